@@ -1,0 +1,203 @@
+//! Algorithms: the unit of generation, run step by step.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use crate::geometry::Model;
+use crate::{Error, Location, Result};
+
+/// What a step reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// More steps would change the result.
+    Continue,
+    /// The algorithm has reached its end; further steps are not taken.
+    Done,
+}
+
+/// What every call of an [`Algorithm`] can read: the run's seed, step override and limits.
+#[derive(Clone, Debug)]
+pub struct RunContext {
+    /// The run's seed (`--seed`).
+    pub seed: u64,
+    /// `--steps`: the number of steps asked for, overriding the algorithm's own count
+    /// (an L-system's `iterations`, a growth's `steps`) when set.
+    pub steps: Option<u32>,
+    /// When the run must stop (`--time-limit`); long Rust loops check it with
+    /// [`RunContext::check_deadline`].
+    pub deadline: Option<Instant>,
+    /// The module-count cap for rewriting systems.
+    pub max_modules: usize,
+    /// Set by another thread to stop the run early (the preview superseding a run).
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Default for RunContext {
+    fn default() -> Self {
+        RunContext { seed: 1, steps: None, deadline: None, max_modules: 10_000_000, cancel: None }
+    }
+}
+
+impl RunContext {
+    /// An error if the deadline has passed or the run was cancelled, pointing at `location`.
+    pub fn check_deadline(&self, location: &Location) -> Result<()> {
+        if self.cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(Error::script(location.clone(), "cancelled"));
+        }
+        match self.deadline {
+            Some(d) if Instant::now() >= d => {
+                Err(Error::script(location.clone(), "time limit exceeded (see --time-limit)"))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// A step-wise generator: an L-system, space colonization, a growth model, a forest.
+///
+/// # Lifecycle
+/// 1. [`init`](Algorithm::init) is called once, before any step.
+/// 2. [`step`](Algorithm::step) is called until it returns [`Step::Done`], or until the caller
+///    has taken the number of steps it wanted (the preview's scrubber, `--steps`).
+/// 3. [`finish`](Algorithm::finish) builds the model of the current state. It may be called
+///    after any step, and it leaves the state intact: a caller may step again and call
+///    `finish` again (watching growth).
+///
+/// After an error from any method the algorithm is in an unspecified state and must not be
+/// called again.
+pub trait Algorithm {
+    /// A short name for progress messages.
+    fn name(&self) -> &str {
+        "algorithm"
+    }
+
+    /// Prepares the first step.
+    fn init(&mut self, ctx: &RunContext) -> Result<()>;
+
+    /// Takes one step of growth.
+    fn step(&mut self, ctx: &RunContext) -> Result<Step>;
+
+    /// Builds the model of the current state.
+    fn finish(&mut self, ctx: &RunContext) -> Result<Model>;
+
+    /// The number of steps the algorithm expects to take, if known (for progress bars).
+    fn planned_steps(&self) -> Option<u32> {
+        None
+    }
+}
+
+/// An algorithm that is already done: it returns a fixed model.
+#[derive(Debug, Clone)]
+pub struct Finished(pub Model);
+
+impl Algorithm for Finished {
+    fn name(&self) -> &str {
+        "model"
+    }
+    fn init(&mut self, _: &RunContext) -> Result<()> {
+        Ok(())
+    }
+    fn step(&mut self, _: &RunContext) -> Result<Step> {
+        Ok(Step::Done)
+    }
+    fn finish(&mut self, _: &RunContext) -> Result<Model> {
+        Ok(self.0.clone())
+    }
+    fn planned_steps(&self) -> Option<u32> {
+        Some(0)
+    }
+}
+
+/// Runs an algorithm: `init`, then steps until done or until `ctx.steps` steps were taken,
+/// then `finish`. `progress` is called after every step with the number of steps taken.
+pub fn run(
+    algorithm: &mut dyn Algorithm,
+    ctx: &RunContext,
+    progress: &mut dyn FnMut(u32),
+) -> Result<Model> {
+    algorithm.init(ctx)?;
+    let mut taken = 0u32;
+    while ctx.steps.is_none_or(|n| taken < n) {
+        let step = algorithm.step(ctx)?;
+        taken += 1;
+        progress(taken);
+        if step == Step::Done {
+            break;
+        }
+    }
+    algorithm.finish(ctx)
+}
+
+/// Runs several algorithms interleaved, one step of each in turn, until all are done (or
+/// have taken `ctx.steps` steps); returns their models in order.
+pub fn interleave(algorithms: &mut [&mut dyn Algorithm], ctx: &RunContext) -> Result<Vec<Model>> {
+    for a in algorithms.iter_mut() {
+        a.init(ctx)?;
+    }
+    let mut done = vec![false; algorithms.len()];
+    let mut taken = 0u32;
+    while done.iter().any(|d| !d) && ctx.steps.is_none_or(|n| taken < n) {
+        for (a, d) in algorithms.iter_mut().zip(done.iter_mut()) {
+            if !*d && a.step(ctx)? == Step::Done {
+                *d = true;
+            }
+        }
+        taken += 1;
+    }
+    algorithms.iter_mut().map(|a| a.finish(ctx)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counts its steps and stops after `limit`.
+    struct Counter {
+        steps: u32,
+        limit: u32,
+    }
+
+    impl Algorithm for Counter {
+        fn init(&mut self, _: &RunContext) -> Result<()> {
+            self.steps = 0;
+            Ok(())
+        }
+        fn step(&mut self, _: &RunContext) -> Result<Step> {
+            self.steps += 1;
+            Ok(if self.steps >= self.limit { Step::Done } else { Step::Continue })
+        }
+        fn finish(&mut self, _: &RunContext) -> Result<Model> {
+            let mut m = Model::new();
+            m.stats.nodes = self.steps as u64;
+            Ok(m)
+        }
+    }
+
+    #[test]
+    fn run_goes_to_the_end_or_to_the_step_count() {
+        let mut c = Counter { steps: 0, limit: 5 };
+        let mut seen = Vec::new();
+        let m = run(&mut c, &RunContext::default(), &mut |s| seen.push(s)).expect("runs");
+        assert_eq!(m.stats.nodes, 5);
+        assert_eq!(seen, vec![1, 2, 3, 4, 5]);
+        let ctx = RunContext { steps: Some(2), ..RunContext::default() };
+        assert_eq!(run(&mut c, &ctx, &mut |_| {}).expect("runs").stats.nodes, 2);
+    }
+
+    #[test]
+    fn interleave_steps_each_in_turn() {
+        let mut a = Counter { steps: 0, limit: 2 };
+        let mut b = Counter { steps: 0, limit: 4 };
+        let models = interleave(&mut [&mut a, &mut b], &RunContext::default()).expect("runs");
+        assert_eq!(models[0].stats.nodes, 2);
+        assert_eq!(models[1].stats.nodes, 4);
+    }
+
+    #[test]
+    fn deadline_in_the_past_is_an_error() {
+        let ctx = RunContext { deadline: Some(Instant::now()), ..RunContext::default() };
+        let err = ctx.check_deadline(&Location::new("a.lua", 3)).expect_err("expired");
+        assert_eq!(err.to_string(), "a.lua:3: time limit exceeded (see --time-limit)");
+    }
+}

@@ -1,0 +1,153 @@
+//! The engine: plugins, limits and the library folder; it creates sessions.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use crate::{Error, Plugin, Result, Session, SessionOptions};
+
+/// The limits every session of an engine runs under.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limits {
+    /// Bytes the Lua state may allocate.
+    pub memory: usize,
+    /// Wall-clock time of one generation (script and algorithm).
+    pub time: Option<Duration>,
+    /// Lua VM instructions one generation may execute.
+    pub instructions: Option<u64>,
+    /// Modules a rewriting system may hold at once.
+    pub max_modules: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            memory: 4096 << 20,
+            time: Some(Duration::from_secs(300)),
+            instructions: None,
+            max_modules: 10_000_000,
+        }
+    }
+}
+
+/// Builds an [`Engine`]: plugins, limits, library folder.
+#[derive(Default)]
+pub struct EngineBuilder {
+    plugins: Vec<Arc<dyn Plugin>>,
+    limits: Limits,
+    library: Option<PathBuf>,
+}
+
+impl EngineBuilder {
+    /// Adds a plugin; its functions appear in the `pge` table of every session.
+    #[must_use]
+    pub fn plugin(mut self, plugin: impl Plugin) -> Self {
+        self.plugins.push(Arc::new(plugin));
+        self
+    }
+
+    /// The memory limit of each Lua state, in MiB (default 4096).
+    #[must_use]
+    pub fn memory_limit_mib(mut self, mib: usize) -> Self {
+        self.limits.memory = mib.saturating_mul(1 << 20);
+        self
+    }
+
+    /// The time limit of one generation (default 300 s); `None` for no limit.
+    #[must_use]
+    pub fn time_limit(mut self, limit: Option<Duration>) -> Self {
+        self.limits.time = limit;
+        self
+    }
+
+    /// The instruction budget of one generation (default: none).
+    #[must_use]
+    pub fn instruction_limit(mut self, limit: Option<u64>) -> Self {
+        self.limits.instructions = limit;
+        self
+    }
+
+    /// The module-count cap of rewriting systems (default 10 000 000).
+    #[must_use]
+    pub fn max_modules(mut self, n: usize) -> Self {
+        self.limits.max_modules = n;
+        self
+    }
+
+    /// The engine's script library: `require` and `pge.load` may read it besides the
+    /// script's own folder tree.
+    #[must_use]
+    pub fn library(mut self, folder: impl Into<PathBuf>) -> Self {
+        self.library = Some(folder.into());
+        self
+    }
+
+    /// Builds the engine; two plugins with the same name are an error.
+    pub fn build(self) -> Result<Engine> {
+        for (i, p) in self.plugins.iter().enumerate() {
+            if self.plugins[..i].iter().any(|q| q.name() == p.name()) {
+                return Err(Error::DuplicatePlugin(p.name().to_string()));
+            }
+        }
+        Ok(Engine { plugins: self.plugins, limits: self.limits, library: self.library })
+    }
+}
+
+/// Owns the plugins and limits; creates [`Session`]s. Cheap to share between threads.
+pub struct Engine {
+    plugins: Vec<Arc<dyn Plugin>>,
+    limits: Limits,
+    library: Option<PathBuf>,
+}
+
+impl Engine {
+    /// Starts building an engine.
+    #[must_use]
+    pub fn builder() -> EngineBuilder {
+        EngineBuilder::default()
+    }
+
+    /// The limits sessions run under.
+    #[must_use]
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// The library folder, if any.
+    #[must_use]
+    pub fn library(&self) -> Option<&std::path::Path> {
+        self.library.as_deref()
+    }
+
+    /// The plugins, in the order they were added.
+    pub fn plugins(&self) -> impl Iterator<Item = &dyn Plugin> {
+        self.plugins.iter().map(|p| &**p)
+    }
+
+    /// A new sandboxed Lua state with the support library and every plugin registered.
+    pub fn session(&self, options: SessionOptions) -> Result<Session> {
+        Session::new(self, options)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Named(&'static str);
+    impl Plugin for Named {
+        fn name(&self) -> &str {
+            self.0
+        }
+        fn register(&self, _: &mlua::Lua, _: &mlua::Table) -> mlua::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn duplicate_plugins_are_refused() {
+        let err = Engine::builder().plugin(Named("a")).plugin(Named("a")).build();
+        assert!(matches!(err, Err(Error::DuplicatePlugin(n)) if n == "a"));
+        assert!(Engine::builder().plugin(Named("a")).plugin(Named("b")).build().is_ok());
+    }
+}

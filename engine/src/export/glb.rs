@@ -1,0 +1,1 @@
+pub struct ExportMeta; pub fn glb_bytes(){}

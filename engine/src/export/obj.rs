@@ -1,0 +1,1 @@
+pub struct ObjFiles; pub fn obj_files(){}

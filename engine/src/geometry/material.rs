@@ -1,0 +1,157 @@
+use std::sync::Arc;
+
+use super::GeometryError;
+
+/// How the alpha channel of a material is used (glTF `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// Fragments with alpha below the cutoff are discarded (leaves).
+    Mask(f32),
+    /// Alpha blending.
+    Blend,
+}
+
+/// An image embedded in the model as PNG.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Name written to the glTF image.
+    pub name: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The PNG file's bytes.
+    pub png: Vec<u8>,
+}
+
+impl Texture {
+    /// Encodes RGBA8 pixels (row-major, top row first) as a PNG texture.
+    ///
+    /// The encoding is deterministic: the same pixels always give the same bytes.
+    pub fn from_rgba(
+        name: impl Into<String>,
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+    ) -> Result<Texture, GeometryError> {
+        let expected = width as usize * height as usize * 4;
+        if rgba.len() != expected || width == 0 || height == 0 {
+            return Err(GeometryError::Texture(format!(
+                "{width}x{height} RGBA needs {expected} bytes, got {}",
+                rgba.len()
+            )));
+        }
+        let mut png = Vec::new();
+        let encoder = image::codecs::png::PngEncoder::new(&mut png);
+        image::ImageEncoder::write_image(
+            encoder,
+            rgba,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+        )
+        .map_err(|e| GeometryError::Texture(e.to_string()))?;
+        Ok(Texture { name: name.into(), width, height, png })
+    }
+
+    /// Reads a texture from PNG (or any format `image` decodes) bytes, re-encoded as PNG.
+    pub fn from_image_bytes(name: impl Into<String>, bytes: &[u8]) -> Result<Texture, GeometryError> {
+        let img = image::load_from_memory(bytes)
+            .map_err(|e| GeometryError::Texture(e.to_string()))?
+            .to_rgba8();
+        Texture::from_rgba(name, img.width(), img.height(), img.as_raw())
+    }
+}
+
+/// A PBR metallic-roughness material as glTF describes it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name written to the glTF material.
+    pub name: String,
+    /// Linear RGBA base colour factor.
+    pub base_color: [f32; 4],
+    /// Base colour texture, multiplied by `base_color`.
+    pub texture: Option<Arc<Texture>>,
+    /// How alpha is used.
+    pub alpha: AlphaMode,
+    /// Whether back faces are rendered (leaves).
+    pub double_sided: bool,
+    /// Metallic factor, 0 for plants.
+    pub metallic: f32,
+    /// Roughness factor.
+    pub roughness: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            base_color: [0.8, 0.8, 0.8, 1.0],
+            texture: None,
+            alpha: AlphaMode::Opaque,
+            double_sided: false,
+            metallic: 0.0,
+            roughness: 0.9,
+        }
+    }
+}
+
+impl Material {
+    /// A plain material of the given sRGB colour `#rrggbb` (or `#rrggbbaa`).
+    pub fn from_hex(name: impl Into<String>, hex: &str) -> Result<Material, GeometryError> {
+        Ok(Material { name: name.into(), base_color: parse_hex_color(hex)?, ..Material::default() })
+    }
+}
+
+/// Parses `#rrggbb` or `#rrggbbaa` (sRGB) into a linear RGBA colour.
+pub fn parse_hex_color(hex: &str) -> Result<[f32; 4], GeometryError> {
+    let digits = hex.strip_prefix('#').unwrap_or(hex);
+    let bad = || GeometryError::Color(hex.to_string());
+    if !(digits.len() == 6 || digits.len() == 8) || !digits.is_ascii() {
+        return Err(bad());
+    }
+    let byte = |i: usize| u8::from_str_radix(&digits[i..i + 2], 16).map_err(|_| bad());
+    let alpha = if digits.len() == 8 { byte(6)? as f32 / 255.0 } else { 1.0 };
+    Ok([
+        srgb_to_linear(byte(0)? as f32 / 255.0),
+        srgb_to_linear(byte(2)? as f32 / 255.0),
+        srgb_to_linear(byte(4)? as f32 / 255.0),
+        alpha,
+    ])
+}
+
+/// Converts one sRGB channel in [0, 1] to linear.
+#[must_use]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_colors_parse_to_linear() {
+        let c = parse_hex_color("#ff0080").expect("valid");
+        assert_eq!(c[0], 1.0);
+        assert_eq!(c[1], 0.0);
+        assert!((c[2] - 0.2158605).abs() < 1e-5);
+        assert_eq!(c[3], 1.0);
+        assert!(parse_hex_color("#ff00").is_err());
+        assert!(parse_hex_color("zz0000").is_err());
+    }
+
+    #[test]
+    fn texture_encoding_is_deterministic() {
+        let px: Vec<u8> = (0..4 * 4 * 4).map(|i| i as u8).collect();
+        let a = Texture::from_rgba("t", 4, 4, &px).expect("encodes");
+        let b = Texture::from_rgba("t", 4, 4, &px).expect("encodes");
+        assert_eq!(a.png, b.png);
+        assert!(Texture::from_rgba("t", 4, 4, &px[1..]).is_err());
+        let back = Texture::from_image_bytes("t", &a.png).expect("decodes");
+        assert_eq!(back.png, a.png);
+    }
+}

@@ -1,0 +1,282 @@
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::{Material, Skeleton};
+
+/// Why a mesh, a texture or a colour was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GeometryError {
+    /// An attribute array does not have one entry per vertex.
+    #[error("{attribute} has {got} entries but there are {vertices} vertices")]
+    AttributeLength {
+        /// Which attribute (`normals`, `uvs`, `colors`).
+        attribute: &'static str,
+        /// Entries found.
+        got: usize,
+        /// Vertices in the mesh.
+        vertices: usize,
+    },
+    /// The index count is not a multiple of the primitive size.
+    #[error("{count} indices is not a multiple of {per} ({primitive})")]
+    IndexCount {
+        /// Number of indices.
+        count: usize,
+        /// Indices per primitive.
+        per: usize,
+        /// Primitive name.
+        primitive: &'static str,
+    },
+    /// An index points past the last vertex.
+    #[error("index {index} at position {at} is out of range (the mesh has {vertices} vertices)")]
+    IndexOutOfRange {
+        /// The offending index value.
+        index: u32,
+        /// Its position in the index array.
+        at: usize,
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// A position, normal, uv or colour is NaN or infinite.
+    #[error("{attribute}[{at}] is not a finite number")]
+    NotFinite {
+        /// Which attribute.
+        attribute: &'static str,
+        /// Vertex index.
+        at: usize,
+    },
+    /// A colour string could not be parsed.
+    #[error("'{0}' is not a colour: expected \"#rrggbb\" or \"#rrggbbaa\"")]
+    Color(String),
+    /// A texture could not be encoded or decoded.
+    #[error("texture: {0}")]
+    Texture(String),
+}
+
+/// How the indices of a mesh are grouped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Primitive {
+    /// Three indices per triangle, counter-clockwise front faces.
+    #[default]
+    Triangles,
+    /// Two indices per line segment.
+    Lines,
+}
+
+impl Primitive {
+    /// Indices per primitive.
+    #[must_use]
+    pub fn arity(self) -> usize {
+        match self {
+            Primitive::Triangles => 3,
+            Primitive::Lines => 2,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Primitive::Triangles => "triangles",
+            Primitive::Lines => "lines",
+        }
+    }
+}
+
+/// An indexed mesh with per-vertex attributes.
+///
+/// `normals`, `uvs` and `colors` are either empty (absent) or have one entry per position.
+/// Builders fill the fields directly; [`Mesh::validate`] checks the invariants and the
+/// exporters refuse a mesh that fails it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Name written to the glTF mesh.
+    pub name: String,
+    /// Triangles or lines.
+    pub primitive: Primitive,
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Unit normals (empty for none).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates (empty for none).
+    pub uvs: Vec<Vec2>,
+    /// Linear RGBA vertex colours (empty for none).
+    pub colors: Vec<Vec4>,
+    /// u32 indices into the vertex arrays.
+    pub indices: Vec<u32>,
+    /// The material, shared between meshes that use the same one.
+    pub material: Arc<Material>,
+    /// The branch graph this mesh was grown from, if any (written to its glTF extras).
+    pub skeleton: Option<Arc<Skeleton>>,
+    /// Application data written under the mesh's `extras.pge` (e.g. foliage LOD tables).
+    pub extras: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Mesh {
+    /// A triangle mesh from positions and indices, with smooth normals computed.
+    pub fn from_triangles(positions: Vec<Vec3>, indices: Vec<u32>) -> Result<Mesh, GeometryError> {
+        let mut mesh = Mesh { positions, indices, ..Mesh::default() };
+        mesh.validate()?;
+        mesh.compute_normals();
+        Ok(mesh)
+    }
+
+    /// Number of vertices.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of triangles (0 for a line mesh).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        match self.primitive {
+            Primitive::Triangles => self.indices.len() / 3,
+            Primitive::Lines => 0,
+        }
+    }
+
+    /// Checks attribute lengths, index ranges and that every number is finite.
+    pub fn validate(&self) -> Result<(), GeometryError> {
+        let n = self.positions.len();
+        for (attribute, got) in
+            [("normals", self.normals.len()), ("uvs", self.uvs.len()), ("colors", self.colors.len())]
+        {
+            if got != 0 && got != n {
+                return Err(GeometryError::AttributeLength { attribute, got, vertices: n });
+            }
+        }
+        let per = self.primitive.arity();
+        if self.indices.len() % per != 0 {
+            return Err(GeometryError::IndexCount {
+                count: self.indices.len(),
+                per,
+                primitive: self.primitive.name(),
+            });
+        }
+        if let Some((at, &index)) = self.indices.iter().enumerate().find(|(_, i)| **i as usize >= n)
+        {
+            return Err(GeometryError::IndexOutOfRange { index, at, vertices: n });
+        }
+        let finite3 = |attribute, v: &[Vec3]| match v.iter().position(|p| !p.is_finite()) {
+            Some(at) => Err(GeometryError::NotFinite { attribute, at }),
+            None => Ok(()),
+        };
+        finite3("positions", &self.positions)?;
+        finite3("normals", &self.normals)?;
+        if let Some(at) = self.uvs.iter().position(|p| !p.is_finite()) {
+            return Err(GeometryError::NotFinite { attribute: "uvs", at });
+        }
+        if let Some(at) = self.colors.iter().position(|p| !p.is_finite()) {
+            return Err(GeometryError::NotFinite { attribute: "colors", at });
+        }
+        Ok(())
+    }
+
+    /// Replaces the normals by area-weighted vertex normals of the triangles.
+    ///
+    /// A vertex used by no triangle (or only degenerate ones) gets `+Y`.
+    pub fn compute_normals(&mut self) {
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        if self.primitive == Primitive::Triangles {
+            for tri in self.indices.chunks_exact(3) {
+                let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+                let n = (self.positions[b] - self.positions[a])
+                    .cross(self.positions[c] - self.positions[a]);
+                normals[a] += n;
+                normals[b] += n;
+                normals[c] += n;
+            }
+        }
+        for n in &mut normals {
+            *n = n.try_normalize().unwrap_or(Vec3::Y);
+        }
+        self.normals = normals;
+    }
+
+    /// Appends another mesh's geometry (its material and skeleton are ignored).
+    ///
+    /// Attributes present in only one of the two are filled with defaults for the other
+    /// (normal `+Y`, uv `0`, colour white) so the result stays valid.
+    pub fn append(&mut self, other: &Mesh) {
+        let base = self.positions.len() as u32;
+        let (n_self, n_other) = (self.positions.len(), other.positions.len());
+        fill_attribute(&mut self.normals, &other.normals, n_self, n_other, Vec3::Y);
+        fill_attribute(&mut self.uvs, &other.uvs, n_self, n_other, Vec2::ZERO);
+        fill_attribute(&mut self.colors, &other.colors, n_self, n_other, Vec4::ONE);
+        self.positions.extend_from_slice(&other.positions);
+        self.indices.extend(other.indices.iter().map(|i| i + base));
+    }
+
+    /// The axis-aligned bounds `(min, max)`, or `None` for an empty mesh.
+    #[must_use]
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(self.positions.iter().fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+}
+
+fn fill_attribute<T: Copy>(mine: &mut Vec<T>, theirs: &[T], n_mine: usize, n_theirs: usize, default: T) {
+    if mine.is_empty() && theirs.is_empty() {
+        return;
+    }
+    if mine.is_empty() {
+        mine.resize(n_mine, default);
+    }
+    if theirs.is_empty() {
+        mine.extend(std::iter::repeat_n(default, n_theirs));
+    } else {
+        mine.extend_from_slice(theirs);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Mesh {
+        Mesh::from_triangles(
+            vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, -1.0)],
+            vec![0, 1, 2, 0, 2, 3],
+        )
+        .expect("valid quad")
+    }
+
+    #[test]
+    fn normals_of_a_flat_quad_point_up() {
+        let q = quad();
+        assert!(q.normals.iter().all(|n| (*n - Vec3::Y).length() < 1e-6));
+        assert_eq!(q.triangle_count(), 2);
+    }
+
+    #[test]
+    fn validation_names_the_problem() {
+        let mut q = quad();
+        q.indices[4] = 9;
+        assert_eq!(
+            q.validate(),
+            Err(GeometryError::IndexOutOfRange { index: 9, at: 4, vertices: 4 })
+        );
+        let mut q = quad();
+        q.uvs = vec![Vec2::ZERO; 3];
+        assert!(matches!(q.validate(), Err(GeometryError::AttributeLength { attribute: "uvs", .. })));
+        let mut q = quad();
+        q.indices.pop();
+        assert!(matches!(q.validate(), Err(GeometryError::IndexCount { .. })));
+        let mut q = quad();
+        q.positions[1].x = f32::NAN;
+        assert!(matches!(q.validate(), Err(GeometryError::NotFinite { attribute: "positions", at: 1 })));
+    }
+
+    #[test]
+    fn append_offsets_indices_and_fills_missing_attributes() {
+        let mut a = quad();
+        let mut b = quad();
+        b.uvs = vec![Vec2::ONE; 4];
+        a.append(&b);
+        assert_eq!(a.positions.len(), 8);
+        assert_eq!(&a.indices[6..], &[4, 5, 6, 4, 6, 7]);
+        assert_eq!(a.uvs.len(), 8);
+        assert_eq!(a.uvs[0], Vec2::ZERO);
+        a.validate().expect("still valid");
+    }
+}

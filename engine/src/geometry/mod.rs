@@ -1,0 +1,15 @@
+//! Geometry: what every generator produces and every exporter writes.
+//!
+//! A [`Model`] holds shared [`Mesh`]es and the instances that place them; a mesh owns its
+//! [`Material`], which may carry a PNG [`Texture`]. Trees also attach their branch
+//! [`Skeleton`] to the bark mesh so games can read the graph back from the glTF extras.
+
+mod material;
+mod mesh;
+mod model;
+mod skeleton;
+
+pub use material::{AlphaMode, Material, Texture};
+pub use mesh::{GeometryError, Mesh, Primitive};
+pub use model::{Instance, Model, Stats};
+pub use skeleton::{LeafPoint, Skeleton};

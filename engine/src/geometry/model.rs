@@ -1,0 +1,194 @@
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+
+use super::{GeometryError, Mesh};
+
+/// One placement of a mesh in the model (a glTF node).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Index into [`Model::meshes`].
+    pub mesh: usize,
+    /// Local-to-world transform.
+    pub transform: Mat4,
+}
+
+/// Counts and timings of a generation, reported by `pge run --stats`.
+///
+/// Vertex and triangle counts are not stored: they are derived from the model.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Skeleton nodes.
+    pub nodes: u64,
+    /// Leaves.
+    pub leaves: u64,
+    /// Length of the final L-system string.
+    pub modules: u64,
+    /// Seconds spent per phase, in the order the phases ran. Never exported to the glb
+    /// (timings would make the output differ from run to run).
+    pub phases: Vec<(String, f64)>,
+}
+
+impl Stats {
+    /// Adds `seconds` to the phase called `name` (appending it if new).
+    pub fn add_phase(&mut self, name: &str, seconds: f64) {
+        match self.phases.iter_mut().find(|(n, _)| n == name) {
+            Some((_, s)) => *s += seconds,
+            None => self.phases.push((name.to_string(), seconds)),
+        }
+    }
+
+    /// Adds the counts and phases of another generation to these.
+    pub fn merge(&mut self, other: &Stats) {
+        self.nodes += other.nodes;
+        self.leaves += other.leaves;
+        self.modules += other.modules;
+        for (name, s) in &other.phases {
+            self.add_phase(name, *s);
+        }
+    }
+}
+
+/// The result of a generation: shared meshes, the instances that place them, and extras.
+#[derive(Clone, Debug, Default)]
+pub struct Model {
+    /// Meshes, each exported once however many instances use it.
+    pub meshes: Vec<Arc<Mesh>>,
+    /// Placements of the meshes; every one becomes a glTF node.
+    pub instances: Vec<Instance>,
+    /// Application data written under the root `extras.pge` next to the generator's own.
+    pub extras: serde_json::Map<String, serde_json::Value>,
+    /// Counts and timings.
+    pub stats: Stats,
+}
+
+impl Model {
+    /// An empty model.
+    #[must_use]
+    pub fn new() -> Model {
+        Model::default()
+    }
+
+    /// A model with one mesh at the origin.
+    #[must_use]
+    pub fn from_mesh(mesh: impl Into<Arc<Mesh>>) -> Model {
+        let mut model = Model::new();
+        model.add_mesh(mesh, Mat4::IDENTITY);
+        model
+    }
+
+    /// Adds a mesh placed by `transform`; a mesh already in the model (same `Arc`) is shared.
+    pub fn add_mesh(&mut self, mesh: impl Into<Arc<Mesh>>, transform: Mat4) {
+        let mesh = mesh.into();
+        let index = self.mesh_index(mesh);
+        self.instances.push(Instance { mesh: index, transform });
+    }
+
+    /// Adds every instance of `other`, placed by `transform`, sharing meshes by `Arc`.
+    /// Stats are merged; extras of `other` are copied where this model has no such key.
+    pub fn add_model(&mut self, other: &Model, transform: Mat4) {
+        let map: Vec<usize> = other.meshes.iter().map(|m| self.mesh_index(m.clone())).collect();
+        for inst in &other.instances {
+            self.instances
+                .push(Instance { mesh: map[inst.mesh], transform: transform * inst.transform });
+        }
+        self.stats.merge(&other.stats);
+        for (k, v) in &other.extras {
+            self.extras.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
+
+    fn mesh_index(&mut self, mesh: Arc<Mesh>) -> usize {
+        match self.meshes.iter().position(|m| Arc::ptr_eq(m, &mesh)) {
+            Some(i) => i,
+            None => {
+                self.meshes.push(mesh);
+                self.meshes.len() - 1
+            }
+        }
+    }
+
+    /// Vertices drawn, counting every instance.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.instances.iter().map(|i| self.meshes[i.mesh].vertex_count()).sum()
+    }
+
+    /// Triangles drawn, counting every instance.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.instances.iter().map(|i| self.meshes[i.mesh].triangle_count()).sum()
+    }
+
+    /// Checks every mesh and that instances point at existing meshes with finite transforms.
+    pub fn validate(&self) -> Result<(), GeometryError> {
+        for mesh in &self.meshes {
+            mesh.validate()?;
+        }
+        for (at, inst) in self.instances.iter().enumerate() {
+            if inst.mesh >= self.meshes.len() {
+                return Err(GeometryError::IndexOutOfRange {
+                    index: inst.mesh as u32,
+                    at,
+                    vertices: self.meshes.len(),
+                });
+            }
+            if !inst.transform.is_finite() {
+                return Err(GeometryError::NotFinite { attribute: "instance transform", at });
+            }
+        }
+        Ok(())
+    }
+
+    /// World-space bounds `(min, max)` over all instances, or `None` when empty.
+    #[must_use]
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut out: Option<(Vec3, Vec3)> = None;
+        for inst in &self.instances {
+            let Some((lo, hi)) = self.meshes[inst.mesh].bounds() else { continue };
+            for corner in 0..8 {
+                let c = Vec3::new(
+                    if corner & 1 == 0 { lo.x } else { hi.x },
+                    if corner & 2 == 0 { lo.y } else { hi.y },
+                    if corner & 4 == 0 { lo.z } else { hi.z },
+                );
+                let p = inst.transform.transform_point3(c);
+                out = Some(match out {
+                    None => (p, p),
+                    Some((a, b)) => (a.min(p), b.max(p)),
+                });
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle() -> Arc<Mesh> {
+        Arc::new(Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("ok"))
+    }
+
+    #[test]
+    fn instancing_shares_meshes_and_composes_transforms() {
+        let tri = triangle();
+        let mut inner = Model::new();
+        inner.add_mesh(tri.clone(), Mat4::from_translation(Vec3::X));
+        inner.stats.leaves = 3;
+        let mut outer = Model::new();
+        outer.add_model(&inner, Mat4::from_translation(Vec3::Y));
+        outer.add_model(&inner, Mat4::from_translation(Vec3::Z));
+        assert_eq!(outer.meshes.len(), 1);
+        assert_eq!(outer.instances.len(), 2);
+        assert_eq!(outer.triangle_count(), 2);
+        assert_eq!(outer.stats.leaves, 6);
+        let t = outer.instances[0].transform.transform_point3(Vec3::ZERO);
+        assert_eq!(t, Vec3::new(1.0, 1.0, 0.0));
+        let (lo, hi) = outer.bounds().expect("not empty");
+        assert_eq!(lo, Vec3::new(1.0, 1.0, 0.0));
+        assert_eq!(hi, Vec3::new(2.0, 2.0, 1.0));
+        outer.validate().expect("valid");
+    }
+}

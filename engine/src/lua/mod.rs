@@ -1,0 +1,45 @@
+//! The Lua side of the engine: the sandbox, the support library (`pge.*`) and the helpers
+//! plugins use to bind their objects.
+//!
+//! Plugins convert vectors with [`LuaVec3`], report mistakes with [`script_error`] (which
+//! points at the script's file and line), hand algorithms back as [`AlgorithmHandle`]s and
+//! resolve files with [`resolve_path`].
+
+mod algorithm;
+mod errors;
+mod math;
+mod model;
+mod noise;
+pub mod params;
+pub(crate) mod random;
+mod sandbox;
+pub(crate) mod state;
+
+pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
+pub use errors::{caller_location, script_error, to_engine_error};
+pub use math::{LuaMat4, LuaQuat, LuaVec3};
+pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
+pub use random::{LuaRng, swap_rng, uniform};
+pub use sandbox::{resolve_path, writable_path};
+pub(crate) use sandbox::exec_file as sandbox_exec;
+
+use crate::RunContext;
+
+/// The run context of the session this Lua state belongs to (seed, `--steps`, deadline,
+/// module cap, cancel flag).
+#[must_use]
+pub fn run_context(lua: &mlua::Lua) -> RunContext {
+    lua.app_data_ref::<state::SessionState>().map(|s| s.ctx.clone()).unwrap_or_default()
+}
+
+/// Registers the support library into the `pge` table.
+pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
+    sandbox::register(lua, pge)?;
+    params::register(lua, pge)?;
+    random::register(lua, pge)?;
+    math::register(lua, pge)?;
+    noise::register(lua, pge)?;
+    model::register(lua, pge)?;
+    algorithm::register(lua, pge)?;
+    Ok(())
+}

@@ -1,0 +1,237 @@
+//! `pge.mesh` and `pge.model`: geometry built in scripts.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use mlua::{AnyUserData, FromLua, Lua, ObjectLike, Table, UserData, UserDataMethods, Value};
+
+use super::errors::script_error;
+use super::math::LuaMat4;
+use super::sandbox::resolve_path;
+use crate::geometry::{AlphaMode, Material, Mesh, Model, Primitive, Texture};
+
+/// A mesh made by `pge.mesh` (or a plugin), shared by the models it is added to.
+#[derive(Clone, Debug)]
+pub struct LuaMesh(pub Arc<Mesh>);
+
+/// A model made by `pge.model()` or returned by a generator's `:model()`.
+#[derive(Clone, Debug, Default)]
+pub struct LuaModel(pub Model);
+
+impl UserData for LuaMesh {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
+        m.add_method("triangleCount", |_, me, ()| Ok(me.0.triangle_count()));
+        m.add_method("model", |_, me, ()| Ok(LuaModel(Model::from_mesh(me.0.clone()))));
+    }
+}
+
+impl UserData for LuaModel {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method_mut("add", |lua, me, (thing, transform): (Value, Option<LuaMat4>)| {
+            let other = to_model(&thing).map_err(|e| match e {
+                mlua::Error::RuntimeError(_) => e,
+                other => script_error(lua, format!("model:add: {other}")),
+            })?;
+            me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
+            Ok(())
+        });
+        m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
+        m.add_method("triangleCount", |_, me, ()| Ok(me.0.triangle_count()));
+        m.add_method("meshCount", |_, me, ()| Ok(me.0.meshes.len()));
+        m.add_method("instanceCount", |_, me, ()| Ok(me.0.instances.len()));
+        m.add_function("model", |_, me: AnyUserData| Ok(me));
+    }
+}
+
+/// The model of a script value: a [`LuaModel`], a [`LuaMesh`], or anything with a `:model()`
+/// method (a modeller, a turtle) whose result is one of those.
+pub fn to_model(value: &Value) -> mlua::Result<Model> {
+    to_model_depth(value, 0)
+}
+
+fn to_model_depth(value: &Value, depth: usize) -> mlua::Result<Model> {
+    let not_a_model = || {
+        mlua::Error::RuntimeError(format!(
+            "expected a model, a mesh or an object with a :model() method, got {}",
+            value.type_name()
+        ))
+    };
+    if depth > 4 {
+        return Err(not_a_model());
+    }
+    let produced: Value = match value {
+        Value::UserData(ud) => {
+            if let Ok(m) = ud.borrow::<LuaModel>() {
+                return Ok(m.0.clone());
+            }
+            if let Ok(m) = ud.borrow::<LuaMesh>() {
+                return Ok(Model::from_mesh(m.0.clone()));
+            }
+            match ud.get::<Value>("model") {
+                Ok(Value::Function(_)) => ud.call_method("model", ())?,
+                _ => return Err(not_a_model()),
+            }
+        }
+        Value::Table(t) => match t.get::<Value>("model")? {
+            Value::Function(_) => t.call_method("model", ())?,
+            _ => return Err(not_a_model()),
+        },
+        _ => return Err(not_a_model()),
+    };
+    to_model_depth(&produced, depth + 1)
+}
+
+fn floats(lua: &Lua, t: &Table, key: &str, per: usize) -> mlua::Result<Option<Vec<f32>>> {
+    let v: Value = t.raw_get(key)?;
+    let Value::Table(arr) = v else {
+        return match v {
+            Value::Nil => Ok(None),
+            other => Err(script_error(lua, format!("pge.mesh: {key} must be an array of numbers, not {}", other.type_name()))),
+        };
+    };
+    let n = arr.raw_len();
+    let mut out = Vec::with_capacity(n);
+    for i in 1..=n {
+        let x = match arr.raw_get::<Value>(i)? {
+            Value::Integer(k) => k as f64,
+            Value::Number(x) => x,
+            other => {
+                return Err(script_error(lua, format!("pge.mesh: {key}[{i}] is a {}, not a number", other.type_name())));
+            }
+        };
+        if !x.is_finite() {
+            return Err(script_error(lua, format!("pge.mesh: {key}[{i}] is NaN or infinite")));
+        }
+        out.push(x as f32);
+    }
+    if n % per != 0 {
+        return Err(script_error(lua, format!("pge.mesh: {key} has {n} numbers, not a multiple of {per}")));
+    }
+    Ok(Some(out))
+}
+
+/// A material from a script table: `color = "#rrggbb"`, `doubleSided`, `roughness`,
+/// `metallic`, `alpha = "opaque"|"mask"|"blend"`, `alphaCutoff`, `texture = "file.png"`,
+/// `name`.
+pub fn material_from_table(lua: &Lua, t: &Table) -> mlua::Result<Material> {
+    let mut m = Material::default();
+    if let Some(name) = t.raw_get::<Option<String>>("name")? {
+        m.name = name;
+    }
+    if let Some(c) = t.raw_get::<Option<String>>("color")? {
+        m.base_color = crate::geometry::Material::from_hex("", &c).map_err(|e| script_error(lua, format!("material color: {e}")))?.base_color;
+    }
+    m.double_sided = t.raw_get::<Option<bool>>("doubleSided")?.unwrap_or(false);
+    let unit = |k: &str, d: f32| -> mlua::Result<f32> {
+        match t.raw_get::<Option<f64>>(k)? {
+            None => Ok(d),
+            Some(x) if (0.0..=1.0).contains(&x) => Ok(x as f32),
+            Some(x) => Err(script_error(lua, format!("material {k} = {x} must be in [0, 1]"))),
+        }
+    };
+    m.roughness = unit("roughness", m.roughness)?;
+    m.metallic = unit("metallic", m.metallic)?;
+    let cutoff = unit("alphaCutoff", 0.5)?;
+    m.alpha = match t.raw_get::<Option<String>>("alpha")?.as_deref() {
+        None | Some("opaque") => AlphaMode::Opaque,
+        Some("mask") => AlphaMode::Mask(cutoff),
+        Some("blend") => AlphaMode::Blend,
+        Some(other) => {
+            return Err(script_error(lua, format!("material alpha = '{other}': expected \"opaque\", \"mask\" or \"blend\"")));
+        }
+    };
+    if let Some(path) = t.raw_get::<Option<String>>("texture")? {
+        let file = resolve_path(lua, &path)?;
+        let bytes = std::fs::read(&file).map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
+        let tex = Texture::from_image_bytes(path.clone(), &bytes).map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
+        m.texture = Some(Arc::new(tex));
+    }
+    Ok(m)
+}
+
+/// `pge.mesh{ positions =, indices = [, normals =, uvs =, colors =, material =, primitive =] }`.
+fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
+    let positions = floats(lua, &t, "positions", 3)?
+        .ok_or_else(|| script_error(lua, "pge.mesh: positions are missing"))?;
+    let positions: Vec<Vec3> = positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    let primitive = match t.raw_get::<Option<String>>("primitive")?.as_deref() {
+        None | Some("triangles") => Primitive::Triangles,
+        Some("lines") => Primitive::Lines,
+        Some(other) => return Err(script_error(lua, format!("pge.mesh: primitive '{other}': expected \"triangles\" or \"lines\""))),
+    };
+    let idx = floats(lua, &t, "indices", primitive.arity())?
+        .ok_or_else(|| script_error(lua, "pge.mesh: indices are missing"))?;
+    let mut indices = Vec::with_capacity(idx.len());
+    for (i, x) in idx.iter().enumerate() {
+        if *x < 0.0 || x.fract() != 0.0 || *x as usize >= positions.len() {
+            return Err(script_error(
+                lua,
+                format!("pge.mesh: indices[{}] = {x} is out of range: indices are 0-based and there are {} vertices", i + 1, positions.len()),
+            ));
+        }
+        indices.push(*x as u32);
+    }
+    let n = positions.len();
+    let per_vertex = |key: &str, got: usize| -> mlua::Result<()> {
+        if got != n {
+            Err(script_error(lua, format!("pge.mesh: {key} has {got} entries but there are {n} vertices")))
+        } else {
+            Ok(())
+        }
+    };
+    let normals: Vec<Vec3> = match floats(lua, &t, "normals", 3)? {
+        Some(v) => {
+            per_vertex("normals", v.len() / 3)?;
+            v.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2]).normalize_or(Vec3::Y)).collect()
+        }
+        None => Vec::new(),
+    };
+    let uvs: Vec<Vec2> = match floats(lua, &t, "uvs", 2)? {
+        Some(v) => {
+            per_vertex("uvs", v.len() / 2)?;
+            v.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect()
+        }
+        None => Vec::new(),
+    };
+    let colors: Vec<Vec4> = match floats(lua, &t, "colors", 1)? {
+        Some(v) if v.len() == 4 * n => v.chunks_exact(4).map(|c| Vec4::new(c[0], c[1], c[2], c[3])).collect(),
+        Some(v) if v.len() == 3 * n => v.chunks_exact(3).map(|c| Vec4::new(c[0], c[1], c[2], 1.0)).collect(),
+        Some(v) => {
+            return Err(script_error(lua, format!("pge.mesh: colors has {} numbers; expected 3 or 4 per vertex ({n} vertices)", v.len())));
+        }
+        None => Vec::new(),
+    };
+    let material = match t.raw_get::<Option<Table>>("material")? {
+        Some(mt) => material_from_table(lua, &mt)?,
+        None => Material::default(),
+    };
+    let mut mesh = Mesh {
+        name: t.raw_get::<Option<String>>("name")?.unwrap_or_else(|| "mesh".into()),
+        primitive,
+        positions,
+        normals,
+        uvs,
+        colors,
+        indices,
+        material: Arc::new(material),
+        ..Mesh::default()
+    };
+    if mesh.normals.is_empty() && primitive == Primitive::Triangles {
+        mesh.compute_normals();
+    }
+    mesh.validate().map_err(|e| script_error(lua, format!("pge.mesh: {e}")))?;
+    Ok(LuaMesh(Arc::new(mesh)))
+}
+
+impl FromLua for LuaModel {
+    fn from_lua(value: Value, _: &Lua) -> mlua::Result<Self> {
+        to_model(&value).map(LuaModel)
+    }
+}
+
+pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
+    pge.set("mesh", lua.create_function(make_mesh)?)?;
+    pge.set("model", lua.create_function(|_, ()| Ok(LuaModel::default()))?)?;
+    Ok(())
+}

@@ -1,0 +1,124 @@
+//! `pge.noise`: Perlin, simplex and fBm noise (the `noise` crate), seeded by the run.
+
+use mlua::{Lua, Table};
+use noise::{Fbm, MultiFractal, NoiseFn, Perlin, Seedable, Simplex};
+
+use super::errors::script_error;
+use super::state::SessionState;
+
+/// Generators kept between calls (building one shuffles a permutation table).
+struct NoiseCache {
+    perlin: Perlin,
+    simplex: Simplex,
+    fbm: Option<(FbmKey, Fbm<Perlin>)>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+struct FbmKey {
+    seed: u32,
+    octaves: usize,
+    frequency: f64,
+    lacunarity: f64,
+    persistence: f64,
+}
+
+fn run_seed(lua: &Lua) -> u32 {
+    lua.app_data_ref::<SessionState>().map_or(1, |s| s.ctx.seed as u32)
+}
+
+fn with_cache<R>(lua: &Lua, f: impl FnOnce(&mut NoiseCache) -> R) -> R {
+    if lua.app_data_ref::<NoiseCache>().is_none() {
+        let seed = run_seed(lua);
+        lua.set_app_data(NoiseCache { perlin: Perlin::new(seed), simplex: Simplex::new(seed), fbm: None });
+    }
+    match lua.app_data_mut::<NoiseCache>() {
+        Some(mut c) => f(&mut c),
+        None => {
+            let seed = run_seed(lua);
+            f(&mut NoiseCache { perlin: Perlin::new(seed), simplex: Simplex::new(seed), fbm: None })
+        }
+    }
+}
+
+fn sample<N: NoiseFn<f64, 2> + NoiseFn<f64, 3>>(n: &N, x: f64, y: f64, z: Option<f64>) -> f64 {
+    match z {
+        Some(z) => n.get([x, y, z]),
+        None => n.get([x, y]),
+    }
+}
+
+fn check(lua: &Lua, what: &str, x: f64, y: f64, z: Option<f64>) -> mlua::Result<()> {
+    if x.is_finite() && y.is_finite() && z.is_none_or(f64::is_finite) {
+        Ok(())
+    } else {
+        Err(script_error(lua, format!("pge.noise.{what}: coordinates must be finite numbers")))
+    }
+}
+
+pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
+    let t = lua.create_table()?;
+    t.set(
+        "perlin",
+        lua.create_function(|lua, (x, y, z): (f64, f64, Option<f64>)| {
+            check(lua, "perlin", x, y, z)?;
+            Ok(with_cache(lua, |c| sample(&c.perlin, x, y, z)))
+        })?,
+    )?;
+    t.set(
+        "simplex",
+        lua.create_function(|lua, (x, y, z): (f64, f64, Option<f64>)| {
+            check(lua, "simplex", x, y, z)?;
+            Ok(with_cache(lua, |c| sample(&c.simplex, x, y, z)))
+        })?,
+    )?;
+    t.set(
+        "fbm",
+        lua.create_function(|lua, args: mlua::Variadic<mlua::Value>| {
+            let mut nums = Vec::new();
+            let mut opts: Option<Table> = None;
+            for a in args.iter() {
+                match a {
+                    mlua::Value::Integer(i) => nums.push(*i as f64),
+                    mlua::Value::Number(n) => nums.push(*n),
+                    mlua::Value::Table(o) => opts = Some(o.clone()),
+                    other => {
+                        return Err(script_error(lua, format!("pge.noise.fbm: unexpected {} argument", other.type_name())));
+                    }
+                }
+            }
+            let (x, y, z) = match nums.as_slice() {
+                [x, y] => (*x, *y, None),
+                [x, y, z] => (*x, *y, Some(*z)),
+                _ => return Err(script_error(lua, "pge.noise.fbm(x, y [, z] [, options]) takes 2 or 3 coordinates")),
+            };
+            check(lua, "fbm", x, y, z)?;
+            let get = |k: &str, d: f64| -> mlua::Result<f64> {
+                Ok(opts.as_ref().map(|o| o.get::<Option<f64>>(k)).transpose()?.flatten().unwrap_or(d))
+            };
+            let octaves = get("octaves", 6.0)?;
+            if !(1.0..=32.0).contains(&octaves) {
+                return Err(script_error(lua, format!("pge.noise.fbm: octaves = {octaves} must be in [1, 32]")));
+            }
+            let key = FbmKey {
+                seed: get("seed", run_seed(lua) as f64)? as u32,
+                octaves: octaves as usize,
+                frequency: get("frequency", 1.0)?,
+                lacunarity: get("lacunarity", 2.0)?,
+                persistence: get("persistence", 0.5)?,
+            };
+            Ok(with_cache(lua, |c| {
+                if c.fbm.as_ref().is_none_or(|(k, _)| *k != key) {
+                    let f = Fbm::<Perlin>::new(key.seed)
+                        .set_octaves(key.octaves)
+                        .set_frequency(key.frequency)
+                        .set_lacunarity(key.lacunarity)
+                        .set_persistence(key.persistence)
+                        .set_seed(key.seed);
+                    c.fbm = Some((key, f));
+                }
+                c.fbm.as_ref().map_or(0.0, |(_, f)| sample(f, x, y, z))
+            }))
+        })?,
+    )?;
+    pge.set("noise", t)
+}

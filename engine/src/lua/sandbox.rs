@@ -1,0 +1,236 @@
+//! The sandbox: which files scripts may read, `require`, `pge.load`, and the base library
+//! functions that would reach outside.
+
+use std::path::{Component, Path, PathBuf};
+
+use mlua::{Lua, Table, Value};
+
+use super::errors::{caller_location, script_error};
+use super::params;
+use super::state::{Chunk, SessionState};
+
+const LOADED_KEY: &str = "pge.loaded";
+
+pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
+    let globals = lua.globals();
+    globals.set("dofile", Value::Nil)?;
+    globals.set("loadfile", Value::Nil)?;
+    // `load` of text only: binary chunks can break the VM's invariants.
+    let load: mlua::Function = globals.get("load")?;
+    let text_load = lua
+        .load("local load = ...; return function(c, name, _, env) return load(c, name, 't', env) end")
+        .set_name("=pge")
+        .call::<mlua::Function>(load)?;
+    globals.set("load", text_load)?;
+    // `print` writes to stderr so that stdout stays clean for `--stats` and `derive`.
+    globals.set(
+        "print",
+        lua.create_function(|_, args: mlua::Variadic<Value>| {
+            let parts: Vec<String> = args.iter().map(display_value).collect();
+            eprintln!("{}", parts.join("\t"));
+            Ok(())
+        })?,
+    )?;
+    lua.set_named_registry_value(LOADED_KEY, lua.create_table()?)?;
+    globals.set("require", lua.create_function(require)?)?;
+    pge.set(
+        "load",
+        lua.create_function(|lua, (path, overrides): (String, Option<Table>)| {
+            load_script(lua, &path, overrides)
+        })?,
+    )?;
+    Ok(())
+}
+
+fn display_value(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.to_string_lossy(),
+        Value::Nil => "nil".into(),
+        Value::Boolean(b) => b.to_string(),
+        Value::Integer(i) => i.to_string(),
+        Value::Number(n) => n.to_string(),
+        other => other.to_string().unwrap_or_else(|_| format!("{}", other.type_name())),
+    }
+}
+
+/// Runs a script file as a chunk named after its shown path; records it for reload.
+pub(crate) fn exec_file(lua: &Lua, display: String, path: PathBuf) -> mlua::Result<Value> {
+    let source = std::fs::read_to_string(&path).map_err(|e| {
+        mlua::Error::RuntimeError(format!("{display}: cannot read script: {e}"))
+    })?;
+    // Like `lua script.lua`, a first line starting with '#' (a shebang) is skipped.
+    let source = if source.starts_with('#') {
+        source.find('\n').map_or(String::new(), |i| source[i..].to_string())
+    } else {
+        source
+    };
+    if let Some(mut st) = lua.app_data_mut::<SessionState>() {
+        st.chunks.push(Chunk { display: display.clone(), path: path.clone() });
+        st.record_file(path);
+    }
+    lua.load(source).set_name(format!("@{display}")).set_mode(mlua::chunk::ChunkMode::Text).call(())
+}
+
+/// The folder of the script that is calling (its shown path and its canonical path).
+fn caller_dir(lua: &Lua) -> (PathBuf, PathBuf) {
+    let loc = caller_location(lua);
+    let st = lua.app_data_ref::<SessionState>();
+    let chunk = st.as_ref().and_then(|s| s.chunk(&loc.file).cloned());
+    match chunk {
+        Some(c) => (
+            Path::new(&c.display).parent().map(Path::to_path_buf).unwrap_or_default(),
+            c.path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        ),
+        None => {
+            let main = st.and_then(|s| s.main_dir.clone()).unwrap_or_default();
+            (PathBuf::new(), main)
+        }
+    }
+}
+
+/// Lexically normalises `a/./b/../c` to `a/c` (for shown names only).
+fn normalize(p: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                if !out.pop() {
+                    out.push("..");
+                }
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+fn is_allowed(lua: &Lua, canonical: &Path) -> bool {
+    lua.app_data_ref::<SessionState>()
+        .is_some_and(|s| s.roots.iter().any(|r| canonical.starts_with(r)))
+}
+
+/// Resolves `relative` against the calling script's folder: the shown path and the
+/// canonical one, checked to be inside the allowed folders.
+fn resolve(lua: &Lua, relative: &str, what: &str) -> mlua::Result<(String, PathBuf)> {
+    let (shown_dir, real_dir) = caller_dir(lua);
+    let rel = Path::new(relative);
+    if rel.is_absolute() {
+        return Err(script_error(
+            lua,
+            format!("{what} '{relative}': absolute paths are not allowed; give a path relative to the script"),
+        ));
+    }
+    let candidate = real_dir.join(rel);
+    let canonical = candidate
+        .canonicalize()
+        .map_err(|e| script_error(lua, format!("{what} '{relative}': {e}")))?;
+    if !is_allowed(lua, &canonical) {
+        return Err(script_error(
+            lua,
+            format!("{what} '{relative}' is outside the script's folder and the library folder"),
+        ));
+    }
+    let shown = normalize(&shown_dir.join(rel)).to_string_lossy().replace('\\', "/");
+    Ok((shown, canonical))
+}
+
+/// Resolves a path relative to the calling script, checks that it lies inside the script's
+/// folder tree or the library folder, and records it as a dependency (for live reload).
+pub fn resolve_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
+    let (_, canonical) = resolve(lua, relative, "file")?;
+    if let Some(mut st) = lua.app_data_mut::<SessionState>() {
+        st.record_file(canonical.clone());
+    }
+    Ok(canonical)
+}
+
+/// A path a script may write to: relative, without `..`, taken from the working directory.
+pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
+    let p = Path::new(relative);
+    if relative.is_empty()
+        || p.is_absolute()
+        || p.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+    {
+        return Err(script_error(
+            lua,
+            format!("cannot write '{relative}': give a relative path without '..'"),
+        ));
+    }
+    Ok(p.to_path_buf())
+}
+
+fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
+    let (shown, canonical) = find_module(lua, &name)?;
+    let loaded: Table = lua.named_registry_value(LOADED_KEY)?;
+    let key = canonical.to_string_lossy().to_string();
+    match loaded.raw_get::<Value>(key.as_str())? {
+        Value::Nil => {}
+        Value::LightUserData(_) => {
+            return Err(script_error(lua, format!("require '{name}': circular require")));
+        }
+        value => return Ok(value),
+    }
+    loaded.raw_set(key.as_str(), Value::LightUserData(mlua::LightUserData(std::ptr::null_mut())))?;
+    let result = exec_file(lua, shown, canonical);
+    let value = match result {
+        Ok(Value::Nil) => Value::Boolean(true),
+        Ok(v) => v,
+        Err(e) => {
+            loaded.raw_set(key.as_str(), Value::Nil)?;
+            return Err(e);
+        }
+    };
+    loaded.raw_set(key.as_str(), value.clone())?;
+    Ok(value)
+}
+
+/// Finds a module: a path with `/` relative to the calling script, or a dotted name looked
+/// up in the caller's folder, the main script's folder and the library folder.
+fn find_module(lua: &Lua, name: &str) -> mlua::Result<(String, PathBuf)> {
+    if name.contains('/') || name.contains('\\') {
+        let with_ext = if name.ends_with(".lua") { name.to_string() } else { format!("{name}.lua") };
+        return resolve(lua, &with_ext, "require");
+    }
+    let rel = name.replace('.', "/");
+    let (shown_dir, real_dir) = caller_dir(lua);
+    let (main, library) = lua
+        .app_data_ref::<SessionState>()
+        .map(|s| (s.main_dir.clone(), s.library.clone()))
+        .unwrap_or_default();
+    let mut dirs = vec![(shown_dir, real_dir)];
+    if let Some(m) = main {
+        dirs.push((m.clone(), m));
+    }
+    if let Some(l) = library {
+        dirs.push((l.clone(), l));
+    }
+    let mut looked = Vec::new();
+    for (shown, real) in &dirs {
+        for file in [format!("{rel}.lua"), format!("{rel}/init.lua")] {
+            let candidate = real.join(&file);
+            looked.push(candidate.display().to_string());
+            if let Ok(canonical) = candidate.canonicalize() {
+                if !is_allowed(lua, &canonical) {
+                    continue;
+                }
+                let shown = normalize(&shown.join(&file)).to_string_lossy().replace('\\', "/");
+                return Ok((shown, canonical));
+            }
+        }
+    }
+    Err(script_error(lua, format!("module '{name}' not found (looked for {})", looked.join(", "))))
+}
+
+fn load_script(lua: &Lua, path: &str, overrides: Option<Table>) -> mlua::Result<Value> {
+    let (shown, canonical) = resolve(lua, path, "pge.load")?;
+    let location = caller_location(lua);
+    params::push_scope(lua, &shown, overrides)?;
+    let result = exec_file(lua, shown, canonical);
+    let unused = params::pop_scope(lua);
+    let value = result?;
+    if let Err(message) = unused {
+        return Err(mlua::Error::RuntimeError(format!("{location}: pge.load('{path}'): {message}")));
+    }
+    Ok(value)
+}

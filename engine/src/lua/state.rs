@@ -1,0 +1,52 @@
+//! Per-session state kept in the Lua state's app data.
+
+use std::path::PathBuf;
+
+use crate::{Location, RunContext};
+
+/// A chunk the session loaded: the name errors show and the file behind it.
+#[derive(Clone, Debug)]
+pub(crate) struct Chunk {
+    /// The path as shown to the user (`scripts/oak.lua`).
+    pub display: String,
+    /// The canonical file.
+    pub path: PathBuf,
+}
+
+/// What the sandbox, the hook and the helpers share.
+#[derive(Debug, Default)]
+pub(crate) struct SessionState {
+    pub ctx: RunContext,
+    /// Canonical folders scripts may read from: the main script's folder, the library.
+    pub roots: Vec<PathBuf>,
+    /// The main script's folder (canonical), once a script runs.
+    pub main_dir: Option<PathBuf>,
+    /// The library folder (canonical), if any.
+    pub library: Option<PathBuf>,
+    pub chunks: Vec<Chunk>,
+    /// Every file read: scripts, modules, meshes, textures (for live reload).
+    pub loaded_files: Vec<PathBuf>,
+    /// Where the Lua code was when the hook last ran (memory errors carry no position).
+    pub last_location: Option<Location>,
+    pub memory_limit: usize,
+    pub instruction_limit: Option<u64>,
+    pub instructions: u64,
+}
+
+impl SessionState {
+    /// The chunk whose shown name is `display`, or whose shown name ends with the tail of a
+    /// name Lua shortened to `...tail`.
+    pub fn chunk(&self, display: &str) -> Option<&Chunk> {
+        if let Some(tail) = display.strip_prefix("...") {
+            self.chunks.iter().rev().find(|c| c.display.ends_with(tail))
+        } else {
+            self.chunks.iter().rev().find(|c| c.display == display)
+        }
+    }
+
+    pub fn record_file(&mut self, path: PathBuf) {
+        if !self.loaded_files.contains(&path) {
+            self.loaded_files.push(path);
+        }
+    }
+}

@@ -1,0 +1,41 @@
+//! Plugins: how functionality reaches the `pge` table of every session.
+
+use mlua::{Lua, Table};
+
+/// A set of constructors and functions added to the `pge` Lua table.
+///
+/// # Lifecycle
+/// Plugins are added to an [`EngineBuilder`](crate::EngineBuilder) once; the engine calls
+/// [`Plugin::register`] for every new session (one Lua state), after the support library is
+/// in place and before the script runs, in the order the plugins were added. A plugin may
+/// therefore rely on `pge.vec3`, `pge.mesh` and the other support functions, and on plugins
+/// added before it. An error from `register` aborts the creation of the session.
+///
+/// Plugins are shared by every thread that creates sessions, hence `Send + Sync`; per-session
+/// state belongs in the Lua state (userdata, app data), not in the plugin.
+///
+/// # Example
+/// ```
+/// use pge_engine::{Engine, Plugin};
+///
+/// struct Greeter;
+/// impl Plugin for Greeter {
+///     fn register(&self, lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
+///         pge.set("greet", lua.create_function(|_, name: String| Ok(format!("hi {name}")))?)
+///     }
+/// }
+///
+/// let engine = Engine::builder().plugin(Greeter).build().unwrap();
+/// let session = engine.session(Default::default()).unwrap();
+/// let s: String = session.eval("return pge.greet('oak')").unwrap();
+/// assert_eq!(s, "hi oak");
+/// ```
+pub trait Plugin: Send + Sync + 'static {
+    /// A unique name; the type name by default.
+    fn name(&self) -> &str {
+        std::any::type_name::<Self>()
+    }
+
+    /// Adds this plugin's functions and constructors to the `pge` table of a new session.
+    fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()>;
+}

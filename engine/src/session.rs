@@ -1,0 +1,223 @@
+//! Sessions: one sandboxed Lua state in which scripts run.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use mlua::{FromLuaMulti, HookTriggers, Lua, LuaOptions, StdLib, Value, VmState};
+
+use crate::algorithm::run;
+use crate::geometry::Model;
+use crate::lua::params::{self, ParamInfo, ParamState};
+use crate::lua::random::CurrentRng;
+use crate::lua::state::SessionState;
+use crate::lua::to_engine_error;
+use crate::{Algorithm, Engine, Error, Limits, Location, Result, RunContext};
+
+/// How often (in VM instructions) the hook checks the limits.
+const HOOK_INTERVAL: u32 = 1000;
+
+/// What a session is created with.
+#[derive(Clone, Debug)]
+pub struct SessionOptions {
+    /// The run's seed (`--seed`, default 1).
+    pub seed: u64,
+    /// `--set NAME=VALUE` overrides of the main script's declared parameters.
+    pub params: Vec<(String, String)>,
+    /// `--steps`: how many steps to run, overriding the algorithm's own count.
+    pub steps: Option<u32>,
+    /// Set from another thread to stop the run (checked by the Lua hook and by algorithms).
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        SessionOptions { seed: 1, params: Vec::new(), steps: None, cancel: None }
+    }
+}
+
+/// The outcome of [`Session::generate`].
+#[derive(Debug)]
+pub struct Generated {
+    /// The model.
+    pub model: Model,
+    /// The main script's declared parameters with the values used.
+    pub params: Vec<ParamInfo>,
+    /// Wall-clock seconds of the whole generation.
+    pub seconds: f64,
+}
+
+/// One sandboxed Lua 5.4 state with the support library and the engine's plugins.
+///
+/// The standard library has no `io`, `os`, `debug` or `package`; `require` and `pge.load`
+/// read only the main script's folder tree and the engine's library folder; memory, time and
+/// instructions are limited. A session is not `Send`: create one per thread.
+pub struct Session {
+    lua: Lua,
+    limits: Limits,
+    overrides: Vec<(String, String)>,
+    script: std::cell::RefCell<Option<String>>,
+}
+
+impl Session {
+    pub(crate) fn new(engine: &Engine, options: SessionOptions) -> Result<Session> {
+        let limits = engine.limits().clone();
+        let libs = StdLib::TABLE | StdLib::STRING | StdLib::MATH | StdLib::UTF8 | StdLib::COROUTINE;
+        let lua = Lua::new_with(libs, LuaOptions::default())
+            .map_err(|e| Error::Plugin { plugin: "lua".into(), message: e.to_string() })?;
+        lua.set_memory_limit(limits.memory)
+            .map_err(|e| Error::Plugin { plugin: "lua".into(), message: e.to_string() })?;
+        let library = engine.library().and_then(|l| l.canonicalize().ok());
+        lua.set_app_data(SessionState {
+            ctx: RunContext {
+                seed: options.seed,
+                steps: options.steps,
+                deadline: None,
+                max_modules: limits.max_modules,
+                cancel: options.cancel.clone(),
+            },
+            roots: library.iter().cloned().collect(),
+            library,
+            memory_limit: limits.memory,
+            instruction_limit: limits.instructions,
+            ..SessionState::default()
+        });
+        lua.set_app_data(CurrentRng(crate::lua::random::mt_from_seed(options.seed)));
+        install_hook(&lua).map_err(|e| Error::Plugin { plugin: "lua".into(), message: e.to_string() })?;
+        let setup = |lua: &Lua| -> mlua::Result<mlua::Table> {
+            let pge = lua.create_table()?;
+            crate::lua::register_support(lua, &pge)?;
+            lua.globals().set("pge", pge.clone())?;
+            Ok(pge)
+        };
+        let pge = setup(&lua).map_err(|e| Error::Plugin { plugin: "pge".into(), message: e.to_string() })?;
+        for plugin in engine.plugins() {
+            plugin
+                .register(&lua, &pge)
+                .map_err(|e| Error::Plugin { plugin: plugin.name().to_string(), message: e.to_string() })?;
+        }
+        Ok(Session { lua, limits, overrides: options.params, script: std::cell::RefCell::new(None) })
+    }
+
+    /// The Lua state, for plugins and hosts that bind more.
+    #[must_use]
+    pub fn lua(&self) -> &Lua {
+        &self.lua
+    }
+
+    /// The run context (seed, steps, deadline, module cap) algorithms receive.
+    #[must_use]
+    pub fn context(&self) -> RunContext {
+        crate::lua::run_context(&self.lua)
+    }
+
+    /// Evaluates a snippet of Lua (named `eval` in errors).
+    pub fn eval<T: FromLuaMulti>(&self, code: &str) -> Result<T> {
+        self.start_clock();
+        self.lua.load(code).set_name("=eval").eval().map_err(|e| to_engine_error(&self.lua, e))
+    }
+
+    /// Evaluates a snippet of Lua and returns its first value.
+    pub fn eval_value(&self, code: &str) -> Result<Value> {
+        self.eval(code)
+    }
+
+    fn start_clock(&self) {
+        if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
+            if st.ctx.deadline.is_none() {
+                st.ctx.deadline = self.limits.time.map(|t| Instant::now() + t);
+            }
+        }
+    }
+
+    /// Runs the main script and returns its value. The script's folder becomes readable by
+    /// `require` and `pge.load`; a `--set` override it does not declare is an error.
+    pub fn run_script(&self, path: &Path) -> Result<Value> {
+        let shown = path.to_string_lossy().replace('\\', "/");
+        let canonical = path.canonicalize().map_err(|e| {
+            Error::script(Location { file: shown.clone(), line: None }, format!("cannot read script: {e}"))
+        })?;
+        if !canonical.is_file() {
+            return Err(Error::script(Location { file: shown, line: None }, "cannot read script: not a file"));
+        }
+        *self.script.borrow_mut() = Some(shown.clone());
+        if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
+            let dir = canonical.parent().map(Path::to_path_buf).unwrap_or_default();
+            st.roots.insert(0, dir.clone());
+            st.main_dir = Some(dir);
+        }
+        params::begin_main(&self.lua, &shown, &self.overrides);
+        self.start_clock();
+        let value = crate::lua::sandbox_exec(&self.lua, shown, canonical)
+            .map_err(|e| to_engine_error(&self.lua, e))?;
+        params::end_main(&self.lua).map_err(|(location, message)| Error::script(location, message))?;
+        Ok(value)
+    }
+
+    /// Turns a script's value into an algorithm (see [`crate::lua::algorithm_from`]).
+    pub fn algorithm_from(&self, value: Value) -> Result<Box<dyn Algorithm>> {
+        let location = Location { file: self.script.borrow().clone().unwrap_or_else(|| "eval".into()), line: None };
+        crate::lua::algorithm_from(&self.lua, value, &location)
+    }
+
+    /// Runs the script, then its algorithm to the end (or `--steps`), and returns the model.
+    /// `progress` receives (steps taken, steps planned if known).
+    pub fn generate(&self, path: &Path, progress: &mut dyn FnMut(u32, Option<u32>)) -> Result<Generated> {
+        let t0 = Instant::now();
+        let value = self.run_script(path)?;
+        let script_seconds = t0.elapsed().as_secs_f64();
+        let mut algorithm = self.algorithm_from(value)?;
+        let ctx = self.context();
+        let planned = ctx.steps.or(algorithm.planned_steps());
+        let mut model = run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
+        model.stats.phases.insert(0, ("script".into(), script_seconds));
+        Ok(Generated { model, params: self.declared_params(), seconds: t0.elapsed().as_secs_f64() })
+    }
+
+    /// The main script's declared parameters, once it has run.
+    #[must_use]
+    pub fn declared_params(&self) -> Vec<ParamInfo> {
+        self.lua.app_data_ref::<ParamState>().map(|p| p.main.clone()).unwrap_or_default()
+    }
+
+    /// Every file the session read: scripts, modules, meshes, textures.
+    #[must_use]
+    pub fn loaded_files(&self) -> Vec<PathBuf> {
+        self.lua.app_data_ref::<SessionState>().map(|s| s.loaded_files.clone()).unwrap_or_default()
+    }
+}
+
+/// The hook that enforces the time and instruction limits and remembers where the script
+/// is (memory errors carry no position).
+fn install_hook(lua: &Lua) -> mlua::Result<()> {
+    let triggers = HookTriggers::new().every_nth_instruction(HOOK_INTERVAL);
+    lua.set_global_hook(triggers, |lua, debug| {
+        let here = {
+            let source = debug.source();
+            let name = source.source.as_deref().unwrap_or("?");
+            Location {
+                file: name.strip_prefix('@').unwrap_or(name).to_string(),
+                line: debug.current_line().map(|l| l as u32),
+            }
+        };
+        let Some(mut st) = lua.app_data_mut::<SessionState>() else { return Ok(VmState::Continue) };
+        st.instructions += HOOK_INTERVAL as u64;
+        let problem = if st.ctx.cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+            Some("cancelled".to_string())
+        } else if st.ctx.deadline.is_some_and(|d| Instant::now() >= d) {
+            Some("time limit exceeded (see --time-limit)".to_string())
+        } else if st.instruction_limit.is_some_and(|n| st.instructions > n) {
+            Some(format!("instruction limit of {} exceeded", st.instruction_limit.unwrap_or(0)))
+        } else {
+            None
+        };
+        st.last_location = Some(here.clone());
+        drop(st);
+        match problem {
+            Some(message) => Err(mlua::Error::RuntimeError(format!("{here}: {message}"))),
+            None => Ok(VmState::Continue),
+        }
+    })?;
+    Ok(())
+}
