@@ -35,20 +35,31 @@ pub struct RunContext {
 
 impl Default for RunContext {
     fn default() -> Self {
-        RunContext { seed: 1, steps: None, deadline: None, max_modules: 10_000_000, cancel: None }
+        RunContext {
+            seed: 1,
+            steps: None,
+            deadline: None,
+            max_modules: 10_000_000,
+            cancel: None,
+        }
     }
 }
 
 impl RunContext {
     /// An error if the deadline has passed or the run was cancelled, pointing at `location`.
     pub fn check_deadline(&self, location: &Location) -> Result<()> {
-        if self.cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+        if self
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+        {
             return Err(Error::script(location.clone(), "cancelled"));
         }
         match self.deadline {
-            Some(d) if Instant::now() >= d => {
-                Err(Error::script(location.clone(), "time limit exceeded (see --time-limit)"))
-            }
+            Some(d) if Instant::now() >= d => Err(Error::script(
+                location.clone(),
+                "time limit exceeded (see --time-limit)",
+            )),
             _ => Ok(()),
         }
     }
@@ -165,7 +176,11 @@ mod tests {
         }
         fn step(&mut self, _: &RunContext) -> Result<Step> {
             self.steps += 1;
-            Ok(if self.steps >= self.limit { Step::Done } else { Step::Continue })
+            Ok(if self.steps >= self.limit {
+                Step::Done
+            } else {
+                Step::Continue
+            })
         }
         fn finish(&mut self, _: &RunContext) -> Result<Model> {
             let mut m = Model::new();
@@ -181,7 +196,10 @@ mod tests {
         let m = run(&mut c, &RunContext::default(), &mut |s| seen.push(s)).expect("runs");
         assert_eq!(m.stats.nodes, 5);
         assert_eq!(seen, vec![1, 2, 3, 4, 5]);
-        let ctx = RunContext { steps: Some(2), ..RunContext::default() };
+        let ctx = RunContext {
+            steps: Some(2),
+            ..RunContext::default()
+        };
         assert_eq!(run(&mut c, &ctx, &mut |_| {}).expect("runs").stats.nodes, 2);
     }
 
@@ -196,8 +214,16 @@ mod tests {
 
     #[test]
     fn deadline_in_the_past_is_an_error() {
-        let ctx = RunContext { deadline: Some(Instant::now()), ..RunContext::default() };
-        let err = ctx.check_deadline(&Location::new("a.lua", 3)).expect_err("expired");
-        assert_eq!(err.to_string(), "a.lua:3: time limit exceeded (see --time-limit)");
+        let ctx = RunContext {
+            deadline: Some(Instant::now()),
+            ..RunContext::default()
+        };
+        let err = ctx
+            .check_deadline(&Location::new("a.lua", 3))
+            .expect_err("expired");
+        assert_eq!(
+            err.to_string(),
+            "a.lua:3: time limit exceeded (see --time-limit)"
+        );
     }
 }

@@ -89,7 +89,11 @@ impl EngineBuilder {
                 return Err(Error::DuplicatePlugin(p.name().to_string()));
             }
         }
-        Ok(Engine { plugins: self.plugins, limits: self.limits, library: self.library })
+        Ok(Engine {
+            plugins: self.plugins,
+            limits: self.limits,
+            library: self.library,
+        })
     }
 }
 
@@ -146,8 +150,17 @@ mod tests {
 
     #[test]
     fn duplicate_plugins_are_refused() {
-        let err = Engine::builder().plugin(Named("a")).plugin(Named("a")).build();
+        let err = Engine::builder()
+            .plugin(Named("a"))
+            .plugin(Named("a"))
+            .build();
         assert!(matches!(err, Err(Error::DuplicatePlugin(n)) if n == "a"));
-        assert!(Engine::builder().plugin(Named("a")).plugin(Named("b")).build().is_ok());
+        assert!(
+            Engine::builder()
+                .plugin(Named("a"))
+                .plugin(Named("b"))
+                .build()
+                .is_ok()
+        );
     }
 }

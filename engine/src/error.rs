@@ -18,7 +18,10 @@ impl Location {
     /// A location with a line.
     #[must_use]
     pub fn new(file: impl Into<String>, line: u32) -> Location {
-        Location { file: file.into(), line: Some(line) }
+        Location {
+            file: file.into(),
+            line: Some(line),
+        }
     }
 }
 
@@ -78,7 +81,11 @@ pub enum Error {
 impl Error {
     /// A script error at `location`.
     pub fn script(location: Location, message: impl Into<String>) -> Error {
-        Error::Script { location, message: message.into(), traceback: None }
+        Error::Script {
+            location,
+            message: message.into(),
+            traceback: None,
+        }
     }
 
     /// The script location, for script errors.
@@ -102,7 +109,13 @@ mod tests {
     fn script_errors_print_file_line_message() {
         let e = Error::script(Location::new("scripts/a.lua", 12), "boom");
         assert_eq!(e.to_string(), "scripts/a.lua:12: boom");
-        let e = Error::script(Location { file: "x.lua".into(), line: None }, "gone");
+        let e = Error::script(
+            Location {
+                file: "x.lua".into(),
+                line: None,
+            },
+            "gone",
+        );
         assert_eq!(e.to_string(), "x.lua: gone");
     }
 }

@@ -33,7 +33,12 @@ pub struct SessionOptions {
 
 impl Default for SessionOptions {
     fn default() -> Self {
-        SessionOptions { seed: 1, params: Vec::new(), steps: None, cancel: None }
+        SessionOptions {
+            seed: 1,
+            params: Vec::new(),
+            steps: None,
+            cancel: None,
+        }
     }
 }
 
@@ -64,10 +69,15 @@ impl Session {
     pub(crate) fn new(engine: &Engine, options: SessionOptions) -> Result<Session> {
         let limits = engine.limits().clone();
         let libs = StdLib::TABLE | StdLib::STRING | StdLib::MATH | StdLib::UTF8 | StdLib::COROUTINE;
-        let lua = Lua::new_with(libs, LuaOptions::default())
-            .map_err(|e| Error::Plugin { plugin: "lua".into(), message: e.to_string() })?;
+        let lua = Lua::new_with(libs, LuaOptions::default()).map_err(|e| Error::Plugin {
+            plugin: "lua".into(),
+            message: e.to_string(),
+        })?;
         lua.set_memory_limit(limits.memory)
-            .map_err(|e| Error::Plugin { plugin: "lua".into(), message: e.to_string() })?;
+            .map_err(|e| Error::Plugin {
+                plugin: "lua".into(),
+                message: e.to_string(),
+            })?;
         let library = engine.library().and_then(|l| l.canonicalize().ok());
         lua.set_app_data(SessionState {
             ctx: RunContext {
@@ -84,20 +94,32 @@ impl Session {
             ..SessionState::default()
         });
         lua.set_app_data(CurrentRng(crate::lua::random::mt_from_seed(options.seed)));
-        install_hook(&lua).map_err(|e| Error::Plugin { plugin: "lua".into(), message: e.to_string() })?;
+        install_hook(&lua).map_err(|e| Error::Plugin {
+            plugin: "lua".into(),
+            message: e.to_string(),
+        })?;
         let setup = |lua: &Lua| -> mlua::Result<mlua::Table> {
             let pge = lua.create_table()?;
             crate::lua::register_support(lua, &pge)?;
             lua.globals().set("pge", pge.clone())?;
             Ok(pge)
         };
-        let pge = setup(&lua).map_err(|e| Error::Plugin { plugin: "pge".into(), message: e.to_string() })?;
+        let pge = setup(&lua).map_err(|e| Error::Plugin {
+            plugin: "pge".into(),
+            message: e.to_string(),
+        })?;
         for plugin in engine.plugins() {
-            plugin
-                .register(&lua, &pge)
-                .map_err(|e| Error::Plugin { plugin: plugin.name().to_string(), message: e.to_string() })?;
+            plugin.register(&lua, &pge).map_err(|e| Error::Plugin {
+                plugin: plugin.name().to_string(),
+                message: e.to_string(),
+            })?;
         }
-        Ok(Session { lua, limits, overrides: options.params, script: std::cell::RefCell::new(None) })
+        Ok(Session {
+            lua,
+            limits,
+            overrides: options.params,
+            script: std::cell::RefCell::new(None),
+        })
     }
 
     /// The Lua state, for plugins and hosts that bind more.
@@ -115,7 +137,11 @@ impl Session {
     /// Evaluates a snippet of Lua (named `eval` in errors).
     pub fn eval<T: FromLuaMulti>(&self, code: &str) -> Result<T> {
         self.start_clock();
-        self.lua.load(code).set_name("=eval").eval().map_err(|e| to_engine_error(&self.lua, e))
+        self.lua
+            .load(code)
+            .set_name("=eval")
+            .eval()
+            .map_err(|e| to_engine_error(&self.lua, e))
     }
 
     /// Evaluates a snippet of Lua and returns its first value.
@@ -136,14 +162,29 @@ impl Session {
     pub fn run_script(&self, path: &Path) -> Result<Value> {
         let shown = path.to_string_lossy().replace('\\', "/");
         let canonical = path.canonicalize().map_err(|e| {
-            Error::script(Location { file: shown.clone(), line: None }, format!("cannot read script: {e}"))
+            Error::script(
+                Location {
+                    file: shown.clone(),
+                    line: None,
+                },
+                format!("cannot read script: {e}"),
+            )
         })?;
         if !canonical.is_file() {
-            return Err(Error::script(Location { file: shown, line: None }, "cannot read script: not a file"));
+            return Err(Error::script(
+                Location {
+                    file: shown,
+                    line: None,
+                },
+                "cannot read script: not a file",
+            ));
         }
         *self.script.borrow_mut() = Some(shown.clone());
         if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
-            let dir = canonical.parent().map(Path::to_path_buf).unwrap_or_default();
+            let dir = canonical
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_default();
             st.roots.insert(0, dir.clone());
             st.main_dir = Some(dir);
         }
@@ -151,19 +192,31 @@ impl Session {
         self.start_clock();
         let value = crate::lua::sandbox_exec(&self.lua, shown, canonical)
             .map_err(|e| to_engine_error(&self.lua, e))?;
-        params::end_main(&self.lua).map_err(|(location, message)| Error::script(location, message))?;
+        params::end_main(&self.lua)
+            .map_err(|(location, message)| Error::script(location, message))?;
         Ok(value)
     }
 
     /// Turns a script's value into an algorithm (see [`crate::lua::algorithm_from`]).
     pub fn algorithm_from(&self, value: Value) -> Result<Box<dyn Algorithm>> {
-        let location = Location { file: self.script.borrow().clone().unwrap_or_else(|| "eval".into()), line: None };
+        let location = Location {
+            file: self
+                .script
+                .borrow()
+                .clone()
+                .unwrap_or_else(|| "eval".into()),
+            line: None,
+        };
         crate::lua::algorithm_from(&self.lua, value, &location)
     }
 
     /// Runs the script, then its algorithm to the end (or `--steps`), and returns the model.
     /// `progress` receives (steps taken, steps planned if known).
-    pub fn generate(&self, path: &Path, progress: &mut dyn FnMut(u32, Option<u32>)) -> Result<Generated> {
+    pub fn generate(
+        &self,
+        path: &Path,
+        progress: &mut dyn FnMut(u32, Option<u32>),
+    ) -> Result<Generated> {
         let t0 = Instant::now();
         let value = self.run_script(path)?;
         let script_seconds = t0.elapsed().as_secs_f64();
@@ -171,20 +224,33 @@ impl Session {
         let ctx = self.context();
         let planned = ctx.steps.or(algorithm.planned_steps());
         let mut model = run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
-        model.stats.phases.insert(0, ("script".into(), script_seconds));
-        Ok(Generated { model, params: self.declared_params(), seconds: t0.elapsed().as_secs_f64() })
+        model
+            .stats
+            .phases
+            .insert(0, ("script".into(), script_seconds));
+        Ok(Generated {
+            model,
+            params: self.declared_params(),
+            seconds: t0.elapsed().as_secs_f64(),
+        })
     }
 
     /// The main script's declared parameters, once it has run.
     #[must_use]
     pub fn declared_params(&self) -> Vec<ParamInfo> {
-        self.lua.app_data_ref::<ParamState>().map(|p| p.main.clone()).unwrap_or_default()
+        self.lua
+            .app_data_ref::<ParamState>()
+            .map(|p| p.main.clone())
+            .unwrap_or_default()
     }
 
     /// Every file the session read: scripts, modules, meshes, textures.
     #[must_use]
     pub fn loaded_files(&self) -> Vec<PathBuf> {
-        self.lua.app_data_ref::<SessionState>().map(|s| s.loaded_files.clone()).unwrap_or_default()
+        self.lua
+            .app_data_ref::<SessionState>()
+            .map(|s| s.loaded_files.clone())
+            .unwrap_or_default()
     }
 }
 
@@ -201,14 +267,24 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
                 line: debug.current_line().map(|l| l as u32),
             }
         };
-        let Some(mut st) = lua.app_data_mut::<SessionState>() else { return Ok(VmState::Continue) };
+        let Some(mut st) = lua.app_data_mut::<SessionState>() else {
+            return Ok(VmState::Continue);
+        };
         st.instructions += HOOK_INTERVAL as u64;
-        let problem = if st.ctx.cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+        let problem = if st
+            .ctx
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+        {
             Some("cancelled".to_string())
         } else if st.ctx.deadline.is_some_and(|d| Instant::now() >= d) {
             Some("time limit exceeded (see --time-limit)".to_string())
         } else if st.instruction_limit.is_some_and(|n| st.instructions > n) {
-            Some(format!("instruction limit of {} exceeded", st.instruction_limit.unwrap_or(0)))
+            Some(format!(
+                "instruction limit of {} exceeded",
+                st.instruction_limit.unwrap_or(0)
+            ))
         } else {
             None
         };

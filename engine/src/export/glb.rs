@@ -1,1 +1,468 @@
-pub struct ExportMeta; pub fn glb_bytes(){}
+//! glTF 2.0 binary export (gltf-json), deterministic to the byte.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+use gltf_json as json;
+use json::validation::Checked::Valid;
+use json::validation::USize64;
+use serde_json::{Map, Value as JsonValue, json};
+
+use crate::geometry::{AlphaMode, Material, Mesh, Model, Primitive, Skeleton, Texture};
+use crate::{Error, Result};
+
+/// What the root `extras.pge` records besides the model's own extras.
+#[derive(Clone, Debug, Default)]
+pub struct ExportMeta {
+    /// The run's seed.
+    pub seed: u64,
+    /// Declared parameters and their values, in order.
+    pub params: Vec<(String, JsonValue)>,
+}
+
+/// The generator string written to `asset.generator` and `extras.pge.generator`.
+pub const GENERATOR: &str = concat!("PGE ", env!("CARGO_PKG_VERSION"));
+
+#[derive(Default)]
+struct Builder {
+    root: json::Root,
+    bin: Vec<u8>,
+    materials: Vec<(Arc<Material>, json::Index<json::Material>)>,
+    textures: Vec<(Arc<Texture>, json::Index<json::Texture>)>,
+    sampler: Option<json::Index<json::texture::Sampler>>,
+}
+
+fn raw(value: &JsonValue) -> Result<json::Extras> {
+    serde_json::value::to_raw_value(value)
+        .map(Some)
+        .map_err(|e| Error::Export(e.to_string()))
+}
+
+impl Builder {
+    fn view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.root.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: USize64(bytes.len() as u64),
+            byte_offset: Some(USize64(offset as u64)),
+            byte_stride: None,
+            name: None,
+            target: target.map(Valid),
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    fn accessor(
+        &mut self,
+        bytes: &[u8],
+        count: usize,
+        component: json::accessor::ComponentType,
+        type_: json::accessor::Type,
+        bounds: Option<(JsonValue, JsonValue)>,
+        target: json::buffer::Target,
+    ) -> json::Index<json::Accessor> {
+        let view = self.view(bytes, Some(target));
+        let (min, max) = match bounds {
+            Some((a, b)) => (Some(a), Some(b)),
+            None => (None, None),
+        };
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: Some(USize64(0)),
+            count: USize64(count as u64),
+            component_type: Valid(json::accessor::GenericComponentType(component)),
+            extensions: None,
+            extras: None,
+            type_: Valid(type_),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
+    }
+
+    fn floats(&mut self, data: &[f32], per: usize, bounds: bool) -> json::Index<json::Accessor> {
+        use json::accessor::Type;
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let type_ = match per {
+            2 => Type::Vec2,
+            3 => Type::Vec3,
+            _ => Type::Vec4,
+        };
+        let b = bounds.then(|| {
+            let mut lo = vec![f32::INFINITY; per];
+            let mut hi = vec![f32::NEG_INFINITY; per];
+            for c in data.chunks_exact(per) {
+                for k in 0..per {
+                    lo[k] = lo[k].min(c[k]);
+                    hi[k] = hi[k].max(c[k]);
+                }
+            }
+            (json!(lo), json!(hi))
+        });
+        self.accessor(
+            &bytes,
+            data.len() / per,
+            json::accessor::ComponentType::F32,
+            type_,
+            b,
+            json::buffer::Target::ArrayBuffer,
+        )
+    }
+
+    fn texture(&mut self, tex: &Arc<Texture>) -> json::Index<json::Texture> {
+        if let Some((_, i)) = self
+            .textures
+            .iter()
+            .find(|(t, _)| Arc::ptr_eq(t, tex) || **t == **tex)
+        {
+            return *i;
+        }
+        let view = self.view(&tex.png, None);
+        let image = self.root.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType("image/png".into())),
+            name: Some(tex.name.clone()),
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+        let sampler = *self.sampler.get_or_insert_with(|| {
+            self.root.push(json::texture::Sampler {
+                mag_filter: Some(Valid(json::texture::MagFilter::Linear)),
+                min_filter: Some(Valid(json::texture::MinFilter::LinearMipmapLinear)),
+                wrap_s: Valid(json::texture::WrappingMode::Repeat),
+                wrap_t: Valid(json::texture::WrappingMode::Repeat),
+                ..Default::default()
+            })
+        });
+        let index = self.root.push(json::Texture {
+            name: Some(tex.name.clone()),
+            sampler: Some(sampler),
+            source: image,
+            extensions: None,
+            extras: None,
+        });
+        self.textures.push((tex.clone(), index));
+        index
+    }
+
+    fn material(&mut self, m: &Arc<Material>) -> json::Index<json::Material> {
+        if let Some((_, i)) = self
+            .materials
+            .iter()
+            .find(|(x, _)| Arc::ptr_eq(x, m) || **x == **m)
+        {
+            return *i;
+        }
+        let base_color_texture = m.texture.as_ref().map(|t| json::texture::Info {
+            index: self.texture(t),
+            tex_coord: 0,
+            extensions: None,
+            extras: None,
+        });
+        let (alpha_mode, alpha_cutoff) = match m.alpha {
+            AlphaMode::Opaque => (json::material::AlphaMode::Opaque, None),
+            AlphaMode::Mask(c) => (
+                json::material::AlphaMode::Mask,
+                Some(json::material::AlphaCutoff(c)),
+            ),
+            AlphaMode::Blend => (json::material::AlphaMode::Blend, None),
+        };
+        let index = self.root.push(json::Material {
+            name: Some(m.name.clone()),
+            alpha_mode: Valid(alpha_mode),
+            alpha_cutoff,
+            double_sided: m.double_sided,
+            pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+                base_color_factor: json::material::PbrBaseColorFactor(m.base_color),
+                base_color_texture,
+                metallic_factor: json::material::StrengthFactor(m.metallic),
+                roughness_factor: json::material::StrengthFactor(m.roughness),
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        self.materials.push((m.clone(), index));
+        index
+    }
+
+    fn mesh(&mut self, mesh: &Mesh) -> Result<json::Index<json::Mesh>> {
+        use json::accessor::{ComponentType, Type};
+        use json::mesh::Semantic;
+        mesh.validate()?;
+        let mut attributes = std::collections::BTreeMap::new();
+        let positions: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
+        attributes.insert(Valid(Semantic::Positions), self.floats(&positions, 3, true));
+        if !mesh.normals.is_empty() {
+            let n: Vec<f32> = mesh.normals.iter().flat_map(|p| p.to_array()).collect();
+            attributes.insert(Valid(Semantic::Normals), self.floats(&n, 3, false));
+        }
+        if !mesh.uvs.is_empty() {
+            let t: Vec<f32> = mesh.uvs.iter().flat_map(|p| p.to_array()).collect();
+            attributes.insert(Valid(Semantic::TexCoords(0)), self.floats(&t, 2, false));
+        }
+        if !mesh.colors.is_empty() {
+            let c: Vec<f32> = mesh.colors.iter().flat_map(|p| p.to_array()).collect();
+            attributes.insert(Valid(Semantic::Colors(0)), self.floats(&c, 4, false));
+        }
+        let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let indices = self.accessor(
+            &index_bytes,
+            mesh.indices.len(),
+            ComponentType::U32,
+            Type::Scalar,
+            None,
+            json::buffer::Target::ElementArrayBuffer,
+        );
+        let material = self.material(&mesh.material);
+        let mut pge = Map::new();
+        if let Some(s) = &mesh.skeleton {
+            pge.insert("skeleton".into(), skeleton_json(s));
+        }
+        for (k, v) in &mesh.extras {
+            pge.insert(k.clone(), v.clone());
+        }
+        let extras = if pge.is_empty() {
+            None
+        } else {
+            raw(&json!({ "pge": pge }))?
+        };
+        let mode = match mesh.primitive {
+            Primitive::Triangles => json::mesh::Mode::Triangles,
+            Primitive::Lines => json::mesh::Mode::Lines,
+        };
+        Ok(self.root.push(json::Mesh {
+            extensions: None,
+            extras,
+            name: Some(mesh.name.clone()),
+            primitives: vec![json::mesh::Primitive {
+                attributes,
+                extensions: None,
+                extras: None,
+                indices: Some(indices),
+                material: Some(material),
+                mode: Valid(mode),
+                targets: None,
+            }],
+            weights: None,
+        }))
+    }
+}
+
+/// The skeleton as `{parents, positions, radii, orders}` (API.md §7).
+fn skeleton_json(s: &Skeleton) -> JsonValue {
+    let parents: Vec<i64> = s.parents.iter().map(|p| p.map_or(-1, i64::from)).collect();
+    let positions: Vec<f32> = s.positions.iter().flat_map(|p| p.to_array()).collect();
+    json!({ "parents": parents, "positions": positions, "radii": s.radii, "orders": s.orders })
+}
+
+/// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
+/// the matrix otherwise.
+fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
+    let mut node = json::Node {
+        mesh: Some(mesh),
+        ..Default::default()
+    };
+    if *m == Mat4::IDENTITY {
+        return node;
+    }
+    let (s, r, t) = m.to_scale_rotation_translation();
+    if Mat4::from_scale_rotation_translation(s, r, t).abs_diff_eq(*m, 1e-5) {
+        if t != Vec3::ZERO {
+            node.translation = Some(t.to_array());
+        }
+        if r != glam::Quat::IDENTITY {
+            node.rotation = Some(json::scene::UnitQuaternion(r.normalize().to_array()));
+        }
+        if s != Vec3::ONE {
+            node.scale = Some(s.to_array());
+        }
+    } else {
+        node.matrix = Some(m.to_cols_array());
+    }
+    node
+}
+
+/// The `.glb` bytes of a model: one buffer, u32 indices, embedded PNG textures, one node per
+/// instance, and the root `extras.pge` with generator, seed, params and stats.
+pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
+    model.validate()?;
+    let mut b = Builder::default();
+    b.root.asset = json::Asset {
+        copyright: None,
+        extensions: None,
+        extras: None,
+        generator: Some(GENERATOR.into()),
+        min_version: None,
+        version: "2.0".into(),
+    };
+    let mut meshes = Vec::with_capacity(model.meshes.len());
+    for m in &model.meshes {
+        meshes.push(b.mesh(m)?);
+    }
+    let mut nodes = Vec::with_capacity(model.instances.len());
+    for inst in &model.instances {
+        let n = node(meshes[inst.mesh], &inst.transform);
+        nodes.push(b.root.push(n));
+    }
+    let scene = b.root.push(json::Scene {
+        extensions: None,
+        extras: None,
+        name: Some("pge".into()),
+        nodes,
+    });
+    b.root.scene = Some(scene);
+    let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
+    let mut pge = Map::new();
+    pge.insert("generator".into(), GENERATOR.into());
+    pge.insert("seed".into(), meta.seed.into());
+    pge.insert("params".into(), JsonValue::Object(params));
+    pge.insert(
+        "stats".into(),
+        json!({
+            "vertices": model.vertex_count(),
+            "triangles": model.triangle_count(),
+            "nodes": model.stats.nodes,
+            "leaves": model.stats.leaves,
+            "modules": model.stats.modules,
+        }),
+    );
+    for (k, v) in &model.extras {
+        pge.entry(k.clone()).or_insert_with(|| v.clone());
+    }
+    b.root.extras = raw(&json!({ "pge": pge }))?;
+    while b.bin.len() % 4 != 0 {
+        b.bin.push(0);
+    }
+    if !b.bin.is_empty() {
+        b.root.push(json::Buffer {
+            byte_length: USize64(b.bin.len() as u64),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+    }
+    let mut text = b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?;
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let total = 12 + 8 + text.len() + if b.bin.is_empty() { 0 } else { 8 + b.bin.len() };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    if !b.bin.is_empty() {
+        out.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&b.bin);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Material, Mesh};
+    use glam::{Quat, Vec2};
+
+    fn textured_model() -> Model {
+        let mut mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+        let tex = Texture::from_rgba("leaf", 2, 2, &[255; 16]).expect("png");
+        mesh.material = Arc::new(Material {
+            texture: Some(Arc::new(tex)),
+            alpha: AlphaMode::Mask(0.5),
+            double_sided: true,
+            ..Material::default()
+        });
+        let mut s = Skeleton::new();
+        let r = s.push(Vec3::ZERO, None, 0.1, 0);
+        s.push(Vec3::Y, Some(r), 0.05, 0);
+        mesh.skeleton = Some(Arc::new(s));
+        let mesh = Arc::new(mesh);
+        let mut model = Model::new();
+        model.add_mesh(mesh.clone(), Mat4::IDENTITY);
+        model.add_mesh(
+            mesh,
+            Mat4::from_rotation_translation(Quat::from_rotation_y(1.0), Vec3::X),
+        );
+        model
+    }
+
+    #[test]
+    fn glb_parses_back_with_the_gltf_crate() {
+        let model = textured_model();
+        let bytes = glb_bytes(
+            &model,
+            &ExportMeta {
+                seed: 7,
+                params: vec![("h".into(), json!(2))],
+            },
+        )
+        .expect("exports");
+        let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+        assert_eq!(gltf.meshes().count(), 1);
+        assert_eq!(gltf.nodes().count(), 2);
+        assert_eq!(gltf.images().count(), 1);
+        let prim = gltf
+            .meshes()
+            .next()
+            .and_then(|m| m.primitives().next())
+            .expect("primitive");
+        assert_eq!(
+            prim.indices().map(|a| a.data_type()),
+            Some(gltf::accessor::DataType::U32)
+        );
+        assert_eq!(
+            prim.material().alpha_mode(),
+            gltf::material::AlphaMode::Mask
+        );
+        let extras: JsonValue = serde_json::from_str(
+            gltf.document
+                .as_json()
+                .extras
+                .as_ref()
+                .expect("extras")
+                .get(),
+        )
+        .expect("json");
+        assert_eq!(extras["pge"]["seed"], 7);
+        assert_eq!(extras["pge"]["params"]["h"], 2);
+        assert_eq!(extras["pge"]["stats"]["triangles"], 2);
+        let mesh_extras: JsonValue = serde_json::from_str(
+            gltf.meshes()
+                .next()
+                .expect("mesh")
+                .extras()
+                .as_ref()
+                .expect("extras")
+                .get(),
+        )
+        .expect("json");
+        assert_eq!(mesh_extras["pge"]["skeleton"]["parents"], json!([-1, 0]));
+    }
+
+    #[test]
+    fn export_is_byte_identical() {
+        let a = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
+        let b = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
+        assert_eq!(a, b);
+        assert_eq!(a.len() % 4, 0);
+    }
+}

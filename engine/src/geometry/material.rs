@@ -54,11 +54,19 @@ impl Texture {
             image::ExtendedColorType::Rgba8,
         )
         .map_err(|e| GeometryError::Texture(e.to_string()))?;
-        Ok(Texture { name: name.into(), width, height, png })
+        Ok(Texture {
+            name: name.into(),
+            width,
+            height,
+            png,
+        })
     }
 
     /// Reads a texture from PNG (or any format `image` decodes) bytes, re-encoded as PNG.
-    pub fn from_image_bytes(name: impl Into<String>, bytes: &[u8]) -> Result<Texture, GeometryError> {
+    pub fn from_image_bytes(
+        name: impl Into<String>,
+        bytes: &[u8],
+    ) -> Result<Texture, GeometryError> {
         let img = image::load_from_memory(bytes)
             .map_err(|e| GeometryError::Texture(e.to_string()))?
             .to_rgba8();
@@ -102,7 +110,11 @@ impl Default for Material {
 impl Material {
     /// A plain material of the given sRGB colour `#rrggbb` (or `#rrggbbaa`).
     pub fn from_hex(name: impl Into<String>, hex: &str) -> Result<Material, GeometryError> {
-        Ok(Material { name: name.into(), base_color: parse_hex_color(hex)?, ..Material::default() })
+        Ok(Material {
+            name: name.into(),
+            base_color: parse_hex_color(hex)?,
+            ..Material::default()
+        })
     }
 }
 
@@ -114,7 +126,11 @@ pub fn parse_hex_color(hex: &str) -> Result<[f32; 4], GeometryError> {
         return Err(bad());
     }
     let byte = |i: usize| u8::from_str_radix(&digits[i..i + 2], 16).map_err(|_| bad());
-    let alpha = if digits.len() == 8 { byte(6)? as f32 / 255.0 } else { 1.0 };
+    let alpha = if digits.len() == 8 {
+        byte(6)? as f32 / 255.0
+    } else {
+        1.0
+    };
     Ok([
         srgb_to_linear(byte(0)? as f32 / 255.0),
         srgb_to_linear(byte(2)? as f32 / 255.0),
@@ -126,7 +142,11 @@ pub fn parse_hex_color(hex: &str) -> Result<[f32; 4], GeometryError> {
 /// Converts one sRGB channel in [0, 1] to linear.
 #[must_use]
 pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 #[cfg(test)]

@@ -114,7 +114,11 @@ pub struct Mesh {
 impl Mesh {
     /// A triangle mesh from positions and indices, with smooth normals computed.
     pub fn from_triangles(positions: Vec<Vec3>, indices: Vec<u32>) -> Result<Mesh, GeometryError> {
-        let mut mesh = Mesh { positions, indices, ..Mesh::default() };
+        let mut mesh = Mesh {
+            positions,
+            indices,
+            ..Mesh::default()
+        };
         mesh.validate()?;
         mesh.compute_normals();
         Ok(mesh)
@@ -138,11 +142,17 @@ impl Mesh {
     /// Checks attribute lengths, index ranges and that every number is finite.
     pub fn validate(&self) -> Result<(), GeometryError> {
         let n = self.positions.len();
-        for (attribute, got) in
-            [("normals", self.normals.len()), ("uvs", self.uvs.len()), ("colors", self.colors.len())]
-        {
+        for (attribute, got) in [
+            ("normals", self.normals.len()),
+            ("uvs", self.uvs.len()),
+            ("colors", self.colors.len()),
+        ] {
             if got != 0 && got != n {
-                return Err(GeometryError::AttributeLength { attribute, got, vertices: n });
+                return Err(GeometryError::AttributeLength {
+                    attribute,
+                    got,
+                    vertices: n,
+                });
             }
         }
         let per = self.primitive.arity();
@@ -153,9 +163,17 @@ impl Mesh {
                 primitive: self.primitive.name(),
             });
         }
-        if let Some((at, &index)) = self.indices.iter().enumerate().find(|(_, i)| **i as usize >= n)
+        if let Some((at, &index)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find(|(_, i)| **i as usize >= n)
         {
-            return Err(GeometryError::IndexOutOfRange { index, at, vertices: n });
+            return Err(GeometryError::IndexOutOfRange {
+                index,
+                at,
+                vertices: n,
+            });
         }
         let finite3 = |attribute, v: &[Vec3]| match v.iter().position(|p| !p.is_finite()) {
             Some(at) => Err(GeometryError::NotFinite { attribute, at }),
@@ -164,10 +182,16 @@ impl Mesh {
         finite3("positions", &self.positions)?;
         finite3("normals", &self.normals)?;
         if let Some(at) = self.uvs.iter().position(|p| !p.is_finite()) {
-            return Err(GeometryError::NotFinite { attribute: "uvs", at });
+            return Err(GeometryError::NotFinite {
+                attribute: "uvs",
+                at,
+            });
         }
         if let Some(at) = self.colors.iter().position(|p| !p.is_finite()) {
-            return Err(GeometryError::NotFinite { attribute: "colors", at });
+            return Err(GeometryError::NotFinite {
+                attribute: "colors",
+                at,
+            });
         }
         Ok(())
     }
@@ -211,11 +235,21 @@ impl Mesh {
     #[must_use]
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;
-        Some(self.positions.iter().fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+        )
     }
 }
 
-fn fill_attribute<T: Copy>(mine: &mut Vec<T>, theirs: &[T], n_mine: usize, n_theirs: usize, default: T) {
+fn fill_attribute<T: Copy>(
+    mine: &mut Vec<T>,
+    theirs: &[T],
+    n_mine: usize,
+    n_theirs: usize,
+    default: T,
+) {
     if mine.is_empty() && theirs.is_empty() {
         return;
     }
@@ -235,7 +269,12 @@ mod tests {
 
     fn quad() -> Mesh {
         Mesh::from_triangles(
-            vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, -1.0)],
+            vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::new(1.0, 0.0, -1.0),
+                Vec3::new(0.0, 0.0, -1.0),
+            ],
             vec![0, 1, 2, 0, 2, 3],
         )
         .expect("valid quad")
@@ -254,17 +293,36 @@ mod tests {
         q.indices[4] = 9;
         assert_eq!(
             q.validate(),
-            Err(GeometryError::IndexOutOfRange { index: 9, at: 4, vertices: 4 })
+            Err(GeometryError::IndexOutOfRange {
+                index: 9,
+                at: 4,
+                vertices: 4
+            })
         );
         let mut q = quad();
         q.uvs = vec![Vec2::ZERO; 3];
-        assert!(matches!(q.validate(), Err(GeometryError::AttributeLength { attribute: "uvs", .. })));
+        assert!(matches!(
+            q.validate(),
+            Err(GeometryError::AttributeLength {
+                attribute: "uvs",
+                ..
+            })
+        ));
         let mut q = quad();
         q.indices.pop();
-        assert!(matches!(q.validate(), Err(GeometryError::IndexCount { .. })));
+        assert!(matches!(
+            q.validate(),
+            Err(GeometryError::IndexCount { .. })
+        ));
         let mut q = quad();
         q.positions[1].x = f32::NAN;
-        assert!(matches!(q.validate(), Err(GeometryError::NotFinite { attribute: "positions", at: 1 })));
+        assert!(matches!(
+            q.validate(),
+            Err(GeometryError::NotFinite {
+                attribute: "positions",
+                at: 1
+            })
+        ));
     }
 
     #[test]

@@ -88,7 +88,9 @@ impl Skeleton {
         for p in self.parents.iter().flatten() {
             has_child[*p as usize] = true;
         }
-        (0..self.len() as u32).filter(|i| !has_child[*i as usize]).collect()
+        (0..self.len() as u32)
+            .filter(|i| !has_child[*i as usize])
+            .collect()
     }
 
     /// Distance from each node to its root along the branches (0 at a root).

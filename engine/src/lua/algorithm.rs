@@ -24,7 +24,10 @@ impl AlgorithmHandle {
 impl UserData for AlgorithmHandle {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method_mut("model", |lua, me, ()| {
-            let ctx = RunContext { steps: None, ..super::run_context(lua) };
+            let ctx = RunContext {
+                steps: None,
+                ..super::run_context(lua)
+            };
             run(&mut *me.0, &ctx, &mut |_| {})
                 .map(LuaModel)
                 .map_err(|e| mlua::Error::RuntimeError(e.to_string()))
@@ -61,14 +64,18 @@ impl Algorithm for ScriptAlgorithm {
 
     fn init(&mut self, _: &RunContext) -> crate::Result<()> {
         if let Some(f) = &self.init {
-            f.call::<()>(self.table.clone()).map_err(|e| self.lua_error(f, e))?;
+            f.call::<()>(self.table.clone())
+                .map_err(|e| self.lua_error(f, e))?;
         }
         Ok(())
     }
 
     fn step(&mut self, ctx: &RunContext) -> crate::Result<Step> {
         ctx.check_deadline(&self.location)?;
-        let more: Value = self.step.call(self.table.clone()).map_err(|e| self.lua_error(&self.step, e))?;
+        let more: Value = self
+            .step
+            .call(self.table.clone())
+            .map_err(|e| self.lua_error(&self.step, e))?;
         Ok(match more {
             Value::Nil | Value::Boolean(false) => Step::Done,
             _ => Step::Continue,
@@ -76,12 +83,20 @@ impl Algorithm for ScriptAlgorithm {
     }
 
     fn finish(&mut self, _: &RunContext) -> crate::Result<Model> {
-        let result: Value = self.finish.call(self.table.clone()).map_err(|e| self.lua_error(&self.finish, e))?;
+        let result: Value = self
+            .finish
+            .call(self.table.clone())
+            .map_err(|e| self.lua_error(&self.finish, e))?;
         to_model(&result).map_err(|e| match e {
-            mlua::Error::RuntimeError(m) if m.contains(": ") && super::errors::split_location(&m).is_some() => {
+            mlua::Error::RuntimeError(m)
+                if m.contains(": ") && super::errors::split_location(&m).is_some() =>
+            {
                 self.lua_error(&self.finish, mlua::Error::RuntimeError(m))
             }
-            other => Error::script(self.location.clone(), format!("pge.Algorithm finish: {other}")),
+            other => Error::script(
+                self.location.clone(),
+                format!("pge.Algorithm finish: {other}"),
+            ),
         })
     }
 }
@@ -91,13 +106,27 @@ fn make_algorithm(lua: &Lua, t: Table) -> mlua::Result<AlgorithmHandle> {
         match t.raw_get::<Value>(k)? {
             Value::Function(f) => Ok(Some(f)),
             Value::Nil if !required => Ok(None),
-            other => Err(script_error(lua, format!("pge.Algorithm: '{k}' must be a function, not {}", other.type_name()))),
+            other => Err(script_error(
+                lua,
+                format!(
+                    "pge.Algorithm: '{k}' must be a function, not {}",
+                    other.type_name()
+                ),
+            )),
         }
     };
     let init = func("init", false)?;
-    let step = func("step", true)?.ok_or_else(|| script_error(lua, "pge.Algorithm: 'step' is missing"))?;
-    let finish = func("finish", true)?.ok_or_else(|| script_error(lua, "pge.Algorithm: 'finish' is missing"))?;
-    Ok(AlgorithmHandle::new(Box::new(ScriptAlgorithm { table: t, init, step, finish, location: caller_location(lua) })))
+    let step =
+        func("step", true)?.ok_or_else(|| script_error(lua, "pge.Algorithm: 'step' is missing"))?;
+    let finish = func("finish", true)?
+        .ok_or_else(|| script_error(lua, "pge.Algorithm: 'finish' is missing"))?;
+    Ok(AlgorithmHandle::new(Box::new(ScriptAlgorithm {
+        table: t,
+        init,
+        step,
+        finish,
+        location: caller_location(lua),
+    })))
 }
 
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
@@ -107,7 +136,11 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
 /// The algorithm a script's value stands for: an [`AlgorithmHandle`]; an object with an
 /// `algorithm()` method (an L-system); or a finished model (a model, a mesh, anything with
 /// `:model()`). `location` is blamed when the value is none of these.
-pub fn algorithm_from(lua: &Lua, value: Value, location: &Location) -> crate::Result<Box<dyn Algorithm>> {
+pub fn algorithm_from(
+    lua: &Lua,
+    value: Value,
+    location: &Location,
+) -> crate::Result<Box<dyn Algorithm>> {
     let mut value = value;
     for _ in 0..4 {
         if let Value::UserData(ud) = &value {
@@ -161,4 +194,3 @@ fn describe_value(v: &Value) -> String {
         other => format!("a {}", other.type_name()),
     }
 }
-

@@ -17,8 +17,14 @@ pub fn caller_location(lua: &Lua) -> Location {
                 return None;
             }
             let name = source.source.as_deref().unwrap_or("?");
-            let file = name.strip_prefix('@').or_else(|| name.strip_prefix('=')).unwrap_or(name);
-            Some(Location { file: file.to_string(), line: d.current_line().map(|l| l as u32) })
+            let file = name
+                .strip_prefix('@')
+                .or_else(|| name.strip_prefix('='))
+                .unwrap_or(name);
+            Some(Location {
+                file: file.to_string(),
+                line: d.current_line().map(|l| l as u32),
+            })
         });
         match found {
             None => break,
@@ -28,7 +34,10 @@ pub fn caller_location(lua: &Lua) -> Location {
     }
     lua.app_data_ref::<SessionState>()
         .and_then(|s| s.last_location.clone())
-        .unwrap_or_else(|| Location { file: "?".into(), line: None })
+        .unwrap_or_else(|| Location {
+            file: "?".into(),
+            line: None,
+        })
 }
 
 /// A runtime error `FILE:LINE: message` located at the calling Lua code: what a plugin
@@ -44,10 +53,24 @@ pub fn to_engine_error(lua: &Lua, err: mlua::Error) -> Error {
     let traceback = traceback_of(&err);
     let (message, location) = describe(lua, &err);
     let location = location
-        .or_else(|| traceback.as_deref().and_then(|t| location_in_traceback(lua, t)))
-        .or_else(|| lua.app_data_ref::<SessionState>().and_then(|s| s.last_location.clone()))
-        .unwrap_or_else(|| Location { file: "?".into(), line: None });
-    Error::Script { location, message, traceback }
+        .or_else(|| {
+            traceback
+                .as_deref()
+                .and_then(|t| location_in_traceback(lua, t))
+        })
+        .or_else(|| {
+            lua.app_data_ref::<SessionState>()
+                .and_then(|s| s.last_location.clone())
+        })
+        .unwrap_or_else(|| Location {
+            file: "?".into(),
+            line: None,
+        });
+    Error::Script {
+        location,
+        message,
+        traceback,
+    }
 }
 
 fn traceback_of(err: &mlua::Error) -> Option<String> {
@@ -66,15 +89,29 @@ fn describe(lua: &Lua, err: &mlua::Error) -> (String, Option<Location>) {
     match err {
         E::SyntaxError { message, .. } | E::RuntimeError(message) => parse_message(lua, message),
         E::MemoryError(_) => {
-            let limit = lua.app_data_ref::<SessionState>().map(|s| s.memory_limit).unwrap_or(0);
-            (format!("memory limit of {} MiB exceeded (see --memory-limit)", limit >> 20), None)
+            let limit = lua
+                .app_data_ref::<SessionState>()
+                .map(|s| s.memory_limit)
+                .unwrap_or(0);
+            (
+                format!(
+                    "memory limit of {} MiB exceeded (see --memory-limit)",
+                    limit >> 20
+                ),
+                None,
+            )
         }
         E::CallbackError { cause, .. } => describe(lua, cause),
         E::WithContext { context, cause } => {
             let (m, l) = describe(lua, cause);
             (format!("{context}: {m}"), l)
         }
-        E::BadArgument { to, pos, name, cause } => {
+        E::BadArgument {
+            to,
+            pos,
+            name,
+            cause,
+        } => {
             let (m, l) = describe(lua, cause);
             let what = match (to, name) {
                 (Some(to), Some(name)) => format!("bad argument #{pos} ({name}) to '{to}'"),
@@ -85,13 +122,16 @@ fn describe(lua: &Lua, err: &mlua::Error) -> (String, Option<Location>) {
             (format!("{what}: {m}"), l)
         }
         E::FromLuaConversionError { from, to, message } => {
-            let extra = message.as_deref().map(|m| format!(" ({m})")).unwrap_or_default();
+            let extra = message
+                .as_deref()
+                .map(|m| format!(" ({m})"))
+                .unwrap_or_default();
             (format!("expected {to}, got {from}{extra}"), None)
         }
         E::ExternalError(e) => match e.downcast_ref::<Error>() {
-            Some(Error::Script { location, message, .. }) => {
-                (message.clone(), Some(location.clone()))
-            }
+            Some(Error::Script {
+                location, message, ..
+            }) => (message.clone(), Some(location.clone())),
             _ => (one_line(&e.to_string()), None),
         },
         other => parse_message(lua, &other.to_string()),
@@ -105,7 +145,13 @@ fn parse_message(lua: &Lua, message: &str) -> (String, Option<Location>) {
     match split_location(&message) {
         Some((file, line, rest)) => {
             let file = full_chunk_name(lua, file);
-            (rest.to_string(), Some(Location { file, line: Some(line) }))
+            (
+                rest.to_string(),
+                Some(Location {
+                    file,
+                    line: Some(line),
+                }),
+            )
         }
         None => (message, None),
     }
@@ -125,7 +171,10 @@ fn location_in_traceback(lua: &Lua, traceback: &str) -> Option<Location> {
             return None;
         }
         let (file, line, _) = split_location(l)?;
-        Some(Location { file: full_chunk_name(lua, file), line: Some(line) })
+        Some(Location {
+            file: full_chunk_name(lua, file),
+            line: Some(line),
+        })
     })
 }
 
@@ -133,7 +182,10 @@ fn location_in_traceback(lua: &Lua, traceback: &str) -> Option<Location> {
 pub(crate) fn split_location(s: &str) -> Option<(&str, u32, &str)> {
     let bytes = s.as_bytes();
     for (i, _) in s.match_indices(':') {
-        let digits = bytes[i + 1..].iter().take_while(|b| b.is_ascii_digit()).count();
+        let digits = bytes[i + 1..]
+            .iter()
+            .take_while(|b| b.is_ascii_digit())
+            .count();
         let end = i + 1 + digits;
         if i > 0 && digits > 0 && bytes.get(end) == Some(&b':') {
             let line = s[i + 1..end].parse().ok()?;
@@ -146,7 +198,11 @@ pub(crate) fn split_location(s: &str) -> Option<(&str, u32, &str)> {
 /// The message up to any traceback, on one line.
 fn one_line(s: &str) -> String {
     let s = s.split("\nstack traceback:").next().unwrap_or(s);
-    s.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" ")
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 #[cfg(test)]
@@ -155,7 +211,10 @@ mod tests {
 
     #[test]
     fn splits_file_line_message() {
-        assert_eq!(split_location("a/b.lua:12: boom: x"), Some(("a/b.lua", 12, "boom: x")));
+        assert_eq!(
+            split_location("a/b.lua:12: boom: x"),
+            Some(("a/b.lua", 12, "boom: x"))
+        );
         assert_eq!(split_location("no location here"), None);
         assert_eq!(split_location("x:y: z"), None);
     }

@@ -20,8 +20,8 @@ pub use errors::{caller_location, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
 pub use random::{LuaRng, swap_rng, uniform};
-pub use sandbox::{resolve_path, writable_path};
 pub(crate) use sandbox::exec_file as sandbox_exec;
+pub use sandbox::{resolve_path, writable_path};
 
 use crate::RunContext;
 
@@ -29,7 +29,9 @@ use crate::RunContext;
 /// module cap, cancel flag).
 #[must_use]
 pub fn run_context(lua: &mlua::Lua) -> RunContext {
-    lua.app_data_ref::<state::SessionState>().map(|s| s.ctx.clone()).unwrap_or_default()
+    lua.app_data_ref::<state::SessionState>()
+        .map(|s| s.ctx.clone())
+        .unwrap_or_default()
 }
 
 /// Registers the support library into the `pge` table.

@@ -22,20 +22,25 @@ impl UserData for LuaMesh {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
         m.add_method("triangleCount", |_, me, ()| Ok(me.0.triangle_count()));
-        m.add_method("model", |_, me, ()| Ok(LuaModel(Model::from_mesh(me.0.clone()))));
+        m.add_method("model", |_, me, ()| {
+            Ok(LuaModel(Model::from_mesh(me.0.clone())))
+        });
     }
 }
 
 impl UserData for LuaModel {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
-        m.add_method_mut("add", |lua, me, (thing, transform): (Value, Option<LuaMat4>)| {
-            let other = to_model(&thing).map_err(|e| match e {
-                mlua::Error::RuntimeError(_) => e,
-                other => script_error(lua, format!("model:add: {other}")),
-            })?;
-            me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
-            Ok(())
-        });
+        m.add_method_mut(
+            "add",
+            |lua, me, (thing, transform): (Value, Option<LuaMat4>)| {
+                let other = to_model(&thing).map_err(|e| match e {
+                    mlua::Error::RuntimeError(_) => e,
+                    other => script_error(lua, format!("model:add: {other}")),
+                })?;
+                me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
+                Ok(())
+            },
+        );
         m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
         m.add_method("triangleCount", |_, me, ()| Ok(me.0.triangle_count()));
         m.add_method("meshCount", |_, me, ()| Ok(me.0.meshes.len()));
@@ -87,7 +92,13 @@ fn floats(lua: &Lua, t: &Table, key: &str, per: usize) -> mlua::Result<Option<Ve
     let Value::Table(arr) = v else {
         return match v {
             Value::Nil => Ok(None),
-            other => Err(script_error(lua, format!("pge.mesh: {key} must be an array of numbers, not {}", other.type_name()))),
+            other => Err(script_error(
+                lua,
+                format!(
+                    "pge.mesh: {key} must be an array of numbers, not {}",
+                    other.type_name()
+                ),
+            )),
         };
     };
     let n = arr.raw_len();
@@ -97,16 +108,28 @@ fn floats(lua: &Lua, t: &Table, key: &str, per: usize) -> mlua::Result<Option<Ve
             Value::Integer(k) => k as f64,
             Value::Number(x) => x,
             other => {
-                return Err(script_error(lua, format!("pge.mesh: {key}[{i}] is a {}, not a number", other.type_name())));
+                return Err(script_error(
+                    lua,
+                    format!(
+                        "pge.mesh: {key}[{i}] is a {}, not a number",
+                        other.type_name()
+                    ),
+                ));
             }
         };
         if !x.is_finite() {
-            return Err(script_error(lua, format!("pge.mesh: {key}[{i}] is NaN or infinite")));
+            return Err(script_error(
+                lua,
+                format!("pge.mesh: {key}[{i}] is NaN or infinite"),
+            ));
         }
         out.push(x as f32);
     }
     if n % per != 0 {
-        return Err(script_error(lua, format!("pge.mesh: {key} has {n} numbers, not a multiple of {per}")));
+        return Err(script_error(
+            lua,
+            format!("pge.mesh: {key} has {n} numbers, not a multiple of {per}"),
+        ));
     }
     Ok(Some(out))
 }
@@ -120,14 +143,19 @@ pub fn material_from_table(lua: &Lua, t: &Table) -> mlua::Result<Material> {
         m.name = name;
     }
     if let Some(c) = t.raw_get::<Option<String>>("color")? {
-        m.base_color = crate::geometry::Material::from_hex("", &c).map_err(|e| script_error(lua, format!("material color: {e}")))?.base_color;
+        m.base_color = crate::geometry::Material::from_hex("", &c)
+            .map_err(|e| script_error(lua, format!("material color: {e}")))?
+            .base_color;
     }
     m.double_sided = t.raw_get::<Option<bool>>("doubleSided")?.unwrap_or(false);
     let unit = |k: &str, d: f32| -> mlua::Result<f32> {
         match t.raw_get::<Option<f64>>(k)? {
             None => Ok(d),
             Some(x) if (0.0..=1.0).contains(&x) => Ok(x as f32),
-            Some(x) => Err(script_error(lua, format!("material {k} = {x} must be in [0, 1]"))),
+            Some(x) => Err(script_error(
+                lua,
+                format!("material {k} = {x} must be in [0, 1]"),
+            )),
         }
     };
     m.roughness = unit("roughness", m.roughness)?;
@@ -138,13 +166,18 @@ pub fn material_from_table(lua: &Lua, t: &Table) -> mlua::Result<Material> {
         Some("mask") => AlphaMode::Mask(cutoff),
         Some("blend") => AlphaMode::Blend,
         Some(other) => {
-            return Err(script_error(lua, format!("material alpha = '{other}': expected \"opaque\", \"mask\" or \"blend\"")));
+            return Err(script_error(
+                lua,
+                format!("material alpha = '{other}': expected \"opaque\", \"mask\" or \"blend\""),
+            ));
         }
     };
     if let Some(path) = t.raw_get::<Option<String>>("texture")? {
         let file = resolve_path(lua, &path)?;
-        let bytes = std::fs::read(&file).map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
-        let tex = Texture::from_image_bytes(path.clone(), &bytes).map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
+        let bytes = std::fs::read(&file)
+            .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
+        let tex = Texture::from_image_bytes(path.clone(), &bytes)
+            .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
         m.texture = Some(Arc::new(tex));
     }
     Ok(m)
@@ -154,11 +187,19 @@ pub fn material_from_table(lua: &Lua, t: &Table) -> mlua::Result<Material> {
 fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
     let positions = floats(lua, &t, "positions", 3)?
         .ok_or_else(|| script_error(lua, "pge.mesh: positions are missing"))?;
-    let positions: Vec<Vec3> = positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    let positions: Vec<Vec3> = positions
+        .chunks_exact(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
     let primitive = match t.raw_get::<Option<String>>("primitive")?.as_deref() {
         None | Some("triangles") => Primitive::Triangles,
         Some("lines") => Primitive::Lines,
-        Some(other) => return Err(script_error(lua, format!("pge.mesh: primitive '{other}': expected \"triangles\" or \"lines\""))),
+        Some(other) => {
+            return Err(script_error(
+                lua,
+                format!("pge.mesh: primitive '{other}': expected \"triangles\" or \"lines\""),
+            ));
+        }
     };
     let idx = floats(lua, &t, "indices", primitive.arity())?
         .ok_or_else(|| script_error(lua, "pge.mesh: indices are missing"))?;
@@ -167,7 +208,11 @@ fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
         if *x < 0.0 || x.fract() != 0.0 || *x as usize >= positions.len() {
             return Err(script_error(
                 lua,
-                format!("pge.mesh: indices[{}] = {x} is out of range: indices are 0-based and there are {} vertices", i + 1, positions.len()),
+                format!(
+                    "pge.mesh: indices[{}] = {x} is out of range: indices are 0-based and there are {} vertices",
+                    i + 1,
+                    positions.len()
+                ),
             ));
         }
         indices.push(*x as u32);
@@ -175,7 +220,10 @@ fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
     let n = positions.len();
     let per_vertex = |key: &str, got: usize| -> mlua::Result<()> {
         if got != n {
-            Err(script_error(lua, format!("pge.mesh: {key} has {got} entries but there are {n} vertices")))
+            Err(script_error(
+                lua,
+                format!("pge.mesh: {key} has {got} entries but there are {n} vertices"),
+            ))
         } else {
             Ok(())
         }
@@ -183,7 +231,9 @@ fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
     let normals: Vec<Vec3> = match floats(lua, &t, "normals", 3)? {
         Some(v) => {
             per_vertex("normals", v.len() / 3)?;
-            v.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2]).normalize_or(Vec3::Y)).collect()
+            v.chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]).normalize_or(Vec3::Y))
+                .collect()
         }
         None => Vec::new(),
     };
@@ -195,10 +245,22 @@ fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
         None => Vec::new(),
     };
     let colors: Vec<Vec4> = match floats(lua, &t, "colors", 1)? {
-        Some(v) if v.len() == 4 * n => v.chunks_exact(4).map(|c| Vec4::new(c[0], c[1], c[2], c[3])).collect(),
-        Some(v) if v.len() == 3 * n => v.chunks_exact(3).map(|c| Vec4::new(c[0], c[1], c[2], 1.0)).collect(),
+        Some(v) if v.len() == 4 * n => v
+            .chunks_exact(4)
+            .map(|c| Vec4::new(c[0], c[1], c[2], c[3]))
+            .collect(),
+        Some(v) if v.len() == 3 * n => v
+            .chunks_exact(3)
+            .map(|c| Vec4::new(c[0], c[1], c[2], 1.0))
+            .collect(),
         Some(v) => {
-            return Err(script_error(lua, format!("pge.mesh: colors has {} numbers; expected 3 or 4 per vertex ({n} vertices)", v.len())));
+            return Err(script_error(
+                lua,
+                format!(
+                    "pge.mesh: colors has {} numbers; expected 3 or 4 per vertex ({n} vertices)",
+                    v.len()
+                ),
+            ));
         }
         None => Vec::new(),
     };
@@ -207,7 +269,9 @@ fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
         None => Material::default(),
     };
     let mut mesh = Mesh {
-        name: t.raw_get::<Option<String>>("name")?.unwrap_or_else(|| "mesh".into()),
+        name: t
+            .raw_get::<Option<String>>("name")?
+            .unwrap_or_else(|| "mesh".into()),
         primitive,
         positions,
         normals,
@@ -220,7 +284,8 @@ fn make_mesh(lua: &Lua, t: Table) -> mlua::Result<LuaMesh> {
     if mesh.normals.is_empty() && primitive == Primitive::Triangles {
         mesh.compute_normals();
     }
-    mesh.validate().map_err(|e| script_error(lua, format!("pge.mesh: {e}")))?;
+    mesh.validate()
+        .map_err(|e| script_error(lua, format!("pge.mesh: {e}")))?;
     Ok(LuaMesh(Arc::new(mesh)))
 }
 
@@ -232,6 +297,9 @@ impl FromLua for LuaModel {
 
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set("mesh", lua.create_function(make_mesh)?)?;
-    pge.set("model", lua.create_function(|_, ()| Ok(LuaModel::default()))?)?;
+    pge.set(
+        "model",
+        lua.create_function(|_, ()| Ok(LuaModel::default()))?,
+    )?;
     Ok(())
 }

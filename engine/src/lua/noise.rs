@@ -23,19 +23,28 @@ struct FbmKey {
 }
 
 fn run_seed(lua: &Lua) -> u32 {
-    lua.app_data_ref::<SessionState>().map_or(1, |s| s.ctx.seed as u32)
+    lua.app_data_ref::<SessionState>()
+        .map_or(1, |s| s.ctx.seed as u32)
 }
 
 fn with_cache<R>(lua: &Lua, f: impl FnOnce(&mut NoiseCache) -> R) -> R {
     if lua.app_data_ref::<NoiseCache>().is_none() {
         let seed = run_seed(lua);
-        lua.set_app_data(NoiseCache { perlin: Perlin::new(seed), simplex: Simplex::new(seed), fbm: None });
+        lua.set_app_data(NoiseCache {
+            perlin: Perlin::new(seed),
+            simplex: Simplex::new(seed),
+            fbm: None,
+        });
     }
     match lua.app_data_mut::<NoiseCache>() {
         Some(mut c) => f(&mut c),
         None => {
             let seed = run_seed(lua);
-            f(&mut NoiseCache { perlin: Perlin::new(seed), simplex: Simplex::new(seed), fbm: None })
+            f(&mut NoiseCache {
+                perlin: Perlin::new(seed),
+                simplex: Simplex::new(seed),
+                fbm: None,
+            })
         }
     }
 }
@@ -51,7 +60,10 @@ fn check(lua: &Lua, what: &str, x: f64, y: f64, z: Option<f64>) -> mlua::Result<
     if x.is_finite() && y.is_finite() && z.is_none_or(f64::is_finite) {
         Ok(())
     } else {
-        Err(script_error(lua, format!("pge.noise.{what}: coordinates must be finite numbers")))
+        Err(script_error(
+            lua,
+            format!("pge.noise.{what}: coordinates must be finite numbers"),
+        ))
     }
 }
 
@@ -82,22 +94,38 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                     mlua::Value::Number(n) => nums.push(*n),
                     mlua::Value::Table(o) => opts = Some(o.clone()),
                     other => {
-                        return Err(script_error(lua, format!("pge.noise.fbm: unexpected {} argument", other.type_name())));
+                        return Err(script_error(
+                            lua,
+                            format!("pge.noise.fbm: unexpected {} argument", other.type_name()),
+                        ));
                     }
                 }
             }
             let (x, y, z) = match nums.as_slice() {
                 [x, y] => (*x, *y, None),
                 [x, y, z] => (*x, *y, Some(*z)),
-                _ => return Err(script_error(lua, "pge.noise.fbm(x, y [, z] [, options]) takes 2 or 3 coordinates")),
+                _ => {
+                    return Err(script_error(
+                        lua,
+                        "pge.noise.fbm(x, y [, z] [, options]) takes 2 or 3 coordinates",
+                    ));
+                }
             };
             check(lua, "fbm", x, y, z)?;
             let get = |k: &str, d: f64| -> mlua::Result<f64> {
-                Ok(opts.as_ref().map(|o| o.get::<Option<f64>>(k)).transpose()?.flatten().unwrap_or(d))
+                Ok(opts
+                    .as_ref()
+                    .map(|o| o.get::<Option<f64>>(k))
+                    .transpose()?
+                    .flatten()
+                    .unwrap_or(d))
             };
             let octaves = get("octaves", 6.0)?;
             if !(1.0..=32.0).contains(&octaves) {
-                return Err(script_error(lua, format!("pge.noise.fbm: octaves = {octaves} must be in [1, 32]")));
+                return Err(script_error(
+                    lua,
+                    format!("pge.noise.fbm: octaves = {octaves} must be in [1, 32]"),
+                ));
             }
             let key = FbmKey {
                 seed: get("seed", run_seed(lua) as f64)? as u32,

@@ -89,7 +89,9 @@ impl ParamValue {
     pub fn to_json(&self) -> serde_json::Value {
         match self {
             ParamValue::Integer(i) => (*i).into(),
-            ParamValue::Number(n) => serde_json::Number::from_f64(*n).map_or(serde_json::Value::Null, Into::into),
+            ParamValue::Number(n) => {
+                serde_json::Number::from_f64(*n).map_or(serde_json::Value::Null, Into::into)
+            }
             ParamValue::Bool(b) => (*b).into(),
             ParamValue::Text(s) => s.clone().into(),
         }
@@ -152,20 +154,33 @@ pub(crate) struct ParamState {
 pub(crate) fn begin_main(lua: &Lua, script: &str, overrides: &[(String, String)]) {
     let scope = Scope {
         script: script.to_string(),
-        overrides: overrides.iter().map(|(k, v)| (k.clone(), Override::Text(v.clone()))).collect(),
+        overrides: overrides
+            .iter()
+            .map(|(k, v)| (k.clone(), Override::Text(v.clone())))
+            .collect(),
         declared: Vec::new(),
         first_call: None,
     };
-    lua.set_app_data(ParamState { scopes: vec![scope], main: Vec::new() });
+    lua.set_app_data(ParamState {
+        scopes: vec![scope],
+        main: Vec::new(),
+    });
 }
 
 /// Ends the main script: keeps its declarations; an override nobody declared is an error.
 pub(crate) fn end_main(lua: &Lua) -> Result<(), (Location, String)> {
-    let Some(mut st) = lua.app_data_mut::<ParamState>() else { return Ok(()) };
-    let Some(scope) = st.scopes.pop() else { return Ok(()) };
+    let Some(mut st) = lua.app_data_mut::<ParamState>() else {
+        return Ok(());
+    };
+    let Some(scope) = st.scopes.pop() else {
+        return Ok(());
+    };
     st.main = scope.declared.clone();
     unused_overrides(&scope, "--set").map_err(|m| {
-        let loc = scope.first_call.clone().unwrap_or(Location { file: scope.script.clone(), line: None });
+        let loc = scope.first_call.clone().unwrap_or(Location {
+            file: scope.script.clone(),
+            line: None,
+        });
         (loc, m)
     })
 }
@@ -176,17 +191,31 @@ pub(crate) fn push_scope(lua: &Lua, script: &str, overrides: Option<Table>) -> m
         for pair in t.pairs::<String, Value>() {
             let (k, v) = pair?;
             let value = ParamValue::from_lua(&v).ok_or_else(|| {
-                script_error(lua, format!("parameter '{k}': a {} cannot be a parameter value", v.type_name()))
+                script_error(
+                    lua,
+                    format!(
+                        "parameter '{k}': a {} cannot be a parameter value",
+                        v.type_name()
+                    ),
+                )
             })?;
             list.push((k, Override::Value(value)));
         }
         list.sort_by(|a, b| a.0.cmp(&b.0));
     }
-    let scope = Scope { script: script.to_string(), overrides: list, declared: Vec::new(), first_call: None };
+    let scope = Scope {
+        script: script.to_string(),
+        overrides: list,
+        declared: Vec::new(),
+        first_call: None,
+    };
     match lua.app_data_mut::<ParamState>() {
         Some(mut st) => st.scopes.push(scope),
         None => {
-            drop(lua.set_app_data(ParamState { scopes: vec![scope], main: Vec::new() }));
+            drop(lua.set_app_data(ParamState {
+                scopes: vec![scope],
+                main: Vec::new(),
+            }));
         }
     }
     Ok(())
@@ -194,7 +223,9 @@ pub(crate) fn push_scope(lua: &Lua, script: &str, overrides: Option<Table>) -> m
 
 /// Pops a `pge.load` scope; an override it did not declare is reported.
 pub(crate) fn pop_scope(lua: &Lua) -> Result<(), String> {
-    let scope = lua.app_data_mut::<ParamState>().and_then(|mut st| st.scopes.pop());
+    let scope = lua
+        .app_data_mut::<ParamState>()
+        .and_then(|mut st| st.scopes.pop());
     match scope {
         Some(s) => unused_overrides(&s, "pge.load"),
         None => Ok(()),
@@ -218,7 +249,10 @@ fn unused_overrides(scope: &Scope, source: &str) -> Result<(), String> {
         format!("declared parameters: {}", names.join(", "))
     };
     let plural = if unknown.len() > 1 { "s" } else { "" };
-    Err(format!("unknown parameter{plural} {} given with {source}; {declared}", unknown.join(", ")))
+    Err(format!(
+        "unknown parameter{plural} {} given with {source}; {declared}",
+        unknown.join(", ")
+    ))
 }
 
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
@@ -231,7 +265,10 @@ fn declare(lua: &Lua, spec: Table) -> mlua::Result<Table> {
     for pair in spec.pairs::<Value, Value>() {
         let (k, v) = pair?;
         let Value::String(k) = k else {
-            return Err(script_error(lua, "pge.params: parameter names must be strings"));
+            return Err(script_error(
+                lua,
+                "pge.params: parameter names must be strings",
+            ));
         };
         entries.push((k.to_string_lossy(), v));
     }
@@ -269,14 +306,18 @@ fn declaration(lua: &Lua, name: &str, v: &Value) -> mlua::Result<ParamInfo> {
                 Value::Nil => t.raw_get("default")?,
                 d => d,
             };
-            let default = ParamValue::from_lua(&d)
-                .ok_or_else(|| bad("the default (first entry) must be a number, boolean or string".into()))?;
+            let default = ParamValue::from_lua(&d).ok_or_else(|| {
+                bad("the default (first entry) must be a number, boolean or string".into())
+            })?;
             let num = |key: &str| -> mlua::Result<Option<f64>> {
                 match t.raw_get::<Value>(key)? {
                     Value::Nil => Ok(None),
                     Value::Integer(i) => Ok(Some(i as f64)),
                     Value::Number(n) if n.is_finite() => Ok(Some(n)),
-                    other => Err(bad(format!("{key} must be a finite number, not {}", other.type_name()))),
+                    other => Err(bad(format!(
+                        "{key} must be a finite number, not {}",
+                        other.type_name()
+                    ))),
                 }
             };
             let (min, max) = (num("min")?, num("max")?);
@@ -301,12 +342,24 @@ fn declaration(lua: &Lua, name: &str, v: &Value) -> mlua::Result<ParamInfo> {
             return Err(bad("the default is not a finite number".into()));
         }
     }
-    Ok(ParamInfo { name: name.to_string(), value: default.clone(), default, min, max, doc })
+    Ok(ParamInfo {
+        name: name.to_string(),
+        value: default.clone(),
+        default,
+        min,
+        max,
+        doc,
+    })
 }
 
 fn apply_override(lua: &Lua, mut info: ParamInfo) -> mlua::Result<ParamInfo> {
     let over = lua.app_data_ref::<ParamState>().and_then(|st| {
-        st.scopes.last().and_then(|s| s.overrides.iter().find(|(k, _)| *k == info.name).map(|(_, o)| o.clone()))
+        st.scopes.last().and_then(|s| {
+            s.overrides
+                .iter()
+                .find(|(k, _)| *k == info.name)
+                .map(|(_, o)| o.clone())
+        })
     });
     let name = info.name.clone();
     match over {
@@ -320,14 +373,20 @@ fn apply_override(lua: &Lua, mut info: ParamInfo) -> mlua::Result<ParamInfo> {
         Some(Override::Value(v)) => {
             let ok = matches!(
                 (&info.default, &v),
-                (ParamValue::Integer(_) | ParamValue::Number(_), ParamValue::Integer(_) | ParamValue::Number(_))
-                    | (ParamValue::Bool(_), ParamValue::Bool(_))
+                (
+                    ParamValue::Integer(_) | ParamValue::Number(_),
+                    ParamValue::Integer(_) | ParamValue::Number(_)
+                ) | (ParamValue::Bool(_), ParamValue::Bool(_))
                     | (ParamValue::Text(_), ParamValue::Text(_))
             );
             if !ok {
                 return Err(script_error(
                     lua,
-                    format!("parameter '{name}' expects {}, got {}", info.default.kind(), v.kind()),
+                    format!(
+                        "parameter '{name}' expects {}, got {}",
+                        info.default.kind(),
+                        v.kind()
+                    ),
                 ));
             }
             info.value = v;
@@ -342,12 +401,27 @@ mod tests {
 
     #[test]
     fn set_values_are_typed_like_the_default() {
-        assert_eq!(ParamValue::Integer(3).parse_like("5"), Ok(ParamValue::Integer(5)));
-        assert_eq!(ParamValue::Integer(3).parse_like("2.5"), Ok(ParamValue::Number(2.5)));
-        assert_eq!(ParamValue::Number(1.0).parse_like("x").unwrap_err(), "'x' is not a number");
-        assert_eq!(ParamValue::Bool(false).parse_like("true"), Ok(ParamValue::Bool(true)));
+        assert_eq!(
+            ParamValue::Integer(3).parse_like("5"),
+            Ok(ParamValue::Integer(5))
+        );
+        assert_eq!(
+            ParamValue::Integer(3).parse_like("2.5"),
+            Ok(ParamValue::Number(2.5))
+        );
+        assert_eq!(
+            ParamValue::Number(1.0).parse_like("x").unwrap_err(),
+            "'x' is not a number"
+        );
+        assert_eq!(
+            ParamValue::Bool(false).parse_like("true"),
+            Ok(ParamValue::Bool(true))
+        );
         assert!(ParamValue::Bool(false).parse_like("maybe").is_err());
-        assert_eq!(ParamValue::Text("a".into()).parse_like("oak"), Ok(ParamValue::Text("oak".into())));
+        assert_eq!(
+            ParamValue::Text("a".into()).parse_like("oak"),
+            Ok(ParamValue::Text("oak".into()))
+        );
         assert!(ParamValue::Number(1.0).parse_like("nan").is_err());
     }
 }

@@ -60,10 +60,15 @@ pub struct LuaRng(pub Mt);
 impl UserData for LuaRng {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method_mut("uniform", |_, r, ()| Ok(uniform(&mut r.0)));
-        m.add_method_mut("range", |_, r, (a, b): (f64, f64)| Ok(a + (b - a) * uniform(&mut r.0)));
+        m.add_method_mut("range", |_, r, (a, b): (f64, f64)| {
+            Ok(a + (b - a) * uniform(&mut r.0))
+        });
         m.add_method_mut("int", |lua, r, (a, b): (i64, i64)| {
             if a > b {
-                return Err(script_error(lua, format!("rng:int({a}, {b}): the first bound exceeds the second")));
+                return Err(script_error(
+                    lua,
+                    format!("rng:int({a}, {b}): the first bound exceeds the second"),
+                ));
             }
             Ok(int_in(&mut r.0, a, b))
         });
@@ -87,16 +92,27 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
             Ok(lua.app_data_ref::<SessionState>().map_or(1, |s| s.ctx.seed) as i64)
         })?,
     )?;
-    pge.set("random", lua.create_function(|lua, ()| Ok(draw(lua, uniform)))?)?;
+    pge.set(
+        "random",
+        lua.create_function(|lua, ()| Ok(draw(lua, uniform)))?,
+    )?;
     pge.set(
         "rng",
         lua.create_function(|lua, seed: Option<Value>| {
             let seed = match seed {
-                None | Some(Value::Nil) => lua.app_data_ref::<SessionState>().map_or(1, |s| s.ctx.seed),
+                None | Some(Value::Nil) => {
+                    lua.app_data_ref::<SessionState>().map_or(1, |s| s.ctx.seed)
+                }
                 Some(Value::Integer(i)) => i as u64,
                 Some(Value::Number(n)) if n.is_finite() => n as i64 as u64,
                 Some(other) => {
-                    return Err(script_error(lua, format!("pge.rng: the seed must be a number, not {}", other.type_name())));
+                    return Err(script_error(
+                        lua,
+                        format!(
+                            "pge.rng: the seed must be a number, not {}",
+                            other.type_name()
+                        ),
+                    ));
                 }
             };
             Ok(LuaRng(mt_from_seed(seed)))

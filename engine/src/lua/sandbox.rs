@@ -18,7 +18,9 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     // `load` of text only: binary chunks can break the VM's invariants.
     let load: mlua::Function = globals.get("load")?;
     let text_load = lua
-        .load("local load = ...; return function(c, name, _, env) return load(c, name, 't', env) end")
+        .load(
+            "local load = ...; return function(c, name, _, env) return load(c, name, 't', env) end",
+        )
         .set_name("=pge")
         .call::<mlua::Function>(load)?;
     globals.set("load", text_load)?;
@@ -49,26 +51,35 @@ fn display_value(v: &Value) -> String {
         Value::Boolean(b) => b.to_string(),
         Value::Integer(i) => i.to_string(),
         Value::Number(n) => n.to_string(),
-        other => other.to_string().unwrap_or_else(|_| format!("{}", other.type_name())),
+        other => other
+            .to_string()
+            .unwrap_or_else(|_| format!("{}", other.type_name())),
     }
 }
 
 /// Runs a script file as a chunk named after its shown path; records it for reload.
 pub(crate) fn exec_file(lua: &Lua, display: String, path: PathBuf) -> mlua::Result<Value> {
-    let source = std::fs::read_to_string(&path).map_err(|e| {
-        mlua::Error::RuntimeError(format!("{display}: cannot read script: {e}"))
-    })?;
+    let source = std::fs::read_to_string(&path)
+        .map_err(|e| mlua::Error::RuntimeError(format!("{display}: cannot read script: {e}")))?;
     // Like `lua script.lua`, a first line starting with '#' (a shebang) is skipped.
     let source = if source.starts_with('#') {
-        source.find('\n').map_or(String::new(), |i| source[i..].to_string())
+        source
+            .find('\n')
+            .map_or(String::new(), |i| source[i..].to_string())
     } else {
         source
     };
     if let Some(mut st) = lua.app_data_mut::<SessionState>() {
-        st.chunks.push(Chunk { display: display.clone(), path: path.clone() });
+        st.chunks.push(Chunk {
+            display: display.clone(),
+            path: path.clone(),
+        });
         st.record_file(path);
     }
-    lua.load(source).set_name(format!("@{display}")).set_mode(mlua::chunk::ChunkMode::Text).call(())
+    lua.load(source)
+        .set_name(format!("@{display}"))
+        .set_mode(mlua::chunk::ChunkMode::Text)
+        .call(())
 }
 
 /// The folder of the script that is calling (its shown path and its canonical path).
@@ -78,7 +89,10 @@ fn caller_dir(lua: &Lua) -> (PathBuf, PathBuf) {
     let chunk = st.as_ref().and_then(|s| s.chunk(&loc.file).cloned());
     match chunk {
         Some(c) => (
-            Path::new(&c.display).parent().map(Path::to_path_buf).unwrap_or_default(),
+            Path::new(&c.display)
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_default(),
             c.path.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
         None => {
@@ -118,7 +132,9 @@ fn resolve(lua: &Lua, relative: &str, what: &str) -> mlua::Result<(String, PathB
     if rel.is_absolute() {
         return Err(script_error(
             lua,
-            format!("{what} '{relative}': absolute paths are not allowed; give a path relative to the script"),
+            format!(
+                "{what} '{relative}': absolute paths are not allowed; give a path relative to the script"
+            ),
         ));
     }
     let candidate = real_dir.join(rel);
@@ -131,7 +147,9 @@ fn resolve(lua: &Lua, relative: &str, what: &str) -> mlua::Result<(String, PathB
             format!("{what} '{relative}' is outside the script's folder and the library folder"),
         ));
     }
-    let shown = normalize(&shown_dir.join(rel)).to_string_lossy().replace('\\', "/");
+    let shown = normalize(&shown_dir.join(rel))
+        .to_string_lossy()
+        .replace('\\', "/");
     Ok((shown, canonical))
 }
 
@@ -150,7 +168,8 @@ pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
     let p = Path::new(relative);
     if relative.is_empty()
         || p.is_absolute()
-        || p.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+        || p.components()
+            .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
     {
         return Err(script_error(
             lua,
@@ -167,11 +186,17 @@ fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
     match loaded.raw_get::<Value>(key.as_str())? {
         Value::Nil => {}
         Value::LightUserData(_) => {
-            return Err(script_error(lua, format!("require '{name}': circular require")));
+            return Err(script_error(
+                lua,
+                format!("require '{name}': circular require"),
+            ));
         }
         value => return Ok(value),
     }
-    loaded.raw_set(key.as_str(), Value::LightUserData(mlua::LightUserData(std::ptr::null_mut())))?;
+    loaded.raw_set(
+        key.as_str(),
+        Value::LightUserData(mlua::LightUserData(std::ptr::null_mut())),
+    )?;
     let result = exec_file(lua, shown, canonical);
     let value = match result {
         Ok(Value::Nil) => Value::Boolean(true),
@@ -189,7 +214,11 @@ fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
 /// up in the caller's folder, the main script's folder and the library folder.
 fn find_module(lua: &Lua, name: &str) -> mlua::Result<(String, PathBuf)> {
     if name.contains('/') || name.contains('\\') {
-        let with_ext = if name.ends_with(".lua") { name.to_string() } else { format!("{name}.lua") };
+        let with_ext = if name.ends_with(".lua") {
+            name.to_string()
+        } else {
+            format!("{name}.lua")
+        };
         return resolve(lua, &with_ext, "require");
     }
     let rel = name.replace('.', "/");
@@ -214,12 +243,20 @@ fn find_module(lua: &Lua, name: &str) -> mlua::Result<(String, PathBuf)> {
                 if !is_allowed(lua, &canonical) {
                     continue;
                 }
-                let shown = normalize(&shown.join(&file)).to_string_lossy().replace('\\', "/");
+                let shown = normalize(&shown.join(&file))
+                    .to_string_lossy()
+                    .replace('\\', "/");
                 return Ok((shown, canonical));
             }
         }
     }
-    Err(script_error(lua, format!("module '{name}' not found (looked for {})", looked.join(", "))))
+    Err(script_error(
+        lua,
+        format!(
+            "module '{name}' not found (looked for {})",
+            looked.join(", ")
+        ),
+    ))
 }
 
 fn load_script(lua: &Lua, path: &str, overrides: Option<Table>) -> mlua::Result<Value> {
@@ -230,7 +267,9 @@ fn load_script(lua: &Lua, path: &str, overrides: Option<Table>) -> mlua::Result<
     let unused = params::pop_scope(lua);
     let value = result?;
     if let Err(message) = unused {
-        return Err(mlua::Error::RuntimeError(format!("{location}: pge.load('{path}'): {message}")));
+        return Err(mlua::Error::RuntimeError(format!(
+            "{location}: pge.load('{path}'): {message}"
+        )));
     }
     Ok(value)
 }

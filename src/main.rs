@@ -1,0 +1,37 @@
+//! The `pge` command: run scripts, print derivations, preview models.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod common;
+mod run;
+
+/// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other
+/// objects and writes them as glTF 2.0.
+#[derive(Parser, Debug)]
+#[command(name = "pge", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a script and write the model it generates (.glb, or .obj by extension).
+    Run(run::RunArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Run(args) => run::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{}", common::describe_error(&e));
+            ExitCode::from(1)
+        }
+    }
+}
