@@ -188,9 +188,18 @@ fn describe_value(v: &Value) -> String {
     match v {
         Value::Nil => "nothing".into(),
         Value::UserData(ud) => match ud.type_name() {
-            Ok(name) => format!("a {}", name.to_string_lossy()),
+            Ok(name) => with_article(&name.to_string_lossy()),
             _ => "a userdata".into(),
         },
-        other => format!("a {}", other.type_name()),
+        other => with_article(other.type_name()),
     }
+}
+
+fn with_article(noun: &str) -> String {
+    let article = if noun.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    format!("{article} {noun}")
 }

@@ -119,6 +119,15 @@ fn normalize(p: &Path) -> PathBuf {
     out
 }
 
+/// How to show a canonical folder: relative to the working directory when inside it.
+fn shown_from_cwd(dir: &Path) -> PathBuf {
+    std::env::current_dir()
+        .ok()
+        .and_then(|cwd| cwd.canonicalize().ok())
+        .and_then(|cwd| dir.strip_prefix(cwd).ok().map(Path::to_path_buf))
+        .unwrap_or_else(|| dir.to_path_buf())
+}
+
 fn is_allowed(lua: &Lua, canonical: &Path) -> bool {
     lua.app_data_ref::<SessionState>()
         .is_some_and(|s| s.roots.iter().any(|r| canonical.starts_with(r)))
@@ -228,11 +237,8 @@ fn find_module(lua: &Lua, name: &str) -> mlua::Result<(String, PathBuf)> {
         .map(|s| (s.main_dir.clone(), s.library.clone()))
         .unwrap_or_default();
     let mut dirs = vec![(shown_dir, real_dir)];
-    if let Some(m) = main {
-        dirs.push((m.clone(), m));
-    }
-    if let Some(l) = library {
-        dirs.push((l.clone(), l));
+    for d in [main, library].into_iter().flatten() {
+        dirs.push((shown_from_cwd(&d), d));
     }
     let mut looked = Vec::new();
     for (shown, real) in &dirs {

@@ -1,0 +1,7 @@
+-- Grows forever: the memory limit stops it.
+local t = {}
+local i = 0
+while true do
+  i = i + 1
+  t[i] = {i, tostring(i)}
+end

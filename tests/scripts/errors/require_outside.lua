@@ -1,0 +1,3 @@
+-- A module outside the script folder and the library.
+local m = require("../outside")
+return m

@@ -1,0 +1,2 @@
+-- Returns something that is not a model.
+return 42
