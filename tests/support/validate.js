@@ -1,0 +1,14 @@
+const fs = require('fs');
+const validator = require('gltf-validator');
+(async () => {
+  let failed = 0;
+  for (const f of process.argv.slice(2)) {
+    const data = new Uint8Array(fs.readFileSync(f));
+    const r = await validator.validateBytes(data, {maxIssues: 100});
+    const i = r.issues;
+    console.log(`${f}: ${i.numErrors} errors, ${i.numWarnings} warnings, ${i.numInfos} infos`);
+    for (const m of i.messages) if (m.severity <= 1) console.log(`  ${m.severity==0?'error':'warning'} ${m.code}: ${m.message} (${m.pointer||''})`);
+    if (i.numErrors > 0) failed++;
+  }
+  process.exit(failed ? 1 : 0);
+})();

@@ -1,0 +1,94 @@
+//! Every script in the library writes a glb that the Khronos glTF validator accepts with no
+//! errors. The validator (npm package `gltf-validator`) is installed into `target/` on
+//! first use; this needs Node.js and npm.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const VALIDATOR_VERSION: &str = "2.0.0-dev.3.10";
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The folder holding `node_modules/gltf-validator`, installing it if needed.
+fn validator_dir() -> PathBuf {
+    let dir = root().join("target").join("gltf-validator");
+    if dir.join("node_modules").join("gltf-validator").exists() {
+        return dir;
+    }
+    std::fs::create_dir_all(&dir).expect("create target/gltf-validator");
+    let status = Command::new("npm")
+        .args(["install", "--prefix"])
+        .arg(&dir)
+        .arg(format!("gltf-validator@{VALIDATOR_VERSION}"))
+        .args(["--no-audit", "--no-fund", "--silent"])
+        .status()
+        .expect("npm is needed to install the glTF validator (apt-get install nodejs npm)");
+    assert!(status.success(), "npm install gltf-validator failed");
+    dir
+}
+
+/// The scripts `pge run` must turn into valid glb files: every `.lua` under `scripts/`
+/// except library modules (`lib/`) and scripts meant to be loaded by others.
+fn library_scripts() -> Vec<PathBuf> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        let mut entries: Vec<_> = entries.flatten().map(|e| e.path()).collect();
+        entries.sort();
+        for p in entries {
+            if p.is_dir() {
+                if p.file_name().is_some_and(|n| n != "lib" && n != "data") {
+                    walk(&p, out);
+                }
+            } else if p.extension().is_some_and(|e| e == "lua") {
+                out.push(p);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&root().join("scripts"), &mut out);
+    out
+}
+
+#[test]
+fn every_library_script_writes_a_valid_glb() {
+    let scripts = library_scripts();
+    assert!(scripts.len() >= 2, "found only {scripts:?}");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut outputs = Vec::new();
+    for (i, script) in scripts.iter().enumerate() {
+        let out = dir.path().join(format!("{i}.glb"));
+        let o = Command::new(env!("CARGO_BIN_EXE_pge"))
+            .arg("run")
+            .arg(script)
+            .arg("-o")
+            .arg(&out)
+            .arg("-q")
+            .current_dir(root())
+            .output()
+            .expect("pge runs");
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            script.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        outputs.push(out);
+    }
+    let validator = validator_dir();
+    let o = Command::new("node")
+        .arg(root().join("tests/support/validate.js"))
+        .args(&outputs)
+        .env("NODE_PATH", validator.join("node_modules"))
+        .output()
+        .expect("node runs the validator");
+    let report = String::from_utf8_lossy(&o.stdout);
+    let report = outputs
+        .iter()
+        .zip(&scripts)
+        .fold(report.to_string(), |r, (out, s)| r.replace(&out.display().to_string(), &s.display().to_string()));
+    println!("{report}");
+    assert!(o.status.success(), "the glTF validator found errors:\n{report}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(report.lines().filter(|l| l.contains(": 0 errors")).count(), scripts.len(), "{report}");
+}
