@@ -150,10 +150,10 @@ impl Session {
     }
 
     fn start_clock(&self) {
-        if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
-            if st.ctx.deadline.is_none() {
-                st.ctx.deadline = self.limits.time.map(|t| Instant::now() + t);
-            }
+        if let Some(mut st) = self.lua.app_data_mut::<SessionState>()
+            && st.ctx.deadline.is_none()
+        {
+            st.ctx.deadline = self.limits.time.map(|t| Instant::now() + t);
         }
     }
 

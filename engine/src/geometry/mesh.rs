@@ -156,7 +156,7 @@ impl Mesh {
             }
         }
         let per = self.primitive.arity();
-        if self.indices.len() % per != 0 {
+        if !self.indices.len().is_multiple_of(per) {
             return Err(GeometryError::IndexCount {
                 count: self.indices.len(),
                 per,

@@ -143,11 +143,11 @@ pub fn algorithm_from(
 ) -> crate::Result<Box<dyn Algorithm>> {
     let mut value = value;
     for _ in 0..4 {
-        if let Value::UserData(ud) = &value {
-            if ud.is::<AlgorithmHandle>() {
-                let handle: AlgorithmHandle = ud.take().map_err(|e| to_engine_error(lua, e))?;
-                return Ok(handle.0);
-            }
+        if let Value::UserData(ud) = &value
+            && ud.is::<AlgorithmHandle>()
+        {
+            let handle: AlgorithmHandle = ud.take().map_err(|e| to_engine_error(lua, e))?;
+            return Ok(handle.0);
         }
         let method = match &value {
             Value::UserData(ud) => has_function(ud.get::<Value>("algorithm")),

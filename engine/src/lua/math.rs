@@ -248,10 +248,10 @@ impl UserData for LuaMat4 {
 
 /// A rotation from `(axis, degrees)` or a quaternion.
 fn rotation(lua: &Lua, r: Value, degrees: Option<f32>) -> mlua::Result<Mat4> {
-    if let Value::UserData(ud) = &r {
-        if let Ok(q) = ud.borrow::<LuaQuat>() {
-            return Ok(Mat4::from_quat(q.0));
-        }
+    if let Value::UserData(ud) = &r
+        && let Ok(q) = ud.borrow::<LuaQuat>()
+    {
+        return Ok(Mat4::from_quat(q.0));
     }
     let axis = LuaVec3::from_lua(r, lua)?.0;
     let axis = axis

@@ -278,21 +278,21 @@ fn declare(lua: &Lua, spec: Table) -> mlua::Result<Table> {
     for (name, v) in entries {
         let info = declaration(lua, &name, &v)?;
         let info = apply_override(lua, info)?;
-        if let (Some(x), Some(lo), Some(hi)) = (info.value.as_f64(), info.min, info.max) {
-            if x < lo || x > hi {
-                return Err(script_error(
-                    lua,
-                    format!("parameter '{name}' = {x} is out of its range [{lo}, {hi}]"),
-                ));
-            }
+        if let (Some(x), Some(lo), Some(hi)) = (info.value.as_f64(), info.min, info.max)
+            && (x < lo || x > hi)
+        {
+            return Err(script_error(
+                lua,
+                format!("parameter '{name}' = {x} is out of its range [{lo}, {hi}]"),
+            ));
         }
         out.set(name.as_str(), info.value.clone().into_lua(lua)?)?;
-        if let Some(mut st) = lua.app_data_mut::<ParamState>() {
-            if let Some(scope) = st.scopes.last_mut() {
-                scope.first_call.get_or_insert_with(|| location.clone());
-                scope.declared.retain(|d| d.name != name);
-                scope.declared.push(info);
-            }
+        if let Some(mut st) = lua.app_data_mut::<ParamState>()
+            && let Some(scope) = st.scopes.last_mut()
+        {
+            scope.first_call.get_or_insert_with(|| location.clone());
+            scope.declared.retain(|d| d.name != name);
+            scope.declared.push(info);
         }
     }
     Ok(out)
@@ -321,10 +321,10 @@ fn declaration(lua: &Lua, name: &str, v: &Value) -> mlua::Result<ParamInfo> {
                 }
             };
             let (min, max) = (num("min")?, num("max")?);
-            if let (Some(a), Some(b)) = (min, max) {
-                if a > b {
-                    return Err(bad(format!("min {a} is greater than max {b}")));
-                }
+            if let (Some(a), Some(b)) = (min, max)
+                && a > b
+            {
+                return Err(bad(format!("min {a} is greater than max {b}")));
             }
             let doc: Option<String> = t.raw_get("doc")?;
             (default, min, max, doc)
@@ -337,10 +337,10 @@ fn declaration(lua: &Lua, name: &str, v: &Value) -> mlua::Result<ParamInfo> {
             None,
         ),
     };
-    if let ParamValue::Number(n) = default {
-        if !n.is_finite() {
-            return Err(bad("the default is not a finite number".into()));
-        }
+    if let ParamValue::Number(n) = default
+        && !n.is_finite()
+    {
+        return Err(bad("the default is not a finite number".into()));
     }
     Ok(ParamInfo {
         name: name.to_string(),
@@ -410,7 +410,9 @@ mod tests {
             Ok(ParamValue::Number(2.5))
         );
         assert_eq!(
-            ParamValue::Number(1.0).parse_like("x").unwrap_err(),
+            ParamValue::Number(1.0)
+                .parse_like("x")
+                .expect_err("not a number"),
             "'x' is not a number"
         );
         assert_eq!(

@@ -32,7 +32,7 @@ fn normal(rng: &mut Mt, mu: f64, sigma: f64) -> f64 {
 /// The MT19937 of a seed (both halves of a 64-bit seed are used).
 #[must_use]
 pub(crate) fn mt_from_seed(seed: u64) -> Mt {
-    Mt::new_with_key([seed as u32, (seed >> 32) as u32].into_iter())
+    Mt::new_with_key([seed as u32, (seed >> 32) as u32])
 }
 
 /// Replaces the generator `pge.random()` draws from and returns the previous one. An

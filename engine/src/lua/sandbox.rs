@@ -53,7 +53,7 @@ fn display_value(v: &Value) -> String {
         Value::Number(n) => n.to_string(),
         other => other
             .to_string()
-            .unwrap_or_else(|_| format!("{}", other.type_name())),
+            .unwrap_or_else(|_| other.type_name().to_string()),
     }
 }
 

@@ -1,0 +1,655 @@
+//! The window: side panel, viewport, input, screenshot.
+
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, channel};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use eframe::egui::{self, Color32, RichText};
+use pge_engine::{Engine, ParamInfo, ParamValue};
+
+use super::camera::OrbitCamera;
+use super::reload::{DEBOUNCE, Generation, Reloader, Report, Settings, Status};
+use super::render::{Renderer, Toggles};
+use super::watch::{Watcher, watch_key};
+use super::worker::Worker;
+
+const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
+
+/// How a `--screenshot` run ended, read after the window closed.
+pub type ScreenshotResult = Arc<Mutex<Option<anyhow::Result<()>>>>;
+
+/// Options of the window besides the script's settings.
+pub struct AppOptions {
+    /// Write the first complete frame here and close.
+    pub screenshot: Option<PathBuf>,
+    /// Where the screenshot run's result goes.
+    pub screenshot_result: ScreenshotResult,
+    /// Print frames per second to stderr every second (for measurements).
+    pub log_fps: bool,
+    /// Start with the turntable on.
+    pub turntable: bool,
+}
+
+enum Shot {
+    /// Waiting for the first generation and its frame.
+    Waiting,
+    /// Asked egui for the screenshot.
+    Requested,
+    /// Written (or failed); closing.
+    Done,
+}
+
+/// The preview application.
+pub struct PreviewApp {
+    reloader: Reloader,
+    worker: Worker,
+    reports: Receiver<Report>,
+    watcher: Option<Watcher>,
+    file_events: Receiver<Vec<PathBuf>>,
+    watched: BTreeSet<PathBuf>,
+    watch_error: Option<String>,
+    renderer: Option<Renderer>,
+    uploaded: u64,
+    camera: OrbitCamera,
+    framed: bool,
+    toggles: Toggles,
+    turntable: bool,
+    viewport_dirty: bool,
+    last_viewport: Option<([u32; 2], OrbitCamera, Toggles)>,
+    texture: Option<egui::TextureId>,
+    edits: BTreeMap<String, ParamValue>,
+    text_edits: BTreeMap<String, String>,
+    total_steps: Option<u32>,
+    export_path: String,
+    export_message: Option<Result<String, String>>,
+    shown_error: Option<String>,
+    shot: Option<(PathBuf, Shot)>,
+    shot_result: ScreenshotResult,
+    frames: VecDeque<Instant>,
+    render_ms: f64,
+    log_fps: bool,
+    last_fps_log: Instant,
+}
+
+impl PreviewApp {
+    /// Starts the worker and the watcher; the first generation starts at the first frame.
+    pub fn new(
+        cc: &eframe::CreationContext<'_>,
+        engine: Engine,
+        script: PathBuf,
+        settings: Settings,
+        options: AppOptions,
+    ) -> anyhow::Result<PreviewApp> {
+        let ctx = cc.egui_ctx.clone();
+        let (report_tx, reports) = channel();
+        let wake = ctx.clone();
+        let worker = Worker::start(Arc::new(engine), report_tx, move || wake.request_repaint())?;
+        let (event_tx, file_events) = channel();
+        let wake = ctx.clone();
+        let (watcher, watch_error) = match Watcher::new(event_tx, move || wake.request_repaint()) {
+            Ok(w) => (Some(w), None),
+            Err(e) => (None, Some(format!("live reload is off: {e}"))),
+        };
+        let renderer = cc.wgpu_render_state.as_ref().map(Renderer::new);
+        let key = watch_key(&script);
+        let export_path = script.with_extension("glb").to_string_lossy().into_owned();
+        Ok(PreviewApp {
+            reloader: Reloader::new(script, key, settings, DEBOUNCE),
+            worker,
+            reports,
+            watcher,
+            file_events,
+            watched: BTreeSet::new(),
+            watch_error,
+            renderer,
+            uploaded: 0,
+            camera: OrbitCamera::default(),
+            framed: false,
+            toggles: Toggles::default(),
+            turntable: options.turntable,
+            viewport_dirty: true,
+            last_viewport: None,
+            texture: None,
+            edits: BTreeMap::new(),
+            text_edits: BTreeMap::new(),
+            total_steps: None,
+            export_path,
+            export_message: None,
+            shown_error: None,
+            shot: options.screenshot.map(|p| (p, Shot::Waiting)),
+            shot_result: options.screenshot_result,
+            frames: VecDeque::new(),
+            render_ms: 0.0,
+            log_fps: options.log_fps,
+            last_fps_log: Instant::now(),
+        })
+    }
+
+    /// File events, worker reports, new requests, the watch list.
+    fn pump(&mut self) {
+        let now = Instant::now();
+        while let Ok(paths) = self.file_events.try_recv() {
+            self.reloader.file_event(&paths, now);
+        }
+        while let Ok(report) = self.reports.try_recv() {
+            self.reloader.report(report, now);
+        }
+        if let Some(request) = self.reloader.poll(now) {
+            self.worker.send(request);
+        }
+        if self.watched != *self.reloader.watched() {
+            self.watched = self.reloader.watched().clone();
+            if let Some(w) = &mut self.watcher {
+                self.watch_error = w.watch_files(&self.watched).err().map(|e| format!("watching: {e}"));
+            }
+        }
+        match self.reloader.status() {
+            Status::Error(message) if self.shown_error.as_ref() != Some(message) => {
+                eprintln!("{message}");
+                self.shown_error = Some(message.clone());
+            }
+            Status::Ready => self.shown_error = None,
+            _ => {}
+        }
+        if self.uploaded != self.reloader.generation_count() {
+            self.uploaded = self.reloader.generation_count();
+            if let Some(g) = self.reloader.current() {
+                if let Some(r) = &mut self.renderer {
+                    r.upload(&g.scene);
+                }
+                if !self.framed {
+                    if let Some(b) = g.scene.bounds {
+                        self.camera.frame(b);
+                        self.framed = true;
+                    }
+                }
+                if g.settings.steps.is_none() {
+                    self.total_steps = Some(g.steps_taken);
+                }
+                self.viewport_dirty = true;
+            }
+        }
+    }
+
+    fn settings_changed(&mut self, settings: Settings) {
+        self.reloader.set_settings(settings);
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        let script = self.reloader.script().to_path_buf();
+        ui.heading(script.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+        self.status_line(ui);
+        ui.separator();
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            egui::CollapsingHeader::new("Parameters").default_open(true).show(ui, |ui| self.params_ui(ui));
+            egui::CollapsingHeader::new("Seed and steps").default_open(true).show(ui, |ui| self.seed_ui(ui));
+            egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| self.view_ui(ui));
+            egui::CollapsingHeader::new("Statistics").default_open(true).show(ui, |ui| self.stats_ui(ui));
+            egui::CollapsingHeader::new("Export").default_open(false).show(ui, |ui| self.export_ui(ui));
+        });
+    }
+
+    fn status_line(&self, ui: &mut egui::Ui) {
+        match self.reloader.status() {
+            Status::Running => {
+                let secs = self.reloader.running_since().map_or(0.0, |t| t.elapsed().as_secs_f64());
+                ui.horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("generating… {secs:.1} s"));
+                });
+            }
+            Status::Ready => {
+                let secs = self.reloader.current().map_or(0.0, |g| g.seconds);
+                ui.label(format!("up to date (generated in {secs:.2} s)"));
+            }
+            Status::Error(message) => {
+                ui.label(RichText::new(message).color(ERROR_COLOR).monospace());
+            }
+            Status::Gone => {
+                ui.label(RichText::new(gone_message(self.reloader.script())).color(ERROR_COLOR));
+            }
+        }
+        if self.reloader.is_running() && !matches!(self.reloader.status(), Status::Running) {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("generating…");
+            });
+        }
+        if let Some(e) = &self.watch_error {
+            ui.label(RichText::new(e).color(ERROR_COLOR));
+        }
+    }
+
+    fn params_ui(&mut self, ui: &mut egui::Ui) {
+        let params: Vec<ParamInfo> = self.reloader.current().map(|g| g.params.clone()).unwrap_or_default();
+        if params.is_empty() {
+            ui.label("The script declares no parameters (pge.params).");
+            return;
+        }
+        let mut changed: Vec<(String, ParamValue)> = Vec::new();
+        egui::Grid::new("params").num_columns(2).striped(true).show(ui, |ui| {
+            for p in &params {
+                let value = self.edits.get(&p.name).cloned().unwrap_or_else(|| p.value.clone());
+                let label = ui.label(&p.name);
+                if let Some(doc) = &p.doc {
+                    label.on_hover_text(doc);
+                }
+                if let Some(v) = self.param_widget(ui, p, value) {
+                    changed.push((p.name.clone(), v));
+                }
+                ui.end_row();
+            }
+        });
+        if ui.button("Reset to defaults").clicked() {
+            self.edits.clear();
+            self.text_edits.clear();
+            let mut s = self.reloader.settings().clone();
+            s.params.clear();
+            self.settings_changed(s);
+        }
+        if !changed.is_empty() {
+            let mut s = self.reloader.settings().clone();
+            for (name, v) in changed {
+                s.set_param(&name, v.to_string());
+                self.edits.insert(name, v);
+            }
+            self.settings_changed(s);
+        }
+    }
+
+    fn param_widget(&mut self, ui: &mut egui::Ui, p: &ParamInfo, value: ParamValue) -> Option<ParamValue> {
+        let range = p.min.zip(p.max).filter(|(a, b)| a < b);
+        match value {
+            ParamValue::Integer(mut i) => {
+                let r = match range {
+                    Some((a, b)) => ui.add(egui::Slider::new(&mut i, a.ceil() as i64..=b.floor() as i64)),
+                    None => ui.add(egui::DragValue::new(&mut i)),
+                };
+                r.changed().then_some(ParamValue::Integer(i))
+            }
+            ParamValue::Number(mut n) => {
+                let r = match range {
+                    Some((a, b)) => ui.add(egui::Slider::new(&mut n, a..=b)),
+                    None => ui.add(egui::DragValue::new(&mut n).speed(0.01 * n.abs().max(0.1))),
+                };
+                r.changed().then_some(ParamValue::Number(n))
+            }
+            ParamValue::Bool(mut b) => ui.checkbox(&mut b, "").changed().then_some(ParamValue::Bool(b)),
+            ParamValue::Text(s) => {
+                let text = self.text_edits.entry(p.name.clone()).or_insert_with(|| s.clone());
+                let r = ui.text_edit_singleline(text);
+                (r.lost_focus() && *text != s).then(|| ParamValue::Text(text.clone()))
+            }
+        }
+    }
+
+    fn seed_ui(&mut self, ui: &mut egui::Ui) {
+        let mut s = self.reloader.settings().clone();
+        ui.horizontal(|ui| {
+            ui.label("seed");
+            ui.add(egui::DragValue::new(&mut s.seed));
+            if ui.button("new seed").clicked() {
+                s.seed = new_seed(s.seed);
+            }
+        });
+        if let Some(total) = self.total_steps.filter(|t| *t > 1) {
+            let mut k = s.steps.unwrap_or(total).min(total);
+            ui.horizontal(|ui| {
+                ui.label("step");
+                if ui.add(egui::Slider::new(&mut k, 0..=total)).changed() {
+                    s.steps = if k >= total { None } else { Some(k) };
+                }
+            });
+            ui.horizontal(|ui| {
+                if ui.button("⏮").on_hover_text("first step").clicked() {
+                    s.steps = Some(0);
+                }
+                if ui.button("◀").on_hover_text("one step back").clicked() {
+                    s.steps = Some(k.saturating_sub(1));
+                }
+                if ui.button("▶").on_hover_text("one step forward").clicked() {
+                    s.steps = if k + 1 >= total { None } else { Some(k + 1) };
+                }
+                if ui.button("⏭").on_hover_text("to the end").clicked() {
+                    s.steps = None;
+                }
+            });
+        } else {
+            ui.label("Step-wise algorithms get a step scrubber here.");
+        }
+        if s != *self.reloader.settings() {
+            self.settings_changed(s);
+        }
+    }
+
+    fn view_ui(&mut self, ui: &mut egui::Ui) {
+        let before = (self.toggles, self.turntable);
+        ui.checkbox(&mut self.toggles.wireframe, "wireframe (W)");
+        ui.checkbox(&mut self.toggles.skeleton, "skeleton (K)");
+        ui.checkbox(&mut self.toggles.leaves, "leaves (L)");
+        ui.checkbox(&mut self.toggles.grid, "ground grid (G)");
+        ui.checkbox(&mut self.turntable, "turntable (T)");
+        if ui.button("Frame the model (F)").clicked() {
+            self.frame_model();
+        }
+        ui.label(RichText::new("drag: orbit · right/middle drag or shift: pan · wheel: zoom").small());
+        if before != (self.toggles, self.turntable) {
+            self.viewport_dirty = true;
+        }
+    }
+
+    fn frame_model(&mut self) {
+        if let Some(b) = self.reloader.current().and_then(|g| g.scene.bounds) {
+            self.camera.frame(b);
+            self.viewport_dirty = true;
+        }
+    }
+
+    fn stats_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(g) = self.reloader.current() else {
+            ui.label("no model yet");
+            return;
+        };
+        let s = &g.scene.stats;
+        egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+            let mut row = |k: &str, v: String| {
+                ui.label(k);
+                ui.label(v);
+                ui.end_row();
+            };
+            row("vertices", s.vertices.to_string());
+            row("triangles", s.triangles.to_string());
+            row("nodes", s.nodes.to_string());
+            row("leaves", s.leaves.to_string());
+            if s.modules > 0 {
+                row("modules", s.modules.to_string());
+            }
+            row("steps", g.steps_taken.to_string());
+            for (phase, secs) in &s.phases {
+                row(&format!("⏱ {phase}"), format!("{:.1} ms", secs * 1000.0));
+            }
+            row("generation", format!("{:.1} ms", g.seconds * 1000.0));
+            if let Some(l) = self.reloader.last_latency() {
+                row("save → model", format!("{:.0} ms", l.as_secs_f64() * 1000.0));
+            }
+            row("draw", format!("{:.1} ms", self.render_ms));
+            row("frames/s", format!("{:.0}", self.fps()));
+        });
+    }
+
+    fn export_ui(&mut self, ui: &mut egui::Ui) {
+        ui.text_edit_singleline(&mut self.export_path);
+        ui.horizontal(|ui| {
+            let stem = PathBuf::from(&self.export_path);
+            if ui.button("Export .glb").clicked() {
+                let path = stem.with_extension("glb");
+                self.export_path = path.to_string_lossy().into_owned();
+                self.export_message = self.reloader.current().map(|g| export(g, &path));
+            }
+            if ui.button("Export .obj").clicked() {
+                let path = stem.with_extension("obj");
+                self.export_path = path.to_string_lossy().into_owned();
+                self.export_message = self.reloader.current().map(|g| export(g, &path));
+            }
+        });
+        match &self.export_message {
+            Some(Ok(m)) => {
+                ui.label(m);
+            }
+            Some(Err(m)) => {
+                ui.label(RichText::new(m).color(ERROR_COLOR));
+            }
+            None => {}
+        }
+    }
+
+    fn fps(&self) -> f64 {
+        match (self.frames.front(), self.frames.back()) {
+            (Some(a), Some(b)) if self.frames.len() > 1 && b > a => {
+                (self.frames.len() - 1) as f64 / b.duration_since(*a).as_secs_f64()
+            }
+            _ => 0.0,
+        }
+    }
+
+    fn viewport(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
+        let (rect, response) = ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
+        let shift = ui.input(|i| i.modifiers.shift);
+        let drag = response.drag_delta();
+        if response.dragged_by(egui::PointerButton::Primary) && !shift {
+            self.camera.orbit(drag.x, drag.y);
+            self.viewport_dirty = true;
+        } else if response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+            || (response.dragged_by(egui::PointerButton::Primary) && shift)
+        {
+            self.camera.pan(drag.x, drag.y, rect.height());
+            self.viewport_dirty = true;
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.camera.zoom(scroll / 50.0);
+                self.viewport_dirty = true;
+            }
+        }
+        if self.turntable {
+            let dt = ui.input(|i| i.stable_dt).min(0.1);
+            self.camera.yaw += 0.5 * dt;
+            self.viewport_dirty = true;
+        }
+        let ppp = ui.ctx().pixels_per_point();
+        let size = [(rect.width() * ppp).round() as u32, (rect.height() * ppp).round() as u32];
+        let state = (size, self.camera, self.toggles);
+        if self.viewport_dirty || self.last_viewport != Some(state) {
+            if let (Some(renderer), Some(rs)) = (&mut self.renderer, frame.wgpu_render_state()) {
+                let t0 = Instant::now();
+                let vp = self.camera.view_projection(rect.width() / rect.height().max(1.0));
+                let id = renderer.render(&mut rs.renderer.write(), vp, size, self.toggles);
+                self.texture = Some(id);
+                self.render_ms = t0.elapsed().as_secs_f64() * 1000.0;
+            }
+            self.viewport_dirty = false;
+            self.last_viewport = Some(state);
+        }
+        let painter = ui.painter_at(rect);
+        match self.texture {
+            Some(id) => {
+                let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+                painter.image(id, rect, uv, Color32::WHITE);
+            }
+            None => {
+                painter.rect_filled(rect, 0.0, Color32::from_gray(20));
+                painter.text(
+                    rect.center(),
+                    egui::Align2::CENTER_CENTER,
+                    "no GPU renderer (wgpu) available",
+                    egui::FontId::proportional(16.0),
+                    ERROR_COLOR,
+                );
+            }
+        }
+        let banner = match self.reloader.status() {
+            Status::Error(m) => Some(m.clone()),
+            Status::Gone => Some(gone_message(self.reloader.script())),
+            _ => None,
+        };
+        if let Some(text) = banner {
+            let galley = painter.layout(
+                text,
+                egui::FontId::monospace(14.0),
+                ERROR_COLOR,
+                (rect.width() - 24.0).max(50.0),
+            );
+            let r = egui::Rect::from_min_size(rect.min + egui::vec2(8.0, 8.0), galley.size() + egui::vec2(16.0, 12.0));
+            painter.rect_filled(r, 4.0, Color32::from_rgba_unmultiplied(40, 0, 0, 220));
+            painter.galley(r.min + egui::vec2(8.0, 6.0), galley, ERROR_COLOR);
+        } else if self.reloader.current().is_none() {
+            painter.text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "generating…",
+                egui::FontId::proportional(18.0),
+                Color32::from_gray(200),
+            );
+        }
+    }
+
+    fn keys(&mut self, ctx: &egui::Context) {
+        if ctx.wants_keyboard_input() {
+            return;
+        }
+        let pressed = |k| ctx.input(|i| i.key_pressed(k));
+        let before = (self.toggles, self.turntable);
+        if pressed(egui::Key::F) {
+            self.frame_model();
+        }
+        if pressed(egui::Key::W) {
+            self.toggles.wireframe ^= true;
+        }
+        if pressed(egui::Key::K) {
+            self.toggles.skeleton ^= true;
+        }
+        if pressed(egui::Key::L) {
+            self.toggles.leaves ^= true;
+        }
+        if pressed(egui::Key::G) {
+            self.toggles.grid ^= true;
+        }
+        if pressed(egui::Key::T) {
+            self.turntable ^= true;
+        }
+        if before != (self.toggles, self.turntable) {
+            self.viewport_dirty = true;
+        }
+    }
+
+    /// The `--screenshot` sequence: once the first generation has ended and its frame is
+    /// drawn, ask egui for the window's pixels; write them when they arrive; close.
+    fn screenshot(&mut self, ctx: &egui::Context) {
+        let Some((path, state)) = &mut self.shot else { return };
+        match state {
+            Shot::Waiting => {
+                let settled = !self.reloader.is_running()
+                    && (self.reloader.current().is_some() || !matches!(self.reloader.status(), Status::Running))
+                    && self.uploaded == self.reloader.generation_count()
+                    && !self.viewport_dirty;
+                if settled {
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::UserData::default()));
+                    *state = Shot::Requested;
+                }
+            }
+            Shot::Requested => {
+                let image = ctx.input(|i| {
+                    i.raw.events.iter().find_map(|e| match e {
+                        egui::Event::Screenshot { image, .. } => Some(image.clone()),
+                        _ => None,
+                    })
+                });
+                if let Some(image) = image {
+                    let mut result = save_png(path, &image);
+                    if result.is_ok() {
+                        match self.reloader.status() {
+                            Status::Error(m) => result = Err(anyhow::anyhow!("{m}")),
+                            Status::Gone => result = Err(anyhow::anyhow!("{}", gone_message(self.reloader.script()))),
+                            _ => {}
+                        }
+                    }
+                    if let Ok(mut slot) = self.shot_result.lock() {
+                        *slot = Some(result);
+                    }
+                    *state = Shot::Done;
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            }
+            Shot::Done => {}
+        }
+        ctx.request_repaint();
+    }
+
+    fn count_frame(&mut self) {
+        let now = Instant::now();
+        self.frames.push_back(now);
+        while self.frames.front().is_some_and(|t| now.duration_since(*t) > Duration::from_secs(2)) {
+            self.frames.pop_front();
+        }
+        if self.log_fps && now.duration_since(self.last_fps_log) >= Duration::from_secs(1) {
+            self.last_fps_log = now;
+            eprintln!("preview: {:.1} frames/s, draw {:.1} ms", self.fps(), self.render_ms);
+        }
+    }
+}
+
+impl eframe::App for PreviewApp {
+    fn update(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
+        self.count_frame();
+        self.pump();
+        self.keys(ctx);
+        egui::SidePanel::left("side").resizable(true).default_width(300.0).show(ctx, |ui| self.side_panel(ui));
+        egui::CentralPanel::default().frame(egui::Frame::NONE).show(ctx, |ui| self.viewport(ui, frame));
+        self.screenshot(ctx);
+        if self.turntable {
+            ctx.request_repaint();
+        } else if self.reloader.is_running() {
+            ctx.request_repaint_after(Duration::from_millis(100));
+        }
+        if let Some(at) = self.reloader.next_wake() {
+            ctx.request_repaint_after(at.saturating_duration_since(Instant::now()));
+        }
+    }
+}
+
+fn gone_message(script: &Path) -> String {
+    format!("{}: file is gone; waiting for it to come back", script.display())
+}
+
+/// A seed different from `old`, from the clock.
+fn new_seed(old: u64) -> u64 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos() as u64);
+    let seed = (nanos ^ old.rotate_left(17)) % 1_000_000;
+    if seed == old { seed + 1 } else { seed }
+}
+
+/// Writes the generation's model to `path` (`.glb`, or `.obj` with its `.mtl` and textures).
+fn export(g: &Generation, path: &Path) -> Result<String, String> {
+    let write = |p: &Path, bytes: &[u8]| std::fs::write(p, bytes).map_err(|e| format!("{}: {e}", p.display()));
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("obj") => {
+            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let mtl = path.with_extension("mtl");
+            let mtl_name = mtl.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let files = pge_engine::export::obj_files(&g.model, &mtl_name, &stem).map_err(|e| e.to_string())?;
+            write(path, files.obj.as_bytes())?;
+            write(&mtl, files.mtl.as_bytes())?;
+            let dir = path.parent().unwrap_or(Path::new("."));
+            for (name, bytes) in &files.textures {
+                write(&dir.join(name), bytes)?;
+            }
+        }
+        _ => {
+            let meta = pge_engine::export::ExportMeta {
+                seed: g.settings.seed,
+                params: g.params.iter().map(|p| (p.name.clone(), p.value.to_json())).collect(),
+            };
+            let bytes = pge_engine::export::glb_bytes(&g.model, &meta).map_err(|e| e.to_string())?;
+            write(path, &bytes)?;
+        }
+    }
+    Ok(format!("wrote {}", path.display()))
+}
+
+fn save_png(path: &Path, image: &egui::ColorImage) -> anyhow::Result<()> {
+    let [w, h] = image.size;
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for c in &image.pixels {
+        rgba.extend_from_slice(&c.to_srgba_unmultiplied());
+    }
+    let img = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+        .ok_or_else(|| anyhow::anyhow!("screenshot of {w}x{h} has the wrong number of pixels"))?;
+    img.save_with_format(path, image::ImageFormat::Png)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}

@@ -1,0 +1,271 @@
+//! A model prepared for drawing: interleaved vertex arrays, instance matrices grouped per
+//! mesh, decoded textures with their mip chains, the branch skeleton as world-space lines.
+//!
+//! Built on the worker thread right after generation, so the window only uploads buffers.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+use pge_engine::geometry::{AlphaMode, Mesh, Model, Primitive, Texture};
+
+/// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4).
+pub const VERTEX_FLOATS: usize = 12;
+
+/// An RGBA8 (sRGB) texture with its mip chain, largest first.
+#[derive(Debug)]
+pub struct TextureData {
+    /// Width of level 0.
+    pub width: u32,
+    /// Height of level 0.
+    pub height: u32,
+    /// Pixels of each level.
+    pub levels: Vec<Vec<u8>>,
+}
+
+/// One mesh with every instance that places it.
+#[derive(Debug)]
+pub struct SceneMesh {
+    /// Interleaved vertices, [`VERTEX_FLOATS`] floats each.
+    pub vertices: Vec<f32>,
+    /// Triangle (or line) indices.
+    pub indices: Vec<u32>,
+    /// Whether `indices` are line pairs.
+    pub lines: bool,
+    /// Column-major local-to-world matrices, one per instance.
+    pub instances: Vec<[f32; 16]>,
+    /// Linear base colour factor.
+    pub base_color: [f32; 4],
+    /// Base colour texture.
+    pub texture: Option<Arc<TextureData>>,
+    /// Alpha cutoff for masked materials (leaves).
+    pub alpha_cutoff: Option<f32>,
+    /// Back faces drawn (lit from the side they face).
+    pub double_sided: bool,
+    /// Foliage, hidden by the "leaves" toggle: a masked material or a name saying so.
+    pub is_leaf: bool,
+}
+
+/// Counts shown in the statistics panel.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneStats {
+    /// Vertices drawn, over all instances.
+    pub vertices: usize,
+    /// Triangles drawn, over all instances.
+    pub triangles: usize,
+    /// Skeleton nodes.
+    pub nodes: u64,
+    /// Leaves.
+    pub leaves: u64,
+    /// L-system modules.
+    pub modules: u64,
+    /// Seconds per phase.
+    pub phases: Vec<(String, f64)>,
+}
+
+/// A model ready to upload.
+#[derive(Debug)]
+pub struct Scene {
+    /// Meshes with their instances.
+    pub meshes: Vec<SceneMesh>,
+    /// The skeletons of every instance as world-space segments (pairs of points).
+    pub skeleton: Vec<[f32; 3]>,
+    /// World-space bounds, `None` when empty.
+    pub bounds: Option<(Vec3, Vec3)>,
+    /// Counts.
+    pub stats: SceneStats,
+}
+
+impl Scene {
+    /// Prepares `model`. Textures that fail to decode are left out (the exporter would
+    /// have refused them earlier; the preview still shows the geometry).
+    #[must_use]
+    pub fn new(model: &Model) -> Scene {
+        let mut textures: HashMap<*const Texture, Option<Arc<TextureData>>> = HashMap::new();
+        let mut per_mesh: Vec<Vec<[f32; 16]>> = vec![Vec::new(); model.meshes.len()];
+        for inst in &model.instances {
+            if let Some(list) = per_mesh.get_mut(inst.mesh) {
+                list.push(inst.transform.to_cols_array());
+            }
+        }
+        let mut meshes = Vec::new();
+        let mut skeleton = Vec::new();
+        for (mesh, instances) in model.meshes.iter().zip(per_mesh) {
+            if instances.is_empty() || mesh.positions.is_empty() {
+                continue;
+            }
+            if let Some(sk) = &mesh.skeleton {
+                for m in &instances {
+                    let m = Mat4::from_cols_array(m);
+                    for (i, parent) in sk.parents.iter().enumerate() {
+                        if let (Some(p), Some(c)) = (parent, sk.positions.get(i)) {
+                            if let Some(pp) = sk.positions.get(*p as usize) {
+                                skeleton.push(m.transform_point3(*pp).to_array());
+                                skeleton.push(m.transform_point3(*c).to_array());
+                            }
+                        }
+                    }
+                }
+            }
+            let texture = mesh.material.texture.as_ref().and_then(|t| {
+                textures.entry(Arc::as_ptr(t)).or_insert_with(|| decode(t).map(Arc::new)).clone()
+            });
+            meshes.push(SceneMesh {
+                vertices: interleave(mesh),
+                indices: mesh.indices.clone(),
+                lines: mesh.primitive == Primitive::Lines,
+                instances,
+                base_color: mesh.material.base_color,
+                texture,
+                alpha_cutoff: match mesh.material.alpha {
+                    AlphaMode::Mask(c) => Some(c),
+                    _ => None,
+                },
+                double_sided: mesh.material.double_sided,
+                is_leaf: is_leaf(mesh),
+            });
+        }
+        let stats = SceneStats {
+            vertices: model.vertex_count(),
+            triangles: model.triangle_count(),
+            nodes: model.stats.nodes,
+            leaves: model.stats.leaves,
+            modules: model.stats.modules,
+            phases: model.stats.phases.clone(),
+        };
+        Scene { meshes, skeleton, bounds: model.bounds(), stats }
+    }
+}
+
+/// Whether a mesh is foliage: an alpha-masked material, or "leaf"/"foliage" in the mesh's or
+/// the material's name.
+fn is_leaf(mesh: &Mesh) -> bool {
+    let named = |s: &str| {
+        let s = s.to_ascii_lowercase();
+        s.contains("leaf") || s.contains("leaves") || s.contains("foliage")
+    };
+    matches!(mesh.material.alpha, AlphaMode::Mask(_)) || named(&mesh.name) || named(&mesh.material.name)
+}
+
+fn interleave(mesh: &Mesh) -> Vec<f32> {
+    let n = mesh.positions.len();
+    let mut out = Vec::with_capacity(n * VERTEX_FLOATS);
+    for i in 0..n {
+        let p = mesh.positions[i];
+        let nr = mesh.normals.get(i).copied().unwrap_or(Vec3::Y);
+        let uv = mesh.uvs.get(i).copied().unwrap_or_default();
+        let c = mesh.colors.get(i).copied().unwrap_or(glam::Vec4::ONE);
+        out.extend_from_slice(&[p.x, p.y, p.z, nr.x, nr.y, nr.z, uv.x, uv.y, c.x, c.y, c.z, c.w]);
+    }
+    out
+}
+
+/// Decodes a PNG texture and builds its mip chain (2x2 box filter, sRGB-aware).
+fn decode(texture: &Texture) -> Option<TextureData> {
+    let img = image::load_from_memory(&texture.png).ok()?.to_rgba8();
+    let (width, height) = img.dimensions();
+    let mut levels = vec![img.into_raw()];
+    let (mut w, mut h) = (width, height);
+    while w > 1 || h > 1 {
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        let prev = levels.last().map(Vec::as_slice).unwrap_or_default();
+        levels.push(downsample(prev, w, h, nw, nh));
+        (w, h) = (nw, nh);
+    }
+    Some(TextureData { width, height, levels })
+}
+
+fn downsample(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
+    let to_linear = |c: u8| (c as f32 / 255.0).powf(2.2);
+    let to_srgb = |c: f32| (c.max(0.0).powf(1.0 / 2.2) * 255.0).round().min(255.0) as u8;
+    let mut out = Vec::with_capacity((nw * nh * 4) as usize);
+    for y in 0..nh {
+        for x in 0..nw {
+            let mut acc = [0.0f32; 4];
+            let mut n = 0.0;
+            for (sx, sy) in [(2 * x, 2 * y), (2 * x + 1, 2 * y), (2 * x, 2 * y + 1), (2 * x + 1, 2 * y + 1)] {
+                if sx < w && sy < h {
+                    let i = ((sy * w + sx) * 4) as usize;
+                    for k in 0..3 {
+                        acc[k] += to_linear(src[i + k]);
+                    }
+                    acc[3] += src[i + 3] as f32 / 255.0;
+                    n += 1.0;
+                }
+            }
+            for (k, a) in acc.iter().enumerate() {
+                out.push(if k < 3 { to_srgb(a / n) } else { (a / n * 255.0).round() as u8 });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use pge_engine::geometry::{Material, Skeleton};
+
+    use super::*;
+
+    fn triangle() -> Mesh {
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid")
+    }
+
+    #[test]
+    fn instances_are_grouped_per_mesh_and_counted() {
+        let tri = Arc::new(triangle());
+        let mut model = Model::new();
+        model.add_mesh(tri.clone(), Mat4::IDENTITY);
+        model.add_mesh(tri, Mat4::from_translation(Vec3::new(5.0, 0.0, 0.0)));
+        let scene = Scene::new(&model);
+        assert_eq!(scene.meshes.len(), 1);
+        assert_eq!(scene.meshes[0].instances.len(), 2);
+        assert_eq!(scene.meshes[0].instances[1][12], 5.0, "translation column");
+        assert_eq!(scene.meshes[0].vertices.len(), 3 * VERTEX_FLOATS);
+        // Vertex 1: position (1,0,0), normal +Z, no uv, white.
+        assert_eq!(&scene.meshes[0].vertices[12..24], &[1., 0., 0., 0., 0., 1., 0., 0., 1., 1., 1., 1.]);
+        assert_eq!(scene.stats.triangles, 2);
+        assert_eq!(scene.stats.vertices, 6);
+        assert_eq!(scene.bounds, Some((Vec3::ZERO, Vec3::new(6.0, 1.0, 0.0))));
+        assert!(!scene.meshes[0].is_leaf);
+    }
+
+    #[test]
+    fn skeleton_becomes_world_segments_and_leaves_are_recognised() {
+        let mut bark = triangle();
+        bark.skeleton = Some(Arc::new(Skeleton {
+            positions: vec![Vec3::ZERO, Vec3::Y, Vec3::new(1.0, 2.0, 0.0)],
+            parents: vec![None, Some(0), Some(1)],
+            radii: vec![0.1; 3],
+            orders: vec![0; 3],
+            ..Skeleton::default()
+        }));
+        let mut leaves = triangle();
+        leaves.material = Arc::new(Material { alpha: AlphaMode::Mask(0.5), ..Material::default() });
+        let mut model = Model::new();
+        model.add_mesh(bark, Mat4::from_translation(Vec3::Z));
+        model.add_mesh(leaves, Mat4::IDENTITY);
+        let scene = Scene::new(&model);
+        assert_eq!(scene.skeleton, vec![[0., 0., 1.], [0., 1., 1.], [0., 1., 1.], [1., 2., 1.]]);
+        assert!(scene.meshes[1].is_leaf);
+        assert_eq!(scene.meshes[1].alpha_cutoff, Some(0.5));
+    }
+
+    #[test]
+    fn textures_are_decoded_with_a_full_mip_chain() {
+        let mut rgba = Vec::new();
+        for i in 0..(4 * 2) {
+            rgba.extend_from_slice(if i % 2 == 0 { &[255, 0, 0, 255] } else { &[0, 0, 255, 0] });
+        }
+        let tex = Arc::new(Texture::from_rgba("t", 4, 2, &rgba).expect("png"));
+        let mut mesh = triangle();
+        mesh.material = Arc::new(Material { texture: Some(tex), ..Material::default() });
+        let scene = Scene::new(&Model::from_mesh(mesh));
+        let data = scene.meshes[0].texture.as_ref().expect("decoded");
+        assert_eq!((data.width, data.height), (4, 2));
+        let sizes: Vec<usize> = data.levels.iter().map(Vec::len).collect();
+        assert_eq!(sizes, vec![32, 8, 4], "4x2, 2x1, 1x1");
+        // Averaging red and transparent blue gives half alpha and gamma-correct halves.
+        assert_eq!(&data.levels[1][0..4], &[186, 0, 186, 128]);
+    }
+}

@@ -1,0 +1,92 @@
+// The preview's shaders: lit instanced meshes, unlit lines.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // xyz: direction towards the sun.
+    sun: vec4<f32>,
+};
+@group(0) @binding(0) var<uniform> g: Globals;
+
+struct Material {
+    base_color: vec4<f32>,
+    // x: alpha cutoff (negative: none), y: 1 when double-sided.
+    params: vec4<f32>,
+};
+@group(1) @binding(0) var<uniform> m: Material;
+@group(1) @binding(1) var base_tex: texture_2d<f32>;
+@group(1) @binding(2) var base_sampler: sampler;
+
+struct MeshIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) color: vec4<f32>,
+    @location(4) m0: vec4<f32>,
+    @location(5) m1: vec4<f32>,
+    @location(6) m2: vec4<f32>,
+    @location(7) m3: vec4<f32>,
+};
+
+struct MeshOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @location(2) color: vec4<f32>,
+};
+
+@vertex
+fn vs_mesh(v: MeshIn) -> MeshOut {
+    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
+    var out: MeshOut;
+    out.clip = g.view_proj * (model * vec4<f32>(v.position, 1.0));
+    out.normal = (model * vec4<f32>(v.normal, 0.0)).xyz;
+    out.uv = v.uv;
+    out.color = v.color;
+    return out;
+}
+
+@fragment
+fn fs_mesh(in: MeshOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let c = m.base_color * in.color * textureSample(base_tex, base_sampler, in.uv);
+    if m.params.x >= 0.0 && c.a < m.params.x {
+        discard;
+    }
+    var n = normalize(in.normal);
+    if !front {
+        n = -n;
+    }
+    let sun = max(dot(n, g.sun.xyz), 0.0);
+    // Hemisphere ambient: warm ground below, cool sky above.
+    let ambient = mix(vec3<f32>(0.16, 0.14, 0.12), vec3<f32>(0.38, 0.42, 0.50), n.y * 0.5 + 0.5);
+    let light = ambient + vec3<f32>(1.0, 0.95, 0.85) * sun * 0.85;
+    return vec4<f32>(c.rgb * light, 1.0);
+}
+
+@fragment
+fn fs_mesh_lines(in: MeshOut) -> @location(0) vec4<f32> {
+    let c = m.base_color * in.color;
+    return vec4<f32>(c.rgb, 1.0);
+}
+
+struct LineIn {
+    @location(0) position: vec3<f32>,
+    @location(1) color: vec4<f32>,
+};
+
+struct LineOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) color: vec4<f32>,
+};
+
+@vertex
+fn vs_line(v: LineIn) -> LineOut {
+    var out: LineOut;
+    out.clip = g.view_proj * vec4<f32>(v.position, 1.0);
+    out.color = v.color;
+    return out;
+}
+
+@fragment
+fn fs_line(in: LineOut) -> @location(0) vec4<f32> {
+    return in.color;
+}
