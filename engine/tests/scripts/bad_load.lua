@@ -1,0 +1,1 @@
+return pge.load("sub/child.lua", { sise = 3 })

@@ -1,0 +1,2 @@
+local p = pge.params{ size = 1 }
+return p.size

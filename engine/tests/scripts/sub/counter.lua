@@ -1,0 +1,2 @@
+COUNTER_LOADS = (COUNTER_LOADS or 0) + 1
+return { count = COUNTER_LOADS }
