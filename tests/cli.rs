@@ -319,3 +319,17 @@ fn support_library_and_params() {
         Some(name)
     );
 }
+
+#[test]
+fn pairs_order_is_the_same_on_every_run() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let outs: Vec<Vec<u8>> = (0..3)
+        .map(|i| {
+            let out = dir.path().join(format!("{i}.glb"));
+            run_to("tests/scripts/pairs_order.lua", &out, &[]);
+            std::fs::read(out).expect("written")
+        })
+        .collect();
+    assert_eq!(outs[0], outs[1]);
+    assert_eq!(outs[1], outs[2]);
+}

@@ -33,7 +33,9 @@ fn validator_dir() -> PathBuf {
 /// except library modules (`lib/`) and scripts meant to be loaded by others.
 fn library_scripts() -> Vec<PathBuf> {
     fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
         let mut entries: Vec<_> = entries.flatten().map(|e| e.path()).collect();
         entries.sort();
         for p in entries {
@@ -87,8 +89,18 @@ fn every_library_script_writes_a_valid_glb() {
     let report = outputs
         .iter()
         .zip(&scripts)
-        .fold(report.to_string(), |r, (out, s)| r.replace(&out.display().to_string(), &s.display().to_string()));
+        .fold(report.to_string(), |r, (out, s)| {
+            r.replace(&out.display().to_string(), &s.display().to_string())
+        });
     println!("{report}");
-    assert!(o.status.success(), "the glTF validator found errors:\n{report}\n{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(report.lines().filter(|l| l.contains(": 0 errors")).count(), scripts.len(), "{report}");
+    assert!(
+        o.status.success(),
+        "the glTF validator found errors:\n{report}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(
+        report.lines().filter(|l| l.contains(": 0 errors")).count(),
+        scripts.len(),
+        "{report}"
+    );
 }
