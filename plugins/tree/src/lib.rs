@@ -1,0 +1,335 @@
+//! PGE trees: every tree generator's branch [`Skeleton`] becomes a model here.
+//!
+//! Space colonization, the turtle and the growth model all produce a skeleton (positions,
+//! parents, radii, orders, leaf points); this crate turns it into a [`Model`] with
+//! - one bark mesh of generalized cylinders (Bloomenthal) with normals, UVs and a bark texture,
+//!   carrying the processed skeleton for the glTF extras;
+//! - one leaf mesh of alpha-masked, double-sided quads with a colour per leaf.
+//!
+//! On the way the skeleton gets pipe-model radii (`r^n = r1^n + r2^n` from a tip radius, or
+//! the generator's own radii), optional smoothing and merging of straight chains. Textures
+//! are procedural (noise, a leaf silhouette) unless a PNG is given. All of it is plain Rust;
+//! the options can be read from a Lua table with [`TreeOptions::from_lua`].
+//!
+//! ```
+//! use glam::Vec3;
+//! use pge_engine::geometry::Skeleton;
+//! use pge_tree::{LeafOptions, TreeOptions, build_tree};
+//!
+//! let mut skeleton = Skeleton::new();
+//! let root = skeleton.push(Vec3::ZERO, None, 0.0, 0);
+//! let fork = skeleton.push(Vec3::Y, Some(root), 0.0, 0);
+//! skeleton.push(Vec3::new(-0.5, 2.0, 0.0), Some(fork), 0.0, 1);
+//! skeleton.push(Vec3::new(0.5, 2.0, 0.0), Some(fork), 0.0, 1);
+//!
+//! let options = TreeOptions { leaves: Some(LeafOptions::default()), ..TreeOptions::default() };
+//! let model = build_tree(&skeleton, &options, 1).unwrap();
+//! assert_eq!(model.meshes.len(), 2); // bark and leaves
+//! assert_eq!(model.stats.nodes, 4);
+//! model.validate().unwrap();
+//! ```
+
+mod cylinders;
+mod leaves;
+mod merge;
+mod options;
+mod radii;
+mod smooth;
+mod textures;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{Mat4, Vec3};
+use pge_engine::geometry::{AlphaMode, GeometryError, Material, Mesh, Model, Skeleton};
+use rand_mt::Mt64;
+
+pub use cylinders::{append_bark, bark_mesh};
+pub use leaves::{append_leaf_quads, tip_leaves};
+pub use merge::merge_straight;
+pub use options::{LeafOptions, MeshOptions, OptionError, RadiiMode, TextureSource, TreeOptions};
+pub use radii::{assign_orders, main_children, pipe_radii};
+pub use smooth::smooth;
+pub use textures::{bark_texture, leaf_texture, load_png};
+
+/// Why a tree could not be built.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TreeError {
+    /// The skeleton breaks an invariant (a generator bug or bad host data).
+    #[error("invalid skeleton: {0}")]
+    Skeleton(String),
+    /// A texture file could not be read or decoded.
+    #[error("texture {}: {message}", path.display())]
+    Texture {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// A mesh or texture broke an invariant.
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+}
+
+/// Checks that a skeleton is usable: equal array lengths, parents before children, finite
+/// positions and non-negative finite radii, leaf points on existing nodes.
+pub fn check_skeleton(skeleton: &Skeleton) -> Result<(), TreeError> {
+    let n = skeleton.positions.len();
+    let bad = |m: String| Err(TreeError::Skeleton(m));
+    if skeleton.parents.len() != n || skeleton.radii.len() != n || skeleton.orders.len() != n {
+        return bad(format!(
+            "{n} positions but {} parents, {} radii and {} orders",
+            skeleton.parents.len(),
+            skeleton.radii.len(),
+            skeleton.orders.len()
+        ));
+    }
+    for i in 0..n {
+        if let Some(p) = skeleton.parents[i]
+            && p as usize >= i
+        {
+            return bad(format!(
+                "node {i} has parent {p}, which does not precede it"
+            ));
+        }
+        if !skeleton.positions[i].is_finite() {
+            return bad(format!("node {i} has a non-finite position"));
+        }
+        let r = skeleton.radii[i];
+        if !(r.is_finite() && r >= 0.0) {
+            return bad(format!("node {i} has radius {r}"));
+        }
+    }
+    for (k, leaf) in skeleton.leaves.iter().enumerate() {
+        if leaf.node as usize >= n {
+            return bad(format!("leaf {k} hangs on node {} of {n}", leaf.node));
+        }
+        if !(leaf.position.is_finite() && leaf.direction.is_finite() && leaf.side.is_finite()) {
+            return bad(format!("leaf {k} has a non-finite position or direction"));
+        }
+    }
+    Ok(())
+}
+
+/// The skeleton the bark is built on: checked, radii by the options' mode (pipe model from
+/// `tip_radius` with `exponent`, or kept), then smoothed, then straight chains merged.
+pub fn prepare_skeleton(skeleton: &Skeleton, options: &MeshOptions) -> Result<Skeleton, TreeError> {
+    check_skeleton(skeleton)?;
+    let mut s = skeleton.clone();
+    if options.radii == RadiiMode::Pipe {
+        pipe_radii(&mut s, options.tip_radius, options.exponent);
+    }
+    smooth(&mut s, options.smoothing);
+    if let Some(angle) = options.merge_straight {
+        s = merge_straight(&s, angle);
+    }
+    Ok(s)
+}
+
+/// The bark mesh alone: [`prepare_skeleton`], then generalized cylinders with the bark
+/// material (procedural or file texture). The mesh carries the prepared skeleton.
+pub fn mesh_skeleton(skeleton: &Skeleton, options: &MeshOptions) -> Result<Mesh, TreeError> {
+    let prepared = prepare_skeleton(skeleton, options)?;
+    bark_of(Arc::new(prepared), options)
+}
+
+fn bark_of(skeleton: Arc<Skeleton>, options: &MeshOptions) -> Result<Mesh, TreeError> {
+    let mut mesh = bark_mesh(&skeleton, options.sides, options.caps);
+    let texture =
+        textures::resolve_texture(&options.texture, "bark", || bark_texture(options.color))?;
+    mesh.material = Arc::new(Material {
+        name: "bark".into(),
+        base_color: [1.0; 4],
+        texture: Some(texture),
+        roughness: 0.95,
+        ..Material::default()
+    });
+    mesh.skeleton = Some(skeleton);
+    Ok(mesh)
+}
+
+/// The leaf material: the texture (procedural silhouette or file), alpha mask at 0.5,
+/// double-sided.
+pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> {
+    let texture = textures::resolve_texture(&options.texture, "leaf", leaf_texture)?;
+    Ok(Arc::new(Material {
+        name: "leaves".into(),
+        base_color: [1.0; 4],
+        texture: Some(texture),
+        alpha: AlphaMode::Mask(0.5),
+        double_sided: true,
+        roughness: 0.8,
+        ..Material::default()
+    }))
+}
+
+/// Builds the whole tree: bark (see [`mesh_skeleton`]) and leaves, as a model with the bark
+/// mesh first and the leaf mesh (if any leaf) second, both at the origin.
+///
+/// Leaves are the skeleton's own leaf points plus, when `options.leaves` is set, tip leaves
+/// ([`tip_leaves`]) drawn from an MT19937-64 seeded with `seed`: the same skeleton, options
+/// and seed give the same model. The bark mesh's skeleton holds every leaf point. Stats:
+/// `nodes` (after merging), `leaves`, and the phases `radii`, `meshing` and `leaves`.
+pub fn build_tree(
+    skeleton: &Skeleton,
+    options: &TreeOptions,
+    seed: u64,
+) -> Result<Model, TreeError> {
+    let mut model = Model::new();
+    let t = Instant::now();
+    let mut prepared = prepare_skeleton(skeleton, &options.mesh)?;
+    model.stats.add_phase("radii", t.elapsed().as_secs_f64());
+
+    let t = Instant::now();
+    let mut rng = Mt64::new(seed);
+    if let Some(leaf_options) = &options.leaves {
+        let extra = tip_leaves(&prepared, leaf_options, &mut rng);
+        prepared.leaves.extend(extra);
+    }
+    let leaves_time = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let prepared = Arc::new(prepared);
+    if prepared.len() >= 2 {
+        model.add_mesh(bark_of(prepared.clone(), &options.mesh)?, Mat4::IDENTITY);
+    }
+    model.stats.add_phase("meshing", t.elapsed().as_secs_f64());
+
+    let t = Instant::now();
+    if !prepared.leaves.is_empty() {
+        let default_style;
+        let style = match &options.leaves {
+            Some(l) => l,
+            None => {
+                default_style = LeafOptions::default();
+                &default_style
+            }
+        };
+        let mut mesh = Mesh {
+            name: "leaves".into(),
+            ..Mesh::default()
+        };
+        append_leaf_quads(&prepared.leaves, style, &mut rng, &mut mesh);
+        mesh.material = leaf_material(style)?;
+        model.add_mesh(mesh, Mat4::IDENTITY);
+    }
+    model
+        .stats
+        .add_phase("leaves", leaves_time + t.elapsed().as_secs_f64());
+    model.stats.nodes = prepared.len() as u64;
+    model.stats.leaves = prepared.leaves.len() as u64;
+    Ok(model)
+}
+
+/// The centre of a skeleton's bounding box, or the origin when empty (handy for envelopes
+/// and cameras).
+#[must_use]
+pub fn skeleton_centre(skeleton: &Skeleton) -> Vec3 {
+    let Some(first) = skeleton.positions.first() else {
+        return Vec3::ZERO;
+    };
+    let (lo, hi) = skeleton
+        .positions
+        .iter()
+        .fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    (lo + hi) * 0.5
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn y_tree() -> Skeleton {
+        let mut s = Skeleton::new();
+        let r = s.push(Vec3::ZERO, None, 0.0, 0);
+        let a = s.push(Vec3::Y, Some(r), 0.0, 0);
+        let b = s.push(Vec3::new(0.0, 2.0, 0.0), Some(a), 0.0, 0);
+        s.push(Vec3::new(-0.5, 2.5, 0.0), Some(b), 0.0, 1);
+        s.push(Vec3::new(0.5, 2.5, 0.2), Some(b), 0.0, 1);
+        s
+    }
+
+    #[test]
+    fn a_tree_has_bark_and_leaves_and_is_deterministic() {
+        let options = TreeOptions {
+            leaves: Some(LeafOptions::default()),
+            ..TreeOptions::default()
+        };
+        let a = build_tree(&y_tree(), &options, 7).expect("builds");
+        let b = build_tree(&y_tree(), &options, 7).expect("builds");
+        let c = build_tree(&y_tree(), &options, 8).expect("builds");
+        a.validate().expect("valid");
+        assert_eq!(a.meshes.len(), 2);
+        assert_eq!(a.meshes[0].positions, b.meshes[0].positions);
+        assert_eq!(a.meshes[1].positions, b.meshes[1].positions);
+        assert_eq!(a.meshes[1].colors, b.meshes[1].colors);
+        assert_ne!(a.meshes[1].positions, c.meshes[1].positions);
+        let bark = &a.meshes[0];
+        let skeleton = bark.skeleton.as_ref().expect("skeleton attached");
+        assert_eq!(skeleton.len(), 5);
+        assert_eq!(skeleton.leaves.len() as u64, a.stats.leaves);
+        assert!(a.stats.leaves >= 6);
+        assert!(bark.material.texture.is_some());
+        let leaves = &a.meshes[1];
+        assert_eq!(leaves.material.alpha, AlphaMode::Mask(0.5));
+        assert!(leaves.material.double_sided);
+        assert_eq!(leaves.positions.len() as u64, 4 * a.stats.leaves);
+        let phases: Vec<&str> = a.stats.phases.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(phases, ["radii", "meshing", "leaves"]);
+    }
+
+    #[test]
+    fn kept_radii_are_not_replaced() {
+        let mut s = y_tree();
+        s.radii = vec![0.3, 0.3, 0.2, 0.1, 0.05];
+        let keep = MeshOptions {
+            radii: RadiiMode::Keep,
+            ..MeshOptions::default()
+        };
+        assert_eq!(prepare_skeleton(&s, &keep).expect("ok").radii, s.radii);
+        let pipe = prepare_skeleton(&s, &MeshOptions::default()).expect("ok");
+        assert_eq!(pipe.radii[3], 0.02);
+    }
+
+    #[test]
+    fn bad_skeletons_and_textures_are_errors() {
+        let mut s = y_tree();
+        s.positions[2].x = f32::NAN;
+        assert!(matches!(
+            build_tree(&s, &TreeOptions::default(), 1),
+            Err(TreeError::Skeleton(_))
+        ));
+        let mut s = y_tree();
+        s.parents[1] = Some(3);
+        let e = build_tree(&s, &TreeOptions::default(), 1).expect_err("bad parent");
+        assert_eq!(
+            e.to_string(),
+            "invalid skeleton: node 1 has parent 3, which does not precede it"
+        );
+        let options = TreeOptions {
+            mesh: MeshOptions {
+                texture: TextureSource::File("/no/such/bark.png".into()),
+                ..MeshOptions::default()
+            },
+            leaves: None,
+        };
+        let e = build_tree(&y_tree(), &options, 1).expect_err("missing file");
+        assert!(
+            e.to_string().starts_with("texture /no/such/bark.png:"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn empty_and_single_node_skeletons_give_empty_models() {
+        let m = build_tree(&Skeleton::new(), &TreeOptions::default(), 1).expect("ok");
+        assert_eq!(m.meshes.len(), 0);
+        let mut s = Skeleton::new();
+        s.push(Vec3::ZERO, None, 0.1, 0);
+        let m = build_tree(&s, &TreeOptions::default(), 1).expect("ok");
+        assert_eq!(m.triangle_count(), 0);
+        assert_eq!(skeleton_centre(&y_tree()), Vec3::new(0.0, 1.25, 0.1));
+    }
+}

@@ -1,0 +1,126 @@
+//! Branch radii by the pipe model and branch orders.
+
+use pge_engine::geometry::Skeleton;
+
+/// Sets every radius by the pipe model: tips get `tip_radius`, and a node with children gets
+/// `r = (r1^n + r2^n + ...)^(1/n)` over its children (`n = exponent`, 2.3 in seed 002). A
+/// node with one child has that child's radius, so non-branching chains are cylinders.
+///
+/// Runs backwards over the topologically ordered nodes, children before parents: O(nodes).
+pub fn pipe_radii(skeleton: &mut Skeleton, tip_radius: f32, exponent: f32) {
+    let n = skeleton.len();
+    // Sum of r^n over the children of each node.
+    let mut sums = vec![0.0f64; n];
+    let mut has_child = vec![false; n];
+    let e = f64::from(exponent);
+    for i in (0..n).rev() {
+        let r = if has_child[i] {
+            sums[i].powf(1.0 / e) as f32
+        } else {
+            tip_radius
+        };
+        skeleton.radii[i] = r;
+        if let Some(p) = skeleton.parents[i] {
+            sums[p as usize] += f64::from(r).powf(e);
+            has_child[p as usize] = true;
+        }
+    }
+}
+
+/// The child that continues each node's branch: the child with the parent's order if any
+/// (a turtle marks lateral branches with a higher order), then the thickest, then the one
+/// that turns least, then the first. `None` for tips.
+#[must_use]
+pub fn main_children(skeleton: &Skeleton, children: &[Vec<u32>]) -> Vec<Option<u32>> {
+    let pos = &skeleton.positions;
+    children
+        .iter()
+        .enumerate()
+        .map(|(i, kids)| {
+            let incoming = skeleton.parents[i]
+                .and_then(|p| (pos[i] - pos[p as usize]).try_normalize())
+                .unwrap_or(glam::Vec3::Y);
+            let key = |c: u32| {
+                let c = c as usize;
+                let same_order = skeleton.orders[c] == skeleton.orders[i];
+                let turn = (pos[c] - pos[i])
+                    .try_normalize()
+                    .map_or(-2.0, |d| d.dot(incoming));
+                (same_order, skeleton.radii[c], turn)
+            };
+            let mut best: Option<u32> = None;
+            for &c in kids {
+                best = match best {
+                    None => Some(c),
+                    Some(b) => Some(if key(c) > key(b) { c } else { b }),
+                };
+            }
+            best
+        })
+        .collect()
+}
+
+/// Sets branch orders from the radii: a root has order 0, the main child of a node (see
+/// [`main_children`], decided by radius and direction here) keeps its parent's order and every
+/// other child gets one more. For skeletons whose generator does not know orders (space
+/// colonization); call it after [`pipe_radii`].
+pub fn assign_orders(skeleton: &mut Skeleton) {
+    for o in &mut skeleton.orders {
+        *o = 0;
+    }
+    let children = skeleton.children();
+    let main = main_children(skeleton, &children);
+    for i in 0..skeleton.len() {
+        let order = skeleton.orders[i];
+        for &c in &children[i] {
+            skeleton.orders[c as usize] = if Some(c) == main[i] { order } else { order + 1 };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// A trunk of two nodes forking into two tips, one of which forks again.
+    fn fork() -> Skeleton {
+        let mut s = Skeleton::new();
+        let r = s.push(Vec3::ZERO, None, 0.0, 0);
+        let a = s.push(Vec3::Y, Some(r), 0.0, 0);
+        s.push(Vec3::new(-1.0, 2.0, 0.0), Some(a), 0.0, 0);
+        let c = s.push(Vec3::new(1.0, 2.0, 0.0), Some(a), 0.0, 0);
+        s.push(Vec3::new(1.0, 3.0, 0.0), Some(c), 0.0, 0);
+        s.push(Vec3::new(2.0, 3.0, 0.0), Some(c), 0.0, 0);
+        s
+    }
+
+    #[test]
+    fn pipe_model_holds_at_every_fork() {
+        let mut s = fork();
+        pipe_radii(&mut s, 0.1, 2.3);
+        let children = s.children();
+        for (i, kids) in children.iter().enumerate() {
+            if kids.is_empty() {
+                assert_eq!(s.radii[i], 0.1);
+            } else {
+                let sum: f32 = kids.iter().map(|c| s.radii[*c as usize].powf(2.3)).sum();
+                assert!((s.radii[i].powf(2.3) - sum).abs() < 1e-6, "node {i}");
+            }
+        }
+        assert_eq!(s.radii[0], s.radii[1]);
+        // Exponent 2: area is conserved, three tips of 0.1 give sqrt(3) * 0.1 at the root.
+        pipe_radii(&mut s, 0.1, 2.0);
+        assert!((s.radii[0] - 3f32.sqrt() * 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn orders_follow_the_thickest_child() {
+        let mut s = fork();
+        pipe_radii(&mut s, 0.1, 2.3);
+        assign_orders(&mut s);
+        // Node 3 carries two tips, so it is the main child of node 1 and node 2 is lateral;
+        // of node 3's equal tips, node 5 turns least.
+        assert_eq!(s.orders, vec![0, 0, 1, 0, 1, 0]);
+    }
+}
