@@ -1,0 +1,1446 @@
+//! Rules, context matching and the derivation step.
+
+use rand_mt::Mt;
+
+use crate::classic::{self, LhsAst, ModuleAst, PatternAst};
+use crate::error::LsError;
+use crate::expr::{Ast, Expr, Operand};
+use crate::module_string::ModuleString;
+use crate::symbol::{Sym, SymbolTable};
+
+/// A uniform draw in `[0, 1)` with 53 random bits (MT19937's `genrand_res53`).
+#[must_use]
+pub fn uniform(mt: &mut Mt) -> f64 {
+    let a = f64::from(mt.next_u32() >> 5);
+    let b = f64::from(mt.next_u32() >> 6);
+    (a * 67_108_864.0 + b) / 9_007_199_254_740_992.0
+}
+
+/// What the derivation needs from its environment: randomness, limits, rules written in
+/// another language (Lua functions) and the interpretation of new modules.
+pub trait Host {
+    /// The error type of the host; engine errors convert into it.
+    type Error: From<LsError>;
+
+    /// A uniform draw in `[0, 1)` from the instance's generator.
+    fn random(&mut self) -> f64;
+
+    /// Called every 65 536 modules: an error stops the step (time limit, cancellation).
+    fn check(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+
+    /// Applies external rule `rule` (the id given to [`System::add_external`]) to the modules
+    /// `matched` of `src` (left context, predecessor, right context, brackets excluded),
+    /// appending its successor to `out`. Returns false when the rule does not apply.
+    fn apply(
+        &mut self,
+        rule: u32,
+        matched: &[usize],
+        src: &ModuleString,
+        out: &mut ModuleString,
+    ) -> Result<bool, Self::Error>;
+
+    /// Interprets the modules `out[from..]` just produced (streaming interpretation).
+    fn interpret(&mut self, out: &ModuleString, from: usize) -> Result<(), Self::Error> {
+        let _ = (out, from);
+        Ok(())
+    }
+}
+
+/// A host for systems without external rules: randomness from a Mersenne Twister.
+pub struct NativeHost<'a> {
+    /// The instance's generator.
+    pub rng: &'a mut Mt,
+}
+
+impl Host for NativeHost<'_> {
+    type Error = LsError;
+    fn random(&mut self) -> f64 {
+        uniform(self.rng)
+    }
+    fn apply(
+        &mut self,
+        rule: u32,
+        _: &[usize],
+        _: &ModuleString,
+        _: &mut ModuleString,
+    ) -> Result<bool, LsError> {
+        Err(LsError::Syntax {
+            text: format!("external rule {rule}"),
+            message: "this host runs no external rules".into(),
+        })
+    }
+}
+
+/// Options of one derivation step.
+#[derive(Clone, Copy, Debug)]
+pub struct StepOptions {
+    /// The step's number (1-based), for error messages.
+    pub step: u32,
+    /// The module cap.
+    pub max_modules: usize,
+    /// Call [`Host::interpret`] after each module's successor.
+    pub stream: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct PatternItem {
+    sym: Sym,
+    /// The number of formal parameters, when the pattern names them.
+    arity: Option<u16>,
+}
+
+#[derive(Clone, Debug)]
+struct Lhs {
+    left: Vec<PatternItem>,
+    pred: PatternItem,
+    right: Vec<PatternItem>,
+}
+
+#[derive(Clone, Debug)]
+enum Kind {
+    Classic {
+        condition: Option<Ast>,
+        successor: Vec<ModuleAst>,
+        weight: Option<f64>,
+    },
+    External(u32),
+}
+
+#[derive(Clone, Debug)]
+struct RuleDef {
+    text: String,
+    origin: u32,
+    lhs: Lhs,
+    /// Formal names of the parameter-reading items, in matching order.
+    formals: Vec<String>,
+    kind: Kind,
+    /// The normalised left side, grouping stochastic alternatives.
+    key: String,
+}
+
+#[derive(Clone, Debug)]
+struct Succ {
+    sym: Sym,
+    args: Box<[Expr]>,
+}
+
+#[derive(Clone, Debug)]
+enum CKind {
+    Classic {
+        condition: Option<Expr>,
+        successor: Box<[Succ]>,
+        /// Stochastic alternatives (cumulative normalised weight, rule), on the group's head.
+        choices: Option<Box<[(f64, usize)]>>,
+    },
+    External(u32),
+}
+
+#[derive(Clone, Debug)]
+struct Compiled {
+    kind: CKind,
+    /// A non-head member of a stochastic group: reached through its head only.
+    skip: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dispatch {
+    Copy,
+    Plain { start: u32, len: u32 },
+    Rules { start: u32, len: u32 },
+}
+
+/// An L-system's rules: classic productions compiled to bytecode and external rules whose
+/// successors a [`Host`] computes, with contexts, `ignore` and stochastic weights.
+///
+/// ```
+/// use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+/// use rand_mt::Mt;
+///
+/// let mut symbols = SymbolTable::new();
+/// let mut system = System::new();
+/// system.add_production("F -> F[+F]F", None, 0, &mut symbols).unwrap();
+/// system.prepare(&symbols).unwrap();
+/// let axiom = system.parse_string("F", &mut symbols, &mut || 0.0).unwrap();
+/// let mut next = ModuleString::new();
+/// let mut rng = Mt::new(1);
+/// let opts = StepOptions { step: 1, max_modules: 1000, stream: false };
+/// system.step(&axiom, &mut next, &mut NativeHost { rng: &mut rng }, &opts).unwrap();
+/// assert_eq!(next.len(), 6);
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct System {
+    declared: Vec<String>,
+    defs: Vec<RuleDef>,
+    ignore_syms: Vec<Sym>,
+    global_names: Vec<String>,
+    global_values: Vec<f64>,
+    rules: Vec<Compiled>,
+    dispatch: Vec<Dispatch>,
+    rule_lists: Vec<u32>,
+    plain_pool: Vec<u32>,
+    ignored: Vec<bool>,
+    uses_context: bool,
+    all_plain: bool,
+    has_external: bool,
+    prepared: bool,
+}
+
+fn normalise(text: &str) -> String {
+    text.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn pattern_items(patterns: &[PatternAst], symbols: &mut SymbolTable) -> Vec<PatternItem> {
+    patterns
+        .iter()
+        .map(|p| PatternItem {
+            sym: symbols.intern(&p.name),
+            arity: p.formals.as_ref().map(|f| f.len() as u16),
+        })
+        .collect()
+}
+
+impl System {
+    /// An empty system.
+    #[must_use]
+    pub fn new() -> System {
+        System::default()
+    }
+
+    /// Declares multi-letter module names for the classic notation (separated by spaces).
+    pub fn declare(&mut self, names: &str) {
+        for n in names.split_whitespace() {
+            if !self.declared.iter().any(|d| d == n) {
+                self.declared.push(n.to_string());
+            }
+        }
+        self.declared
+            .sort_by(|a, b| b.len().cmp(&a.len()).then(a.cmp(b)));
+        self.prepared = false;
+    }
+
+    /// Symbols skipped when matching contexts (names separated by spaces).
+    pub fn ignore(&mut self, names: &str, symbols: &mut SymbolTable) {
+        for n in names.split_whitespace() {
+            let s = symbols.intern(n);
+            if !self.ignore_syms.contains(&s) {
+                self.ignore_syms.push(s);
+            }
+        }
+        self.prepared = false;
+    }
+
+    /// Sets a numeric global, readable by name in classic expressions.
+    pub fn set_global(&mut self, name: &str, value: f64) {
+        match self.global_names.iter().position(|n| n == name) {
+            Some(i) => self.global_values[i] = value,
+            None => {
+                self.global_names.push(name.to_string());
+                self.global_values.push(value);
+                self.prepared = false;
+            }
+        }
+    }
+
+    /// A numeric global.
+    #[must_use]
+    pub fn global(&self, name: &str) -> Option<f64> {
+        self.global_names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.global_values[i])
+    }
+
+    /// Number of rules added.
+    #[must_use]
+    pub fn rule_count(&self) -> usize {
+        self.defs.len()
+    }
+
+    /// Whether some rule is external (computed by the host).
+    #[must_use]
+    pub fn has_external(&self) -> bool {
+        self.defs
+            .iter()
+            .any(|d| matches!(d.kind, Kind::External(_)))
+    }
+
+    /// Adds a classic production (`"A(l) : l > 1 -> F(l) [+A(l/2)]"`), with an optional
+    /// stochastic weight. `origin` is the host's tag returned in errors.
+    pub fn add_production(
+        &mut self,
+        text: &str,
+        weight: Option<f64>,
+        origin: u32,
+        symbols: &mut SymbolTable,
+    ) -> Result<usize, LsError> {
+        let err = |message: String| LsError::Rule {
+            origin,
+            rule: text.trim().into(),
+            message,
+        };
+        if let Some(w) = weight
+            && !(w.is_finite() && w > 0.0)
+        {
+            return Err(err(format!(
+                "the weight must be a positive number, not {w}"
+            )));
+        }
+        let p = classic::parse_production(text, &self.declared).map_err(err)?;
+        for m in &p.successor {
+            symbols.intern(&m.name);
+        }
+        let key_end = text
+            .find("-->")
+            .or_else(|| text.find("->"))
+            .unwrap_or(text.len());
+        let key = normalise(&text[..key_end]);
+        self.push_def(
+            text,
+            origin,
+            &p.lhs,
+            symbols,
+            |condition| Kind::Classic {
+                condition,
+                successor: p.successor.clone(),
+                weight,
+            },
+            key,
+        )
+    }
+
+    /// Adds a rule whose successor the host computes ([`Host::apply`] receives `external`).
+    /// The left side is symbol names separated by spaces: `"L < S > R"`.
+    pub fn add_external(
+        &mut self,
+        lhs: &str,
+        external: u32,
+        origin: u32,
+        symbols: &mut SymbolTable,
+    ) -> Result<usize, LsError> {
+        let err = |message: String| LsError::Rule {
+            origin,
+            rule: lhs.trim().into(),
+            message,
+        };
+        if lhs.contains(':') {
+            return Err(err(
+                "a rule function's left side has no ':' condition".into()
+            ));
+        }
+        let parsed =
+            classic::parse_lhs(lhs, &|t| Ok(classic::parse_lua_patterns(t))).map_err(err)?;
+        self.push_def(
+            lhs,
+            origin,
+            &parsed,
+            symbols,
+            |_| Kind::External(external),
+            normalise(lhs),
+        )
+    }
+
+    fn push_def(
+        &mut self,
+        text: &str,
+        origin: u32,
+        lhs: &LhsAst,
+        symbols: &mut SymbolTable,
+        kind: impl FnOnce(Option<Ast>) -> Kind,
+        key: String,
+    ) -> Result<usize, LsError> {
+        let left = pattern_items(&lhs.left, symbols);
+        let pred = pattern_items(std::slice::from_ref(&lhs.pred), symbols)[0];
+        let right = pattern_items(&lhs.right, symbols);
+        let mut formals = Vec::new();
+        for p in lhs
+            .left
+            .iter()
+            .chain(std::iter::once(&lhs.pred))
+            .chain(&lhs.right)
+        {
+            formals.extend(p.formals.iter().flatten().cloned());
+        }
+        self.defs.push(RuleDef {
+            text: text.trim().to_string(),
+            origin,
+            lhs: Lhs { left, pred, right },
+            formals,
+            kind: kind(lhs.condition.clone()),
+            key,
+        });
+        self.prepared = false;
+        Ok(self.defs.len() - 1)
+    }
+
+    /// Parses a classic string whose arguments are constant expressions (an axiom, a
+    /// successor string returned by a rule function); names are numeric globals.
+    pub fn parse_string(
+        &self,
+        text: &str,
+        symbols: &mut SymbolTable,
+        rand: &mut dyn FnMut() -> f64,
+    ) -> Result<ModuleString, LsError> {
+        let err = |message: String| LsError::Syntax {
+            text: text.trim().into(),
+            message,
+        };
+        let modules = classic::parse_modules(text, &self.declared).map_err(err)?;
+        let mut out = ModuleString::new();
+        let mut params = Vec::new();
+        for m in &modules {
+            params.clear();
+            for a in &m.args {
+                let e = Expr::compile(a, &mut |n| self.global(n).map(Operand::Const))
+                    .map_err(|e| err(e.0))?;
+                let v = e.eval(&[], &[], rand);
+                if !v.is_finite() {
+                    return Err(err(format!("an argument of '{}' is {v}", m.name)));
+                }
+                params.push(v);
+            }
+            let sym = symbols.intern(&m.name);
+            if (sym == Sym::PUSH || sym == Sym::POP) && !params.is_empty() {
+                return Err(err(format!("'{}' takes no parameters", m.name)));
+            }
+            out.push(sym, &params);
+        }
+        Ok(out)
+    }
+
+    /// Compiles every rule: names resolve against formals and globals, dispatch tables are
+    /// built. Called before the first step and again after any change.
+    pub fn prepare(&mut self, symbols: &SymbolTable) -> Result<(), LsError> {
+        let n = symbols.len();
+        let mut rules = Vec::with_capacity(self.defs.len());
+        for def in &self.defs {
+            rules.push(self.compile(def, symbols)?);
+        }
+        // Stochastic groups: alternatives with the same left side; the first is the head.
+        let mut seen: Vec<(String, usize)> = Vec::new();
+        let mut members: Vec<Vec<(f64, usize)>> = Vec::new();
+        for (i, def) in self.defs.iter().enumerate() {
+            if let Kind::Classic {
+                weight: Some(w), ..
+            } = def.kind
+            {
+                match seen.iter().find(|(k, _)| *k == def.key) {
+                    Some((_, g)) => {
+                        members[*g].push((w, i));
+                        rules[i].skip = true;
+                    }
+                    None => {
+                        seen.push((def.key.clone(), members.len()));
+                        members.push(vec![(w, i)]);
+                    }
+                }
+            }
+        }
+        for group in members.iter().filter(|g| g.len() > 1) {
+            let total: f64 = group.iter().map(|m| m.0).sum();
+            let mut acc = 0.0;
+            let choices: Box<[(f64, usize)]> = group
+                .iter()
+                .map(|&(w, r)| {
+                    acc += w / total;
+                    (acc, r)
+                })
+                .collect();
+            if let CKind::Classic { choices: c, .. } = &mut rules[group[0].1].kind {
+                *c = Some(choices);
+            }
+        }
+        self.ignored = vec![false; n];
+        for s in &self.ignore_syms {
+            self.ignored[s.index()] = true;
+        }
+        self.uses_context = self
+            .defs
+            .iter()
+            .any(|d| !d.lhs.left.is_empty() || !d.lhs.right.is_empty());
+        self.dispatch = vec![Dispatch::Copy; n];
+        self.rule_lists.clear();
+        self.plain_pool.clear();
+        for s in 0..n {
+            let list: Vec<u32> = (0..self.defs.len())
+                .filter(|&r| self.defs[r].lhs.pred.sym.index() == s && !rules[r].skip)
+                .map(|r| r as u32)
+                .collect();
+            if list.is_empty() {
+                continue;
+            }
+            let r = list[0] as usize;
+            let def = &self.defs[r];
+            let plain = list.len() == 1
+                && def.lhs.left.is_empty()
+                && def.lhs.right.is_empty()
+                && def.lhs.pred.arity.is_none()
+                && matches!(&rules[r].kind, CKind::Classic { condition: None, successor, choices: None }
+                    if successor.iter().all(|s| s.args.is_empty()));
+            if plain {
+                let CKind::Classic { successor, .. } = &rules[r].kind else {
+                    continue;
+                };
+                let start = self.plain_pool.len() as u32;
+                self.plain_pool.extend(successor.iter().map(|s| s.sym.0));
+                self.dispatch[s] = Dispatch::Plain {
+                    start,
+                    len: successor.len() as u32,
+                };
+            } else {
+                let start = self.rule_lists.len() as u32;
+                self.rule_lists.extend(&list);
+                self.dispatch[s] = Dispatch::Rules {
+                    start,
+                    len: list.len() as u32,
+                };
+            }
+        }
+        self.all_plain = self
+            .dispatch
+            .iter()
+            .all(|d| !matches!(d, Dispatch::Rules { .. }));
+        self.has_external = self.has_external();
+        self.rules = rules;
+        self.prepared = true;
+        Ok(())
+    }
+
+    fn compile(&self, def: &RuleDef, symbols: &SymbolTable) -> Result<Compiled, LsError> {
+        let err = |message: String| LsError::Rule {
+            origin: def.origin,
+            rule: def.text.clone(),
+            message,
+        };
+        let kind = match &def.kind {
+            Kind::External(id) => CKind::External(*id),
+            Kind::Classic {
+                condition,
+                successor,
+                ..
+            } => {
+                let mut resolve = |name: &str| {
+                    if let Some(i) = def.formals.iter().position(|f| f == name) {
+                        return Some(Operand::Param(i as u16));
+                    }
+                    self.global_names
+                        .iter()
+                        .position(|g| g == name)
+                        .map(|i| Operand::Global(i as u16))
+                };
+                let condition = match condition {
+                    Some(c) => Some(
+                        Expr::compile(c, &mut resolve)
+                            .map_err(|e| err(format!("condition: {e}")))?,
+                    ),
+                    None => None,
+                };
+                let mut succ = Vec::with_capacity(successor.len());
+                for m in successor {
+                    let sym = symbols
+                        .get(&m.name)
+                        .ok_or_else(|| err(format!("symbol '{}' was not interned", m.name)))?;
+                    if (sym == Sym::PUSH || sym == Sym::POP) && !m.args.is_empty() {
+                        return Err(err(format!("'{}' takes no parameters", m.name)));
+                    }
+                    let args = m
+                        .args
+                        .iter()
+                        .map(|a| Expr::compile(a, &mut resolve).map_err(|e| err(e.to_string())))
+                        .collect::<Result<Box<[Expr]>, LsError>>()?;
+                    succ.push(Succ { sym, args });
+                }
+                CKind::Classic {
+                    condition,
+                    successor: succ.into_boxed_slice(),
+                    choices: None,
+                }
+            }
+        };
+        Ok(Compiled { kind, skip: false })
+    }
+
+    #[inline]
+    fn is_ignored(&self, s: Sym) -> bool {
+        self.ignored.get(s.index()).copied().unwrap_or(false)
+    }
+
+    /// Matches the left context: the path toward the root, skipping whole branches and
+    /// climbing out of enclosing ones. Pushes matched indices leftmost first.
+    fn match_left(
+        &self,
+        left: &[PatternItem],
+        src: &ModuleString,
+        matches: &[u32],
+        i: usize,
+        out: &mut Vec<usize>,
+    ) -> bool {
+        let base = out.len();
+        let mut j = i;
+        for p in left.iter().rev() {
+            loop {
+                if j == 0 {
+                    return false;
+                }
+                j -= 1;
+                let s = src.sym(j);
+                if s == Sym::POP {
+                    let open = matches[j];
+                    if open == u32::MAX {
+                        return false;
+                    }
+                    j = open as usize;
+                } else if s != Sym::PUSH && !self.is_ignored(s) {
+                    break;
+                }
+            }
+            if src.sym(j) != p.sym {
+                return false;
+            }
+            out.push(j);
+        }
+        out[base..].reverse();
+        true
+    }
+
+    /// Matches the right context: along the axis, skipping branches the pattern does not
+    /// enter; `[` in the pattern enters a branch, `]` skips the rest of the current one.
+    fn match_right(
+        &self,
+        right: &[PatternItem],
+        src: &ModuleString,
+        matches: &[u32],
+        i: usize,
+        out: &mut Vec<usize>,
+    ) -> bool {
+        let n = src.len();
+        let mut j = i + 1;
+        for p in right {
+            if p.sym == Sym::POP {
+                loop {
+                    if j >= n {
+                        return false;
+                    }
+                    let s = src.sym(j);
+                    if s == Sym::POP {
+                        j += 1;
+                        break;
+                    }
+                    if s == Sym::PUSH {
+                        let close = matches[j];
+                        if close == u32::MAX {
+                            return false;
+                        }
+                        j = close as usize + 1;
+                    } else {
+                        j += 1;
+                    }
+                }
+                continue;
+            }
+            loop {
+                if j >= n {
+                    return false;
+                }
+                let s = src.sym(j);
+                if self.is_ignored(s) {
+                    j += 1;
+                } else if s == Sym::PUSH && p.sym != Sym::PUSH {
+                    let close = matches[j];
+                    if close == u32::MAX {
+                        return false;
+                    }
+                    j = close as usize + 1;
+                } else {
+                    break;
+                }
+            }
+            if src.sym(j) != p.sym {
+                return false;
+            }
+            if p.sym != Sym::PUSH {
+                out.push(j);
+            }
+            j += 1;
+        }
+        true
+    }
+
+    /// One derivation step: rewrites `src` into `out` (cleared first).
+    pub fn step<H: Host>(
+        &self,
+        src: &ModuleString,
+        out: &mut ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+    ) -> Result<(), H::Error> {
+        assert!(
+            self.prepared,
+            "System::prepare must be called after changing the rules"
+        );
+        out.clear();
+        let too_many = |count: u64| LsError::TooManyModules {
+            step: opts.step,
+            count,
+            max: opts.max_modules,
+        };
+        if self.all_plain && src.is_flat() && !opts.stream {
+            // Fast path: count first (fail before allocating), then copy slices.
+            let syms = src.raw_syms();
+            let mut total = 0u64;
+            for &s in syms {
+                total += match self.dispatch.get(s as usize) {
+                    Some(Dispatch::Plain { len, .. }) => u64::from(*len),
+                    _ => 1,
+                };
+            }
+            if total > opts.max_modules as u64 {
+                return Err(too_many(total).into());
+            }
+            out.reserve(total as usize);
+            for chunk in syms.chunks(1 << 16) {
+                host.check()?;
+                for &s in chunk {
+                    match self.dispatch.get(s as usize) {
+                        Some(Dispatch::Plain { start, len }) => out.extend_plain(
+                            &self.plain_pool[*start as usize..(*start + *len) as usize],
+                        ),
+                        _ => out.extend_plain(&[s]),
+                    }
+                }
+            }
+            return Ok(());
+        }
+        let matches = if self.uses_context {
+            src.bracket_matches()
+        } else {
+            Vec::new()
+        };
+        let mut matched: Vec<usize> = Vec::with_capacity(16);
+        let mut gathered: Vec<f64> = Vec::with_capacity(16);
+        let max = opts.max_modules;
+        for i in 0..src.len() {
+            if i & 0xFFFF == 0 {
+                host.check()?;
+            }
+            let from = out.len();
+            let s = src.sym(i);
+            match self.dispatch.get(s.index()) {
+                Some(Dispatch::Plain { start, len }) => {
+                    out.extend_plain(&self.plain_pool[*start as usize..(*start + *len) as usize])
+                }
+                Some(Dispatch::Rules { start, len }) => {
+                    let list = &self.rule_lists[*start as usize..(*start + *len) as usize];
+                    let applied = self.apply_rules(
+                        list,
+                        src,
+                        &matches,
+                        i,
+                        out,
+                        host,
+                        &mut matched,
+                        &mut gathered,
+                    )?;
+                    if !applied {
+                        out.push_from(src, i);
+                    }
+                }
+                _ => out.push_from(src, i),
+            }
+            if out.len() > max {
+                return Err(too_many(out.len() as u64).into());
+            }
+            if opts.stream {
+                host.interpret(out, from)?;
+            }
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn apply_rules<H: Host>(
+        &self,
+        list: &[u32],
+        src: &ModuleString,
+        matches: &[u32],
+        i: usize,
+        out: &mut ModuleString,
+        host: &mut H,
+        matched: &mut Vec<usize>,
+        gathered: &mut Vec<f64>,
+    ) -> Result<bool, H::Error> {
+        for &r in list {
+            let r = r as usize;
+            let def = &self.defs[r];
+            let lhs = &def.lhs;
+            matched.clear();
+            if !lhs.left.is_empty() && !self.match_left(&lhs.left, src, matches, i, matched) {
+                continue;
+            }
+            matched.push(i);
+            if !lhs.right.is_empty() && !self.match_right(&lhs.right, src, matches, i, matched) {
+                continue;
+            }
+            match &self.rules[r].kind {
+                CKind::External(id) => {
+                    if host.apply(*id, matched, src, out)? {
+                        return Ok(true);
+                    }
+                }
+                CKind::Classic {
+                    condition,
+                    successor,
+                    choices,
+                } => {
+                    let params: &[f64] = if lhs.left.is_empty() && lhs.right.is_empty() {
+                        match lhs.pred.arity {
+                            None => &[],
+                            Some(k) => {
+                                self.check_arity(def, src, i, k)?;
+                                src.params(i)
+                            }
+                        }
+                    } else {
+                        gathered.clear();
+                        let items = lhs.left.iter().chain(std::iter::once(&lhs.pred)).chain(
+                            lhs.right
+                                .iter()
+                                .filter(|p| p.sym != Sym::PUSH && p.sym != Sym::POP),
+                        );
+                        for (p, &m) in items.zip(matched.iter()) {
+                            if let Some(k) = p.arity {
+                                self.check_arity(def, src, m, k)?;
+                                gathered.extend_from_slice(src.params(m));
+                            }
+                        }
+                        gathered
+                    };
+                    let globals = &self.global_values;
+                    if let Some(c) = condition
+                        && c.eval(params, globals, &mut || host.random()) == 0.0
+                    {
+                        continue;
+                    }
+                    let (succ, def) = match choices {
+                        Some(choices) => {
+                            let x = host.random();
+                            let pick = choices
+                                .iter()
+                                .find(|(cum, _)| x < *cum)
+                                .map_or(choices[choices.len() - 1].1, |c| c.1);
+                            match &self.rules[pick].kind {
+                                CKind::Classic { successor, .. } => (successor, &self.defs[pick]),
+                                CKind::External(_) => (successor, def),
+                            }
+                        }
+                        None => (successor, def),
+                    };
+                    for item in succ.iter() {
+                        if item.args.is_empty() {
+                            out.push(item.sym, &[]);
+                            continue;
+                        }
+                        out.begin(item.sym);
+                        for a in item.args.iter() {
+                            let v = a.eval(params, globals, &mut || host.random());
+                            if !v.is_finite() {
+                                return Err(LsError::Rule {
+                                    origin: def.origin,
+                                    rule: def.text.clone(),
+                                    message: format!(
+                                        "a parameter of the successor evaluated to {v}"
+                                    ),
+                                }
+                                .into());
+                            }
+                            out.push_param(v);
+                        }
+                        out.end();
+                    }
+                    return Ok(true);
+                }
+            }
+        }
+        Ok(false)
+    }
+
+    #[cold]
+    fn arity_error(&self, def: &RuleDef, src: &ModuleString, m: usize, k: u16) -> LsError {
+        let message = if src.external(m).is_some() {
+            format!(
+                "a classic production cannot read the non-numeric parameters of module #{} ({})",
+                m + 1,
+                def.text
+                    .split(['<', '>', ':', '-'])
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+            )
+        } else {
+            format!(
+                "expects {k} parameter{} but module #{} has {}",
+                if k == 1 { "" } else { "s" },
+                m + 1,
+                src.params(m).len()
+            )
+        };
+        LsError::Rule {
+            origin: def.origin,
+            rule: def.text.clone(),
+            message,
+        }
+    }
+
+    #[inline]
+    fn check_arity(
+        &self,
+        def: &RuleDef,
+        src: &ModuleString,
+        m: usize,
+        k: u16,
+    ) -> Result<(), LsError> {
+        if src.external(m).is_some() || src.params(m).len() != k as usize {
+            return Err(self.arity_error(def, src, m, k));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    struct Run {
+        symbols: SymbolTable,
+        system: System,
+        string: ModuleString,
+        rng: Mt,
+        steps: u32,
+        max: usize,
+    }
+
+    impl Run {
+        fn new(axiom: &str, rules: &[&str]) -> Run {
+            Run::with(axiom, rules, |_, _| {})
+        }
+
+        fn with(
+            axiom: &str,
+            rules: &[&str],
+            setup: impl FnOnce(&mut System, &mut SymbolTable),
+        ) -> Run {
+            let mut symbols = SymbolTable::new();
+            let mut system = System::new();
+            setup(&mut system, &mut symbols);
+            for r in rules {
+                system
+                    .add_production(r, None, 0, &mut symbols)
+                    .expect("rule parses");
+            }
+            system.prepare(&symbols).expect("compiles");
+            let string = system
+                .parse_string(axiom, &mut symbols, &mut || 0.0)
+                .expect("axiom");
+            Run {
+                symbols,
+                system,
+                string,
+                rng: Mt::new(7),
+                steps: 0,
+                max: 10_000_000,
+            }
+        }
+
+        fn step(&mut self) -> Result<(), LsError> {
+            self.steps += 1;
+            let mut next = ModuleString::new();
+            let opts = StepOptions {
+                step: self.steps,
+                max_modules: self.max,
+                stream: false,
+            };
+            self.system.step(
+                &self.string,
+                &mut next,
+                &mut NativeHost { rng: &mut self.rng },
+                &opts,
+            )?;
+            self.string = next;
+            Ok(())
+        }
+
+        fn steps(&mut self, n: u32) -> &mut Run {
+            for _ in 0..n {
+                self.step().expect("derives");
+            }
+            self
+        }
+
+        fn text(&self) -> String {
+            self.string.to_text(&self.symbols, "")
+        }
+    }
+
+    /// Counts symbols after `n` steps of a context-free single-character system by iterating
+    /// occurrence counts, independently of the engine.
+    fn expected_counts(axiom: &str, rules: &[(char, &str)], n: u32) -> u64 {
+        let mut counts: HashMap<char, u64> = HashMap::new();
+        for c in axiom.chars() {
+            *counts.entry(c).or_default() += 1;
+        }
+        for _ in 0..n {
+            let mut next: HashMap<char, u64> = HashMap::new();
+            for (c, k) in &counts {
+                match rules.iter().find(|r| r.0 == *c) {
+                    Some((_, succ)) => {
+                        for s in succ.chars() {
+                            *next.entry(s).or_default() += k;
+                        }
+                    }
+                    None => *next.entry(*c).or_default() += k,
+                }
+            }
+            counts = next;
+        }
+        counts.values().sum()
+    }
+
+    #[test]
+    fn koch_island_first_step() {
+        let mut r = Run::new("F-F-F-F", &["F -> F-F+F+FF-F-F+F"]);
+        r.steps(1);
+        assert_eq!(
+            r.text(),
+            "F-F+F+FF-F-F+F-F-F+F+FF-F-F+F-F-F+F+FF-F-F+F-F-F+F+FF-F-F+F"
+        );
+        r.steps(2);
+        assert_eq!(
+            r.string.len() as u64,
+            expected_counts("F-F-F-F", &[('F', "F-F+F+FF-F-F+F")], 3)
+        );
+    }
+
+    type Plant = (&'static str, &'static [(char, &'static str)], u32);
+
+    #[test]
+    fn abop_fig_1_24_module_counts_at_several_depths() {
+        let plants: [Plant; 6] = [
+            ("F", &[('F', "F[+F]F[-F]F")], 5),
+            ("F", &[('F', "F[+F]F[-F][F]")], 5),
+            ("F", &[('F', "FF-[-F+F+F]+[+F-F-F]")], 4),
+            ("X", &[('X', "F[+X]F[-X]+X"), ('F', "FF")], 7),
+            ("X", &[('X', "F[+X][-X]FX"), ('F', "FF")], 7),
+            ("X", &[('X', "F-[[X]+X]+F[+FX]-X"), ('F', "FF")], 5),
+        ];
+        for (axiom, rules, n) in plants {
+            let texts: Vec<String> = rules.iter().map(|(p, s)| format!("{p} -> {s}")).collect();
+            let texts: Vec<&str> = texts.iter().map(String::as_str).collect();
+            let mut r = Run::new(axiom, &texts);
+            for depth in 1..=n {
+                r.steps(1);
+                assert_eq!(
+                    r.string.len() as u64,
+                    expected_counts(axiom, rules, depth),
+                    "{axiom} {rules:?} at depth {depth}"
+                );
+            }
+        }
+        // Fig. 1.24a: 5^5 segments.
+        let mut a = Run::new("F", &["F -> F[+F]F[-F]F"]);
+        a.steps(1);
+        assert_eq!(a.text(), "F[+F]F[-F]F");
+        a.steps(4);
+        assert_eq!(a.text().matches('F').count(), 3125);
+        assert_eq!(a.string.len(), 3125 + 6 * 781);
+    }
+
+    #[test]
+    fn signal_propagation_step_by_step() {
+        // ABOP §1.8: an acropetal signal...
+        let mut r = Run::new("baaaaaaaa", &["b < a -> b", "b -> a"]);
+        let mut seen = vec![r.text()];
+        for _ in 0..9 {
+            r.steps(1);
+            seen.push(r.text());
+        }
+        assert_eq!(seen[1], "abaaaaaaa");
+        assert_eq!(seen[2], "aabaaaaaa");
+        assert_eq!(seen[8], "aaaaaaaab");
+        assert_eq!(seen[9], "aaaaaaaaa");
+        // ... and a basipetal one.
+        let mut r = Run::new("aaaaaaaab", &["a > b -> b", "b -> a"]);
+        r.steps(1);
+        assert_eq!(r.text(), "aaaaaaaba");
+        r.steps(7);
+        assert_eq!(r.text(), "baaaaaaaa");
+    }
+
+    #[test]
+    fn left_context_skips_branches_and_climbs_out() {
+        // ABOP p. 32: BC < S > G[H]M applies to S in ABC[DE][SG[HI[JK]L]MNO].
+        let mut r = Run::new("ABC[DE][SG[HI[JK]L]MNO]", &["BC < S > G[H]M -> X"]);
+        r.steps(1);
+        assert_eq!(r.text(), "ABC[DE][XG[HI[JK]L]MNO]");
+        // The right context must not see inside a branch it does not enter.
+        let mut r = Run::new("SG[M]", &["S > GM -> X"]);
+        r.steps(1);
+        assert_eq!(r.text(), "SG[M]");
+        let mut r = Run::new("SG[K]M", &["S > GM -> X"]);
+        r.steps(1);
+        assert_eq!(r.text(), "XG[K]M");
+        // A left context is not found inside a sibling branch, only on the path to the root.
+        let mut r = Run::new("A[B]C", &["B < C -> X", "A < C -> Y", "A < B -> Z"]);
+        r.steps(1);
+        assert_eq!(r.text(), "A[Z]Y");
+        // The end of a branch ends the right context.
+        let mut r = Run::new("A[B]C", &["B > C -> X"]);
+        r.steps(1);
+        assert_eq!(r.text(), "A[B]C");
+    }
+
+    #[test]
+    fn ignored_symbols_are_skipped_by_both_contexts() {
+        let mut r = Run::with("A+-B-C", &["A < B > C -> X"], |s, t| s.ignore("+ -", t));
+        r.steps(1);
+        assert_eq!(r.text(), "A+-X-C");
+        let mut r = Run::new("A+-B-C", &["A < B > C -> X"]);
+        r.steps(1);
+        assert_eq!(r.text(), "A+-B-C");
+    }
+
+    /// The Hogeweg-Hesper systems of ABOP fig. 1.31 (a-e).
+    fn hogeweg(which: usize) -> (&'static str, [&'static str; 8], u32) {
+        let a = ["0", "1[+F1F1]", "1", "1", "0", "1F1", "0", "0"];
+        let b = ["1", "1[-F1F1]", "1", "1", "0", "1F1", "1", "0"];
+        let c = ["0", "1", "0", "1[+F1F1]", "0", "1F1", "0", "0"];
+        let d = ["1", "0", "0", "1F1", "1", "1[+F1F1]", "1", "0"];
+        let e = ["0", "1[-F1F1]", "1", "1", "0", "1F1", "1", "0"];
+        match which {
+            0 => ("F1F1F1", a, 30),
+            1 => ("F1F1F1", b, 30),
+            2 => ("F1F1F1", c, 26),
+            3 => ("F0F1F1", d, 24),
+            _ => ("F1F1F1", e, 26),
+        }
+    }
+
+    /// A direct, slow implementation of the same systems to compare against.
+    fn hogeweg_reference(axiom: &str, succ: &[&str; 8], steps: u32) -> String {
+        let ignore = |c: char| matches!(c, '+' | '-' | 'F');
+        let mut s: Vec<char> = axiom.chars().collect();
+        for _ in 0..steps {
+            let mut next = Vec::new();
+            for i in 0..s.len() {
+                let c = s[i];
+                if c == '+' || c == '-' {
+                    next.push(if c == '+' { '-' } else { '+' });
+                    continue;
+                }
+                if c != '0' && c != '1' {
+                    next.push(c);
+                    continue;
+                }
+                let mut left = None;
+                let mut depth = 0;
+                for j in (0..i).rev() {
+                    match s[j] {
+                        ']' => depth += 1,
+                        '[' => depth = (depth - 1).max(0),
+                        x if depth == 0 && !ignore(x) => {
+                            left = Some(x);
+                            break;
+                        }
+                        _ => {}
+                    }
+                }
+                let mut right = None;
+                let mut depth = 0;
+                for &x in &s[i + 1..] {
+                    match x {
+                        '[' => depth += 1,
+                        ']' if depth == 0 => break,
+                        ']' => depth -= 1,
+                        x if depth == 0 && !ignore(x) => {
+                            right = Some(x);
+                            break;
+                        }
+                        _ => {}
+                    }
+                }
+                match (left, right) {
+                    (Some(l), Some(r)) => {
+                        let k =
+                            (l == '1') as usize * 4 + (c == '1') as usize * 2 + (r == '1') as usize;
+                        next.extend(succ[k].chars());
+                    }
+                    _ => next.push(c),
+                }
+            }
+            s = next;
+        }
+        s.into_iter().collect()
+    }
+
+    #[test]
+    fn hogeweg_hesper_systems_match_abop_across_branches() {
+        for which in 0..5 {
+            let (axiom, succ, n) = hogeweg(which);
+            let mut rules = Vec::new();
+            for (k, s) in succ.iter().enumerate() {
+                rules.push(format!("{} < {} > {} -> {s}", k >> 2, (k >> 1) & 1, k & 1));
+            }
+            rules.push("+ -> -".into());
+            rules.push("- -> +".into());
+            let rules: Vec<&str> = rules.iter().map(String::as_str).collect();
+            let mut r = Run::with(axiom, &rules, |s, t| s.ignore("+ - F", t));
+            if which == 0 {
+                r.steps(1);
+                assert_eq!(r.text(), "F1F0F1");
+                r.steps(1);
+                assert_eq!(r.text(), "F1F1F1F1");
+                r.steps(1);
+                assert_eq!(r.text(), "F1F0F0F1");
+                r.steps(n - 3);
+            } else {
+                r.steps(n);
+            }
+            let expected = hogeweg_reference(axiom, &succ, n);
+            assert!(expected.contains('['), "system {which} branches");
+            assert_eq!(r.text(), expected, "fig 1.31 system {which}");
+        }
+    }
+
+    #[test]
+    fn parametric_productions_with_conditions() {
+        let mut r = Run::new(
+            "A(1,0.5)",
+            &[
+                "A(l,w) : l < 3 -> F(l) [ +(30) A(l+1, w*0.5) ] A(l+1, w)",
+                "A(l,w) -> B(l*w)",
+            ],
+        );
+        r.steps(1);
+        assert_eq!(
+            r.string.to_text(&r.symbols, " "),
+            "F(1) [ +(30) A(2,0.25) ] A(2,0.5)"
+        );
+        r.steps(2);
+        assert!(r.text().contains("B(0.375)"), "{}", r.text());
+        assert!(r.text().contains("B(1.5)"));
+    }
+
+    #[test]
+    fn contexts_pass_parameters_leftmost_first() {
+        let mut r = Run::new(
+            "A(1)B(2)C(3)",
+            &["A(x) < B(y) > C(z) : x + y + z > 5 -> D(x*100 + y*10 + z)"],
+        );
+        r.steps(1);
+        assert_eq!(r.string.to_text(&r.symbols, ""), "A(1)D(123)C(3)");
+    }
+
+    #[test]
+    fn globals_and_declared_names() {
+        let mut r = Run::with("Apex(2)", &["Apex(x) -> Apex(x*r) Bud"], |s, _| {
+            s.declare("Apex Bud");
+            s.set_global("r", 0.5);
+        });
+        r.steps(2);
+        assert_eq!(r.string.to_text(&r.symbols, " "), "Apex(0.5) Bud Bud");
+    }
+
+    #[test]
+    fn first_applicable_rule_wins_and_unmatched_symbols_are_copied() {
+        let mut r = Run::new("A(1)A(5)C", &["A(x) : x > 3 -> B", "A(x) -> D(x)", "Z -> "]);
+        r.steps(1);
+        assert_eq!(r.text(), "D(1)BC");
+        let mut r = Run::new("AZA", &["Z -> "]);
+        r.steps(1);
+        assert_eq!(r.text(), "AA");
+    }
+
+    #[test]
+    fn stochastic_choice_is_weighted_and_deterministic_per_seed() {
+        let rules = ["A -> B", "A -> C"];
+        let build = |seed: u32| {
+            let mut symbols = SymbolTable::new();
+            let mut system = System::new();
+            system
+                .add_production(rules[0], Some(3.0), 0, &mut symbols)
+                .expect("ok");
+            system
+                .add_production(rules[1], Some(1.0), 0, &mut symbols)
+                .expect("ok");
+            system.prepare(&symbols).expect("ok");
+            let axiom = system
+                .parse_string(&"A".repeat(4000), &mut symbols, &mut || 0.0)
+                .expect("ok");
+            let mut out = ModuleString::new();
+            let mut rng = Mt::new(seed);
+            let opts = StepOptions {
+                step: 1,
+                max_modules: 100_000,
+                stream: false,
+            };
+            system
+                .step(&axiom, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+                .expect("ok");
+            out.to_text(&symbols, "")
+        };
+        let a = build(1);
+        assert_eq!(a, build(1));
+        assert_ne!(a, build(2));
+        let b = a.matches('B').count() as f64 / 4000.0;
+        assert!((b - 0.75).abs() < 0.03, "B share {b}");
+    }
+
+    #[test]
+    fn growth_past_max_modules_fails_before_allocating() {
+        let mut r = Run::new("F", &["F -> FF"]);
+        let mut failed = None;
+        for _ in 0..40 {
+            if let Err(e) = r.step() {
+                failed = Some(e);
+                break;
+            }
+        }
+        assert_eq!(
+            failed.expect("stops"),
+            LsError::TooManyModules {
+                step: 24,
+                count: 16_777_216,
+                max: 10_000_000
+            }
+        );
+        assert!(r.string.len() <= 10_000_000);
+        // The general path stops as soon as the cap is passed.
+        let mut r = Run::new("A(1)", &["A(x) -> A(x)A(x)"]);
+        r.max = 1000;
+        let err = (0..30).find_map(|_| r.step().err()).expect("stops");
+        assert_eq!(
+            err,
+            LsError::TooManyModules {
+                step: 10,
+                count: 1002,
+                max: 1000
+            }
+        );
+    }
+
+    #[test]
+    fn bad_rules_name_themselves() {
+        let mut symbols = SymbolTable::new();
+        let mut s = System::new();
+        s.add_production("A(x) -> B(y)", None, 3, &mut symbols)
+            .expect("parses");
+        let e = s.prepare(&symbols).expect_err("unknown name");
+        assert_eq!(e.to_string(), "rule 'A(x) -> B(y)': unknown name 'y'");
+        assert!(matches!(e, LsError::Rule { origin: 3, .. }));
+        let e = s
+            .add_production("A(x) B -> C", None, 4, &mut symbols)
+            .expect_err("two preds");
+        assert!(
+            e.to_string()
+                .starts_with("rule 'A(x) B -> C': the strict predecessor")
+        );
+        let mut s = System::new();
+        s.add_production("A(x, y) -> B(x)", None, 0, &mut symbols)
+            .expect("parses");
+        s.prepare(&symbols).expect("ok");
+        let axiom = s
+            .parse_string("A(1)", &mut symbols, &mut || 0.0)
+            .expect("ok");
+        let mut out = ModuleString::new();
+        let mut rng = Mt::new(1);
+        let opts = StepOptions {
+            step: 1,
+            max_modules: 100,
+            stream: false,
+        };
+        let e = s
+            .step(&axiom, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+            .expect_err("arity");
+        assert_eq!(
+            e.to_string(),
+            "rule 'A(x, y) -> B(x)': expects 2 parameters but module #1 has 1"
+        );
+        let mut s = System::new();
+        s.add_production("A(x) -> B(1/x)", None, 0, &mut symbols)
+            .expect("parses");
+        s.prepare(&symbols).expect("ok");
+        let axiom = s
+            .parse_string("A(0)", &mut symbols, &mut || 0.0)
+            .expect("ok");
+        let e = s
+            .step(&axiom, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+            .expect_err("inf");
+        assert!(e.to_string().ends_with("evaluated to inf"), "{e}");
+    }
+
+    /// Records what a host is asked to do.
+    struct Recorder {
+        rng: Mt,
+        calls: Vec<(u32, Vec<usize>)>,
+        interpreted: Vec<usize>,
+    }
+
+    impl Host for Recorder {
+        type Error = LsError;
+        fn random(&mut self) -> f64 {
+            uniform(&mut self.rng)
+        }
+        fn apply(
+            &mut self,
+            rule: u32,
+            matched: &[usize],
+            src: &ModuleString,
+            out: &mut ModuleString,
+        ) -> Result<bool, LsError> {
+            self.calls.push((rule, matched.to_vec()));
+            if rule == 0 {
+                return Ok(false);
+            }
+            out.push(src.sym(matched[0]), &[9.0]);
+            out.push_external(Sym::PUSH.max(Sym(2)), 4);
+            Ok(true)
+        }
+        fn interpret(&mut self, out: &ModuleString, from: usize) -> Result<(), LsError> {
+            self.interpreted.push(out.len() - from);
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn external_rules_fall_through_on_nil_and_stream_interpretation() {
+        let mut symbols = SymbolTable::new();
+        let mut s = System::new();
+        s.add_external("A", 0, 0, &mut symbols).expect("ok");
+        s.add_external("A > B", 1, 0, &mut symbols).expect("ok");
+        s.prepare(&symbols).expect("ok");
+        let axiom = s
+            .parse_string("AAB", &mut symbols, &mut || 0.0)
+            .expect("ok");
+        let mut out = ModuleString::new();
+        let mut host = Recorder {
+            rng: Mt::new(1),
+            calls: Vec::new(),
+            interpreted: Vec::new(),
+        };
+        let opts = StepOptions {
+            step: 1,
+            max_modules: 100,
+            stream: true,
+        };
+        s.step(&axiom, &mut out, &mut host, &opts).expect("ok");
+        // Rule 0 declines both A; rule 1 applies to the A before B only.
+        assert_eq!(
+            host.calls,
+            vec![(0, vec![0]), (0, vec![1]), (1, vec![1, 2])]
+        );
+        assert_eq!(out.to_text(&symbols, " "), "A A(9) A B");
+        assert_eq!(out.external(2), Some(4));
+        assert_eq!(host.interpreted, vec![1, 2, 1]);
+    }
+}
