@@ -1,0 +1,574 @@
+//! [`MarchingCubes`]: extracts the isosurface of a [`Metaballs`] field as a closed mesh.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::Vec3;
+use pge_engine::geometry::{Material, Mesh};
+
+use crate::field::{Metaballs, Particle};
+use crate::table::{EDGES, corner_offset, table};
+
+/// The finest grid allowed along one axis.
+pub const MAX_RESOLUTION: u32 = 4096;
+
+/// Cells per block side: the grid is visited in blocks of `BLOCK³` cells, and a block is
+/// skipped when the field provably does not cross the iso value inside it.
+const BLOCK: usize = 8;
+
+/// Why a surface could not be extracted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MarchError {
+    /// The resolution was 0 or above [`MAX_RESOLUTION`].
+    #[error("resolution must be between 1 and {MAX_RESOLUTION} cells, got {0}")]
+    BadResolution(i64),
+    /// The iso value was not a positive finite number.
+    #[error("iso must be a positive number (the field is 0 far from every particle), got {0}")]
+    BadIso(f32),
+    /// The bounds were empty, inverted or not finite.
+    #[error("bounds must have min < max on every axis and be finite")]
+    BadBounds,
+    /// The grid has more cells than allowed.
+    #[error(
+        "a grid of {nx}x{ny}x{nz} cells is larger than the limit of {max} cells; lower the resolution"
+    )]
+    GridTooLarge {
+        /// Cells along x.
+        nx: usize,
+        /// Cells along y.
+        ny: usize,
+        /// Cells along z.
+        nz: usize,
+        /// The limit.
+        max: u64,
+    },
+    /// The work or the mesh would need more memory than allowed.
+    #[error(
+        "marching cubes needs more than the memory limit of {limit_mib} MiB ({what}); lower the resolution"
+    )]
+    MemoryLimit {
+        /// What grew too large.
+        what: &'static str,
+        /// The limit in MiB.
+        limit_mib: usize,
+    },
+    /// The caller asked to stop (time limit or cancellation).
+    #[error("interrupted")]
+    Interrupted,
+}
+
+/// How [`MarchingCubes`] samples the field.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarchOptions {
+    /// Cells along the longest side of the bounds (default 64); the other sides get cells of
+    /// the same size.
+    pub resolution: u32,
+    /// The field value of the surface (default 0.5). Inside is where the field is above it.
+    pub iso: f32,
+    /// The box to sample; default: the field's bounds (where any particle reaches). The mesh
+    /// is closed at the box's walls where the surface would cross them.
+    pub bounds: Option<(Vec3, Vec3)>,
+    /// The most cells the grid may have (default 2^31).
+    pub max_cells: u64,
+    /// The most bytes the work and the mesh may take (default 1 GiB).
+    pub max_bytes: usize,
+    /// The mesh's material.
+    pub material: Arc<Material>,
+}
+
+impl Default for MarchOptions {
+    fn default() -> Self {
+        MarchOptions {
+            resolution: 64,
+            iso: 0.5,
+            bounds: None,
+            max_cells: 1 << 31,
+            max_bytes: 1 << 30,
+            material: Arc::new(Material::default()),
+        }
+    }
+}
+
+/// What one extraction did, for tests and benchmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MarchStats {
+    /// Cells of the whole grid.
+    pub grid_cells: u64,
+    /// Cells whose corners were sampled and classified.
+    pub visited_cells: u64,
+    /// Blocks of the grid.
+    pub blocks: u64,
+    /// Blocks visited (the others provably hold no surface).
+    pub visited_blocks: u64,
+}
+
+/// Marching cubes over a [`Metaballs`] field.
+///
+/// The grid is split into blocks of 8³ cells; each particle is listed in the blocks its
+/// radius reaches. A block without particles, or whose interval bound on the field (from the
+/// nearest and farthest distance of each listed particle) stays on one side of `iso`, is
+/// skipped, so the work follows the surface rather than the volume. Within a block the
+/// corners are sampled from the block's own particle list, in particle order, so the two
+/// blocks sharing a corner compute the same bits.
+///
+/// The mesh is closed: every vertex is welded per grid edge, the case table agrees across
+/// shared faces (see [`crate::table`]), and the grid's outer corners count as outside.
+/// Normals are the normalised negative field gradient at each vertex.
+///
+/// ```
+/// use pge_metaballs::{Metaballs, MarchingCubes, MarchOptions};
+/// use glam::Vec3;
+///
+/// let mut field = Metaballs::new(1.0);
+/// field.add_particle(Vec3::ZERO, 1.0, None).unwrap();
+/// let (mesh, stats) = MarchingCubes::new(MarchOptions { resolution: 64, ..Default::default() })
+///     .unwrap()
+///     .polygonize(&field, &mut || false)
+///     .unwrap();
+/// assert!(mesh.triangle_count() > 100);
+/// assert!(stats.visited_cells < stats.grid_cells);
+/// ```
+#[derive(Clone, Debug)]
+pub struct MarchingCubes {
+    options: MarchOptions,
+}
+
+impl MarchingCubes {
+    /// Checks the options.
+    pub fn new(options: MarchOptions) -> Result<MarchingCubes, MarchError> {
+        if options.resolution == 0 || options.resolution > MAX_RESOLUTION {
+            return Err(MarchError::BadResolution(i64::from(options.resolution)));
+        }
+        if !options.iso.is_finite() || options.iso <= 0.0 {
+            return Err(MarchError::BadIso(options.iso));
+        }
+        if let Some((lo, hi)) = options.bounds
+            && (!lo.is_finite() || !hi.is_finite() || !lo.cmplt(hi).all())
+        {
+            return Err(MarchError::BadBounds);
+        }
+        Ok(MarchingCubes { options })
+    }
+
+    /// The options.
+    #[must_use]
+    pub fn options(&self) -> &MarchOptions {
+        &self.options
+    }
+
+    /// Extracts the surface. `interrupt` is called between blocks; returning `true` stops
+    /// with [`MarchError::Interrupted`].
+    pub fn polygonize(
+        &self,
+        field: &Metaballs,
+        interrupt: &mut dyn FnMut() -> bool,
+    ) -> Result<(Mesh, MarchStats), MarchError> {
+        let o = &self.options;
+        let mut mesh = Mesh {
+            name: "metaballs".into(),
+            material: o.material.clone(),
+            ..Mesh::default()
+        };
+        let Some((lo, hi)) = o.bounds.or_else(|| field.bounds()) else {
+            return Ok((mesh, MarchStats::default()));
+        };
+        let extent = hi - lo;
+        let h = extent.max_element() / o.resolution as f32;
+        let dims = (extent / h).ceil().max(Vec3::ONE);
+        let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
+        let cells = nx as u64 * ny as u64 * nz as u64;
+        if cells > o.max_cells {
+            return Err(MarchError::GridTooLarge {
+                nx,
+                ny,
+                nz,
+                max: o.max_cells,
+            });
+        }
+        let limit_mib = o.max_bytes >> 20;
+        let nb = [nx.div_ceil(BLOCK), ny.div_ceil(BLOCK), nz.div_ceil(BLOCK)];
+        let block_count = nb[0] * nb[1] * nb[2];
+
+        // Which blocks each particle reaches (points it may affect, conservatively).
+        let ranges: Vec<[(usize, usize); 3]> = field
+            .particles()
+            .iter()
+            .map(|p| {
+                let r = Vec3::splat(p.radius);
+                let a = ((p.position - r - lo) / h).floor();
+                let b = ((p.position + r - lo) / h).ceil();
+                let range = |a: f32, b: f32, n: usize| {
+                    let last = n as i64 - 1;
+                    let first = ((a as i64 - 1).div_euclid(BLOCK as i64)).clamp(0, last.max(0));
+                    let end = ((b as i64).div_euclid(BLOCK as i64)).clamp(-1, last);
+                    (first as usize, (end + 1).max(first) as usize)
+                };
+                [
+                    range(a.x, b.x, nb[0]),
+                    range(a.y, b.y, nb[1]),
+                    range(a.z, b.z, nb[2]),
+                ]
+            })
+            .collect();
+        let pairs: u64 = ranges
+            .iter()
+            .map(|r| r.iter().map(|(a, b)| (b - a) as u64).product::<u64>())
+            .sum();
+        if pairs.saturating_mul(4) + block_count as u64 * 8 > o.max_bytes as u64 {
+            return Err(MarchError::MemoryLimit {
+                what: "particle lists per block",
+                limit_mib,
+            });
+        }
+        // Particle lists per block, compressed (CSR), each in particle order.
+        let mut start = vec![0u32; block_count + 1];
+        let block_index = |bx: usize, by: usize, bz: usize| (bz * nb[1] + by) * nb[0] + bx;
+        for r in &ranges {
+            for bz in r[2].0..r[2].1 {
+                for by in r[1].0..r[1].1 {
+                    for bx in r[0].0..r[0].1 {
+                        start[block_index(bx, by, bz) + 1] += 1;
+                    }
+                }
+            }
+        }
+        for i in 0..block_count {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut lists = vec![0u32; pairs as usize];
+        for (pi, r) in ranges.iter().enumerate() {
+            for bz in r[2].0..r[2].1 {
+                for by in r[1].0..r[1].1 {
+                    for bx in r[0].0..r[0].1 {
+                        let b = block_index(bx, by, bz);
+                        lists[fill[b] as usize] = pi as u32;
+                        fill[b] += 1;
+                    }
+                }
+            }
+        }
+
+        let mut stats = MarchStats {
+            grid_cells: cells,
+            blocks: block_count as u64,
+            ..MarchStats::default()
+        };
+        let mut edge_vertex: HashMap<u64, u32> = HashMap::new();
+        let mut local: Vec<Particle> = Vec::new();
+        let mut values = vec![0.0f32; (BLOCK + 1).pow(3)];
+        let point = |i: usize, j: usize, k: usize| lo + Vec3::new(i as f32, j as f32, k as f32) * h;
+        let iso = o.iso;
+        let tables = table();
+        for bz in 0..nb[2] {
+            for by in 0..nb[1] {
+                for bx in 0..nb[0] {
+                    if interrupt() {
+                        return Err(MarchError::Interrupted);
+                    }
+                    let b = block_index(bx, by, bz);
+                    let list = &lists[start[b] as usize..start[b + 1] as usize];
+                    if list.is_empty() {
+                        continue;
+                    }
+                    let i0 = [bx * BLOCK, by * BLOCK, bz * BLOCK];
+                    let i1 = [
+                        (i0[0] + BLOCK).min(nx),
+                        (i0[1] + BLOCK).min(ny),
+                        (i0[2] + BLOCK).min(nz),
+                    ];
+                    let (blo, bhi) = (point(i0[0], i0[1], i0[2]), point(i1[0], i1[1], i1[2]));
+                    local.clear();
+                    local.extend(list.iter().map(|&i| field.particles()[i as usize]));
+                    // Interval bound of the field over the block.
+                    let (mut fmin, mut fmax) = (0.0f32, 0.0f32);
+                    for p in &local {
+                        let near = p.position.clamp(blo, bhi).distance_squared(p.position);
+                        let far_corner =
+                            Vec3::select(p.position.cmplt((blo + bhi) * 0.5), bhi, blo);
+                        let far = far_corner.distance_squared(p.position);
+                        let (a, b) = (p.falloff(far), p.falloff(near));
+                        fmin += a.min(b);
+                        fmax += a.max(b);
+                    }
+                    let touches_wall = i0.contains(&0) || i1[0] == nx || i1[1] == ny || i1[2] == nz;
+                    if fmax <= iso || (fmin > iso && !touches_wall) {
+                        continue;
+                    }
+                    stats.visited_blocks += 1;
+                    // Sample the block's corners.
+                    let (sx, sy) = (i1[0] - i0[0] + 1, i1[1] - i0[1] + 1);
+                    let at = |i: usize, j: usize, k: usize| {
+                        ((k - i0[2]) * sy + (j - i0[1])) * sx + (i - i0[0])
+                    };
+                    for k in i0[2]..=i1[2] {
+                        for j in i0[1]..=i1[1] {
+                            for i in i0[0]..=i1[0] {
+                                let wall =
+                                    i == 0 || j == 0 || k == 0 || i == nx || j == ny || k == nz;
+                                values[at(i, j, k)] = if wall {
+                                    0.0
+                                } else {
+                                    let p = point(i, j, k);
+                                    local.iter().map(|q| q.value(p)).sum()
+                                };
+                            }
+                        }
+                    }
+                    // March its cells.
+                    for k in i0[2]..i1[2] {
+                        for j in i0[1]..i1[1] {
+                            for i in i0[0]..i1[0] {
+                                stats.visited_cells += 1;
+                                let mut case = 0usize;
+                                let mut v = [0.0f32; 8];
+                                for (c, vc) in v.iter_mut().enumerate() {
+                                    let [dx, dy, dz] = corner_offset(c);
+                                    *vc = values[at(i + dx, j + dy, k + dz)];
+                                    if *vc > iso {
+                                        case |= 1 << c;
+                                    }
+                                }
+                                for tri in &tables[case] {
+                                    let mut ids = [0u32; 3];
+                                    for (slot, &e) in ids.iter_mut().zip(tri) {
+                                        let (ca, cb, axis) = EDGES[e as usize];
+                                        let [dx, dy, dz] = corner_offset(ca);
+                                        let (gi, gj, gk) = (i + dx, j + dy, k + dz);
+                                        let key = (((gk * (ny + 1) + gj) * (nx + 1) + gi) * 3
+                                            + axis)
+                                            as u64;
+                                        *slot = *edge_vertex.entry(key).or_insert_with(|| {
+                                            let (va, vb) = (v[ca], v[cb]);
+                                            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+                                            let pa = point(gi, gj, gk);
+                                            let mut step = Vec3::ZERO;
+                                            step[axis] = h;
+                                            let p = pa + step * t;
+                                            let g: Vec3 = local.iter().map(|q| q.gradient(p)).sum();
+                                            mesh.positions.push(p);
+                                            mesh.normals
+                                                .push((-g).try_normalize().unwrap_or(Vec3::ZERO));
+                                            (mesh.positions.len() - 1) as u32
+                                        });
+                                    }
+                                    mesh.indices.extend(ids);
+                                }
+                            }
+                        }
+                    }
+                    let bytes = mesh.positions.len() * 48 + mesh.indices.len() * 4;
+                    if bytes > o.max_bytes {
+                        return Err(MarchError::MemoryLimit {
+                            what: "the mesh",
+                            limit_mib,
+                        });
+                    }
+                }
+            }
+        }
+        fix_degenerate_normals(&mut mesh);
+        Ok((mesh, stats))
+    }
+}
+
+/// Vertices where the gradient vanished (a saddle exactly on the surface, or a vertex on a
+/// wall of the bounds) take the average normal of their triangles.
+fn fix_degenerate_normals(mesh: &mut Mesh) {
+    if mesh.normals.iter().all(|n| *n != Vec3::ZERO) {
+        return;
+    }
+    let mut acc = vec![Vec3::ZERO; mesh.positions.len()];
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            acc[i as usize] += n;
+        }
+    }
+    for (n, a) in mesh.normals.iter_mut().zip(acc) {
+        if *n == Vec3::ZERO {
+            *n = a.try_normalize().unwrap_or(Vec3::Y);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use super::*;
+
+    fn extract(field: &Metaballs, resolution: u32) -> (Mesh, MarchStats) {
+        MarchingCubes::new(MarchOptions {
+            resolution,
+            ..MarchOptions::default()
+        })
+        .expect("valid options")
+        .polygonize(field, &mut || false)
+        .expect("extracts")
+    }
+
+    /// Asserts every undirected edge (by vertex index) is used by exactly two triangles, once
+    /// in each direction (closed and consistently oriented).
+    fn assert_closed(mesh: &Mesh) {
+        let mut uses: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+        for t in mesh.indices.chunks_exact(3) {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                let e = uses.entry((a.min(b), a.max(b))).or_insert((0, 0));
+                if a < b { e.0 += 1 } else { e.1 += 1 }
+            }
+        }
+        assert!(!uses.is_empty());
+        for (edge, (fwd, back)) in uses {
+            assert_eq!(
+                (fwd, back),
+                (1, 1),
+                "edge {edge:?} is not shared by exactly two triangles"
+            );
+        }
+    }
+
+    fn volume(mesh: &Mesh) -> f64 {
+        mesh.indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize].as_dvec3());
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn one_ball_is_closed_with_the_sphere_volume() {
+        let mut field = Metaballs::new(1.0);
+        field
+            .add_particle(Vec3::new(0.3, -0.2, 0.1), 1.0, None)
+            .expect("ok");
+        let (mesh, stats) = extract(&field, 96);
+        mesh.validate().expect("valid");
+        assert_closed(&mesh);
+        let s = (1.0f64 - 0.5f64.cbrt()).sqrt();
+        let analytic = 4.0 / 3.0 * std::f64::consts::PI * s * s * s;
+        let v = volume(&mesh);
+        assert!(
+            (v - analytic).abs() / analytic < 0.02,
+            "volume {v} vs {analytic}"
+        );
+        // Normals come from the gradient: on a sphere, radial.
+        for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+            let radial = (*p - Vec3::new(0.3, -0.2, 0.1)).normalize();
+            assert!(n.dot(radial) > 0.999, "normal {n} at {p}");
+        }
+        // The surface takes a thin shell of the grid.
+        assert!(stats.visited_cells * 2 < stats.grid_cells, "{stats:?}");
+    }
+
+    #[test]
+    fn many_balls_with_negative_charges_stay_closed() {
+        // A deterministic pseudo-random cloud, dense enough for ambiguous faces.
+        let mut field = Metaballs::new(0.6);
+        let mut s = 12345u32;
+        let mut next = || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for i in 0..60 {
+            let p = Vec3::new(next(), next(), next()) * 3.0;
+            let charge = if i % 5 == 0 { -0.8 } else { 1.0 };
+            field
+                .add_particle(p, charge, Some(0.4 + next() * 0.5))
+                .expect("ok");
+        }
+        for res in [17, 40, 63] {
+            let (mesh, _) = extract(&field, res);
+            assert!(mesh.triangle_count() > 0);
+            mesh.validate().expect("valid");
+            assert_closed(&mesh);
+            assert!(volume(&mesh) > 0.0, "outward orientation");
+        }
+    }
+
+    #[test]
+    fn bounds_cut_the_surface_and_close_it() {
+        let mut field = Metaballs::new(1.0);
+        field.add_particle(Vec3::ZERO, 1.0, None).expect("ok");
+        let (mesh, _) = MarchingCubes::new(MarchOptions {
+            resolution: 20,
+            bounds: Some((Vec3::new(-1.0, 0.0, -1.0), Vec3::ONE)),
+            ..MarchOptions::default()
+        })
+        .expect("ok")
+        .polygonize(&field, &mut || false)
+        .expect("ok");
+        assert_closed(&mesh);
+        assert!(mesh.positions.iter().all(|p| p.y >= -1e-6));
+    }
+
+    #[test]
+    fn bad_options_and_limits() {
+        let opts = |f: fn(&mut MarchOptions)| {
+            let mut o = MarchOptions::default();
+            f(&mut o);
+            MarchingCubes::new(o).err()
+        };
+        assert_eq!(
+            opts(|o| o.resolution = 0),
+            Some(MarchError::BadResolution(0))
+        );
+        assert_eq!(opts(|o| o.iso = 0.0), Some(MarchError::BadIso(0.0)));
+        assert_eq!(
+            opts(|o| o.iso = f32::NAN).map(|e| e.to_string().contains("iso")),
+            Some(true)
+        );
+        assert_eq!(
+            opts(|o| o.bounds = Some((Vec3::ONE, Vec3::ZERO))),
+            Some(MarchError::BadBounds)
+        );
+        let mut field = Metaballs::new(1.0);
+        field.add_particle(Vec3::ZERO, 1.0, None).expect("ok");
+        let mc = MarchingCubes::new(MarchOptions {
+            resolution: 1000,
+            max_cells: 1 << 20,
+            ..MarchOptions::default()
+        })
+        .expect("ok");
+        assert!(matches!(
+            mc.polygonize(&field, &mut || false),
+            Err(MarchError::GridTooLarge { .. })
+        ));
+        let mc = MarchingCubes::new(MarchOptions {
+            resolution: 200,
+            max_bytes: 1 << 16,
+            ..MarchOptions::default()
+        })
+        .expect("ok");
+        assert!(matches!(
+            mc.polygonize(&field, &mut || false),
+            Err(MarchError::MemoryLimit { .. })
+        ));
+        let mc = MarchingCubes::new(MarchOptions::default()).expect("ok");
+        assert_eq!(
+            mc.polygonize(&field, &mut || true).err(),
+            Some(MarchError::Interrupted)
+        );
+        // No particles: an empty mesh, not an error.
+        let (mesh, _) = mc
+            .polygonize(&Metaballs::new(1.0), &mut || false)
+            .expect("ok");
+        assert_eq!(mesh.vertex_count(), 0);
+    }
+
+    #[test]
+    fn output_is_deterministic() {
+        let mut field = Metaballs::new(1.0);
+        field.add_particle(Vec3::ZERO, 1.0, None).expect("ok");
+        field
+            .add_particle(Vec3::new(0.7, 0.1, 0.0), 0.8, None)
+            .expect("ok");
+        let (a, _) = extract(&field, 40);
+        let (b, _) = extract(&field, 40);
+        assert_eq!(a, b);
+    }
+}
