@@ -151,6 +151,11 @@ impl MarchingCubes {
         Ok(MarchingCubes { options })
     }
 
+    /// Changes the memory budget (the session's limit, known only when the mesh is made).
+    pub fn set_max_bytes(&mut self, bytes: usize) {
+        self.options.max_bytes = bytes;
+    }
+
     /// The options.
     #[must_use]
     pub fn options(&self) -> &MarchOptions {

@@ -1,0 +1,451 @@
+//! The Lua side: `pge.Metaballs{...}` and `pge.MarchingCubes(meta, {...})`.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use glam::Vec3;
+use mlua::{AnyUserData, FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
+use pge_engine::geometry::{Material, Mesh, Model};
+use pge_engine::lua::{LuaMesh, LuaModel, LuaVec3, material_from_table, run_context, script_error};
+
+use crate::{MarchError, MarchOptions, MarchingCubes, Metaballs};
+
+/// The memory budget when the session sets none.
+const DEFAULT_MEMORY: usize = 1 << 30;
+
+fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
+    let x = match v {
+        Value::Integer(i) => *i as f64,
+        Value::Number(n) => *n,
+        other => {
+            return Err(script_error(
+                lua,
+                format!("{what}: expected a number, got {}", other.type_name()),
+            ));
+        }
+    };
+    if !x.is_finite() {
+        return Err(script_error(
+            lua,
+            format!("{what}: the number is NaN or infinite"),
+        ));
+    }
+    Ok(x as f32)
+}
+
+fn short(e: &mlua::Error) -> String {
+    match e {
+        mlua::Error::FromLuaConversionError {
+            message: Some(m), ..
+        } => m.clone(),
+        other => other.to_string(),
+    }
+}
+
+fn vec3(lua: &Lua, v: Value, what: &str) -> mlua::Result<Vec3> {
+    LuaVec3::from_lua(v, lua)
+        .map(|v| v.0)
+        .map_err(|e| script_error(lua, format!("{what}: {}", short(&e))))
+}
+
+fn check_keys(lua: &Lua, t: &Table, ctor: &str, known: &[&str]) -> mlua::Result<()> {
+    for pair in t.pairs::<Value, Value>() {
+        let (k, _) = pair?;
+        let ok = matches!(&k, Value::String(s) if s.to_str().is_ok_and(|s| known.contains(&&*s)));
+        if !ok {
+            let name = match &k {
+                Value::String(s) => s.to_string_lossy(),
+                other => format!("{other:?}"),
+            };
+            return Err(script_error(
+                lua,
+                format!(
+                    "{ctor}: unknown option '{name}' (options: {})",
+                    known.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `pge.Metaballs{ radius = 1 }`: a field of charged particles.
+#[derive(Clone)]
+pub struct LuaMetaballs(pub Rc<RefCell<Metaballs>>);
+
+impl UserData for LuaMetaballs {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method(
+            "addParticle",
+            |lua, me, (pos, charge, radius): (Value, Value, Value)| {
+                let p = vec3(lua, pos, "addParticle(position, charge [, radius])")?;
+                let q = match charge {
+                    Value::Nil => 1.0,
+                    c => number(lua, &c, "addParticle: charge")?,
+                };
+                let r = match radius {
+                    Value::Nil => None,
+                    r => Some(number(lua, &r, "addParticle: radius")?),
+                };
+                let index =
+                    me.0.borrow_mut()
+                        .add_particle(p, q, r)
+                        .map_err(|e| script_error(lua, format!("addParticle: {e}")))?;
+                Ok(index + 1)
+            },
+        );
+        m.add_method("calc", |lua, me, p: Value| {
+            let p = vec3(lua, p, "calc(position)")?;
+            Ok(me.0.borrow().value(p))
+        });
+        m.add_method("gradient", |lua, me, p: Value| {
+            let p = vec3(lua, p, "gradient(position)")?;
+            Ok(LuaVec3(me.0.borrow().gradient(p)))
+        });
+        m.add_method("getParticle", |lua, me, i: Value| {
+            let n = me.0.borrow().len();
+            let i = number(lua, &i, "getParticle(i)")?;
+            if i.fract() != 0.0 || i < 1.0 || i as usize > n {
+                return Err(script_error(
+                    lua,
+                    format!("getParticle({i}): there are {n} particles, numbered from 1"),
+                ));
+            }
+            let p = me.0.borrow().particles()[i as usize - 1];
+            let t = lua.create_table()?;
+            t.set("position", LuaVec3(p.position))?;
+            t.set("charge", p.charge)?;
+            t.set("radius", p.radius)?;
+            Ok(t)
+        });
+        m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
+        m.add_method("update", |_, me, ()| {
+            me.0.borrow_mut().update();
+            Ok(())
+        });
+        m.add_method("bounds", |_, me, ()| match me.0.borrow().bounds() {
+            Some((lo, hi)) => Ok((Some(LuaVec3(lo)), Some(LuaVec3(hi)))),
+            None => Ok((None, None)),
+        });
+    }
+}
+
+/// `pge.MarchingCubes(meta, {...})`: extracts the field's surface when its model is asked
+/// for, so particles added after construction are included.
+pub struct LuaMarchingCubes {
+    field: Rc<RefCell<Metaballs>>,
+    mc: MarchingCubes,
+    cache: RefCell<Option<(u64, Arc<Mesh>)>>,
+}
+
+impl LuaMarchingCubes {
+    fn mesh(&self, lua: &Lua) -> mlua::Result<Arc<Mesh>> {
+        let version = self.field.borrow().version();
+        if let Some((v, mesh)) = &*self.cache.borrow()
+            && *v == version
+        {
+            return Ok(mesh.clone());
+        }
+        let ctx = run_context(lua);
+        let here = pge_engine::lua::caller_location(lua);
+        let mut interrupt = || ctx.check_deadline(&here).is_err();
+        let mut mc = self.mc.clone();
+        mc.set_max_bytes(memory_budget(lua));
+        let (mesh, _) = mc
+            .polygonize(&self.field.borrow(), &mut interrupt)
+            .map_err(|e| match e {
+                MarchError::Interrupted => script_error(
+                    lua,
+                    "marching cubes: time limit exceeded (see --time-limit)",
+                ),
+                e => script_error(lua, format!("marching cubes: {e}")),
+            })?;
+        let mesh = Arc::new(mesh);
+        *self.cache.borrow_mut() = Some((version, mesh.clone()));
+        Ok(mesh)
+    }
+}
+
+/// The session's memory limit (the budget for the grid and the mesh too).
+fn memory_budget(lua: &Lua) -> usize {
+    // mlua has no getter: setting a limit returns the previous one, which is put back.
+    match lua.set_memory_limit(0) {
+        Ok(previous) => {
+            let _ = lua.set_memory_limit(previous);
+            if previous == 0 {
+                DEFAULT_MEMORY
+            } else {
+                previous
+            }
+        }
+        Err(_) => DEFAULT_MEMORY,
+    }
+}
+
+impl UserData for LuaMarchingCubes {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method("mesh", |lua, me, ()| Ok(LuaMesh(me.mesh(lua)?)));
+        m.add_method("model", |lua, me, ()| {
+            let mesh = me.mesh(lua)?;
+            Ok(LuaModel(if mesh.positions.is_empty() {
+                Model::new()
+            } else {
+                Model::from_mesh(mesh)
+            }))
+        });
+    }
+}
+
+fn march_options(lua: &Lua, t: Option<Table>) -> mlua::Result<MarchOptions> {
+    let mut o = MarchOptions::default();
+    let Some(t) = t else { return Ok(o) };
+    check_keys(
+        lua,
+        &t,
+        "pge.MarchingCubes",
+        &[
+            "resolution",
+            "iso",
+            "bounds",
+            "material",
+            "color",
+            "maxCells",
+        ],
+    )?;
+    match t.raw_get::<Value>("resolution")? {
+        Value::Nil => {}
+        v => {
+            let r = number(lua, &v, "pge.MarchingCubes: resolution")?;
+            if r.fract() != 0.0 || r < 1.0 || r > crate::MAX_RESOLUTION as f32 {
+                return Err(script_error(
+                    lua,
+                    format!(
+                        "pge.MarchingCubes: resolution must be a whole number of cells between 1 and {}, got {r}",
+                        crate::MAX_RESOLUTION
+                    ),
+                ));
+            }
+            o.resolution = r as u32;
+        }
+    }
+    match t.raw_get::<Value>("iso")? {
+        Value::Nil => {}
+        v => o.iso = number(lua, &v, "pge.MarchingCubes: iso")?,
+    }
+    match t.raw_get::<Value>("maxCells")? {
+        Value::Nil => {}
+        v => {
+            let c = number(lua, &v, "pge.MarchingCubes: maxCells")?;
+            if c < 1.0 {
+                return Err(script_error(
+                    lua,
+                    "pge.MarchingCubes: maxCells must be at least 1",
+                ));
+            }
+            o.max_cells = c as u64;
+        }
+    }
+    match t.raw_get::<Value>("bounds")? {
+        Value::Nil => {}
+        Value::Table(b) => {
+            let (lo, hi): (Value, Value) =
+                match (b.raw_get::<Value>("min")?, b.raw_get::<Value>("max")?) {
+                    (Value::Nil, Value::Nil) => (b.raw_get(1)?, b.raw_get(2)?),
+                    pair => pair,
+                };
+            o.bounds = Some((
+                vec3(lua, lo, "pge.MarchingCubes: bounds = {min, max}")?,
+                vec3(lua, hi, "pge.MarchingCubes: bounds = {min, max}")?,
+            ));
+        }
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "pge.MarchingCubes: bounds must be {{min, max}}, got {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    }
+    let mut material = match t.raw_get::<Value>("material")? {
+        Value::Nil => Material {
+            name: "metaballs".into(),
+            ..Material::default()
+        },
+        Value::Table(mt) => material_from_table(lua, &mt)?,
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "pge.MarchingCubes: material must be a table, got {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
+    if let Some(c) = t.raw_get::<Option<String>>("color")? {
+        material.base_color = Material::from_hex("", &c)
+            .map_err(|e| script_error(lua, format!("pge.MarchingCubes: color: {e}")))?
+            .base_color;
+    }
+    o.material = Arc::new(material);
+    Ok(o)
+}
+
+/// Adds `pge.Metaballs` and `pge.MarchingCubes`.
+pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
+    pge.set(
+        "Metaballs",
+        lua.create_function(|lua, t: Value| {
+            let radius = match t {
+                Value::Nil => 1.0,
+                Value::Table(t) => {
+                    check_keys(lua, &t, "pge.Metaballs", &["radius"])?;
+                    match t.raw_get::<Value>("radius")? {
+                        Value::Nil => 1.0,
+                        v => number(lua, &v, "pge.Metaballs: radius")?,
+                    }
+                }
+                other => {
+                    return Err(script_error(
+                        lua,
+                        format!(
+                            "pge.Metaballs: expected an options table or nothing, got {}",
+                            other.type_name()
+                        ),
+                    ));
+                }
+            };
+            if radius <= 0.0 {
+                return Err(script_error(
+                    lua,
+                    format!("pge.Metaballs: radius must be positive, got {radius}"),
+                ));
+            }
+            Ok(LuaMetaballs(Rc::new(RefCell::new(Metaballs::new(radius)))))
+        })?,
+    )?;
+    pge.set(
+        "MarchingCubes",
+        lua.create_function(|lua, args: MultiValue| {
+            let mut args = args.into_iter();
+            let field = match args.next() {
+                Some(Value::UserData(ud)) if ud.is::<LuaMetaballs>() => field_of(&ud)?,
+                other => {
+                    return Err(script_error(
+                        lua,
+                        format!(
+                            "pge.MarchingCubes(meta, options): the first argument must be a pge.Metaballs, got {}",
+                            other.map_or("nothing", |v| v.type_name())
+                        ),
+                    ));
+                }
+            };
+            let t = match args.next() {
+                None | Some(Value::Nil) => None,
+                Some(Value::Table(t)) => Some(t),
+                Some(other) => {
+                    return Err(script_error(
+                        lua,
+                        format!("pge.MarchingCubes: options must be a table, got {}", other.type_name()),
+                    ));
+                }
+            };
+            let options = march_options(lua, t)?;
+            let mc = MarchingCubes::new(options).map_err(|e| script_error(lua, format!("pge.MarchingCubes: {e}")))?;
+            Ok(LuaMarchingCubes { field, mc, cache: RefCell::new(None) })
+        })?,
+    )?;
+    Ok(())
+}
+
+fn field_of(ud: &AnyUserData) -> mlua::Result<Rc<RefCell<Metaballs>>> {
+    Ok(ud.borrow::<LuaMetaballs>()?.0.clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use pge_engine::{Engine, Session};
+
+    fn session() -> (Engine, Session) {
+        let engine = Engine::builder()
+            .plugin(crate::MetaballsPlugin)
+            .build()
+            .expect("engine");
+        let session = engine.session(Default::default()).expect("session");
+        (engine, session)
+    }
+
+    #[test]
+    fn metaballs_from_lua() {
+        let (_e, s) = session();
+        let (i, v, gx, charge, tris, later): (usize, f32, f32, f32, usize, usize) = s
+            .eval(
+                "local meta = pge.Metaballs{ radius = 1 }
+                 local mc = pge.MarchingCubes(meta, { resolution = 48, iso = 0.5, color = '#ff8060',
+                                                       bounds = {{-2, -2, -2}, {4, 2, 2}} })
+                 local i = meta:addParticle({0, 0, 0}, 1)
+                 local g = meta:gradient(pge.vec3(0.5, 0, 0))
+                 local first = mc:model():triangleCount()
+                 meta:addParticle(pge.vec3(3, 0, 0), 1)
+                 return i, meta:calc({0, 0, 0}), g.x, meta:getParticle(1).charge, first,
+                        mc:model():triangleCount()",
+            )
+            .expect("runs");
+        assert_eq!((i, v, charge), (1, 1.0, 1.0));
+        assert!(gx < 0.0);
+        assert!(tris > 100);
+        assert!(
+            later > tris,
+            "particles added after construction are included"
+        );
+    }
+
+    #[test]
+    fn mistakes_are_located_errors() {
+        let (_e, s) = session();
+        let cases = [
+            (
+                "local m = pge.Metaballs()\nlocal mc = pge.MarchingCubes(m, {resolution = 0})",
+                "eval:2: pge.MarchingCubes: resolution must be",
+            ),
+            (
+                "local m = pge.Metaballs()\nlocal mc = pge.MarchingCubes(m, {resolution = -3})",
+                "eval:2: pge.MarchingCubes: resolution must be",
+            ),
+            (
+                "local mc = pge.MarchingCubes({}, {})",
+                "eval:1: pge.MarchingCubes(meta, options): the first argument",
+            ),
+            (
+                "local m = pge.Metaballs()\nlocal mc = pge.MarchingCubes(m, {iso = 0})",
+                "eval:2: pge.MarchingCubes: iso must be a positive",
+            ),
+            (
+                "local m = pge.Metaballs()\nlocal mc = pge.MarchingCubes(m, {reslution = 3})",
+                "eval:2: pge.MarchingCubes: unknown option 'reslution'",
+            ),
+            (
+                "local m = pge.Metaballs()\nm:addParticle({0,0,0}, 1, -1)",
+                "eval:2: addParticle: particle radius must be positive",
+            ),
+            (
+                "local m = pge.Metaballs()\nm:getParticle(1)",
+                "eval:2: getParticle(1): there are 0 particles",
+            ),
+            (
+                "local m = pge.Metaballs()\nm:addParticle({0,0,0}, 1)\nlocal mc = pge.MarchingCubes(m, {resolution = 4000, maxCells = 1000})\nmc:model()",
+                "eval:4: marching cubes: a grid of 4000x4000x4000 cells is larger than the limit",
+            ),
+        ];
+        for (code, expected) in cases {
+            let err = s.eval::<()>(code).expect_err(code).to_string();
+            assert!(
+                err.starts_with(expected),
+                "{code}\n  gave: {err}\n  want: {expected}"
+            );
+        }
+    }
+}
