@@ -28,13 +28,20 @@ impl Heightfield {
                 heights.push((x * 0.3).sin() * 1.5 + (z * 0.2).cos());
             }
         }
-        Heightfield { size, cell, heights }
+        Heightfield {
+            size,
+            cell,
+            heights,
+        }
     }
 
     /// Bilinear height at world (x, z), clamped to the grid.
     fn height(&self, x: f32, z: f32) -> f32 {
         let max = (self.size - 1) as f32;
-        let (gx, gz) = ((x / self.cell).clamp(0.0, max), (z / self.cell).clamp(0.0, max));
+        let (gx, gz) = (
+            (x / self.cell).clamp(0.0, max),
+            (z / self.cell).clamp(0.0, max),
+        );
         let (i, j) = (gx.floor() as usize, gz.floor() as usize);
         let (i1, j1) = ((i + 1).min(self.size - 1), (j + 1).min(self.size - 1));
         let (fx, fz) = (gx - i as f32, gz - j as f32);
@@ -53,10 +60,17 @@ struct World {
 
 impl UserData for World {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
-        m.add_method("height", |_, w, (x, z): (f32, f32)| Ok(w.field.height(x, z)));
-        m.add_method("extent", |_, w, ()| Ok((w.field.size - 1) as f32 * w.field.cell));
+        m.add_method("height", |_, w, (x, z): (f32, f32)| {
+            Ok(w.field.height(x, z))
+        });
+        m.add_method("extent", |_, w, ()| {
+            Ok((w.field.size - 1) as f32 * w.field.cell)
+        });
         m.add_method("plant", |_, w, (x, y, z): (f32, f32, f32)| {
-            w.planted.lock().map_err(|_| mlua::Error::runtime("planted log poisoned"))?.push([x, y, z]);
+            w.planted
+                .lock()
+                .map_err(|_| mlua::Error::runtime("planted log poisoned"))?
+                .push([x, y, z]);
             Ok(())
         });
     }
@@ -74,7 +88,13 @@ impl Plugin for WorldPlugin {
     }
 
     fn register(&self, _lua: &Lua, pge: &Table) -> mlua::Result<()> {
-        pge.set("world", World { field: self.field.clone(), planted: self.planted.clone() })
+        pge.set(
+            "world",
+            World {
+                field: self.field.clone(),
+                planted: self.planted.clone(),
+            },
+        )
     }
 }
 
@@ -82,7 +102,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let field = Arc::new(Heightfield::new(64, 0.5));
     let planted = Arc::new(Mutex::new(Vec::new()));
     let engine = pge::default_engine()
-        .plugin(WorldPlugin { field: field.clone(), planted: planted.clone() })
+        .plugin(WorldPlugin {
+            field: field.clone(),
+            planted: planted.clone(),
+        })
         .build()?;
     let session = engine.session(SessionOptions::default())?;
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/host_object.lua");
@@ -90,10 +113,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let planted = planted.lock().map_err(|_| "planted log poisoned")?;
     for p in planted.iter() {
         let ground = field.height(p[0], p[2]);
-        assert!((p[1] - ground).abs() < 1e-4, "the script asked the host for the height");
+        assert!(
+            (p[1] - ground).abs() < 1e-4,
+            "the script asked the host for the height"
+        );
     }
     let glb = pge_engine::export::glb_bytes(&generated.model, &Default::default())?;
     std::fs::write("host_object.glb", glb)?;
-    println!("planted {} markers on the host's terrain; wrote host_object.glb", planted.len());
+    println!(
+        "planted {} markers on the host's terrain; wrote host_object.glb",
+        planted.len()
+    );
     Ok(())
 }
