@@ -1,0 +1,446 @@
+//! The Lua side: `pge.Lines{...}` and `pge.Image.new` / `pge.Image.load`.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use glam::{Vec3, Vec4};
+use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
+use pge_engine::geometry::{Model, Texture};
+use pge_engine::lua::{LuaMesh, LuaModel, LuaVec3, resolve_path, script_error, writable_path};
+
+use crate::{Image, Lines};
+
+fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f64> {
+    let x = match v {
+        Value::Integer(i) => *i as f64,
+        Value::Number(n) => *n,
+        other => {
+            return Err(script_error(
+                lua,
+                format!("{what}: expected a number, got {}", other.type_name()),
+            ));
+        }
+    };
+    if !x.is_finite() {
+        return Err(script_error(
+            lua,
+            format!("{what}: the number is NaN or infinite"),
+        ));
+    }
+    Ok(x)
+}
+
+fn short(e: &mlua::Error) -> String {
+    match e {
+        mlua::Error::FromLuaConversionError {
+            message: Some(m), ..
+        } => m.clone(),
+        other => other.to_string(),
+    }
+}
+
+fn vec3(lua: &Lua, v: Value, what: &str) -> mlua::Result<Vec3> {
+    LuaVec3::from_lua(v, lua)
+        .map(|v| v.0)
+        .map_err(|e| script_error(lua, format!("{what}: {}", short(&e))))
+}
+
+/// An sRGB colour as bytes: `"#rrggbb"`, `"#rrggbbaa"`, or `{r, g, b [, a]}` in [0, 1].
+fn rgba_bytes(lua: &Lua, v: &Value, what: &str) -> mlua::Result<[u8; 4]> {
+    let bad = |msg: String| script_error(lua, format!("{what}: {msg}"));
+    match v {
+        Value::String(s) => {
+            let s = s.to_str()?;
+            let digits = s.strip_prefix('#').unwrap_or(&s);
+            let byte = |i: usize| u8::from_str_radix(digits.get(i..i + 2).unwrap_or("x"), 16);
+            let parsed = match digits.len() {
+                6 => (byte(0), byte(2), byte(4), Ok(255)),
+                8 => (byte(0), byte(2), byte(4), byte(6)),
+                _ => {
+                    return Err(bad(format!(
+                        "'{}' is not a colour: expected \"#rrggbb\" or \"#rrggbbaa\"",
+                        &*s
+                    )));
+                }
+            };
+            match parsed {
+                (Ok(r), Ok(g), Ok(b), Ok(a)) => Ok([r, g, b, a]),
+                _ => Err(bad(format!(
+                    "'{}' is not a colour: expected \"#rrggbb\" or \"#rrggbbaa\"",
+                    &*s
+                ))),
+            }
+        }
+        Value::Table(t) => {
+            let n = t.raw_len();
+            if !(3..=4).contains(&n) {
+                return Err(bad(format!(
+                    "a colour table needs 3 or 4 numbers in [0, 1], got {n}"
+                )));
+            }
+            let mut out = [255u8; 4];
+            for (i, slot) in out.iter_mut().enumerate().take(n) {
+                let x = number(lua, &t.raw_get::<Value>(i + 1)?, what)?;
+                if !(0.0..=1.0).contains(&x) {
+                    return Err(bad(format!("colour component {x} is outside [0, 1]")));
+                }
+                *slot = (x * 255.0).round() as u8;
+            }
+            Ok(out)
+        }
+        other => Err(bad(format!(
+            "expected a colour \"#rrggbb\" or {{r, g, b}}, got {}",
+            other.type_name()
+        ))),
+    }
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A colour for a vertex: the sRGB input made linear.
+fn linear(lua: &Lua, v: &Value, what: &str) -> mlua::Result<Vec4> {
+    let [r, g, b, a] = rgba_bytes(lua, v, what)?.map(|c| c as f32 / 255.0);
+    Ok(Vec4::new(
+        srgb_to_linear(r),
+        srgb_to_linear(g),
+        srgb_to_linear(b),
+        a,
+    ))
+}
+
+/// `pge.Lines{ color = "#ffffff" }`: coloured segments.
+#[derive(Clone)]
+pub struct LuaLines(pub Rc<RefCell<Lines>>);
+
+impl UserData for LuaLines {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method("add", |lua, me, (a, b, c): (Value, Value, Value)| {
+            let a = vec3(lua, a, "add(a, b [, colour])")?;
+            let b = vec3(lua, b, "add(a, b [, colour])")?;
+            let c = match c {
+                Value::Nil => None,
+                c => Some(linear(lua, &c, "add: colour")?),
+            };
+            me.0.borrow_mut()
+                .add(a, b, c)
+                .map_err(|e| script_error(lua, format!("add: {e}")))
+        });
+        m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
+        m.add_method("clear", |_, me, ()| {
+            me.0.borrow_mut().clear();
+            Ok(())
+        });
+        m.add_method("mesh", |_, me, ()| {
+            Ok(LuaMesh(Arc::new(me.0.borrow().mesh())))
+        });
+        m.add_method("model", |_, me, ()| {
+            let lines = me.0.borrow();
+            Ok(LuaModel(if lines.is_empty() {
+                Model::new()
+            } else {
+                Model::from_mesh(lines.mesh())
+            }))
+        });
+    }
+}
+
+/// `pge.Image.new(w, h)` / `pge.Image.load(path)`.
+#[derive(Clone)]
+pub struct LuaImage(pub Rc<RefCell<Image>>);
+
+/// What `image:texture()` returns: a snapshot of the image as a PNG texture, for a
+/// material's `texture`.
+#[derive(Clone, Debug)]
+pub struct LuaTexture(pub Arc<Texture>);
+
+impl UserData for LuaTexture {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method("width", |_, me, ()| Ok(me.0.width));
+        m.add_method("height", |_, me, ()| Ok(me.0.height));
+        m.add_method("pngBytes", |lua, me, ()| lua.create_string(&me.0.png));
+    }
+}
+
+/// A pixel coordinate: a whole number (range is checked by the image).
+fn coord(lua: &Lua, v: &Value, what: &str) -> mlua::Result<i64> {
+    let x = number(lua, v, what)?;
+    if x.fract() != 0.0 {
+        return Err(script_error(
+            lua,
+            format!("{what}: pixel coordinate {x} is not a whole number"),
+        ));
+    }
+    Ok(x as i64)
+}
+
+impl UserData for LuaImage {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method("width", |_, me, ()| Ok(me.0.borrow().width()));
+        m.add_method("height", |_, me, ()| Ok(me.0.borrow().height()));
+        m.add_method("inside", |lua, me, (x, y): (Value, Value)| {
+            let (x, y) = (
+                number(lua, &x, "inside(x, y)")?,
+                number(lua, &y, "inside(x, y)")?,
+            );
+            Ok(x.fract() == 0.0 && y.fract() == 0.0 && me.0.borrow().contains(x as i64, y as i64))
+        });
+        m.add_method("get", |lua, me, (x, y): (Value, Value)| {
+            let (x, y) = (coord(lua, &x, "get(x, y)")?, coord(lua, &y, "get(x, y)")?);
+            let px =
+                me.0.borrow()
+                    .get(x, y)
+                    .map_err(|e| script_error(lua, format!("get: {e}")))?;
+            let [r, g, b, a] = px.map(|c| f64::from(c) / 255.0);
+            Ok((r, g, b, a))
+        });
+        m.add_method("getHex", |lua, me, (x, y): (Value, Value)| {
+            let (x, y) = (
+                coord(lua, &x, "getHex(x, y)")?,
+                coord(lua, &y, "getHex(x, y)")?,
+            );
+            let [r, g, b, a] =
+                me.0.borrow()
+                    .get(x, y)
+                    .map_err(|e| script_error(lua, format!("getHex: {e}")))?;
+            Ok(if a == 255 {
+                format!("#{r:02x}{g:02x}{b:02x}")
+            } else {
+                format!("#{r:02x}{g:02x}{b:02x}{a:02x}")
+            })
+        });
+        m.add_method("set", |lua, me, args: MultiValue| {
+            let args: Vec<Value> = args.into_iter().collect();
+            if args.len() < 3 {
+                return Err(script_error(
+                    lua,
+                    "set(x, y, colour): expected x, y and a colour",
+                ));
+            }
+            let (x, y) = (
+                coord(lua, &args[0], "set(x, y, colour)")?,
+                coord(lua, &args[1], "set(x, y, colour)")?,
+            );
+            let px = if args.len() >= 5 {
+                // set(x, y, r, g, b [, a])
+                let t = lua.create_sequence_from(args[2..].iter().take(4).cloned())?;
+                rgba_bytes(lua, &Value::Table(t), "set: colour")?
+            } else {
+                rgba_bytes(lua, &args[2], "set: colour")?
+            };
+            me.0.borrow_mut()
+                .set(x, y, px)
+                .map_err(|e| script_error(lua, format!("set: {e}")))
+        });
+        m.add_method("fill", |lua, me, c: Value| {
+            let px = rgba_bytes(lua, &c, "fill(colour)")?;
+            me.0.borrow_mut().fill(px);
+            Ok(())
+        });
+        m.add_method("save", |lua, me, path: Value| {
+            let Value::String(p) = path else {
+                return Err(script_error(lua, "save(path): expected a file name"));
+            };
+            let p = p.to_str()?.to_string();
+            let target = writable_path(lua, &p)?;
+            let png =
+                me.0.borrow()
+                    .png()
+                    .map_err(|e| script_error(lua, format!("save: {e}")))?;
+            if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir)
+                    .map_err(|e| script_error(lua, format!("save '{p}': {e}")))?;
+            }
+            std::fs::write(&target, png).map_err(|e| script_error(lua, format!("save '{p}': {e}")))
+        });
+        m.add_method("clone", |_, me, ()| {
+            Ok(LuaImage(Rc::new(RefCell::new(me.0.borrow().clone()))))
+        });
+        m.add_method("texture", |lua, me, ()| {
+            let t =
+                me.0.borrow()
+                    .texture("image")
+                    .map_err(|e| script_error(lua, format!("texture: {e}")))?;
+            Ok(LuaTexture(Arc::new(t)))
+        });
+        m.add_method("pngBytes", |lua, me, ()| {
+            let png =
+                me.0.borrow()
+                    .png()
+                    .map_err(|e| script_error(lua, format!("pngBytes: {e}")))?;
+            lua.create_string(&png)
+        });
+        m.add_method("model", |lua, me, ()| {
+            let mesh =
+                me.0.borrow()
+                    .plane_mesh()
+                    .map_err(|e| script_error(lua, format!("model: {e}")))?;
+            Ok(LuaModel(Model::from_mesh(mesh)))
+        });
+    }
+}
+
+fn size(lua: &Lua, v: &Value, what: &str) -> mlua::Result<u32> {
+    let x = number(lua, v, what)?;
+    if x.fract() != 0.0 || x < 1.0 || x > f64::from(u32::MAX) {
+        return Err(script_error(
+            lua,
+            format!("{what}: the size must be a whole number of pixels, got {x}"),
+        ));
+    }
+    Ok(x as u32)
+}
+
+/// Adds `pge.Lines` and `pge.Image`.
+pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
+    pge.set(
+        "Lines",
+        lua.create_function(|lua, t: Value| {
+            let color = match &t {
+                Value::Nil => Vec4::ONE,
+                Value::Table(t) => {
+                    for pair in t.pairs::<Value, Value>() {
+                        let (k, _) = pair?;
+                        if !matches!(&k, Value::String(s) if s.to_str().is_ok_and(|s| &*s == "color")) {
+                            return Err(script_error(lua, "pge.Lines: unknown option (options: color)"));
+                        }
+                    }
+                    match t.raw_get::<Value>("color")? {
+                        Value::Nil => Vec4::ONE,
+                        c => linear(lua, &c, "pge.Lines: color")?,
+                    }
+                }
+                other => {
+                    return Err(script_error(
+                        lua,
+                        format!("pge.Lines: expected an options table or nothing, got {}", other.type_name()),
+                    ));
+                }
+            };
+            Ok(LuaLines(Rc::new(RefCell::new(Lines::new(color)))))
+        })?,
+    )?;
+    let image = lua.create_table()?;
+    image.set(
+        "new",
+        lua.create_function(|lua, (w, h, fill): (Value, Value, Value)| {
+            let (w, h) = (
+                size(lua, &w, "pge.Image.new(w, h)")?,
+                size(lua, &h, "pge.Image.new(w, h)")?,
+            );
+            let fill = match fill {
+                Value::Nil => [0, 0, 0, 255],
+                c => rgba_bytes(lua, &c, "pge.Image.new: fill colour")?,
+            };
+            let img = Image::new(w, h, fill)
+                .map_err(|e| script_error(lua, format!("pge.Image.new: {e}")))?;
+            Ok(LuaImage(Rc::new(RefCell::new(img))))
+        })?,
+    )?;
+    image.set(
+        "load",
+        lua.create_function(|lua, path: Value| {
+            let Value::String(p) = path else {
+                return Err(script_error(
+                    lua,
+                    "pge.Image.load(path): expected a file name",
+                ));
+            };
+            let p = p.to_str()?.to_string();
+            let file = resolve_path(lua, &p)?;
+            let bytes = std::fs::read(&file)
+                .map_err(|e| script_error(lua, format!("pge.Image.load '{p}': {e}")))?;
+            let img = Image::decode(&bytes)
+                .map_err(|e| script_error(lua, format!("pge.Image.load '{p}': {e}")))?;
+            Ok(LuaImage(Rc::new(RefCell::new(img))))
+        })?,
+    )?;
+    pge.set("Image", image)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use pge_engine::{Engine, Session};
+
+    fn session() -> (Engine, Session) {
+        let engine = Engine::builder()
+            .plugin(crate::CanvasPlugin)
+            .build()
+            .expect("engine");
+        let session = engine.session(Default::default()).expect("session");
+        (engine, session)
+    }
+
+    #[test]
+    fn lines_and_images_from_lua() {
+        let (_e, s) = session();
+        let (segments, hex, r, a, w): (usize, String, f64, f64, u32) = s
+            .eval(
+                "local l = pge.Lines{ color = '#ffffff' }
+                 l:add({0, 0, 0}, {0, 1, 0})
+                 l:add(pge.vec3(0, 1, 0), {1, 1, 0}, '#ff0000')
+                 local img = pge.Image.new(8, 4, '#000000')
+                 img:set(7, 3, '#ff8000')
+                 img:set(0, 0, 1, 0, 0, 0.5)
+                 local r, g, b, a = img:get(0, 0)
+                 assert(img:texture():width() == 8)
+                 assert(img:model():triangleCount() == 2)
+                 return l:count(), img:getHex(7, 3), r, a, img:width()",
+            )
+            .expect("runs");
+        assert_eq!(segments, 2);
+        assert_eq!(hex, "#ff8000");
+        assert_eq!(r, 1.0);
+        assert!((a - 128.0 / 255.0).abs() < 1e-9);
+        assert_eq!(w, 8);
+    }
+
+    #[test]
+    fn mistakes_are_located_errors() {
+        let (_e, s) = session();
+        let cases = [
+            (
+                "local img = pge.Image.new(4, 4)\nimg:get(4, 0)",
+                "eval:2: get: pixel (4, 0) is outside the 4x4 image",
+            ),
+            (
+                "local img = pge.Image.new(4, 4)\nimg:set(0, -1, '#ffffff')",
+                "eval:2: set: pixel (0, -1) is outside",
+            ),
+            (
+                "local img = pge.Image.new(4, 4)\nimg:set(0.5, 1, '#ffffff')",
+                "eval:2: set(x, y, colour): pixel coordinate 0.5",
+            ),
+            (
+                "local img = pge.Image.new(0, 4)",
+                "eval:1: pge.Image.new(w, h): the size must be",
+            ),
+            (
+                "local img = pge.Image.new(4, 4)\nimg:set(0, 0, 'red')",
+                "eval:2: set: colour: 'red' is not a colour",
+            ),
+            (
+                "local l = pge.Lines()\nl:add({0, 0}, {1, 1, 1})",
+                "eval:2: add(a, b [, colour]): a vector table needs three numbers",
+            ),
+            (
+                "local img = pge.Image.new(4, 4)\nimg:save('/tmp/x.png')",
+                "eval:2: cannot write '/tmp/x.png'",
+            ),
+        ];
+        for (code, expected) in cases {
+            let err = s.eval::<()>(code).expect_err(code).to_string();
+            assert!(
+                err.starts_with(expected),
+                "{code}\n  gave: {err}\n  want: {expected}"
+            );
+        }
+    }
+}
