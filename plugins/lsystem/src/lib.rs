@@ -28,11 +28,16 @@
 mod classic;
 mod error;
 pub mod expr;
+mod lua;
 mod module_string;
 mod symbol;
 mod system;
 
 pub use error::LsError;
+pub use lua::{
+    DefaultInterpreter, Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, LuaSymbol,
+    check_mutable, derive_value, register_interpreter,
+};
 pub use module_string::ModuleString;
 pub use symbol::{Sym, SymbolTable};
 pub use system::{Host, NativeHost, StepOptions, System, uniform};

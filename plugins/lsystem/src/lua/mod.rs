@@ -1,0 +1,309 @@
+//! The Lua layer: `pge.LSystem`, symbol constructors, and the hooks other plugins use (the
+//! turtle's default interpretation, read-only checks during rewriting rules).
+
+mod algorithm;
+mod derive;
+mod object;
+mod symbols;
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use mlua::{AnyUserData, Lua, Table};
+use pge_engine::Plugin;
+use pge_engine::lua::script_error;
+
+use crate::SymbolTable;
+
+pub use algorithm::LSystemAlgorithm;
+pub use derive::{Derivation, derive_value};
+pub use object::LuaLSystem;
+pub use symbols::LuaSymbol;
+
+/// Interprets one module for an instance it knows (a turtle): returns `Ok(false)` when the
+/// instance is not of its type or the module is not one of its commands.
+pub type DefaultInterpreter = fn(&Lua, &AnyUserData, &str, &[f64]) -> mlua::Result<bool>;
+
+/// What the L-systems of one session share: the symbol names, the default interpreters,
+/// the rewriting rule running now (if any), and the count of L-system objects.
+#[derive(Default)]
+pub(crate) struct Shared {
+    pub symbols: Rc<RefCell<SymbolTable>>,
+    pub interpreters: Vec<DefaultInterpreter>,
+    pub deriving: Option<String>,
+    pub instances: u32,
+}
+
+pub(crate) fn with_shared<R>(lua: &Lua, f: impl FnOnce(&mut Shared) -> R) -> R {
+    if lua.app_data_ref::<Shared>().is_none() {
+        lua.set_app_data(Shared::default());
+    }
+    match lua.app_data_mut::<Shared>() {
+        Some(mut s) => f(&mut s),
+        None => f(&mut Shared::default()),
+    }
+}
+
+/// The symbol table shared by every L-system of the session.
+pub(crate) fn session_symbols(lua: &Lua) -> Rc<RefCell<SymbolTable>> {
+    with_shared(lua, |s| s.symbols.clone())
+}
+
+/// Adds a default interpretation (a plugin's instance type, such as the turtle, calls this
+/// from its `register`). Interpreters are tried in the order they were added.
+pub fn register_interpreter(lua: &Lua, interpreter: DefaultInterpreter) {
+    with_shared(lua, |s| {
+        if !s.interpreters.contains(&interpreter) {
+            s.interpreters.push(interpreter);
+        }
+    });
+}
+
+pub(crate) fn interpreters(lua: &Lua) -> Vec<DefaultInterpreter> {
+    with_shared(lua, |s| s.interpreters.clone())
+}
+
+pub(crate) fn set_deriving(lua: &Lua, rule: Option<String>) {
+    with_shared(lua, |s| s.deriving = rule);
+}
+
+/// The error a host object's mutating method raises while a rewriting rule (RRule) runs:
+/// during derivation `this` and the global table are read-only. `what` names the method
+/// (`"turtle:forward"`). Call it at the start of every method that changes the object.
+pub fn check_mutable(lua: &Lua, what: &str) -> mlua::Result<()> {
+    let rule = with_shared(lua, |s| s.deriving.clone());
+    match rule {
+        Some(rule) => Err(script_error(
+            lua,
+            format!(
+                "RRule '{rule}': {what} is not allowed: `this` and the global table are \
+                 read-only during rewriting rules (change them in an IRule)"
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The `pge.LSystem` plugin: L-system objects, `pge.sym`, and symbol constructors for every
+/// undefined global whose name starts with an uppercase ASCII letter (`A{}`, `Apex{age = 2}`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LSystemPlugin;
+
+impl Plugin for LSystemPlugin {
+    fn name(&self) -> &str {
+        "lsystem"
+    }
+
+    fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
+        with_shared(lua, |_| ());
+        pge.set("LSystem", lua.create_function(object::new_lsystem)?)?;
+        symbols::register(lua, pge)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pge_engine::{Engine, Location, RunContext, Session, SessionOptions};
+
+    fn session(seed: u64) -> Session {
+        let engine = Engine::builder()
+            .plugin(LSystemPlugin)
+            .build()
+            .expect("engine");
+        engine
+            .session(SessionOptions {
+                seed,
+                ..SessionOptions::default()
+            })
+            .expect("session")
+    }
+
+    fn derive_in(s: &Session, code: &str, steps: Option<u32>) -> pge_engine::Result<Derivation> {
+        let value = s.eval_value(code)?;
+        let ctx = RunContext {
+            steps,
+            ..s.context()
+        };
+        derive_value(s.lua(), &value, &ctx, &Location::new("eval", 0))
+    }
+
+    fn text(code: &str) -> String {
+        let d = derive_in(&session(1), code, None).expect("derives");
+        let mut out = Vec::new();
+        d.write_text(&mut out).expect("writes");
+        String::from_utf8(out).expect("utf8").trim_end().to_string()
+    }
+
+    fn error(code: &str) -> String {
+        derive_in(&session(1), code, None)
+            .expect_err("fails")
+            .to_string()
+    }
+
+    #[test]
+    fn classic_rules_through_lua() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:axiom("F") l:rule("F -> F[+F]F") l:iterations(2)
+            return l"#,
+        );
+        assert_eq!(t, "F [ + F ] F [ + F [ + F ] F ] F [ + F ] F");
+    }
+
+    #[test]
+    fn rule_functions_fall_through_delete_and_branch() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:axiom{ A{1}, B{}, C{}, D{} }
+            l:RRule("A", function(a) if a[1] > 5 then return B{} end end)
+            l:RRule("A", function(a) return { A{a[1] + 1}, { X{} }, "F(2.5)" } end)
+            l:RRule("B", function() return {} end)
+            l:RRule("C", function() return nil end)
+            l:iterations(1)
+            return l"#,
+        );
+        assert_eq!(t, "A(2) [ X ] F(2.5) C D");
+    }
+
+    #[test]
+    fn contexts_pass_tables_leftmost_first_and_named_params_survive() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:axiom{ A{v = 1}, B{2}, C{v = 3} }
+            l:RRule("A < B > C", function(a, b, c) return B{a.v * 100 + b[1] * 10 + c.v} end)
+            l:iterations(1)
+            return l"#,
+        );
+        assert_eq!(t, "A B(123) C");
+        let s = session(1);
+        let d = derive_in(
+            &s,
+            r#"local l = pge.LSystem("t") l:axiom{ A{v = 1, 7} } l:iterations(0) return l"#,
+            None,
+        )
+        .expect("derives");
+        let mut out = Vec::new();
+        d.write_json(&mut out).expect("json");
+        let json: serde_json::Value = serde_json::from_slice(&out).expect("valid json");
+        assert_eq!(json[0]["name"], "A");
+        assert_eq!(json[0]["params"]["v"], 1);
+        assert_eq!(d.module_text(0), "A(7)");
+    }
+
+    #[test]
+    fn rrules_read_the_instance_left_by_interpretation() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:createInstance(function()
+                return { n = 0, reset = function(self) self.n = 0 end }
+            end)
+            l:axiom{ A{}, A{}, A{} }
+            l:IRule("B", function() this.n = this.n + 1 return true end)
+            l:RRule("A", function() return B{ this.n } end)
+            l:iterations(1)
+            return l"#,
+        );
+        assert_eq!(t, "B(0) B(1) B(2)");
+    }
+
+    #[test]
+    fn writes_during_rrules_are_errors_naming_the_rule() {
+        let e = error(
+            "local l = pge.LSystem('t')\nl:axiom{ A{} }\nl:createInstance(function() return {} end)\n\
+             l:RRule('A', function()\n  this.x = 1\n  return A{}\nend)\nl:iterations(1)\nreturn l",
+        );
+        assert!(e.starts_with("eval:5:"), "{e}");
+        assert!(e.contains("RRule 'A'"), "{e}");
+        let e = error(
+            "local l = pge.LSystem('t')\nl:axiom{ A{} }\n\
+             l:RRule('A', function()\n  l:set('k', 2)\n  return A{}\nend)\nl:iterations(1)\nreturn l",
+        );
+        assert!(e.starts_with("eval:4:"), "{e}");
+        assert!(e.contains("read-only"), "{e}");
+    }
+
+    #[test]
+    fn bad_successors_and_rules_point_at_their_line() {
+        let e = error(
+            "local l = pge.LSystem('t')\nl:axiom('A')\nl:RRule('A', function() return 5 end)\nl:iterations(1)\nreturn l",
+        );
+        assert!(
+            e.starts_with("eval:3: the successor returned by RRule 'A' is integer;"),
+            "{e}"
+        );
+        let e = error(
+            "local l = pge.LSystem('t')\nl:axiom('A')\nl:rule('A(x) -> B(y)')\nl:iterations(1)\nreturn l",
+        );
+        assert_eq!(e, "eval:3: rule 'A(x) -> B(y)': unknown name 'y'");
+        let e = error("local l = pge.LSystem('t')\nl:rule('A(1 -> B')\nreturn l");
+        assert!(e.starts_with("eval:2: rule 'A(1 -> B'"), "{e}");
+    }
+
+    #[test]
+    fn max_modules_stops_the_run_fast() {
+        let e = error(
+            "local l = pge.LSystem('big')\nl:axiom('F')\nl:rule('F -> FF')\nl:iterations(40)\nreturn l",
+        );
+        assert_eq!(
+            e,
+            "eval:1: L-system 'big': step 24: the string reached 16777216 modules, more than \
+             maxModules (10000000)"
+        );
+        let e = error(
+            "local l = pge.LSystem('big')\nl:axiom('F')\nl:rule('F -> FF')\nl:maxModules(100)\nl:iterations(40)\nreturn l",
+        );
+        assert!(e.contains("step 7: the string reached 128 modules"), "{e}");
+    }
+
+    #[test]
+    fn randomness_is_per_instance_and_repeats_per_seed() {
+        let code = r#"local l = pge.LSystem("t")
+            l:axiom("AAAAAAAAAA")
+            l:RRule("A", function() if pge.random() < 0.5 then return "B" end end)
+            l:rule("A -> C", 1) l:rule("A -> D", 1)
+            l:iterations(1)
+            return l"#;
+        let run = |seed| {
+            let d = derive_in(&session(seed), code, None).expect("derives");
+            (0..d.len()).map(|i| d.module_text(i)).collect::<String>()
+        };
+        assert_eq!(run(1), run(1));
+        assert_ne!(run(1), run(2));
+        assert!(run(3).contains('B'));
+    }
+
+    #[test]
+    fn callbacks_globals_and_the_steps_override() {
+        let s = session(1);
+        let d = derive_in(
+            &s,
+            r#"local l = pge.LSystem("t")
+            l:set("k", 2)
+            l:axiom("A(1)")
+            l:rule("A(x) -> A(x * k)")
+            l:beforeStep(function() l:set("k", l:get("k") + 1) end)
+            l:afterStep(function() steps_taken = (steps_taken or 0) + 1 end)
+            l:iterations(5)
+            return l"#,
+            Some(2),
+        )
+        .expect("derives");
+        assert_eq!(d.steps, 2);
+        // k is 3 during step 1 and 4 during step 2: classic expressions see each step's value.
+        assert_eq!(d.module_text(0), "A(12)");
+        let steps: i64 = s.eval("return steps_taken").expect("counted");
+        assert_eq!(steps, 2);
+    }
+
+    #[test]
+    fn a_script_value_becomes_an_algorithm() {
+        let s = session(1);
+        let v = s
+            .eval_value("local l = pge.LSystem('t') l:axiom('F') l:rule('F -> FF') l:iterations(3) return l")
+            .expect("runs");
+        let mut a = s.algorithm_from(v).expect("algorithm");
+        let m = pge_engine::algorithm::run(&mut *a, &s.context(), &mut |_| {}).expect("runs");
+        assert_eq!(m.stats.modules, 8);
+    }
+}
