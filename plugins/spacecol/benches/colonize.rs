@@ -1,0 +1,69 @@
+//! Space colonization cost from 1,000 to 100,000 attraction points in the same ellipsoid
+//! crown (init + every growth step, no meshing), and a complete small tree from script to
+//! glb bytes in memory.
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec3;
+use pge_engine::{Algorithm, Engine, Location, RunContext, SessionOptions, Step};
+use pge_spacecol::{Params, Shape, SpaceColonization, SpaceColonizationPlugin};
+
+fn crown(points: u32) -> Params {
+    let mut p = Params::new(Shape::Ellipsoid {
+        center: Vec3::new(0.0, 7.0, 0.0),
+        radii: Vec3::new(4.0, 3.5, 4.0),
+    });
+    p.points = Some(points);
+    p.step = 0.2;
+    p.influence = 1.6;
+    p.kill = 0.4;
+    p
+}
+
+/// Grows to the end without meshing; returns the node count.
+fn colonize(points: u32) -> usize {
+    let mut sc = SpaceColonization::new(crown(points), Location::new("bench", 1)).expect("valid");
+    let ctx = RunContext::default();
+    sc.init(&ctx).expect("init");
+    while sc.step(&ctx).expect("step") == Step::Continue {}
+    sc.skeleton().map_or(0, |s| s.len())
+}
+
+fn bench_colonize(c: &mut Criterion) {
+    let mut group = c.benchmark_group("colonize");
+    group.sample_size(10);
+    for points in [1_000u32, 3_000, 10_000, 30_000, 100_000] {
+        group.throughput(Throughput::Elements(u64::from(points)));
+        group.bench_with_input(BenchmarkId::from_parameter(points), &points, |b, &n| {
+            b.iter(|| colonize(black_box(n)))
+        });
+    }
+    group.finish();
+}
+
+fn bench_script_to_glb(c: &mut Criterion) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/small_tree.lua");
+    let engine = Engine::builder()
+        .plugin(SpaceColonizationPlugin)
+        .build()
+        .expect("engine");
+    let run = || {
+        let session = engine.session(SessionOptions::default()).expect("session");
+        let generated = session
+            .generate(&script, &mut |_, _| {})
+            .expect("generates");
+        let glb =
+            pge_engine::export::glb_bytes(&generated.model, &Default::default()).expect("glb");
+        (generated.model.triangle_count(), glb.len())
+    };
+    let (triangles, bytes) = run();
+    c.bench_function(
+        &format!("script to glb: {triangles} triangles, {bytes} bytes"),
+        |b| b.iter(run),
+    );
+}
+
+criterion_group!(benches, bench_colonize, bench_script_to_glb);
+criterion_main!(benches);

@@ -1,0 +1,673 @@
+//! Space colonization (Runions, Lane and Prusinkiewicz 2007; seeds 000 ch. 2 and 002) as a
+//! step-wise [`Algorithm`].
+//!
+//! Each step is one iteration: every attraction point pulls the node nearest to it (within
+//! the influence radius); each pulled node grows one segment of length `step` along
+//! `normalize(normalize(sum of unit vectors) + tropism)`; points within the kill distance
+//! of a node are removed. Before a root's node is within reach of any point, that root grows
+//! a trunk toward the cloud (the sum of unit vectors to all points, seed 000).
+//!
+//! Cost: a point's nearest node only changes when a node is added nearby, so each point
+//! caches its nearest node and every new node updates only the points in the grid cells
+//! around it (a [`PointGrid`] with cells of half the influence radius). An iteration then
+//! costs O(attracted points + new nodes x points near them), not points x nodes.
+//!
+//! The known failure of the method, a node pulled by points on opposite sides (its sum of
+//! directions cancels) or one that keeps regrowing where a node already stands, is guarded:
+//! a cancelled sum grows toward the closest attracting point instead, and a growth that
+//! would land within a fifth of a step of an existing node is refused and the points pulling
+//! that node are dropped as unreachable. Every iteration therefore adds a node or removes a
+//! point, and the iteration cap bounds the rest (with a warning).
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use glam::Vec3;
+use pge_engine::geometry::{Model, Skeleton};
+use pge_engine::{Algorithm, Error, Location, Result, RunContext, Step};
+use pge_tree::TreeOptions;
+
+use crate::points::{self, Mode, PointGrid};
+use crate::shape::Shape;
+
+/// The parameters of a colonization (API.md §5).
+#[derive(Clone, Debug)]
+pub struct Params {
+    /// Where the attraction points are.
+    pub envelope: Shape,
+    /// How many points (`None`: [`points::DEFAULT_POINTS`], or every vertex in the
+    /// `vertices` mode).
+    pub points: Option<u32>,
+    /// How points are taken from the envelope.
+    pub mode: Mode,
+    /// Influence radius: a point pulls its nearest node only within this distance.
+    pub influence: f32,
+    /// Kill distance: a point this close to a node is removed (must be < `influence`).
+    pub kill: f32,
+    /// Segment length D.
+    pub step: f32,
+    /// Tropism g added to each unit growth direction (e.g. `(0, -0.3, 0)` for weeping).
+    pub tropism: Vec3,
+    /// Root positions (several for a bush).
+    pub roots: Vec<Vec3>,
+    /// Iteration cap; reaching it stops with a warning.
+    pub max_iterations: u32,
+    /// Bark and leaf options.
+    pub tree: TreeOptions,
+}
+
+impl Params {
+    /// Parameters with defaults scaled to the envelope: `step` 1/50 of its bounds' diagonal,
+    /// `influence` 8 steps, `kill` 2 steps, one root at the origin, 1000 iterations.
+    #[must_use]
+    pub fn new(envelope: Shape) -> Params {
+        let (lo, hi) = envelope.bounds();
+        let diag = (hi - lo).length();
+        let step = if diag.is_finite() && diag > 0.0 {
+            diag / 50.0
+        } else {
+            0.1
+        };
+        Params {
+            envelope,
+            points: None,
+            mode: Mode::Fill,
+            influence: 8.0 * step,
+            kill: 2.0 * step,
+            step,
+            tropism: Vec3::ZERO,
+            roots: vec![Vec3::ZERO],
+            max_iterations: 1000,
+            tree: TreeOptions::default(),
+        }
+    }
+
+    /// Checks the ranges: an error names the parameter and what it needs.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |name: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{name} must be a number > 0, got {v}"))
+            }
+        };
+        positive("step", self.step)?;
+        positive("influence", self.influence)?;
+        positive("kill", self.kill)?;
+        if self.kill >= self.influence {
+            return Err(format!(
+                "kill ({}) must be smaller than influence ({}): points would be removed before they attract",
+                self.kill, self.influence
+            ));
+        }
+        if !self.tropism.is_finite() {
+            return Err("tropism must be a finite vector".into());
+        }
+        if self.roots.is_empty() || self.roots.iter().any(|r| !r.is_finite()) {
+            return Err("root must be a finite vector (roots: a non-empty list of them)".into());
+        }
+        if let Mode::Surround { thickness } = self.mode {
+            positive("thickness", thickness)?;
+        }
+        if self.mode != Mode::Vertices
+            && let Some(why) = self.envelope.open_mesh()
+        {
+            return Err(format!(
+                "envelope: {why}; the inside test needs a closed mesh (or use mode = \"vertices\")"
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err("maxIterations must be an integer >= 1, got 0".into());
+        }
+        Ok(())
+    }
+}
+
+const NONE: u32 = u32::MAX;
+
+/// The growing state.
+struct State {
+    points: Vec<Vec3>,
+    alive: Vec<bool>,
+    alive_count: usize,
+    nearest: Vec<u32>,
+    nearest_d2: Vec<f32>,
+    /// Points with a nearest node within reach (some may be dead; filtered each step).
+    active: Vec<u32>,
+    grid: PointGrid,
+    dead_since_grid: usize,
+    nodes: Vec<Vec3>,
+    parents: Vec<Option<u32>>,
+    /// Whether some point was within the influence radius when the node was added.
+    in_range: Vec<bool>,
+    /// Nodes by cell of side `step`, for the duplicate-growth guard.
+    node_cells: HashMap<[i32; 3], Vec<u32>>,
+    /// The iteration in which a node's growth was refused (its pullers are dropped next).
+    refused: Vec<u32>,
+    /// Roots still growing their trunk: the trunk's current tip.
+    trunk_tips: Vec<u32>,
+    iteration: u32,
+    // Per-step scratch.
+    sum: Vec<Vec3>,
+    count: Vec<u32>,
+    closest: Vec<(f32, u32)>,
+    touched: Vec<u32>,
+}
+
+/// Space colonization as an [`Algorithm`]: one step is one growth iteration; `finish` meshes
+/// the current skeleton with [`pge_tree::build_tree`].
+pub struct SpaceColonization {
+    params: Params,
+    location: Location,
+    state: Option<State>,
+    done: bool,
+    points_seconds: f64,
+    growth_seconds: f64,
+    warnings: Vec<String>,
+}
+
+impl SpaceColonization {
+    /// A colonization with checked parameters; `location` is where script errors point
+    /// (the constructor call).
+    pub fn new(params: Params, location: Location) -> Result<SpaceColonization> {
+        params
+            .validate()
+            .map_err(|m| Error::script(location.clone(), m))?;
+        Ok(SpaceColonization {
+            params,
+            location,
+            state: None,
+            done: false,
+            points_seconds: 0.0,
+            growth_seconds: 0.0,
+            warnings: Vec::new(),
+        })
+    }
+
+    /// The parameters.
+    #[must_use]
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Warnings so far (the iteration cap).
+    #[must_use]
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// The branch skeleton grown so far (radii and orders unset), or `None` before `init`.
+    #[must_use]
+    pub fn skeleton(&self) -> Option<Skeleton> {
+        let st = self.state.as_ref()?;
+        let mut s = Skeleton::new();
+        for (p, parent) in st.nodes.iter().zip(&st.parents) {
+            s.push(*p, *parent, 0.0, 0);
+        }
+        Some(s)
+    }
+
+    /// The attraction points and whether each is still alive, or `None` before `init`.
+    #[must_use]
+    pub fn attraction_points(&self) -> Option<(&[Vec3], &[bool])> {
+        self.state.as_ref().map(|s| (&s.points[..], &s.alive[..]))
+    }
+
+    /// Whether the algorithm has stopped.
+    #[must_use]
+    pub fn is_done(&self) -> bool {
+        self.done
+    }
+
+    /// Iterations taken.
+    #[must_use]
+    pub fn iterations(&self) -> u32 {
+        self.state.as_ref().map_or(0, |s| s.iteration)
+    }
+}
+
+impl State {
+    fn add_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
+        let index = self.nodes.len() as u32;
+        self.nodes.push(position);
+        self.parents.push(parent);
+        self.refused.push(NONE);
+        self.sum.push(Vec3::ZERO);
+        self.count.push(0);
+        self.closest.push((f32::INFINITY, NONE));
+        self.node_cells
+            .entry(cell_of(position, p.step))
+            .or_default()
+            .push(index);
+        let (r2, k2) = (p.influence * p.influence, p.kill * p.kill);
+        let mut in_range = false;
+        let State {
+            grid,
+            points,
+            alive,
+            alive_count,
+            nearest,
+            nearest_d2,
+            active,
+            dead_since_grid,
+            ..
+        } = self;
+        grid.for_each_near(position, p.influence, |i| {
+            let i = i as usize;
+            if !alive[i] {
+                return;
+            }
+            let d2 = points[i].distance_squared(position);
+            if d2 < k2 {
+                alive[i] = false;
+                *alive_count -= 1;
+                *dead_since_grid += 1;
+            } else if d2 < r2 {
+                in_range = true;
+                if d2 < nearest_d2[i] {
+                    if nearest[i] == NONE {
+                        active.push(i as u32);
+                    }
+                    nearest[i] = index;
+                    nearest_d2[i] = d2;
+                }
+            }
+        });
+        self.in_range.push(in_range);
+        index
+    }
+
+    /// Whether a node stands within `eps` of `q`.
+    fn occupied(&self, q: Vec3, eps: f32, step: f32) -> bool {
+        let c = cell_of(q, step);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(list) = self.node_cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        && list
+                            .iter()
+                            .any(|n| self.nodes[*n as usize].distance_squared(q) < eps * eps)
+                    {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    fn kill(&mut self, i: usize) {
+        if self.alive[i] {
+            self.alive[i] = false;
+            self.alive_count -= 1;
+            self.dead_since_grid += 1;
+        }
+    }
+}
+
+fn cell_of(p: Vec3, step: f32) -> [i32; 3] {
+    let c = (p / step).floor();
+    [c.x as i32, c.y as i32, c.z as i32]
+}
+
+impl Algorithm for SpaceColonization {
+    fn name(&self) -> &str {
+        "space colonization"
+    }
+
+    fn init(&mut self, ctx: &RunContext) -> Result<()> {
+        let t = Instant::now();
+        let p = &self.params;
+        let pts = points::generate(
+            &p.envelope,
+            p.mode,
+            p.points,
+            ctx.seed ^ 0x5ace_c010,
+            ctx,
+            &self.location,
+        )?;
+        let n = pts.len();
+        let alive = vec![true; n];
+        let grid = PointGrid::new(&pts, &alive, p.influence * 0.5);
+        let mut st = State {
+            points: pts,
+            alive,
+            alive_count: n,
+            nearest: vec![NONE; n],
+            nearest_d2: vec![f32::INFINITY; n],
+            active: Vec::new(),
+            grid,
+            dead_since_grid: 0,
+            nodes: Vec::new(),
+            parents: Vec::new(),
+            in_range: Vec::new(),
+            node_cells: HashMap::new(),
+            refused: Vec::new(),
+            trunk_tips: Vec::new(),
+            iteration: 0,
+            sum: Vec::new(),
+            count: Vec::new(),
+            closest: Vec::new(),
+            touched: Vec::new(),
+        };
+        for root in &p.roots {
+            let r = st.add_node(*root, None, p);
+            if !st.in_range[r as usize] {
+                st.trunk_tips.push(r);
+            }
+        }
+        self.state = Some(st);
+        self.done = false;
+        self.warnings.clear();
+        self.points_seconds = t.elapsed().as_secs_f64();
+        self.growth_seconds = 0.0;
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &RunContext) -> Result<Step> {
+        if self.done {
+            return Ok(Step::Done);
+        }
+        let t = Instant::now();
+        ctx.check_deadline(&self.location)?;
+        let p = &self.params;
+        let Some(st) = self.state.as_mut() else {
+            return Err(Error::script(
+                self.location.clone(),
+                "space colonization stepped before init",
+            ));
+        };
+        st.iteration += 1;
+        let iteration = st.iteration;
+
+        // Pulls: each live point adds its unit direction to its nearest node.
+        let mut active = std::mem::take(&mut st.active);
+        active.retain(|&i| st.alive[i as usize]);
+        for &i in &active {
+            let i = i as usize;
+            let n = st.nearest[i] as usize;
+            if st.refused[n] == iteration - 1 {
+                // The node could not grow toward these points last time: unreachable.
+                st.kill(i);
+                continue;
+            }
+            if st.count[n] == 0 {
+                st.touched.push(n as u32);
+            }
+            let d2 = st.nearest_d2[i];
+            st.sum[n] += (st.points[i] - st.nodes[n]) / d2.sqrt();
+            st.count[n] += 1;
+            if d2 < st.closest[n].0 {
+                st.closest[n] = (d2, i as u32);
+            }
+        }
+        active.retain(|&i| st.alive[i as usize]);
+        st.active = active;
+
+        // Growth directions, all from the state before this iteration's new nodes.
+        st.touched.sort_unstable();
+        let mut growth: Vec<(u32, Option<Vec3>)> =
+            Vec::with_capacity(st.touched.len() + st.trunk_tips.len());
+        for &n in &st.touched {
+            let n = n as usize;
+            let sum = st.sum[n];
+            let dir = if sum.length() > 0.1 {
+                sum.normalize()
+            } else {
+                (st.points[st.closest[n].1 as usize] - st.nodes[n]).normalize_or_zero()
+            };
+            growth.push((n as u32, (dir + p.tropism).try_normalize()));
+            st.sum[n] = Vec3::ZERO;
+            st.count[n] = 0;
+            st.closest[n] = (f32::INFINITY, NONE);
+        }
+        st.touched.clear();
+
+        // Trunks: toward the sum of unit vectors to every live point.
+        let mut trunks = std::mem::take(&mut st.trunk_tips);
+        trunks.retain(|&tip| !st.in_range[tip as usize]);
+        if st.alive_count == 0 {
+            trunks.clear();
+        }
+        for &tip in &trunks {
+            let q = st.nodes[tip as usize];
+            let mut sum = Vec3::ZERO;
+            let mut closest = (f32::INFINITY, Vec3::ZERO);
+            for (pt, alive) in st.points.iter().zip(&st.alive) {
+                if *alive {
+                    let d = *pt - q;
+                    let l2 = d.length_squared();
+                    if l2 > 0.0 {
+                        sum += d / l2.sqrt();
+                    }
+                    if l2 < closest.0 {
+                        closest = (l2, d);
+                    }
+                }
+            }
+            let dir = if sum.length() > 0.1 {
+                sum.normalize()
+            } else {
+                closest.1.normalize_or_zero()
+            };
+            growth.push((tip, (dir + p.tropism).try_normalize()));
+        }
+
+        // Grow.
+        let mut next_trunks = Vec::new();
+        let attempted = growth.len();
+        for (n, dir) in growth {
+            let is_trunk = trunks.contains(&n);
+            let grown = dir.map(|d| st.nodes[n as usize] + d * p.step);
+            match grown {
+                // Refused: no direction, or a node already stands there. A refused trunk
+                // stops being a trunk; a refused node's pullers are dropped next iteration.
+                None => st.refused[n as usize] = iteration,
+                Some(q) if st.occupied(q, 0.2 * p.step, p.step) => {
+                    st.refused[n as usize] = iteration
+                }
+                Some(q) => {
+                    let child = st.add_node(q, Some(n), p);
+                    if is_trunk && !st.in_range[child as usize] {
+                        next_trunks.push(child);
+                    }
+                }
+            }
+        }
+        st.trunk_tips = next_trunks;
+
+        if st.dead_since_grid * 2 > st.alive_count.max(1024) {
+            st.grid = PointGrid::new(&st.points, &st.alive, p.influence * 0.5);
+            st.dead_since_grid = 0;
+        }
+
+        let finished = st.alive_count == 0 || (st.active.is_empty() && st.trunk_tips.is_empty());
+        let stuck = attempted == 0;
+        self.growth_seconds += t.elapsed().as_secs_f64();
+        if finished || stuck {
+            self.done = true;
+            return Ok(Step::Done);
+        }
+        if iteration >= p.max_iterations {
+            let msg = format!(
+                "{}: warning: space colonization stopped at maxIterations = {} with {} of {} attraction points left (the tree may not reach its envelope: move the root closer or raise influence)",
+                self.location,
+                p.max_iterations,
+                st.alive_count,
+                st.points.len()
+            );
+            eprintln!("{msg}");
+            self.warnings.push(msg);
+            self.done = true;
+            return Ok(Step::Done);
+        }
+        Ok(Step::Continue)
+    }
+
+    fn finish(&mut self, ctx: &RunContext) -> Result<Model> {
+        let mut skeleton = self.skeleton().ok_or_else(|| {
+            Error::script(
+                self.location.clone(),
+                "space colonization finished before init",
+            )
+        })?;
+        let mesh = &self.params.tree.mesh;
+        pge_tree::pipe_radii(&mut skeleton, mesh.tip_radius, mesh.exponent);
+        pge_tree::assign_orders(&mut skeleton);
+        let mut options = self.params.tree.clone();
+        options.mesh.radii = pge_tree::RadiiMode::Keep;
+        let tree = pge_tree::build_tree(&skeleton, &options, ctx.seed)
+            .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
+        let mut model = Model::new();
+        model.stats.add_phase("points", self.points_seconds);
+        model.stats.add_phase("growth", self.growth_seconds);
+        model.add_model(&tree, glam::Mat4::IDENTITY);
+        Ok(model)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pge_engine::algorithm::run;
+
+    fn crown(points: u32) -> Params {
+        let mut p = Params::new(Shape::Ellipsoid {
+            center: Vec3::new(0.0, 6.0, 0.0),
+            radii: Vec3::new(4.0, 3.0, 4.0),
+        });
+        p.points = Some(points);
+        p.step = 0.25;
+        p.influence = 2.0;
+        p.kill = 0.5;
+        p
+    }
+
+    fn grow(params: Params, seed: u64) -> (SpaceColonization, Model) {
+        let mut sc = SpaceColonization::new(params, Location::new("t.lua", 1)).expect("valid");
+        let ctx = RunContext {
+            seed,
+            ..RunContext::default()
+        };
+        let model = run(&mut sc, &ctx, &mut |_| {}).expect("grows");
+        (sc, model)
+    }
+
+    #[test]
+    fn every_point_is_reached_or_out_of_reach() {
+        let (sc, model) = grow(crown(2000), 1);
+        assert!(sc.warnings().is_empty(), "{:?}", sc.warnings());
+        let (pts, alive) = sc.attraction_points().expect("state");
+        let skeleton = sc.skeleton().expect("skeleton");
+        let influence = sc.params().influence;
+        for (p, a) in pts.iter().zip(alive) {
+            if *a {
+                let nearest = skeleton
+                    .positions
+                    .iter()
+                    .map(|n| n.distance(*p))
+                    .fold(f32::INFINITY, f32::min);
+                assert!(
+                    nearest >= influence,
+                    "a live point is within reach of a node ({nearest})"
+                );
+            }
+        }
+        let removed = alive.iter().filter(|a| !**a).count();
+        assert!(removed > 1900, "only {removed} of 2000 points were reached");
+        assert!(model.stats.nodes > 100);
+        model.validate().expect("valid model");
+    }
+
+    #[test]
+    fn the_skeleton_is_one_tree_rooted_at_the_root() {
+        let (sc, _) = grow(crown(1500), 3);
+        let s = sc.skeleton().expect("skeleton");
+        assert_eq!(s.positions[0], Vec3::ZERO);
+        assert_eq!(s.parents[0], None);
+        for i in 1..s.len() {
+            let parent = s.parents[i].expect("only node 0 is a root");
+            assert!((parent as usize) < i);
+            let len = s.positions[i].distance(s.positions[parent as usize]);
+            assert!((len - 0.25).abs() < 1e-4, "segment {i} has length {len}");
+        }
+        // The trunk reaches the crown: some node lies inside the ellipsoid.
+        assert!(s.positions.iter().any(|p| p.y > 4.0));
+    }
+
+    #[test]
+    fn same_seed_same_tree() {
+        let (_, a) = grow(crown(800), 5);
+        let (_, b) = grow(crown(800), 5);
+        let (_, c) = grow(crown(800), 6);
+        assert_eq!(a.meshes[0].positions, b.meshes[0].positions);
+        assert_eq!(a.meshes[0].indices, b.meshes[0].indices);
+        assert_ne!(a.meshes[0].positions, c.meshes[0].positions);
+    }
+
+    #[test]
+    fn an_unreachable_crown_stops_at_the_cap_with_a_warning() {
+        let mut p = crown(300);
+        p.roots = vec![Vec3::new(0.0, -1000.0, 0.0)];
+        p.max_iterations = 50;
+        let (sc, model) = grow(p, 1);
+        assert_eq!(sc.iterations(), 50);
+        assert_eq!(sc.warnings().len(), 1);
+        assert!(
+            sc.warnings()[0].contains("maxIterations = 50"),
+            "{}",
+            sc.warnings()[0]
+        );
+        assert_eq!(model.stats.nodes, 51);
+    }
+
+    #[test]
+    fn opposite_points_do_not_trap_a_node() {
+        // Two points exactly on either side of the root: their pulls cancel.
+        let pts = Shape::Union(
+            vec![
+                Shape::Sphere {
+                    center: Vec3::new(-1.0, 0.0, 0.0),
+                    radius: 0.01,
+                },
+                Shape::Sphere {
+                    center: Vec3::new(1.0, 0.0, 0.0),
+                    radius: 0.01,
+                },
+            ]
+            .into(),
+        );
+        let mut p = Params::new(pts);
+        p.points = Some(2);
+        p.step = 0.3;
+        p.influence = 1.5;
+        p.kill = 0.2;
+        p.max_iterations = 100;
+        let (sc, _) = grow(p, 1);
+        assert!(sc.warnings().is_empty(), "it finished on its own");
+        assert!(sc.iterations() < 30);
+    }
+
+    #[test]
+    fn bad_parameters_name_themselves() {
+        let mut p = crown(10);
+        p.kill = 3.0;
+        let e = SpaceColonization::new(p, Location::new("t.lua", 4))
+            .err()
+            .expect("kill > influence");
+        assert!(
+            e.to_string()
+                .starts_with("t.lua:4: kill (3) must be smaller than influence (2)"),
+            "{e}"
+        );
+        let mut p = crown(10);
+        p.step = -1.0;
+        let e = SpaceColonization::new(p, Location::new("t.lua", 4))
+            .err()
+            .expect("negative step");
+        assert_eq!(e.to_string(), "t.lua:4: step must be a number > 0, got -1");
+        let mut p = crown(10);
+        p.influence = f32::NAN;
+        assert!(SpaceColonization::new(p, Location::new("t.lua", 4)).is_err());
+    }
+}

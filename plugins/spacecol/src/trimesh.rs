@@ -1,0 +1,479 @@
+//! Closed triangle meshes as envelopes: reading `.obj` and `.glb`, welding, the closedness
+//! check and the inside test by ray parity (seed 000).
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Vec3};
+use pge_engine::geometry::{Model, Primitive};
+
+/// Why a mesh cannot be an envelope.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// A line of an `.obj` file could not be read.
+    #[error("line {line}: {message}")]
+    Obj {
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `.glb`/`.gltf` file could not be read.
+    #[error("{0}")]
+    Gltf(String),
+    /// There are no triangles.
+    #[error("has no triangles")]
+    Empty,
+    /// An edge is used by an odd number of triangles: the mesh has a hole.
+    #[error(
+        "is not closed: the edge between vertices {a} and {b} ({pa}, {pb}) borders {count} triangle(s)"
+    )]
+    NotClosed {
+        /// Welded vertex index.
+        a: u32,
+        /// Welded vertex index.
+        b: u32,
+        /// Its position.
+        pa: String,
+        /// Its position.
+        pb: String,
+        /// Triangles using it.
+        count: u32,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("has a non-finite vertex")]
+    NotFinite,
+}
+
+/// A welded triangle mesh with a grid that speeds up the ray-parity inside test.
+#[derive(Clone, Debug)]
+pub struct TriMesh {
+    /// Where the mesh came from (a file name, "model"), for messages.
+    pub name: String,
+    /// `None` when closed, else why not.
+    open: Option<MeshError>,
+    vertices: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    min: Vec3,
+    max: Vec3,
+    /// Triangles by cell of a `cells x cells` grid over the bounds projected on YZ.
+    grid: Vec<Vec<u32>>,
+    cells: usize,
+}
+
+impl TriMesh {
+    /// A mesh from positions and triangles; equal positions are welded. Errors when empty or
+    /// not finite; whether it is closed is kept for [`TriMesh::closed`].
+    pub fn new(
+        name: impl Into<String>,
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+    ) -> Result<TriMesh, MeshError> {
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(MeshError::NotFinite);
+        }
+        let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+        let mut vertices = Vec::new();
+        let remap: Vec<u32> = positions
+            .iter()
+            .map(|p| {
+                // +0.0 and -0.0 are the same point.
+                let key = (*p + Vec3::ZERO).to_array().map(f32::to_bits);
+                *weld.entry(key).or_insert_with(|| {
+                    vertices.push(*p);
+                    (vertices.len() - 1) as u32
+                })
+            })
+            .collect();
+        let triangles: Vec<[u32; 3]> = triangles
+            .iter()
+            .filter(|t| t.iter().all(|i| (*i as usize) < remap.len()))
+            .map(|t| t.map(|i| remap[i as usize]))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect();
+        if triangles.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        let open = check_closed(&vertices, &triangles).err();
+        let (mut min, mut max) = (vertices[0], vertices[0]);
+        for v in &vertices {
+            min = min.min(*v);
+            max = max.max(*v);
+        }
+        let cells = ((triangles.len() as f32).sqrt() as usize).clamp(1, 256);
+        let mut mesh = TriMesh {
+            name: name.into(),
+            open,
+            vertices,
+            triangles,
+            min,
+            max,
+            grid: vec![Vec::new(); cells * cells],
+            cells,
+        };
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            let ps = t.map(|k| mesh.vertices[k as usize]);
+            let lo = ps[0].min(ps[1]).min(ps[2]);
+            let hi = ps[0].max(ps[1]).max(ps[2]);
+            let (y0, z0) = mesh.cell(lo);
+            let (y1, z1) = mesh.cell(hi);
+            for y in y0..=y1 {
+                for z in z0..=z1 {
+                    mesh.grid[y * cells + z].push(i as u32);
+                }
+            }
+        }
+        Ok(mesh)
+    }
+
+    /// The grid cell of a point's (y, z), clamped.
+    fn cell(&self, p: Vec3) -> (usize, usize) {
+        let size = (self.max - self.min).max(Vec3::splat(f32::MIN_POSITIVE));
+        let f = |v: f32, lo: f32, s: f32| {
+            (((v - lo) / s * self.cells as f32) as isize).clamp(0, self.cells as isize - 1) as usize
+        };
+        (f(p.y, self.min.y, size.y), f(p.z, self.min.z, size.z))
+    }
+
+    /// `Ok` when every edge borders an even number of triangles (the inside test needs a
+    /// closed surface), else the first open edge.
+    pub fn closed(&self) -> Result<(), MeshError> {
+        match &self.open {
+            None => Ok(()),
+            Some(e) => Err(e.clone()),
+        }
+    }
+
+    /// Welded vertex positions.
+    #[must_use]
+    pub fn vertices(&self) -> &[Vec3] {
+        &self.vertices
+    }
+
+    /// Triangles (indices into [`vertices`](TriMesh::vertices)).
+    #[must_use]
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Bounds `(min, max)`.
+    #[must_use]
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (self.min, self.max)
+    }
+
+    /// Whether `p` is inside: a ray toward +x crosses the surface an odd number of times.
+    /// The ray is nudged off axis by a tiny fixed amount so it does not run along edges.
+    #[must_use]
+    pub fn contains(&self, p: Vec3) -> bool {
+        if p.cmplt(self.min).any() || p.cmpgt(self.max).any() {
+            return false;
+        }
+        let extent = (self.max - self.min).max_element();
+        let (py, pz) = (p.y + extent * 1.234_567e-6, p.z + extent * 2.345_678e-6);
+        let (cy, cz) = self.cell(Vec3::new(p.x, py, pz));
+        let mut crossings = 0u32;
+        for &t in &self.grid[cy * self.cells + cz] {
+            let [a, b, c] = self.triangles[t as usize].map(|k| self.vertices[k as usize]);
+            // Barycentric coordinates of (py, pz) in the triangle projected on YZ.
+            let d = (b.y - a.y) * (c.z - a.z) - (c.y - a.y) * (b.z - a.z);
+            if d == 0.0 {
+                continue;
+            }
+            let u = ((py - a.y) * (c.z - a.z) - (c.y - a.y) * (pz - a.z)) / d;
+            let v = ((b.y - a.y) * (pz - a.z) - (py - a.y) * (b.z - a.z)) / d;
+            if u < 0.0 || v < 0.0 || u + v > 1.0 {
+                continue;
+            }
+            let x = a.x + u * (b.x - a.x) + v * (c.x - a.x);
+            if x > p.x {
+                crossings += 1;
+            }
+        }
+        crossings % 2 == 1
+    }
+
+    /// Distance to the nearest triangle, negative inside.
+    #[must_use]
+    pub fn signed_distance(&self, p: Vec3) -> f32 {
+        let mut d2 = f32::INFINITY;
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|k| self.vertices[k as usize]);
+            d2 = d2.min(p.distance_squared(closest_on_triangle(p, a, b, c)));
+        }
+        if self.contains(p) {
+            -d2.sqrt()
+        } else {
+            d2.sqrt()
+        }
+    }
+
+    /// Reads a Wavefront `.obj`: `v x y z` and `f a b c ...` lines (1-based or negative
+    /// indices, `a/b/c` forms; polygons are fanned). Other lines are ignored.
+    pub fn parse_obj(text: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), MeshError> {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for (n, line) in text.lines().enumerate() {
+            let err = |message: String| MeshError::Obj {
+                line: n + 1,
+                message,
+            };
+            let mut words = line.split_whitespace();
+            match words.next() {
+                Some("v") => {
+                    let c: Vec<f32> = words
+                        .take(3)
+                        .map(|w| {
+                            w.parse::<f32>()
+                                .map_err(|_| err(format!("'{w}' is not a number")))
+                        })
+                        .collect::<Result<_, _>>()?;
+                    if c.len() != 3 {
+                        return Err(err("a vertex needs three coordinates".into()));
+                    }
+                    positions.push(Vec3::new(c[0], c[1], c[2]));
+                }
+                Some("f") => {
+                    let mut face = Vec::new();
+                    for w in words {
+                        let first = w.split('/').next().unwrap_or("");
+                        let i: i64 = first
+                            .parse()
+                            .map_err(|_| err(format!("'{w}' is not a vertex index")))?;
+                        let index = if i > 0 {
+                            i - 1
+                        } else {
+                            positions.len() as i64 + i
+                        };
+                        if index < 0 || index >= positions.len() as i64 {
+                            return Err(err(format!(
+                                "vertex index {i} is out of range ({} vertices so far)",
+                                positions.len()
+                            )));
+                        }
+                        face.push(index as u32);
+                    }
+                    if face.len() < 3 {
+                        return Err(err("a face needs at least three vertices".into()));
+                    }
+                    for k in 1..face.len() - 1 {
+                        triangles.push([face[0], face[k], face[k + 1]]);
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok((positions, triangles))
+    }
+
+    /// Reads the triangles of every mesh node of a `.glb` (or `.gltf` with embedded data)
+    /// in its default scene, placed by the node transforms.
+    pub fn parse_gltf(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), MeshError> {
+        let (doc, buffers, _) =
+            gltf::import_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        let scene = doc.default_scene().or_else(|| doc.scenes().next());
+        let mut stack: Vec<(gltf::Node, Mat4)> = match &scene {
+            Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY)).collect(),
+            None => Vec::new(),
+        };
+        while let Some((node, parent)) = stack.pop() {
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if let Some(mesh) = node.mesh() {
+                for prim in mesh.primitives() {
+                    if prim.mode() != gltf::mesh::Mode::Triangles {
+                        continue;
+                    }
+                    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                    let Some(ps) = reader.read_positions() else {
+                        continue;
+                    };
+                    let base = positions.len() as u32;
+                    positions.extend(ps.map(|p| world.transform_point3(Vec3::from_array(p))));
+                    let count = positions.len() as u32 - base;
+                    let idx: Vec<u32> = match reader.read_indices() {
+                        Some(i) => i.into_u32().collect(),
+                        None => (0..count).collect(),
+                    };
+                    for t in idx.chunks_exact(3) {
+                        if t.iter().all(|i| *i < count) {
+                            triangles.push([base + t[0], base + t[1], base + t[2]]);
+                        }
+                    }
+                }
+            }
+            stack.extend(node.children().map(|c| (c, world)));
+        }
+        Ok((positions, triangles))
+    }
+
+    /// The triangles of a model (every instance placed by its transform).
+    #[must_use]
+    pub fn model_triangles(model: &Model) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for inst in &model.instances {
+            let mesh = &model.meshes[inst.mesh];
+            if mesh.primitive != Primitive::Triangles {
+                continue;
+            }
+            let base = positions.len() as u32;
+            positions.extend(
+                mesh.positions
+                    .iter()
+                    .map(|p| inst.transform.transform_point3(*p)),
+            );
+            for t in mesh.indices.chunks_exact(3) {
+                triangles.push([base + t[0], base + t[1], base + t[2]]);
+            }
+        }
+        (positions, triangles)
+    }
+}
+
+/// Every undirected edge must border an even number of triangles.
+fn check_closed(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Result<(), MeshError> {
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 3);
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut open: Vec<((u32, u32), u32)> = edges.into_iter().filter(|(_, c)| c % 2 == 1).collect();
+    open.sort_unstable();
+    match open.first() {
+        None => Ok(()),
+        Some(&((a, b), count)) => {
+            let show = |v: Vec3| format!("({}, {}, {})", v.x, v.y, v.z);
+            Err(MeshError::NotClosed {
+                a,
+                b,
+                pa: show(vertices[a as usize]),
+                pb: show(vertices[b as usize]),
+                count,
+            })
+        }
+    }
+}
+
+/// The point of triangle `abc` closest to `p` (Ericson, Real-Time Collision Detection 5.1.5).
+fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit cube from 0 to 1 as an .obj with quads (vertices repeated per face would weld).
+    pub(crate) const CUBE_OBJ: &str = "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+
+    fn cube() -> TriMesh {
+        let (p, t) = TriMesh::parse_obj(CUBE_OBJ).expect("parses");
+        let m = TriMesh::new("cube", &p, &t).expect("valid");
+        m.closed().expect("closed");
+        m
+    }
+
+    #[test]
+    fn cube_inside_test_by_parity() {
+        let m = cube();
+        assert_eq!(m.triangles().len(), 12);
+        assert!(m.contains(Vec3::splat(0.5)));
+        assert!(m.contains(Vec3::new(0.01, 0.99, 0.5)));
+        assert!(!m.contains(Vec3::new(1.5, 0.5, 0.5)));
+        assert!(!m.contains(Vec3::new(-0.5, 0.5, 0.5)));
+        // Points on the same line as a diagonal edge are still classified.
+        assert!(m.contains(Vec3::new(0.2, 0.5, 0.5)));
+        assert!((m.signed_distance(Vec3::splat(0.5)) + 0.5).abs() < 1e-6);
+        assert!((m.signed_distance(Vec3::new(2.0, 0.5, 0.5)) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn open_meshes_are_refused_with_the_edge() {
+        let (p, mut t) = TriMesh::parse_obj(CUBE_OBJ).expect("parses");
+        t.pop();
+        let m = TriMesh::new("open", &p, &t).expect("usable for the vertices mode");
+        let e = m.closed().expect_err("open");
+        assert!(
+            e.to_string().starts_with("is not closed: the edge between"),
+            "{e}"
+        );
+        assert_eq!(
+            TriMesh::new("empty", &p, &[]).expect_err("empty"),
+            MeshError::Empty
+        );
+    }
+
+    #[test]
+    fn obj_errors_name_the_line() {
+        let e = TriMesh::parse_obj("v 0 0 0\nv 1 0 0\nf 1 2 7\n").expect_err("bad index");
+        assert_eq!(
+            e.to_string(),
+            "line 3: vertex index 7 is out of range (2 vertices so far)"
+        );
+        let e = TriMesh::parse_obj("v 0 zero 0\n").expect_err("bad number");
+        assert_eq!(e.to_string(), "line 1: 'zero' is not a number");
+        let (p, t) = TriMesh::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3/1/1 -2/2/2 -1/3/3\n")
+            .expect("relative");
+        assert_eq!((p.len(), t), (3, vec![[0, 1, 2]]));
+    }
+
+    #[test]
+    fn split_vertices_are_welded() {
+        // Two triangles of a square with their own copies of the shared edge.
+        let p = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::Y,
+            Vec3::X,
+            Vec3::ONE.with_z(0.0),
+            Vec3::Y,
+        ];
+        let m = TriMesh::new("square", &p, &[[0, 1, 2], [3, 4, 5]]).expect("ok");
+        assert_eq!(m.vertices().len(), 4);
+    }
+
+    #[test]
+    fn closest_points() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let inner = closest_on_triangle(Vec3::new(0.2, 0.2, 1.0), a, b, c);
+        assert!(inner.distance(Vec3::new(0.2, 0.2, 0.0)) < 1e-6, "{inner}");
+        assert_eq!(closest_on_triangle(Vec3::new(-1.0, -1.0, 0.0), a, b, c), a);
+        assert_eq!(
+            closest_on_triangle(Vec3::new(2.0, 2.0, 0.0), a, b, c),
+            Vec3::new(0.5, 0.5, 0.0)
+        );
+    }
+}
