@@ -142,7 +142,10 @@ impl PreviewApp {
         if self.watched != *self.reloader.watched() {
             self.watched = self.reloader.watched().clone();
             if let Some(w) = &mut self.watcher {
-                self.watch_error = w.watch_files(&self.watched).err().map(|e| format!("watching: {e}"));
+                self.watch_error = w
+                    .watch_files(&self.watched)
+                    .err()
+                    .map(|e| format!("watching: {e}"));
             }
         }
         match self.reloader.status() {
@@ -159,11 +162,11 @@ impl PreviewApp {
                 if let Some(r) = &mut self.renderer {
                     r.upload(&g.scene);
                 }
-                if !self.framed {
-                    if let Some(b) = g.scene.bounds {
-                        self.camera.frame(b);
-                        self.framed = true;
-                    }
+                if !self.framed
+                    && let Some(b) = g.scene.bounds
+                {
+                    self.camera.frame(b);
+                    self.framed = true;
                 }
                 if g.settings.steps.is_none() {
                     self.total_steps = Some(g.steps_taken);
@@ -179,22 +182,40 @@ impl PreviewApp {
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
         let script = self.reloader.script().to_path_buf();
-        ui.heading(script.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+        ui.heading(
+            script
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        );
         self.status_line(ui);
         ui.separator();
         egui::ScrollArea::vertical().show(ui, |ui| {
-            egui::CollapsingHeader::new("Parameters").default_open(true).show(ui, |ui| self.params_ui(ui));
-            egui::CollapsingHeader::new("Seed and steps").default_open(true).show(ui, |ui| self.seed_ui(ui));
-            egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| self.view_ui(ui));
-            egui::CollapsingHeader::new("Statistics").default_open(true).show(ui, |ui| self.stats_ui(ui));
-            egui::CollapsingHeader::new("Export").default_open(false).show(ui, |ui| self.export_ui(ui));
+            egui::CollapsingHeader::new("Parameters")
+                .default_open(true)
+                .show(ui, |ui| self.params_ui(ui));
+            egui::CollapsingHeader::new("Seed and steps")
+                .default_open(true)
+                .show(ui, |ui| self.seed_ui(ui));
+            egui::CollapsingHeader::new("View")
+                .default_open(true)
+                .show(ui, |ui| self.view_ui(ui));
+            egui::CollapsingHeader::new("Statistics")
+                .default_open(true)
+                .show(ui, |ui| self.stats_ui(ui));
+            egui::CollapsingHeader::new("Export")
+                .default_open(false)
+                .show(ui, |ui| self.export_ui(ui));
         });
     }
 
     fn status_line(&self, ui: &mut egui::Ui) {
         match self.reloader.status() {
             Status::Running => {
-                let secs = self.reloader.running_since().map_or(0.0, |t| t.elapsed().as_secs_f64());
+                let secs = self
+                    .reloader
+                    .running_since()
+                    .map_or(0.0, |t| t.elapsed().as_secs_f64());
                 ui.horizontal(|ui| {
                     ui.spinner();
                     ui.label(format!("generating… {secs:.1} s"));
@@ -223,25 +244,36 @@ impl PreviewApp {
     }
 
     fn params_ui(&mut self, ui: &mut egui::Ui) {
-        let params: Vec<ParamInfo> = self.reloader.current().map(|g| g.params.clone()).unwrap_or_default();
+        let params: Vec<ParamInfo> = self
+            .reloader
+            .current()
+            .map(|g| g.params.clone())
+            .unwrap_or_default();
         if params.is_empty() {
             ui.label("The script declares no parameters (pge.params).");
             return;
         }
         let mut changed: Vec<(String, ParamValue)> = Vec::new();
-        egui::Grid::new("params").num_columns(2).striped(true).show(ui, |ui| {
-            for p in &params {
-                let value = self.edits.get(&p.name).cloned().unwrap_or_else(|| p.value.clone());
-                let label = ui.label(&p.name);
-                if let Some(doc) = &p.doc {
-                    label.on_hover_text(doc);
+        egui::Grid::new("params")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                for p in &params {
+                    let value = self
+                        .edits
+                        .get(&p.name)
+                        .cloned()
+                        .unwrap_or_else(|| p.value.clone());
+                    let label = ui.label(&p.name);
+                    if let Some(doc) = &p.doc {
+                        label.on_hover_text(doc);
+                    }
+                    if let Some(v) = self.param_widget(ui, p, value) {
+                        changed.push((p.name.clone(), v));
+                    }
+                    ui.end_row();
                 }
-                if let Some(v) = self.param_widget(ui, p, value) {
-                    changed.push((p.name.clone(), v));
-                }
-                ui.end_row();
-            }
-        });
+            });
         if ui.button("Reset to defaults").clicked() {
             self.edits.clear();
             self.text_edits.clear();
@@ -259,12 +291,20 @@ impl PreviewApp {
         }
     }
 
-    fn param_widget(&mut self, ui: &mut egui::Ui, p: &ParamInfo, value: ParamValue) -> Option<ParamValue> {
+    fn param_widget(
+        &mut self,
+        ui: &mut egui::Ui,
+        p: &ParamInfo,
+        value: ParamValue,
+    ) -> Option<ParamValue> {
         let range = p.min.zip(p.max).filter(|(a, b)| a < b);
         match value {
             ParamValue::Integer(mut i) => {
                 let r = match range {
-                    Some((a, b)) => ui.add(egui::Slider::new(&mut i, a.ceil() as i64..=b.floor() as i64)),
+                    Some((a, b)) => ui.add(egui::Slider::new(
+                        &mut i,
+                        a.ceil() as i64..=b.floor() as i64,
+                    )),
                     None => ui.add(egui::DragValue::new(&mut i)),
                 };
                 r.changed().then_some(ParamValue::Integer(i))
@@ -272,13 +312,22 @@ impl PreviewApp {
             ParamValue::Number(mut n) => {
                 let r = match range {
                     Some((a, b)) => ui.add(egui::Slider::new(&mut n, a..=b)),
-                    None => ui.add(egui::DragValue::new(&mut n).speed(0.01 * n.abs().max(0.1))),
+                    None => {
+                        let speed = 0.01 * n.abs().max(0.1);
+                        ui.add(egui::DragValue::new(&mut n).speed(speed))
+                    }
                 };
                 r.changed().then_some(ParamValue::Number(n))
             }
-            ParamValue::Bool(mut b) => ui.checkbox(&mut b, "").changed().then_some(ParamValue::Bool(b)),
+            ParamValue::Bool(mut b) => ui
+                .checkbox(&mut b, "")
+                .changed()
+                .then_some(ParamValue::Bool(b)),
             ParamValue::Text(s) => {
-                let text = self.text_edits.entry(p.name.clone()).or_insert_with(|| s.clone());
+                let text = self
+                    .text_edits
+                    .entry(p.name.clone())
+                    .or_insert_with(|| s.clone());
                 let r = ui.text_edit_singleline(text);
                 (r.lost_focus() && *text != s).then(|| ParamValue::Text(text.clone()))
             }
@@ -334,7 +383,9 @@ impl PreviewApp {
         if ui.button("Frame the model (F)").clicked() {
             self.frame_model();
         }
-        ui.label(RichText::new("drag: orbit · right/middle drag or shift: pan · wheel: zoom").small());
+        ui.label(
+            RichText::new("drag: orbit · right/middle drag or shift: pan · wheel: zoom").small(),
+        );
         if before != (self.toggles, self.turntable) {
             self.viewport_dirty = true;
         }
@@ -372,7 +423,10 @@ impl PreviewApp {
             }
             row("generation", format!("{:.1} ms", g.seconds * 1000.0));
             if let Some(l) = self.reloader.last_latency() {
-                row("save → model", format!("{:.0} ms", l.as_secs_f64() * 1000.0));
+                row(
+                    "save → model",
+                    format!("{:.0} ms", l.as_secs_f64() * 1000.0),
+                );
             }
             row("draw", format!("{:.1} ms", self.render_ms));
             row("frames/s", format!("{:.0}", self.fps()));
@@ -415,7 +469,8 @@ impl PreviewApp {
     }
 
     fn viewport(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
-        let (rect, response) = ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
+        let (rect, response) =
+            ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
         let shift = ui.input(|i| i.modifiers.shift);
         let drag = response.drag_delta();
         if response.dragged_by(egui::PointerButton::Primary) && !shift {
@@ -441,12 +496,17 @@ impl PreviewApp {
             self.viewport_dirty = true;
         }
         let ppp = ui.ctx().pixels_per_point();
-        let size = [(rect.width() * ppp).round() as u32, (rect.height() * ppp).round() as u32];
+        let size = [
+            (rect.width() * ppp).round() as u32,
+            (rect.height() * ppp).round() as u32,
+        ];
         let state = (size, self.camera, self.toggles);
         if self.viewport_dirty || self.last_viewport != Some(state) {
             if let (Some(renderer), Some(rs)) = (&mut self.renderer, frame.wgpu_render_state()) {
                 let t0 = Instant::now();
-                let vp = self.camera.view_projection(rect.width() / rect.height().max(1.0));
+                let vp = self
+                    .camera
+                    .view_projection(rect.width() / rect.height().max(1.0));
                 let id = renderer.render(&mut rs.renderer.write(), vp, size, self.toggles);
                 self.texture = Some(id);
                 self.render_ms = t0.elapsed().as_secs_f64() * 1000.0;
@@ -483,7 +543,10 @@ impl PreviewApp {
                 ERROR_COLOR,
                 (rect.width() - 24.0).max(50.0),
             );
-            let r = egui::Rect::from_min_size(rect.min + egui::vec2(8.0, 8.0), galley.size() + egui::vec2(16.0, 12.0));
+            let r = egui::Rect::from_min_size(
+                rect.min + egui::vec2(8.0, 8.0),
+                galley.size() + egui::vec2(16.0, 12.0),
+            );
             painter.rect_filled(r, 4.0, Color32::from_rgba_unmultiplied(40, 0, 0, 220));
             painter.galley(r.min + egui::vec2(8.0, 6.0), galley, ERROR_COLOR);
         } else if self.reloader.current().is_none() {
@@ -529,15 +592,20 @@ impl PreviewApp {
     /// The `--screenshot` sequence: once the first generation has ended and its frame is
     /// drawn, ask egui for the window's pixels; write them when they arrive; close.
     fn screenshot(&mut self, ctx: &egui::Context) {
-        let Some((path, state)) = &mut self.shot else { return };
+        let Some((path, state)) = &mut self.shot else {
+            return;
+        };
         match state {
             Shot::Waiting => {
                 let settled = !self.reloader.is_running()
-                    && (self.reloader.current().is_some() || !matches!(self.reloader.status(), Status::Running))
+                    && (self.reloader.current().is_some()
+                        || !matches!(self.reloader.status(), Status::Running))
                     && self.uploaded == self.reloader.generation_count()
                     && !self.viewport_dirty;
                 if settled {
-                    ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::UserData::default()));
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(
+                        egui::UserData::default(),
+                    ));
                     *state = Shot::Requested;
                 }
             }
@@ -553,7 +621,10 @@ impl PreviewApp {
                     if result.is_ok() {
                         match self.reloader.status() {
                             Status::Error(m) => result = Err(anyhow::anyhow!("{m}")),
-                            Status::Gone => result = Err(anyhow::anyhow!("{}", gone_message(self.reloader.script()))),
+                            Status::Gone => {
+                                result =
+                                    Err(anyhow::anyhow!("{}", gone_message(self.reloader.script())))
+                            }
                             _ => {}
                         }
                     }
@@ -572,12 +643,20 @@ impl PreviewApp {
     fn count_frame(&mut self) {
         let now = Instant::now();
         self.frames.push_back(now);
-        while self.frames.front().is_some_and(|t| now.duration_since(*t) > Duration::from_secs(2)) {
+        while self
+            .frames
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(2))
+        {
             self.frames.pop_front();
         }
         if self.log_fps && now.duration_since(self.last_fps_log) >= Duration::from_secs(1) {
             self.last_fps_log = now;
-            eprintln!("preview: {:.1} frames/s, draw {:.1} ms", self.fps(), self.render_ms);
+            eprintln!(
+                "preview: {:.1} frames/s, draw {:.1} ms",
+                self.fps(),
+                self.render_ms
+            );
         }
     }
 }
@@ -587,8 +666,13 @@ impl eframe::App for PreviewApp {
         self.count_frame();
         self.pump();
         self.keys(ctx);
-        egui::SidePanel::left("side").resizable(true).default_width(300.0).show(ctx, |ui| self.side_panel(ui));
-        egui::CentralPanel::default().frame(egui::Frame::NONE).show(ctx, |ui| self.viewport(ui, frame));
+        egui::SidePanel::left("side")
+            .resizable(true)
+            .default_width(300.0)
+            .show(ctx, |ui| self.side_panel(ui));
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ctx, |ui| self.viewport(ui, frame));
         self.screenshot(ctx);
         if self.turntable {
             ctx.request_repaint();
@@ -602,7 +686,10 @@ impl eframe::App for PreviewApp {
 }
 
 fn gone_message(script: &Path) -> String {
-    format!("{}: file is gone; waiting for it to come back", script.display())
+    format!(
+        "{}: file is gone; waiting for it to come back",
+        script.display()
+    )
 }
 
 /// A seed different from `old`, from the clock.
@@ -616,13 +703,22 @@ fn new_seed(old: u64) -> u64 {
 
 /// Writes the generation's model to `path` (`.glb`, or `.obj` with its `.mtl` and textures).
 fn export(g: &Generation, path: &Path) -> Result<String, String> {
-    let write = |p: &Path, bytes: &[u8]| std::fs::write(p, bytes).map_err(|e| format!("{}: {e}", p.display()));
+    let write = |p: &Path, bytes: &[u8]| {
+        std::fs::write(p, bytes).map_err(|e| format!("{}: {e}", p.display()))
+    };
     match path.extension().and_then(|e| e.to_str()) {
         Some("obj") => {
-            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
             let mtl = path.with_extension("mtl");
-            let mtl_name = mtl.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            let files = pge_engine::export::obj_files(&g.model, &mtl_name, &stem).map_err(|e| e.to_string())?;
+            let mtl_name = mtl
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let files = pge_engine::export::obj_files(&g.model, &mtl_name, &stem)
+                .map_err(|e| e.to_string())?;
             write(path, files.obj.as_bytes())?;
             write(&mtl, files.mtl.as_bytes())?;
             let dir = path.parent().unwrap_or(Path::new("."));
@@ -633,9 +729,14 @@ fn export(g: &Generation, path: &Path) -> Result<String, String> {
         _ => {
             let meta = pge_engine::export::ExportMeta {
                 seed: g.settings.seed,
-                params: g.params.iter().map(|p| (p.name.clone(), p.value.to_json())).collect(),
+                params: g
+                    .params
+                    .iter()
+                    .map(|p| (p.name.clone(), p.value.to_json()))
+                    .collect(),
             };
-            let bytes = pge_engine::export::glb_bytes(&g.model, &meta).map_err(|e| e.to_string())?;
+            let bytes =
+                pge_engine::export::glb_bytes(&g.model, &meta).map_err(|e| e.to_string())?;
             write(path, &bytes)?;
         }
     }

@@ -20,7 +20,12 @@ pub struct OrbitCamera {
 
 impl Default for OrbitCamera {
     fn default() -> Self {
-        OrbitCamera { target: Vec3::new(0.0, 1.0, 0.0), distance: 6.0, yaw: 0.6, pitch: 0.25 }
+        OrbitCamera {
+            target: Vec3::new(0.0, 1.0, 0.0),
+            distance: 6.0,
+            yaw: 0.6,
+            pitch: 0.25,
+        }
     }
 }
 
@@ -86,9 +91,16 @@ mod tests {
         cam.frame((Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 10.0, 1.0)));
         assert!(close(cam.target, Vec3::new(0.0, 5.0, 0.0)));
         let vp = cam.view_projection(1.0);
-        for corner in [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 10.0, 1.0), Vec3::new(1.0, 0.0, -1.0)] {
+        for corner in [
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 10.0, 1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+        ] {
             let p = vp.project_point3(corner);
-            assert!(p.x.abs() <= 1.0 && p.y.abs() <= 1.0, "{corner} projects to {p}");
+            assert!(
+                p.x.abs() <= 1.0 && p.y.abs() <= 1.0,
+                "{corner} projects to {p}"
+            );
             assert!((0.0..1.0).contains(&p.z));
         }
     }
@@ -105,10 +117,17 @@ mod tests {
 
     #[test]
     fn panning_moves_the_target_sideways() {
-        let mut cam = OrbitCamera { yaw: 0.0, pitch: 0.0, ..OrbitCamera::default() };
+        let mut cam = OrbitCamera {
+            yaw: 0.0,
+            pitch: 0.0,
+            ..OrbitCamera::default()
+        };
         let before = cam.target;
         cam.pan(-100.0, 0.0, 500.0);
         let moved = cam.target - before;
-        assert!(moved.x > 0.0 && moved.y.abs() < 1e-5 && moved.z.abs() < 1e-5, "{moved}");
+        assert!(
+            moved.x > 0.0 && moved.y.abs() < 1e-5 && moved.z.abs() < 1e-5,
+            "{moved}"
+        );
     }
 }

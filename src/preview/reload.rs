@@ -40,7 +40,11 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { seed: 1, params: Vec::new(), steps: None }
+        Settings {
+            seed: 1,
+            params: Vec::new(),
+            steps: None,
+        }
     }
 }
 
@@ -132,6 +136,7 @@ pub enum Status {
 #[derive(Debug)]
 pub struct Reloader {
     script: PathBuf,
+    key: PathBuf,
     debounce: Duration,
     settings: Settings,
     watched: BTreeSet<PathBuf>,
@@ -152,13 +157,15 @@ pub struct Reloader {
 }
 
 impl Reloader {
-    /// A reloader for `script` (watched from the start) that will generate with `settings`
-    /// at the first [`Reloader::poll`].
+    /// A reloader for `script` that will generate with `settings` at the first
+    /// [`Reloader::poll`]. `key` is the script's name in file events (see
+    /// [`super::watch::watch_key`]); it is watched from the start.
     #[must_use]
-    pub fn new(script: PathBuf, settings: Settings, debounce: Duration) -> Reloader {
-        let watched = BTreeSet::from([script.clone()]);
+    pub fn new(script: PathBuf, key: PathBuf, settings: Settings, debounce: Duration) -> Reloader {
+        let watched = BTreeSet::from([key.clone()]);
         Reloader {
             script,
+            key,
             debounce,
             settings,
             watched,
@@ -282,24 +289,33 @@ impl Reloader {
         if matches!(self.status, Status::Ready) {
             self.status = Status::Running;
         }
-        Request { id, script: self.script.clone(), settings: self.settings.clone(), cancel }
+        Request {
+            id,
+            script: self.script.clone(),
+            settings: self.settings.clone(),
+            cancel,
+        }
     }
 
     /// Takes a worker's report; returns whether the model on screen changed. Reports of
     /// superseded requests are ignored.
     pub fn report(&mut self, report: Report, now: Instant) -> bool {
-        if self.running.as_ref().is_none_or(|(id, _, _)| *id != report.id) {
+        if self
+            .running
+            .as_ref()
+            .is_none_or(|(id, _, _)| *id != report.id)
+        {
             return false;
         }
         self.running = None;
         match report.outcome {
             Outcome::Generated(generation) => {
-                self.watched = BTreeSet::from([self.script.clone()]);
+                self.watched = BTreeSet::from([self.key.clone()]);
                 self.watched.extend(generation.loaded.iter().cloned());
-                if let Some((id, t)) = self.trigger_time.take() {
-                    if id == report.id {
-                        self.last_latency = Some(now.duration_since(t));
-                    }
+                if let Some((id, t)) = self.trigger_time.take()
+                    && id == report.id
+                {
+                    self.last_latency = Some(now.duration_since(t));
                 }
                 self.current = Some(*generation);
                 self.generation_count += 1;
@@ -348,7 +364,12 @@ mod tests {
     }
 
     fn reloader() -> Reloader {
-        Reloader::new("tree.lua".into(), Settings::default(), Duration::from_millis(50))
+        Reloader::new(
+            "tree.lua".into(),
+            "tree.lua".into(),
+            Settings::default(),
+            Duration::from_millis(50),
+        )
     }
 
     #[test]
@@ -360,7 +381,13 @@ mod tests {
         assert!(r.poll(t0).is_none(), "one run at a time");
         assert_eq!(r.status(), &Status::Running);
         let out = generation(&req.settings, &["tree.lua", "lib/leaf.lua"], 7);
-        assert!(r.report(Report { id: req.id, outcome: out }, ms(t0, 10)));
+        assert!(r.report(
+            Report {
+                id: req.id,
+                outcome: out
+            },
+            ms(t0, 10)
+        ));
         assert_eq!(r.status(), &Status::Ready);
         assert_eq!(r.current().map(|g| g.model.stats.nodes), Some(7));
         assert!(r.watched().contains(Path::new("lib/leaf.lua")));
@@ -372,16 +399,31 @@ mod tests {
         let t0 = Instant::now();
         let mut r = reloader();
         let req = r.poll(t0).expect("first");
-        r.report(Report { id: req.id, outcome: generation(&req.settings, &[], 1) }, t0);
+        r.report(
+            Report {
+                id: req.id,
+                outcome: generation(&req.settings, &[], 1),
+            },
+            t0,
+        );
         assert!(!r.file_event(&["other.lua"], ms(t0, 100)), "not watched");
         assert!(r.poll(ms(t0, 200)).is_none());
         assert!(r.file_event(&["tree.lua"], ms(t0, 100)));
-        assert!(r.file_event(&["tree.lua"], ms(t0, 130)), "a second write of the same save");
+        assert!(
+            r.file_event(&["tree.lua"], ms(t0, 130)),
+            "a second write of the same save"
+        );
         assert_eq!(r.next_wake(), Some(ms(t0, 180)));
         assert!(r.poll(ms(t0, 170)).is_none(), "still settling");
         let req = r.poll(ms(t0, 180)).expect("settled");
         assert!(r.poll(ms(t0, 400)).is_none(), "only once");
-        r.report(Report { id: req.id, outcome: generation(&req.settings, &[], 2) }, ms(t0, 300));
+        r.report(
+            Report {
+                id: req.id,
+                outcome: generation(&req.settings, &[], 2),
+            },
+            ms(t0, 300),
+        );
         assert_eq!(r.last_latency(), Some(Duration::from_millis(170)));
     }
 
@@ -392,14 +434,29 @@ mod tests {
         let first = r.poll(t0).expect("first");
         r.file_event(&["tree.lua"], ms(t0, 10));
         let second = r.poll(ms(t0, 60)).expect("superseding");
-        assert!(first.cancel.load(Ordering::Relaxed), "the old run is told to stop");
+        assert!(
+            first.cancel.load(Ordering::Relaxed),
+            "the old run is told to stop"
+        );
         assert!(!second.cancel.load(Ordering::Relaxed));
         assert!(second.id > first.id);
         // The old run's late answer is ignored, even a successful one.
-        assert!(!r.report(Report { id: first.id, outcome: generation(&first.settings, &[], 1) }, t0));
+        assert!(!r.report(
+            Report {
+                id: first.id,
+                outcome: generation(&first.settings, &[], 1)
+            },
+            t0
+        ));
         assert!(r.current().is_none());
         assert!(r.is_running());
-        assert!(r.report(Report { id: second.id, outcome: generation(&second.settings, &[], 2) }, t0));
+        assert!(r.report(
+            Report {
+                id: second.id,
+                outcome: generation(&second.settings, &[], 2)
+            },
+            t0
+        ));
         assert_eq!(r.current().map(|g| g.model.stats.nodes), Some(2));
     }
 
@@ -408,18 +465,50 @@ mod tests {
         let t0 = Instant::now();
         let mut r = reloader();
         let req = r.poll(t0).expect("first");
-        r.report(Report { id: req.id, outcome: generation(&req.settings, &["mod.lua"], 5) }, t0);
+        r.report(
+            Report {
+                id: req.id,
+                outcome: generation(&req.settings, &["mod.lua"], 5),
+            },
+            t0,
+        );
         r.file_event(&["mod.lua"], ms(t0, 10));
         let req = r.poll(ms(t0, 100)).expect("module changed");
-        let failed = Outcome::Failed { message: "mod.lua:3: boom".into(), loaded: vec![] };
-        assert!(!r.report(Report { id: req.id, outcome: failed }, t0));
+        let failed = Outcome::Failed {
+            message: "mod.lua:3: boom".into(),
+            loaded: vec![],
+        };
+        assert!(!r.report(
+            Report {
+                id: req.id,
+                outcome: failed
+            },
+            t0
+        ));
         assert_eq!(r.status(), &Status::Error("mod.lua:3: boom".into()));
-        assert_eq!(r.current().map(|g| g.model.stats.nodes), Some(5), "last good model stays");
-        assert!(r.watched().contains(Path::new("mod.lua")), "the fix may come in the module");
+        assert_eq!(
+            r.current().map(|g| g.model.stats.nodes),
+            Some(5),
+            "last good model stays"
+        );
+        assert!(
+            r.watched().contains(Path::new("mod.lua")),
+            "the fix may come in the module"
+        );
         r.file_event(&["mod.lua"], ms(t0, 200));
         let req = r.poll(ms(t0, 300)).expect("fixed");
-        assert_eq!(r.status(), &Status::Error("mod.lua:3: boom".into()), "shown until fixed");
-        r.report(Report { id: req.id, outcome: generation(&req.settings, &["mod.lua"], 6) }, t0);
+        assert_eq!(
+            r.status(),
+            &Status::Error("mod.lua:3: boom".into()),
+            "shown until fixed"
+        );
+        r.report(
+            Report {
+                id: req.id,
+                outcome: generation(&req.settings, &["mod.lua"], 6),
+            },
+            t0,
+        );
         assert_eq!(r.status(), &Status::Ready);
         assert_eq!(r.current().map(|g| g.model.stats.nodes), Some(6));
     }
@@ -429,16 +518,34 @@ mod tests {
         let t0 = Instant::now();
         let mut r = reloader();
         let req = r.poll(t0).expect("first");
-        r.report(Report { id: req.id, outcome: generation(&req.settings, &[], 5) }, t0);
+        r.report(
+            Report {
+                id: req.id,
+                outcome: generation(&req.settings, &[], 5),
+            },
+            t0,
+        );
         r.file_event(&["tree.lua"], ms(t0, 10));
         let req = r.poll(ms(t0, 100)).expect("deleted");
-        r.report(Report { id: req.id, outcome: Outcome::Gone }, t0);
+        r.report(
+            Report {
+                id: req.id,
+                outcome: Outcome::Gone,
+            },
+            t0,
+        );
         assert_eq!(r.status(), &Status::Gone);
         assert!(r.current().is_some());
         assert!(r.poll(ms(t0, 1000)).is_none(), "waits");
         r.file_event(&["tree.lua"], ms(t0, 2000));
         let req = r.poll(ms(t0, 2100)).expect("back");
-        r.report(Report { id: req.id, outcome: generation(&req.settings, &[], 9) }, t0);
+        r.report(
+            Report {
+                id: req.id,
+                outcome: generation(&req.settings, &[], 9),
+            },
+            t0,
+        );
         assert_eq!(r.status(), &Status::Ready);
     }
 
@@ -453,13 +560,31 @@ mod tests {
         s.set_param("height", "4".into());
         s.seed = 9;
         r.set_settings(s.clone());
-        assert!(r.poll(ms(t0, 10)).is_none(), "a slider does not cancel the run");
+        assert!(
+            r.poll(ms(t0, 10)).is_none(),
+            "a slider does not cancel the run"
+        );
         assert!(!first.cancel.load(Ordering::Relaxed));
-        r.report(Report { id: first.id, outcome: generation(&first.settings, &[], 1) }, t0);
+        r.report(
+            Report {
+                id: first.id,
+                outcome: generation(&first.settings, &[], 1),
+            },
+            t0,
+        );
         let next = r.poll(ms(t0, 20)).expect("latest settings");
-        assert_eq!(next.settings.params, vec![("height".to_string(), "4".to_string())]);
+        assert_eq!(
+            next.settings.params,
+            vec![("height".to_string(), "4".to_string())]
+        );
         assert_eq!(next.settings.seed, 9);
-        r.report(Report { id: next.id, outcome: generation(&next.settings, &[], 1) }, t0);
+        r.report(
+            Report {
+                id: next.id,
+                outcome: generation(&next.settings, &[], 1),
+            },
+            t0,
+        );
         r.set_settings(s);
         assert!(r.poll(ms(t0, 30)).is_none(), "same settings: nothing to do");
     }
@@ -469,9 +594,21 @@ mod tests {
         let t0 = Instant::now();
         let mut r = reloader();
         let req = r.poll(t0).expect("first");
-        let failed = Outcome::Failed { message: "tree.lua:1: syntax error".into(), loaded: vec![] };
-        r.report(Report { id: req.id, outcome: failed }, t0);
+        let failed = Outcome::Failed {
+            message: "tree.lua:1: syntax error".into(),
+            loaded: vec![],
+        };
+        r.report(
+            Report {
+                id: req.id,
+                outcome: failed,
+            },
+            t0,
+        );
         assert!(r.current().is_none());
-        assert_eq!(r.status(), &Status::Error("tree.lua:1: syntax error".into()));
+        assert_eq!(
+            r.status(),
+            &Status::Error("tree.lua:1: syntax error".into())
+        );
     }
 }

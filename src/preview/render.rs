@@ -13,10 +13,19 @@ use wgpu::util::DeviceExt;
 
 use super::scene::{Scene, SceneMesh, TextureData, VERTEX_FLOATS};
 
-const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The viewport texture holds sRGB-encoded values in a plain format: egui samples every
+/// texture as gamma-encoded colour. The shaders encode.
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Model textures are sRGB images, decoded to linear when sampled for lighting.
+const IMAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Background, linear RGB.
-const CLEAR: wgpu::Color = wgpu::Color { r: 0.045, g: 0.05, b: 0.06, a: 1.0 };
+/// Background, sRGB-encoded.
+const CLEAR: wgpu::Color = wgpu::Color {
+    r: 0.11,
+    g: 0.12,
+    b: 0.135,
+    a: 1.0,
+};
 
 /// What to draw besides the meshes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,7 +42,12 @@ pub struct Toggles {
 
 impl Default for Toggles {
     fn default() -> Self {
-        Toggles { wireframe: false, skeleton: false, leaves: true, grid: true }
+        Toggles {
+            wireframe: false,
+            skeleton: false,
+            leaves: true,
+            grid: true,
+        }
     }
 }
 
@@ -80,8 +94,17 @@ pub struct Renderer {
     texture_id: Option<egui::TextureId>,
 }
 
-fn buffer_init(device: &wgpu::Device, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: bytes, usage })
+fn buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytes,
+        usage,
+    })
 }
 
 impl Renderer {
@@ -117,7 +140,10 @@ impl Renderer {
         let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("globals"),
             layout: &globals_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() }],
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            }],
         });
         let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("material"),
@@ -151,6 +177,7 @@ impl Renderer {
             bind_group_layouts: &[&globals_layout],
             push_constant_ranges: &[],
         });
+        let front_face = probe_front_face(&device, &queue, &shader);
         let f32x = |n: u64| n * 4;
         let vertex_attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
@@ -196,7 +223,7 @@ impl Renderer {
                 },
                 primitive: wgpu::PrimitiveState {
                     topology,
-                    front_face: wgpu::FrontFace::Ccw,
+                    front_face,
                     cull_mode: cull,
                     ..Default::default()
                 },
@@ -226,24 +253,59 @@ impl Renderer {
         use wgpu::PrimitiveTopology::{LineList, TriangleList};
         let alpha = Some(wgpu::BlendState::ALPHA_BLENDING);
         let mesh_culled = pipeline(
-            "mesh", &layout, &mesh_buffers, "vs_mesh", "fs_mesh", TriangleList,
-            Some(wgpu::Face::Back), (true, Less), None,
+            "mesh",
+            &layout,
+            &mesh_buffers,
+            "vs_mesh",
+            "fs_mesh",
+            TriangleList,
+            Some(wgpu::Face::Back),
+            (true, Less),
+            None,
         );
         let mesh_double = pipeline(
-            "mesh double-sided", &layout, &mesh_buffers, "vs_mesh", "fs_mesh", TriangleList, None,
-            (true, Less), None,
+            "mesh double-sided",
+            &layout,
+            &mesh_buffers,
+            "vs_mesh",
+            "fs_mesh",
+            TriangleList,
+            None,
+            (true, Less),
+            None,
         );
         let mesh_lines = pipeline(
-            "mesh lines", &layout, &mesh_buffers, "vs_mesh", "fs_mesh_lines", LineList, None,
-            (true, LessEqual), None,
+            "mesh lines",
+            &layout,
+            &mesh_buffers,
+            "vs_mesh",
+            "fs_mesh_lines",
+            LineList,
+            None,
+            (true, LessEqual),
+            None,
         );
         let overlay_depth = pipeline(
-            "grid", &line_layout, &line_buffers, "vs_line", "fs_line", LineList, None,
-            (false, LessEqual), alpha,
+            "grid",
+            &line_layout,
+            &line_buffers,
+            "vs_line",
+            "fs_line",
+            LineList,
+            None,
+            (false, LessEqual),
+            alpha,
         );
         let overlay_top = pipeline(
-            "skeleton", &line_layout, &line_buffers, "vs_line", "fs_line", LineList, None,
-            (false, Always), alpha,
+            "skeleton",
+            &line_layout,
+            &line_buffers,
+            "vs_line",
+            "fs_line",
+            LineList,
+            None,
+            (false, Always),
+            alpha,
         );
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("base colour"),
@@ -254,7 +316,11 @@ impl Renderer {
             mipmap_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let white_data = TextureData { width: 1, height: 1, levels: vec![vec![255; 4]] };
+        let white_data = TextureData {
+            width: 1,
+            height: 1,
+            levels: vec![vec![255; 4]],
+        };
         let white = upload_texture(&device, &queue, &white_data);
         Renderer {
             device,
@@ -298,15 +364,28 @@ impl Renderer {
             let params = [cutoff, if mesh.double_sided { 1.0 } else { 0.0 }, 0.0, 0.0];
             let mut uniform = mesh.base_color.to_vec();
             uniform.extend_from_slice(&params);
-            let uniform =
-                buffer_init(device, "material", bytemuck::cast_slice(&uniform), wgpu::BufferUsages::UNIFORM);
+            let uniform = buffer_init(
+                device,
+                "material",
+                bytemuck::cast_slice(&uniform),
+                wgpu::BufferUsages::UNIFORM,
+            );
             let material = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("material"),
                 layout: &self.material_layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniform.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
                 ],
             });
             self.meshes.push(GpuMesh {
@@ -316,7 +395,12 @@ impl Renderer {
                     bytemuck::cast_slice(&mesh.vertices),
                     wgpu::BufferUsages::VERTEX,
                 ),
-                indices: buffer_init(device, "indices", index_bytes(&mesh.indices), wgpu::BufferUsages::INDEX),
+                indices: buffer_init(
+                    device,
+                    "indices",
+                    index_bytes(&mesh.indices),
+                    wgpu::BufferUsages::INDEX,
+                ),
                 index_count: mesh.indices.len() as u32,
                 instances: buffer_init(
                     device,
@@ -337,7 +421,15 @@ impl Renderer {
         let lines = |label: &str, data: Vec<f32>| {
             (!data.is_empty()).then(|| {
                 let count = (data.len() / 7) as u32;
-                (buffer_init(device, label, bytemuck::cast_slice(&data), wgpu::BufferUsages::VERTEX), count)
+                (
+                    buffer_init(
+                        device,
+                        label,
+                        bytemuck::cast_slice(&data),
+                        wgpu::BufferUsages::VERTEX,
+                    ),
+                    count,
+                )
             })
         };
         self.grid = lines("grid", grid_lines(scene.bounds));
@@ -361,7 +453,10 @@ impl Renderer {
         let size = [size[0].max(1), size[1].max(1)];
         if self.target.as_ref().is_none_or(|t| t.size != size) {
             self.target = Some(self.make_target(size));
-            let color_view = self.target.as_ref().map(|t| t.color.create_view(&Default::default()));
+            let color_view = self
+                .target
+                .as_ref()
+                .map(|t| t.color.create_view(&Default::default()));
             if let Some(view) = color_view {
                 match self.texture_id {
                     Some(id) => egui_renderer.update_egui_texture_from_wgpu_texture(
@@ -386,10 +481,13 @@ impl Renderer {
         let sun = Vec3::new(0.45, 0.8, 0.35).normalize();
         let mut globals = view_proj.to_cols_array().to_vec();
         globals.extend_from_slice(&[sun.x, sun.y, sun.z, 0.0]);
-        self.queue.write_buffer(&self.globals, 0, bytemuck::cast_slice(&globals));
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("pge preview"),
-        });
+        self.queue
+            .write_buffer(&self.globals, 0, bytemuck::cast_slice(&globals));
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("pge preview"),
+            });
         if let Some(target) = &self.target {
             let color = target.color.create_view(&Default::default());
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -398,7 +496,10 @@ impl Renderer {
                     view: &color,
                     resolve_target: None,
                     depth_slice: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(CLEAR), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(CLEAR),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &target.depth,
@@ -441,19 +542,19 @@ impl Renderer {
                     pass.draw_indexed(0..count, 0, 0..mesh.instance_count);
                 }
             }
-            if toggles.grid {
-                if let Some((grid, n)) = &self.grid {
-                    pass.set_pipeline(&self.overlay_depth);
-                    pass.set_vertex_buffer(0, grid.slice(..));
-                    pass.draw(0..*n, 0..1);
-                }
+            if toggles.grid
+                && let Some((grid, n)) = &self.grid
+            {
+                pass.set_pipeline(&self.overlay_depth);
+                pass.set_vertex_buffer(0, grid.slice(..));
+                pass.draw(0..*n, 0..1);
             }
-            if toggles.skeleton {
-                if let Some((lines, n)) = &self.skeleton {
-                    pass.set_pipeline(&self.overlay_top);
-                    pass.set_vertex_buffer(0, lines.slice(..));
-                    pass.draw(0..*n, 0..1);
-                }
+            if toggles.skeleton
+                && let Some((lines, n)) = &self.skeleton
+            {
+                pass.set_pipeline(&self.overlay_top);
+                pass.set_vertex_buffer(0, lines.slice(..));
+                pass.draw(0..*n, 0..1);
             }
         }
         self.queue.submit([encoder.finish()]);
@@ -461,7 +562,11 @@ impl Renderer {
     }
 
     fn make_target(&self, size: [u32; 2]) -> Target {
-        let extent = wgpu::Extent3d { width: size[0], height: size[1], depth_or_array_layers: 1 };
+        let extent = wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: 1,
+        };
         let texture = |label, format, usage| {
             self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -479,8 +584,12 @@ impl Renderer {
             COLOR_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         );
-        let depth = texture("viewport depth", DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT)
-            .create_view(&Default::default());
+        let depth = texture(
+            "viewport depth",
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default());
         Target { color, depth, size }
     }
 
@@ -491,25 +600,154 @@ impl Renderer {
             }
             let source: &SceneMesh = &mesh.source.meshes[mesh.index_in_scene];
             let edges = triangle_edges(&source.indices);
-            let buffer = buffer_init(&self.device, "edges", index_bytes(&edges), wgpu::BufferUsages::INDEX);
+            let buffer = buffer_init(
+                &self.device,
+                "edges",
+                index_bytes(&edges),
+                wgpu::BufferUsages::INDEX,
+            );
             mesh.edges = Some((buffer, edges.len() as u32));
         }
     }
 }
 
-/// wgpu refuses empty buffers; an empty index list still gets one (unused) index.
-fn index_bytes(indices: &[u32]) -> &[u8] {
-    if indices.is_empty() { bytemuck::cast_slice(&[0u32]) } else { bytemuck::cast_slice(indices) }
+/// The front-face winding to declare so that triangles counter-clockwise in normalized
+/// device coordinates (the glTF convention) are front faces.
+///
+/// wgpu promises that `FrontFace::Ccw` means exactly that, but its OpenGL backend flips the
+/// image vertically when drawing into a texture, which mirrors the winding on some drivers
+/// (seen with Mesa's llvmpipe): closed meshes then show their inside. One probe triangle,
+/// read back once, tells which way this device goes.
+fn probe_front_face(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    shader: &wgpu::ShaderModule,
+) -> wgpu::FrontFace {
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let target = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("winding probe"),
+        size: wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("winding probe"),
+        bind_group_layouts: &[],
+        push_constant_ranges: &[],
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("winding probe"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: shader,
+            entry_point: Some("vs_probe"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState {
+            front_face: wgpu::FrontFace::Ccw,
+            ..Default::default()
+        },
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: shader,
+            entry_point: Some("fs_probe"),
+            compilation_options: Default::default(),
+            targets: &[Some(format.into())],
+        }),
+        multiview: None,
+        cache: None,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("winding probe"),
+        size: 256,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let view = target.create_view(&Default::default());
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("winding probe"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                resolve_target: None,
+                depth_slice: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::RED),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.draw(0..3, 0..1);
+    }
+    encoder.copy_texture_to_buffer(
+        target.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(256),
+                rows_per_image: Some(1),
+            },
+        },
+        wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+    );
+    queue.submit([encoder.finish()]);
+    readback.map_async(wgpu::MapMode::Read, .., |_| {});
+    let front = match device.poll(wgpu::PollType::wait_indefinitely()) {
+        Ok(_) => readback.get_mapped_range(..).first().copied(),
+        Err(_) => None,
+    };
+    // White: as promised; black: mirrored; anything else (the probe failed): trust wgpu.
+    match front {
+        Some(0) => wgpu::FrontFace::Cw,
+        _ => wgpu::FrontFace::Ccw,
+    }
 }
 
-fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, data: &TextureData) -> wgpu::TextureView {
+/// wgpu refuses empty buffers; an empty index list still gets one (unused) index.
+fn index_bytes(indices: &[u32]) -> &[u8] {
+    if indices.is_empty() {
+        bytemuck::cast_slice(&[0u32])
+    } else {
+        bytemuck::cast_slice(indices)
+    }
+}
+
+fn upload_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    data: &TextureData,
+) -> wgpu::TextureView {
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("base colour"),
-        size: wgpu::Extent3d { width: data.width, height: data.height, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width: data.width,
+            height: data.height,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: data.levels.len() as u32,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: COLOR_FORMAT,
+        format: IMAGE_FORMAT,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
@@ -523,8 +761,16 @@ fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, data: &TextureData
                 aspect: wgpu::TextureAspect::All,
             },
             pixels,
-            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * w), rows_per_image: Some(h) },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * w),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
         );
         (w, h) = ((w / 2).max(1), (h / 2).max(1));
     }
@@ -535,20 +781,27 @@ fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, data: &TextureData
 /// costs less than finding them).
 #[must_use]
 pub fn triangle_edges(indices: &[u32]) -> Vec<u32> {
-    indices.chunks_exact(3).flat_map(|t| [t[0], t[1], t[1], t[2], t[2], t[0]]).collect()
+    indices
+        .chunks_exact(3)
+        .flat_map(|t| [t[0], t[1], t[1], t[2], t[2], t[0]])
+        .collect()
 }
 
 /// A ground grid on y = 0 around the model's footprint: lines as `[x, y, z, r, g, b, a]`,
-/// spaced by a power of ten that gives between 5 and 50 cells across, every tenth brighter;
+/// spaced by a power of ten that gives 2 to 20 cells from the centre to the edge, every
+/// tenth line brighter;
 /// the X axis red and the Z axis blue.
 #[must_use]
 pub fn grid_lines(bounds: Option<(Vec3, Vec3)>) -> Vec<f32> {
     let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
     let half = ((hi - lo).length() * 0.75).max(1.0);
-    let spacing = 10f32.powf((half / 5.0).log10().floor());
+    let spacing = 10f32.powf((half / 2.0).log10().floor());
     let centre = (lo + hi) * 0.5;
     let n = (half / spacing).ceil() as i64;
-    let (cx, cz) = ((centre.x / spacing).round() as i64, (centre.z / spacing).round() as i64);
+    let (cx, cz) = (
+        (centre.x / spacing).round() as i64,
+        (centre.z / spacing).round() as i64,
+    );
     let mut out = Vec::new();
     let mut line = |a: [f32; 3], b: [f32; 3], c: [f32; 4]| {
         out.extend_from_slice(&[a[0], a[1], a[2], c[0], c[1], c[2], c[3]]);
@@ -567,8 +820,16 @@ pub fn grid_lines(bounds: Option<(Vec3, Vec3)>) -> Vec<f32> {
                 [0.3, 0.3, 0.3, 0.45]
             }
         };
-        line([x, 0.0, z0], [x, 0.0, z1], colour(cx + i, [0.2, 0.3, 0.9, 0.9]));
-        line([x0, 0.0, z], [x1, 0.0, z], colour(cz + i, [0.9, 0.2, 0.2, 0.9]));
+        line(
+            [x, 0.0, z0],
+            [x, 0.0, z1],
+            colour(cx + i, [0.2, 0.3, 0.9, 0.9]),
+        );
+        line(
+            [x0, 0.0, z],
+            [x1, 0.0, z],
+            colour(cz + i, [0.9, 0.2, 0.2, 0.9]),
+        );
     }
     out
 }
@@ -579,19 +840,28 @@ mod tests {
 
     #[test]
     fn edges_of_two_triangles() {
-        assert_eq!(triangle_edges(&[0, 1, 2, 2, 1, 3]), vec![0, 1, 1, 2, 2, 0, 2, 1, 1, 3, 3, 2]);
+        assert_eq!(
+            triangle_edges(&[0, 1, 2, 2, 1, 3]),
+            vec![0, 1, 1, 2, 2, 0, 2, 1, 1, 3, 3, 2]
+        );
     }
 
     #[test]
     fn the_grid_scales_with_the_model_and_marks_the_axes() {
         let small = grid_lines(Some((Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 3.0, 1.0))));
-        let big = grid_lines(Some((Vec3::new(-100.0, 0.0, -100.0), Vec3::new(100.0, 30.0, 100.0))));
+        let big = grid_lines(Some((
+            Vec3::new(-100.0, 0.0, -100.0),
+            Vec3::new(100.0, 30.0, 100.0),
+        )));
         let lines = |g: &[f32]| g.len() / 14;
         assert!((10..=110).contains(&lines(&small)), "{}", lines(&small));
         assert!((10..=110).contains(&lines(&big)), "{}", lines(&big));
         assert!(small.chunks(7).all(|v| v[1] == 0.0), "on the ground");
         // The Z axis line (x = 0) is blue.
-        let z_axis = small.chunks(14).find(|l| l[0] == 0.0 && l[7] == 0.0).expect("axis line");
+        let z_axis = small
+            .chunks(14)
+            .find(|l| l[0] == 0.0 && l[7] == 0.0)
+            .expect("axis line");
         assert_eq!(&z_axis[3..7], &[0.2, 0.3, 0.9, 0.9]);
     }
 }

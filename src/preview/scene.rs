@@ -98,17 +98,20 @@ impl Scene {
                 for m in &instances {
                     let m = Mat4::from_cols_array(m);
                     for (i, parent) in sk.parents.iter().enumerate() {
-                        if let (Some(p), Some(c)) = (parent, sk.positions.get(i)) {
-                            if let Some(pp) = sk.positions.get(*p as usize) {
-                                skeleton.push(m.transform_point3(*pp).to_array());
-                                skeleton.push(m.transform_point3(*c).to_array());
-                            }
+                        if let (Some(p), Some(c)) = (parent, sk.positions.get(i))
+                            && let Some(pp) = sk.positions.get(*p as usize)
+                        {
+                            skeleton.push(m.transform_point3(*pp).to_array());
+                            skeleton.push(m.transform_point3(*c).to_array());
                         }
                     }
                 }
             }
             let texture = mesh.material.texture.as_ref().and_then(|t| {
-                textures.entry(Arc::as_ptr(t)).or_insert_with(|| decode(t).map(Arc::new)).clone()
+                textures
+                    .entry(Arc::as_ptr(t))
+                    .or_insert_with(|| decode(t).map(Arc::new))
+                    .clone()
             });
             meshes.push(SceneMesh {
                 vertices: interleave(mesh),
@@ -133,7 +136,12 @@ impl Scene {
             modules: model.stats.modules,
             phases: model.stats.phases.clone(),
         };
-        Scene { meshes, skeleton, bounds: model.bounds(), stats }
+        Scene {
+            meshes,
+            skeleton,
+            bounds: model.bounds(),
+            stats,
+        }
     }
 }
 
@@ -144,7 +152,9 @@ fn is_leaf(mesh: &Mesh) -> bool {
         let s = s.to_ascii_lowercase();
         s.contains("leaf") || s.contains("leaves") || s.contains("foliage")
     };
-    matches!(mesh.material.alpha, AlphaMode::Mask(_)) || named(&mesh.name) || named(&mesh.material.name)
+    matches!(mesh.material.alpha, AlphaMode::Mask(_))
+        || named(&mesh.name)
+        || named(&mesh.material.name)
 }
 
 fn interleave(mesh: &Mesh) -> Vec<f32> {
@@ -155,7 +165,9 @@ fn interleave(mesh: &Mesh) -> Vec<f32> {
         let nr = mesh.normals.get(i).copied().unwrap_or(Vec3::Y);
         let uv = mesh.uvs.get(i).copied().unwrap_or_default();
         let c = mesh.colors.get(i).copied().unwrap_or(glam::Vec4::ONE);
-        out.extend_from_slice(&[p.x, p.y, p.z, nr.x, nr.y, nr.z, uv.x, uv.y, c.x, c.y, c.z, c.w]);
+        out.extend_from_slice(&[
+            p.x, p.y, p.z, nr.x, nr.y, nr.z, uv.x, uv.y, c.x, c.y, c.z, c.w,
+        ]);
     }
     out
 }
@@ -172,7 +184,11 @@ fn decode(texture: &Texture) -> Option<TextureData> {
         levels.push(downsample(prev, w, h, nw, nh));
         (w, h) = (nw, nh);
     }
-    Some(TextureData { width, height, levels })
+    Some(TextureData {
+        width,
+        height,
+        levels,
+    })
 }
 
 fn downsample(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
@@ -183,7 +199,12 @@ fn downsample(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
         for x in 0..nw {
             let mut acc = [0.0f32; 4];
             let mut n = 0.0;
-            for (sx, sy) in [(2 * x, 2 * y), (2 * x + 1, 2 * y), (2 * x, 2 * y + 1), (2 * x + 1, 2 * y + 1)] {
+            for (sx, sy) in [
+                (2 * x, 2 * y),
+                (2 * x + 1, 2 * y),
+                (2 * x, 2 * y + 1),
+                (2 * x + 1, 2 * y + 1),
+            ] {
                 if sx < w && sy < h {
                     let i = ((sy * w + sx) * 4) as usize;
                     for k in 0..3 {
@@ -194,7 +215,11 @@ fn downsample(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
                 }
             }
             for (k, a) in acc.iter().enumerate() {
-                out.push(if k < 3 { to_srgb(a / n) } else { (a / n * 255.0).round() as u8 });
+                out.push(if k < 3 {
+                    to_srgb(a / n)
+                } else {
+                    (a / n * 255.0).round() as u8
+                });
             }
         }
     }
@@ -223,7 +248,10 @@ mod tests {
         assert_eq!(scene.meshes[0].instances[1][12], 5.0, "translation column");
         assert_eq!(scene.meshes[0].vertices.len(), 3 * VERTEX_FLOATS);
         // Vertex 1: position (1,0,0), normal +Z, no uv, white.
-        assert_eq!(&scene.meshes[0].vertices[12..24], &[1., 0., 0., 0., 0., 1., 0., 0., 1., 1., 1., 1.]);
+        assert_eq!(
+            &scene.meshes[0].vertices[12..24],
+            &[1., 0., 0., 0., 0., 1., 0., 0., 1., 1., 1., 1.]
+        );
         assert_eq!(scene.stats.triangles, 2);
         assert_eq!(scene.stats.vertices, 6);
         assert_eq!(scene.bounds, Some((Vec3::ZERO, Vec3::new(6.0, 1.0, 0.0))));
@@ -241,12 +269,18 @@ mod tests {
             ..Skeleton::default()
         }));
         let mut leaves = triangle();
-        leaves.material = Arc::new(Material { alpha: AlphaMode::Mask(0.5), ..Material::default() });
+        leaves.material = Arc::new(Material {
+            alpha: AlphaMode::Mask(0.5),
+            ..Material::default()
+        });
         let mut model = Model::new();
         model.add_mesh(bark, Mat4::from_translation(Vec3::Z));
         model.add_mesh(leaves, Mat4::IDENTITY);
         let scene = Scene::new(&model);
-        assert_eq!(scene.skeleton, vec![[0., 0., 1.], [0., 1., 1.], [0., 1., 1.], [1., 2., 1.]]);
+        assert_eq!(
+            scene.skeleton,
+            vec![[0., 0., 1.], [0., 1., 1.], [0., 1., 1.], [1., 2., 1.]]
+        );
         assert!(scene.meshes[1].is_leaf);
         assert_eq!(scene.meshes[1].alpha_cutoff, Some(0.5));
     }
@@ -255,11 +289,18 @@ mod tests {
     fn textures_are_decoded_with_a_full_mip_chain() {
         let mut rgba = Vec::new();
         for i in 0..(4 * 2) {
-            rgba.extend_from_slice(if i % 2 == 0 { &[255, 0, 0, 255] } else { &[0, 0, 255, 0] });
+            rgba.extend_from_slice(if i % 2 == 0 {
+                &[255, 0, 0, 255]
+            } else {
+                &[0, 0, 255, 0]
+            });
         }
         let tex = Arc::new(Texture::from_rgba("t", 4, 2, &rgba).expect("png"));
         let mut mesh = triangle();
-        mesh.material = Arc::new(Material { texture: Some(tex), ..Material::default() });
+        mesh.material = Arc::new(Material {
+            texture: Some(tex),
+            ..Material::default()
+        });
         let scene = Scene::new(&Model::from_mesh(mesh));
         let data = scene.meshes[0].texture.as_ref().expect("decoded");
         assert_eq!((data.width, data.height), (4, 2));

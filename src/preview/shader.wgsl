@@ -1,4 +1,5 @@
-// The preview's shaders: lit instanced meshes, unlit lines.
+// The preview's shaders: lit instanced meshes, unlit lines. Colours are linear until the
+// fragment output, which is sRGB-encoded; overlay line colours are given encoded.
 
 struct Globals {
     view_proj: mat4x4<f32>,
@@ -59,13 +60,19 @@ fn fs_mesh(in: MeshOut, @builtin(front_facing) front: bool) -> @location(0) vec4
     // Hemisphere ambient: warm ground below, cool sky above.
     let ambient = mix(vec3<f32>(0.16, 0.14, 0.12), vec3<f32>(0.38, 0.42, 0.50), n.y * 0.5 + 0.5);
     let light = ambient + vec3<f32>(1.0, 0.95, 0.85) * sun * 0.85;
-    return vec4<f32>(c.rgb * light, 1.0);
+    return vec4<f32>(srgb(c.rgb * light), 1.0);
+}
+
+// Linear to sRGB encoding (the viewport texture is read by egui as encoded colour).
+fn srgb(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, x * 12.92, x <= vec3<f32>(0.0031308));
 }
 
 @fragment
 fn fs_mesh_lines(in: MeshOut) -> @location(0) vec4<f32> {
     let c = m.base_color * in.color;
-    return vec4<f32>(c.rgb, 1.0);
+    return vec4<f32>(srgb(c.rgb), 1.0);
 }
 
 struct LineIn {
@@ -89,4 +96,21 @@ fn vs_line(v: LineIn) -> LineOut {
 @fragment
 fn fs_line(in: LineOut) -> @location(0) vec4<f32> {
     return in.color;
+}
+
+// Probe: one triangle, counter-clockwise in normalized device coordinates, covering the
+// target; white where the rasterizer calls it front-facing. Tells whether this backend
+// needs the front face declared clockwise.
+@vertex
+fn vs_probe(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    var corners = array<vec2<f32>, 3>(vec2<f32>(-1.0, -1.0), vec2<f32>(3.0, -1.0), vec2<f32>(-1.0, 3.0));
+    return vec4<f32>(corners[i], 0.5, 1.0);
+}
+
+@fragment
+fn fs_probe(@builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    if front {
+        return vec4<f32>(1.0, 1.0, 1.0, 1.0);
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, 1.0);
 }

@@ -31,20 +31,31 @@ pub struct Watcher {
 
 impl Watcher {
     /// A watcher sending every batch of changed paths to `events`, then calling `wake`.
-    pub fn new(events: Sender<Vec<PathBuf>>, wake: impl Fn() + Send + 'static) -> notify::Result<Watcher> {
+    pub fn new(
+        events: Sender<Vec<PathBuf>>,
+        wake: impl Fn() + Send + 'static,
+    ) -> notify::Result<Watcher> {
         let inner = notify::recommended_watcher(move |event: notify::Result<notify::Event>| {
             let Ok(event) = event else { return };
             if is_change(&event.kind) && events.send(event.paths).is_ok() {
                 wake();
             }
         })?;
-        Ok(Watcher { inner, folders: BTreeSet::new() })
+        Ok(Watcher {
+            inner,
+            folders: BTreeSet::new(),
+        })
     }
 
     /// Watches the folders of `files` (keys from [`watch_key`]) and no others.
-    pub fn watch_files<'a>(&mut self, files: impl IntoIterator<Item = &'a PathBuf>) -> notify::Result<()> {
-        let wanted: BTreeSet<PathBuf> =
-            files.into_iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect();
+    pub fn watch_files<'a>(
+        &mut self,
+        files: impl IntoIterator<Item = &'a PathBuf>,
+    ) -> notify::Result<()> {
+        let wanted: BTreeSet<PathBuf> = files
+            .into_iter()
+            .filter_map(|f| f.parent().map(Path::to_path_buf))
+            .collect();
         for gone in self.folders.difference(&wanted) {
             // A folder that was deleted is no longer watched anyway.
             let _ = self.inner.unwatch(gone);

@@ -35,7 +35,10 @@ impl Worker {
         let thread = std::thread::Builder::new()
             .name("pge-generate".into())
             .spawn(move || serve(&engine, &rx, &reports, &wake))?;
-        Ok(Worker { requests: Some(tx), thread: Some(thread) })
+        Ok(Worker {
+            requests: Some(tx),
+            thread: Some(thread),
+        })
     }
 
     /// Queues a request.
@@ -61,10 +64,19 @@ fn serve(engine: &Engine, rx: &Receiver<Request>, reports: &Sender<Report>, wake
         // Only the newest queued request matters.
         while let Ok(newer) = rx.try_recv() {
             let old = std::mem::replace(&mut request, newer);
-            let _ = reports.send(Report { id: old.id, outcome: Outcome::Cancelled });
+            let _ = reports.send(Report {
+                id: old.id,
+                outcome: Outcome::Cancelled,
+            });
         }
         let outcome = generate(engine, &request);
-        if reports.send(Report { id: request.id, outcome }).is_err() {
+        if reports
+            .send(Report {
+                id: request.id,
+                outcome,
+            })
+            .is_err()
+        {
             return;
         }
         wake();
@@ -86,7 +98,12 @@ pub fn generate(engine: &Engine, request: &Request) -> Outcome {
     };
     let session = match engine.session(options) {
         Ok(s) => s,
-        Err(e) => return Outcome::Failed { message: e.to_string(), loaded: Vec::new() },
+        Err(e) => {
+            return Outcome::Failed {
+                message: e.to_string(),
+                loaded: Vec::new(),
+            };
+        }
     };
     let t0 = Instant::now();
     let mut taken = 0u32;
@@ -96,7 +113,10 @@ pub fn generate(engine: &Engine, request: &Request) -> Outcome {
         let mut algorithm = session.algorithm_from(value)?;
         let ctx = session.context();
         let mut model = pge_engine::algorithm::run(&mut *algorithm, &ctx, &mut |s| taken = s)?;
-        model.stats.phases.insert(0, ("script".into(), script_seconds));
+        model
+            .stats
+            .phases
+            .insert(0, ("script".into(), script_seconds));
         model.validate()?;
         Ok::<_, pge_engine::Error>(model)
     })();
@@ -121,7 +141,10 @@ pub fn generate(engine: &Engine, request: &Request) -> Outcome {
                 settings: settings.clone(),
             }))
         }
-        Err(e) => Outcome::Failed { message: one_line(&e.to_string()), loaded },
+        Err(e) => Outcome::Failed {
+            message: one_line(&e.to_string()),
+            loaded,
+        },
     }
 }
 
@@ -151,7 +174,12 @@ mod tests {
     use super::*;
 
     fn request(id: u64, script: &Path, settings: Settings) -> Request {
-        Request { id, script: script.to_path_buf(), settings, cancel: Arc::new(AtomicBool::new(false)) }
+        Request {
+            id,
+            script: script.to_path_buf(),
+            settings,
+            cancel: Arc::new(AtomicBool::new(false)),
+        }
     }
 
     const TRIANGLE: &str = r#"
@@ -165,7 +193,10 @@ mod tests {
         let script = dir.path().join("tri.lua");
         std::fs::write(&script, TRIANGLE).expect("write");
         let engine = Engine::builder().build().expect("engine");
-        let settings = Settings { params: vec![("size".into(), "2".into())], ..Settings::default() };
+        let settings = Settings {
+            params: vec![("size".into(), "2".into())],
+            ..Settings::default()
+        };
         let Outcome::Generated(g) = generate(&engine, &request(1, &script, settings)) else {
             panic!("expected a model")
         };
@@ -192,7 +223,10 @@ mod tests {
             other => panic!("expected an error, got {other:?}"),
         }
         let gone = dir.path().join("gone.lua");
-        assert!(matches!(generate(&engine, &request(2, &gone, Settings::default())), Outcome::Gone));
+        assert!(matches!(
+            generate(&engine, &request(2, &gone, Settings::default())),
+            Outcome::Gone
+        ));
         std::fs::write(&script, "while true do end").expect("write");
         let req = request(3, &script, Settings::default());
         let cancel = req.cancel.clone();
@@ -213,7 +247,14 @@ mod tests {
         let (tx, rx) = channel();
         let worker = Worker::start(engine, tx, || {}).expect("thread");
         for id in 1..=3 {
-            worker.send(request(id, &script, Settings { seed: id, ..Settings::default() }));
+            worker.send(request(
+                id,
+                &script,
+                Settings {
+                    seed: id,
+                    ..Settings::default()
+                },
+            ));
         }
         let mut last = None;
         while last.is_none() {
@@ -222,7 +263,13 @@ mod tests {
                 last = Some(report);
             }
         }
-        let Some(Report { outcome: Outcome::Generated(g), .. }) = last else { panic!("model") };
+        let Some(Report {
+            outcome: Outcome::Generated(g),
+            ..
+        }) = last
+        else {
+            panic!("model")
+        };
         assert_eq!(g.settings.seed, 3);
         drop(worker);
     }

@@ -1,0 +1,159 @@
+//! `pge preview`: a window that shows the model a script makes and regenerates it on save.
+//!
+//! The script runs on a background thread ([`worker`]); a save of the script or of any file
+//! it loaded ([`watch`]) starts a new generation that supersedes the running one, following
+//! the rules of [`reload`]; the last good model stays on screen while an error is shown as
+//! `FILE:LINE: message`. The model is drawn with wgpu ([`render`]) in an egui window
+//! ([`app`]); the side panel holds the script's parameters, the seed, a step scrubber,
+//! statistics and export.
+//!
+//! With `--screenshot PNG` the window writes its first complete frame (after the first
+//! generation has ended) to the file and closes; the command then fails if the generation
+//! did. Setting the environment variable `PGE_PREVIEW_FPS=1` prints frames per second to
+//! stderr and starts the turntable (for measuring the viewport's speed).
+
+mod app;
+pub mod camera;
+pub mod reload;
+pub mod render;
+pub mod scene;
+pub mod watch;
+pub mod worker;
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use anyhow::{anyhow, bail};
+use eframe::egui;
+use pge_engine::EngineBuilder;
+
+use self::app::{AppOptions, PreviewApp};
+use self::reload::Settings;
+
+/// Arguments of `pge preview`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct PreviewArgs {
+    /// The Lua script to show.
+    pub script: PathBuf,
+    /// Seed of every random draw.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Overrides a parameter declared with pge.params (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
+    pub set: Vec<(String, String)>,
+    /// Writes the first complete frame to this PNG file and exits.
+    #[arg(long, value_name = "PNG")]
+    pub screenshot: Option<PathBuf>,
+    /// Seconds one generation may take.
+    #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = parse_seconds)]
+    pub time_limit: f64,
+    /// MiB of memory the Lua state may use.
+    #[arg(long, value_name = "MIB", default_value_t = 4096)]
+    pub memory_limit: usize,
+}
+
+fn parse_set(text: &str) -> Result<(String, String), String> {
+    match text.split_once('=') {
+        Some((name, value)) if !name.trim().is_empty() => {
+            Ok((name.trim().to_string(), value.to_string()))
+        }
+        _ => Err(format!("'{text}' is not NAME=VALUE")),
+    }
+}
+
+fn parse_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 => Ok(s),
+        _ => Err(format!("'{text}' is not a positive number of seconds")),
+    }
+}
+
+/// Opens the preview window for `args.script` with every plugin of the `pge` command.
+pub fn preview(args: &PreviewArgs) -> anyhow::Result<()> {
+    preview_with(args, crate::default_engine())
+}
+
+/// Opens the preview window with the engine `builder` makes (plugins of a host application).
+pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Result<()> {
+    let engine = builder
+        .memory_limit_mib(args.memory_limit)
+        .time_limit(Some(Duration::from_secs_f64(args.time_limit)))
+        .build()?;
+    let settings = Settings {
+        seed: args.seed,
+        params: args.set.clone(),
+        steps: None,
+    };
+    let screenshot_result = Arc::new(Mutex::new(None));
+    let measuring = std::env::var_os("PGE_PREVIEW_FPS").is_some_and(|v| v == "1");
+    let options = AppOptions {
+        screenshot: args.screenshot.clone(),
+        screenshot_result: screenshot_result.clone(),
+        log_fps: measuring,
+        turntable: measuring,
+    };
+    let title = format!("PGE preview: {}", args.script.display());
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title(title.clone())
+            .with_app_id("pge-preview")
+            .with_inner_size([1280.0, 800.0]),
+        ..eframe::NativeOptions::default()
+    };
+    let script = args.script.clone();
+    let failure: Arc<Mutex<Option<anyhow::Error>>> = Arc::new(Mutex::new(None));
+    let failure_slot = failure.clone();
+    eframe::run_native(
+        &title,
+        native,
+        Box::new(move |cc| {
+            let app = PreviewApp::new(cc, engine, script, settings, options);
+            match app {
+                Ok(app) => Ok(Box::new(app) as Box<dyn eframe::App>),
+                Err(e) => {
+                    let message = e.to_string();
+                    if let Ok(mut slot) = failure_slot.lock() {
+                        *slot = Some(e);
+                    }
+                    Err(message.into())
+                }
+            }
+        }),
+    )
+    .map_err(|e| {
+        let inner = failure.lock().ok().and_then(|mut f| f.take());
+        inner.unwrap_or_else(|| anyhow!("cannot open the preview window: {e}"))
+    })?;
+    if let Some(path) = &args.screenshot {
+        let result = screenshot_result
+            .lock()
+            .map_err(|_| anyhow!("screenshot state poisoned"))?
+            .take();
+        match result {
+            Some(r) => r?,
+            None => bail!(
+                "the window closed before the screenshot {} was taken",
+                path.display()
+            ),
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_and_seconds_are_parsed() {
+        assert_eq!(parse_set("height=3.5"), Ok(("height".into(), "3.5".into())));
+        assert_eq!(parse_set("name=a=b"), Ok(("name".into(), "a=b".into())));
+        assert!(parse_set("height").is_err());
+        assert!(parse_set("=3").is_err());
+        assert_eq!(parse_seconds("2.5"), Ok(2.5));
+        assert!(parse_seconds("0").is_err());
+        assert!(parse_seconds("inf").is_err());
+        assert!(parse_seconds("x").is_err());
+    }
+}
