@@ -1,8 +1,7 @@
 //! The window: side panel, viewport, input, screenshot.
 
-use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -10,10 +9,9 @@ use eframe::egui::{self, Color32, RichText};
 use pge_engine::{Engine, ParamInfo, ParamValue};
 
 use super::camera::OrbitCamera;
-use super::reload::{DEBOUNCE, Generation, Reloader, Report, Settings, Status};
+use super::live::Live;
+use super::reload::{Generation, Settings, Status};
 use super::render::{Renderer, Toggles};
-use super::watch::{Watcher, watch_key};
-use super::worker::Worker;
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
 
@@ -43,13 +41,7 @@ enum Shot {
 
 /// The preview application.
 pub struct PreviewApp {
-    reloader: Reloader,
-    worker: Worker,
-    reports: Receiver<Report>,
-    watcher: Option<Watcher>,
-    file_events: Receiver<Vec<PathBuf>>,
-    watched: BTreeSet<PathBuf>,
-    watch_error: Option<String>,
+    live: Live,
     renderer: Option<Renderer>,
     uploaded: u64,
     camera: OrbitCamera,
@@ -82,27 +74,14 @@ impl PreviewApp {
         settings: Settings,
         options: AppOptions,
     ) -> anyhow::Result<PreviewApp> {
-        let ctx = cc.egui_ctx.clone();
-        let (report_tx, reports) = channel();
-        let wake = ctx.clone();
-        let worker = Worker::start(Arc::new(engine), report_tx, move || wake.request_repaint())?;
-        let (event_tx, file_events) = channel();
-        let wake = ctx.clone();
-        let (watcher, watch_error) = match Watcher::new(event_tx, move || wake.request_repaint()) {
-            Ok(w) => (Some(w), None),
-            Err(e) => (None, Some(format!("live reload is off: {e}"))),
-        };
+        let wake = cc.egui_ctx.clone();
+        let live = Live::start(Arc::new(engine), script.clone(), settings, move || {
+            wake.request_repaint()
+        })?;
         let renderer = cc.wgpu_render_state.as_ref().map(Renderer::new);
-        let key = watch_key(&script);
         let export_path = script.with_extension("glb").to_string_lossy().into_owned();
         Ok(PreviewApp {
-            reloader: Reloader::new(script, key, settings, DEBOUNCE),
-            worker,
-            reports,
-            watcher,
-            file_events,
-            watched: BTreeSet::new(),
-            watch_error,
+            live,
             renderer,
             uploaded: 0,
             camera: OrbitCamera::default(),
@@ -129,36 +108,21 @@ impl PreviewApp {
 
     /// File events, worker reports, new requests, the watch list.
     fn pump(&mut self) {
-        let now = Instant::now();
-        while let Ok(paths) = self.file_events.try_recv() {
-            self.reloader.file_event(&paths, now);
-        }
-        while let Ok(report) = self.reports.try_recv() {
-            self.reloader.report(report, now);
-        }
-        if let Some(request) = self.reloader.poll(now) {
-            self.worker.send(request);
-        }
-        if self.watched != *self.reloader.watched() {
-            self.watched = self.reloader.watched().clone();
-            if let Some(w) = &mut self.watcher {
-                self.watch_error = w
-                    .watch_files(&self.watched)
-                    .err()
-                    .map(|e| format!("watching: {e}"));
-            }
-        }
-        match self.reloader.status() {
+        self.live.pump(Instant::now());
+        match self.live.reloader().status() {
             Status::Error(message) if self.shown_error.as_ref() != Some(message) => {
-                eprintln!("{message}");
+                // A screenshot run reports its error when the window closes.
+                if self.shot.is_none() {
+                    eprintln!("{message}");
+                }
                 self.shown_error = Some(message.clone());
             }
             Status::Ready => self.shown_error = None,
             _ => {}
         }
-        if self.uploaded != self.reloader.generation_count() {
-            self.uploaded = self.reloader.generation_count();
-            if let Some(g) = self.reloader.current() {
+        if self.uploaded != self.live.reloader().generation_count() {
+            self.uploaded = self.live.reloader().generation_count();
+            if let Some(g) = self.live.reloader().current() {
                 if let Some(r) = &mut self.renderer {
                     r.upload(&g.scene);
                 }
@@ -177,11 +141,11 @@ impl PreviewApp {
     }
 
     fn settings_changed(&mut self, settings: Settings) {
-        self.reloader.set_settings(settings);
+        self.live.reloader_mut().set_settings(settings);
     }
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
-        let script = self.reloader.script().to_path_buf();
+        let script = self.live.reloader().script().to_path_buf();
         ui.heading(
             script
                 .file_name()
@@ -210,10 +174,11 @@ impl PreviewApp {
     }
 
     fn status_line(&self, ui: &mut egui::Ui) {
-        match self.reloader.status() {
+        match self.live.reloader().status() {
             Status::Running => {
                 let secs = self
-                    .reloader
+                    .live
+                    .reloader()
                     .running_since()
                     .map_or(0.0, |t| t.elapsed().as_secs_f64());
                 ui.horizontal(|ui| {
@@ -222,30 +187,35 @@ impl PreviewApp {
                 });
             }
             Status::Ready => {
-                let secs = self.reloader.current().map_or(0.0, |g| g.seconds);
+                let secs = self.live.reloader().current().map_or(0.0, |g| g.seconds);
                 ui.label(format!("up to date (generated in {secs:.2} s)"));
             }
             Status::Error(message) => {
                 ui.label(RichText::new(message).color(ERROR_COLOR).monospace());
             }
             Status::Gone => {
-                ui.label(RichText::new(gone_message(self.reloader.script())).color(ERROR_COLOR));
+                ui.label(
+                    RichText::new(gone_message(self.live.reloader().script())).color(ERROR_COLOR),
+                );
             }
         }
-        if self.reloader.is_running() && !matches!(self.reloader.status(), Status::Running) {
+        if self.live.reloader().is_running()
+            && !matches!(self.live.reloader().status(), Status::Running)
+        {
             ui.horizontal(|ui| {
                 ui.spinner();
                 ui.label("generating…");
             });
         }
-        if let Some(e) = &self.watch_error {
+        if let Some(e) = self.live.watch_error() {
             ui.label(RichText::new(e).color(ERROR_COLOR));
         }
     }
 
     fn params_ui(&mut self, ui: &mut egui::Ui) {
         let params: Vec<ParamInfo> = self
-            .reloader
+            .live
+            .reloader()
             .current()
             .map(|g| g.params.clone())
             .unwrap_or_default();
@@ -277,12 +247,12 @@ impl PreviewApp {
         if ui.button("Reset to defaults").clicked() {
             self.edits.clear();
             self.text_edits.clear();
-            let mut s = self.reloader.settings().clone();
+            let mut s = self.live.reloader().settings().clone();
             s.params.clear();
             self.settings_changed(s);
         }
         if !changed.is_empty() {
-            let mut s = self.reloader.settings().clone();
+            let mut s = self.live.reloader().settings().clone();
             for (name, v) in changed {
                 s.set_param(&name, v.to_string());
                 self.edits.insert(name, v);
@@ -335,7 +305,7 @@ impl PreviewApp {
     }
 
     fn seed_ui(&mut self, ui: &mut egui::Ui) {
-        let mut s = self.reloader.settings().clone();
+        let mut s = self.live.reloader().settings().clone();
         ui.horizontal(|ui| {
             ui.label("seed");
             ui.add(egui::DragValue::new(&mut s.seed));
@@ -368,7 +338,7 @@ impl PreviewApp {
         } else {
             ui.label("Step-wise algorithms get a step scrubber here.");
         }
-        if s != *self.reloader.settings() {
+        if s != *self.live.reloader().settings() {
             self.settings_changed(s);
         }
     }
@@ -392,14 +362,14 @@ impl PreviewApp {
     }
 
     fn frame_model(&mut self) {
-        if let Some(b) = self.reloader.current().and_then(|g| g.scene.bounds) {
+        if let Some(b) = self.live.reloader().current().and_then(|g| g.scene.bounds) {
             self.camera.frame(b);
             self.viewport_dirty = true;
         }
     }
 
     fn stats_ui(&mut self, ui: &mut egui::Ui) {
-        let Some(g) = self.reloader.current() else {
+        let Some(g) = self.live.reloader().current() else {
             ui.label("no model yet");
             return;
         };
@@ -422,7 +392,7 @@ impl PreviewApp {
                 row(&format!("⏱ {phase}"), format!("{:.1} ms", secs * 1000.0));
             }
             row("generation", format!("{:.1} ms", g.seconds * 1000.0));
-            if let Some(l) = self.reloader.last_latency() {
+            if let Some(l) = self.live.reloader().last_latency() {
                 row(
                     "save → model",
                     format!("{:.0} ms", l.as_secs_f64() * 1000.0),
@@ -440,12 +410,12 @@ impl PreviewApp {
             if ui.button("Export .glb").clicked() {
                 let path = stem.with_extension("glb");
                 self.export_path = path.to_string_lossy().into_owned();
-                self.export_message = self.reloader.current().map(|g| export(g, &path));
+                self.export_message = self.live.reloader().current().map(|g| export(g, &path));
             }
             if ui.button("Export .obj").clicked() {
                 let path = stem.with_extension("obj");
                 self.export_path = path.to_string_lossy().into_owned();
-                self.export_message = self.reloader.current().map(|g| export(g, &path));
+                self.export_message = self.live.reloader().current().map(|g| export(g, &path));
             }
         });
         match &self.export_message {
@@ -531,9 +501,9 @@ impl PreviewApp {
                 );
             }
         }
-        let banner = match self.reloader.status() {
+        let banner = match self.live.reloader().status() {
             Status::Error(m) => Some(m.clone()),
-            Status::Gone => Some(gone_message(self.reloader.script())),
+            Status::Gone => Some(gone_message(self.live.reloader().script())),
             _ => None,
         };
         if let Some(text) = banner {
@@ -549,7 +519,7 @@ impl PreviewApp {
             );
             painter.rect_filled(r, 4.0, Color32::from_rgba_unmultiplied(40, 0, 0, 220));
             painter.galley(r.min + egui::vec2(8.0, 6.0), galley, ERROR_COLOR);
-        } else if self.reloader.current().is_none() {
+        } else if self.live.reloader().current().is_none() {
             painter.text(
                 rect.center(),
                 egui::Align2::CENTER_CENTER,
@@ -597,10 +567,10 @@ impl PreviewApp {
         };
         match state {
             Shot::Waiting => {
-                let settled = !self.reloader.is_running()
-                    && (self.reloader.current().is_some()
-                        || !matches!(self.reloader.status(), Status::Running))
-                    && self.uploaded == self.reloader.generation_count()
+                let settled = !self.live.reloader().is_running()
+                    && (self.live.reloader().current().is_some()
+                        || !matches!(self.live.reloader().status(), Status::Running))
+                    && self.uploaded == self.live.reloader().generation_count()
                     && !self.viewport_dirty;
                 if settled {
                     ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(
@@ -619,11 +589,13 @@ impl PreviewApp {
                 if let Some(image) = image {
                     let mut result = save_png(path, &image);
                     if result.is_ok() {
-                        match self.reloader.status() {
+                        match self.live.reloader().status() {
                             Status::Error(m) => result = Err(anyhow::anyhow!("{m}")),
                             Status::Gone => {
-                                result =
-                                    Err(anyhow::anyhow!("{}", gone_message(self.reloader.script())))
+                                result = Err(anyhow::anyhow!(
+                                    "{}",
+                                    gone_message(self.live.reloader().script())
+                                ))
                             }
                             _ => {}
                         }
@@ -676,10 +648,10 @@ impl eframe::App for PreviewApp {
         self.screenshot(ctx);
         if self.turntable {
             ctx.request_repaint();
-        } else if self.reloader.is_running() {
+        } else if self.live.reloader().is_running() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
-        if let Some(at) = self.reloader.next_wake() {
+        if let Some(at) = self.live.reloader().next_wake() {
             ctx.request_repaint_after(at.saturating_duration_since(Instant::now()));
         }
     }

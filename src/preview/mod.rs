@@ -14,6 +14,7 @@
 
 mod app;
 pub mod camera;
+pub mod live;
 pub mod reload;
 pub mod render;
 pub mod scene;

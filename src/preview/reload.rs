@@ -235,6 +235,13 @@ impl Reloader {
         self.last_latency
     }
 
+    /// Cancels the running generation (the window is closing).
+    pub fn cancel_running(&self) {
+        if let Some((_, cancel, _)) = &self.running {
+            cancel.store(true, Ordering::Relaxed);
+        }
+    }
+
     /// Notes that `paths` changed at `now`; returns whether any of them is watched.
     pub fn file_event<P: AsRef<Path>>(&mut self, paths: &[P], now: Instant) -> bool {
         let relevant = paths.iter().any(|p| self.watched.contains(p.as_ref()));

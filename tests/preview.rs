@@ -1,0 +1,163 @@
+//! End-to-end tests of `pge preview --screenshot`: the real window, under Xvfb with Mesa's
+//! software renderer (`.ci/preview-deps` installs both).
+//!
+//! Without an X server (no `xvfb-run`, no `DISPLAY`) the tests print why and pass, unless the
+//! `CI` variable is set: in CI they must run.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// One window at a time: `xvfb-run -a` picks display numbers racily.
+static DISPLAY_LOCK: Mutex<()> = Mutex::new(());
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
+}
+
+/// The command that runs `pge` with a display, or why there is none.
+fn pge_with_display() -> Result<Command, String> {
+    let pge = env!("CARGO_BIN_EXE_pge");
+    if on_path("xvfb-run") && on_path("Xvfb") {
+        let mut cmd = Command::new("xvfb-run");
+        cmd.args(["-a", "-s", "-screen 0 1280x1024x24 -nolisten tcp", pge]);
+        return Ok(cmd);
+    }
+    if std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty()) {
+        return Ok(Command::new(pge));
+    }
+    Err("no X server: xvfb-run is not installed and DISPLAY is not set (run .ci/preview-deps)".into())
+}
+
+/// Runs `pge preview ARGS` with a display; `None` (after printing why) when the test must be
+/// skipped.
+fn preview(args: &[&str], dir: &Path) -> Option<Output> {
+    let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let mut cmd = match pge_with_display() {
+        Ok(cmd) => cmd,
+        Err(why) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipping the preview window test: {why}");
+            return None;
+        }
+        Err(why) => panic!("CI is set but the preview cannot run: {why}"),
+    };
+    cmd.arg("preview").args(args).current_dir(dir);
+    cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null());
+    let mut child = cmd.spawn().expect("start pge preview");
+    let end = Instant::now() + Duration::from_secs(300);
+    loop {
+        if child.try_wait().expect("wait").is_some() {
+            break;
+        }
+        if Instant::now() > end {
+            let _ = child.kill();
+            panic!("pge preview {args:?} did not finish in 300 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Some(child.wait_with_output().expect("output"))
+}
+
+/// Pixel counts of a screenshot, right of the side panel (the viewport).
+struct Picture {
+    width: u32,
+    height: u32,
+    /// Distinct clearly coloured (not grey) values in the viewport.
+    colours: usize,
+    bluish: usize,
+    reddish: usize,
+}
+
+fn look_at(png: &Path) -> Picture {
+    let img = image::open(png).expect("a PNG").to_rgba8();
+    let (width, height) = img.dimensions();
+    let mut colours = std::collections::HashSet::new();
+    let (mut bluish, mut reddish) = (0, 0);
+    for (x, _, p) in img.enumerate_pixels() {
+        let [r, g, b, _] = p.0.map(i32::from);
+        if x < width / 4 {
+            continue;
+        }
+        if r.max(g).max(b) - r.min(g).min(b) > 30 {
+            colours.insert(p.0);
+        }
+        if b > r + 40 && b > g + 15 {
+            bluish += 1;
+        }
+        if r > b + 40 && r > g + 15 {
+            reddish += 1;
+        }
+    }
+    Picture { width, height, colours: colours.len(), bluish, reddish }
+}
+
+#[test]
+fn screenshot_of_an_example_shows_the_model() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let png = dir.path().join("spiral.png");
+    let script = root().join("scripts/examples/spiral.lua");
+    let Some(out) = preview(
+        &[script.to_str().expect("utf-8 path"), "--screenshot", png.to_str().expect("utf-8 path")],
+        dir.path(),
+    ) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "pge preview failed: {stderr}");
+    let pic = look_at(&png);
+    assert!(pic.width >= 640 && pic.height >= 400, "{}x{}", pic.width, pic.height);
+    assert!(pic.colours > 50, "a lit model has many shades, this one {}", pic.colours);
+    // The spiral's boxes go from blue at the bottom to orange at the top: both must fill a
+    // good part of the viewport (the red and blue axis lines alone are a few hundred pixels).
+    assert!(pic.bluish > 5000, "blue boxes: {} pixels", pic.bluish);
+    assert!(pic.reddish > 5000, "orange boxes: {} pixels", pic.reddish);
+}
+
+#[test]
+fn a_script_error_is_shown_and_fails_the_screenshot_run() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("broken.lua"), "local x = 1\nlocal y = = 2\nreturn x\n").expect("write");
+    let Some(out) = preview(&["broken.lua", "--screenshot", "broken.png"], dir.path()) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("broken.lua:2:"), "FILE:LINE in: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // The window still showed the error: the picture was taken.
+    let pic = look_at(&dir.path().join("broken.png"));
+    assert!(pic.reddish > 200, "the error banner is red: {} pixels", pic.reddish);
+}
+
+#[test]
+fn a_missing_script_is_reported_as_gone() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let Some(out) = preview(&["nothing.lua", "--screenshot", "nothing.png"], dir.path()) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("nothing.lua: file is gone"), "{stderr}");
+}
+
+#[test]
+fn a_script_that_runs_forever_is_stopped_by_the_time_limit() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("forever.lua"), "local n = 0\nwhile true do n = n + 1 end\n").expect("write");
+    let Some(out) = preview(
+        &["forever.lua", "--time-limit", "1", "--screenshot", "forever.png"],
+        dir.path(),
+    ) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("forever.lua:2:"), "{stderr}");
+    assert!(stderr.contains("time limit"), "{stderr}");
+}
