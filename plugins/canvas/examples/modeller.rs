@@ -1,4 +1,4 @@
-//! Runs a modeller script with the extruder, metaballs and canvas plugins, writes the `.glb`
+//! Runs a modeller script with the extruder, metaballs, canvas and L-system plugins, writes the `.glb`
 //! and a shaded software render (`.png`) of it, to look at a script's output without a
 //! window:
 //!
@@ -37,6 +37,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)
+        .plugin(pge_lsystem::LSystemPlugin)
         .build()?;
     let session = engine.session(options)?;
     let generated = session.generate(&script, &mut |_, _| {})?;
@@ -52,13 +53,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         .sum();
     let bounds = model.bounds();
     println!(
-        "{}: {} meshes, {} instances, {} vertices, {} triangles, {} line segments, bounds {:?}",
+        "{}: {} meshes, {} instances, {} vertices, {} triangles, {} line segments, {} modules, bounds {:?}",
         script.display(),
         model.meshes.len(),
         model.instances.len(),
         model.vertex_count(),
         model.triangle_count(),
         lines,
+        model.stats.modules,
         bounds
     );
     render(&model).save(out.with_extension("png"))?;
