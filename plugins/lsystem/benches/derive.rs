@@ -123,6 +123,37 @@ fn bench_context(c: &mut Criterion) {
     g.finish();
 }
 
+fn bench_lua(c: &mut Criterion) {
+    use pge_engine::{Engine, Location, SessionOptions};
+    let engine = Engine::builder()
+        .plugin(pge_lsystem::LSystemPlugin)
+        .build()
+        .expect("engine");
+    let session = engine.session(SessionOptions::default()).expect("session");
+    let value = session
+        .eval_value(
+            r#"local l = pge.LSystem("bench")
+            l:axiom(string.rep("A", 100000))
+            l:RRule("A", function(a) return { B{}, A{}, B{} } end)
+            l:iterations(1)
+            return l"#,
+        )
+        .expect("script");
+    let ctx = session.context();
+    let location = Location::new("bench", 0);
+    let mut g = c.benchmark_group("lua_rules");
+    g.throughput(Throughput::Elements(300_000));
+    g.sample_size(10);
+    g.bench_function("RRule A -> {B{}, A{}, B{}} on 100k", |bench| {
+        bench.iter(|| {
+            let d =
+                pge_lsystem::derive_value(session.lua(), &value, &ctx, &location).expect("derives");
+            assert_eq!(d.len(), 300_000);
+        });
+    });
+    g.finish();
+}
+
 fn bench_memory(_: &mut Criterion) {
     // One million modules with two numeric parameters.
     let mut string = ModuleString::new();
@@ -143,6 +174,7 @@ criterion_group!(
     bench_classic,
     bench_parametric,
     bench_context,
+    bench_lua,
     bench_memory
 );
 criterion_main!(benches);

@@ -35,8 +35,8 @@ mod system;
 
 pub use error::LsError;
 pub use lua::{
-    DefaultInterpreter, Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, LuaSymbol,
-    check_mutable, derive_value, register_interpreter,
+    DefaultInterpreter, Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, check_mutable,
+    derive_value, register_interpreter,
 };
 pub use module_string::ModuleString;
 pub use symbol::{Sym, SymbolTable};

@@ -12,8 +12,8 @@ use pge_engine::{Algorithm, Error, Location, RunContext, Step};
 use rand_mt::Mt;
 
 use super::object::{Axiom, Config, LuaIRule, LuaRule};
-use super::symbols::LuaSymbol;
-use super::{DefaultInterpreter, interpreters, session_symbols, set_deriving, with_shared};
+use super::symbols::{SymbolTags, tags};
+use super::{DefaultInterpreter, deriving_cell, interpreters, session_symbols};
 use crate::system::uniform;
 use crate::{Host, LsError, ModuleString, StepOptions, Sym, SymbolTable, System};
 
@@ -130,6 +130,8 @@ struct LuaHost<'a> {
     instance_ud: Option<AnyUserData>,
     interpret: bool,
     numbers: Vec<f64>,
+    tags: Rc<RefCell<SymbolTags>>,
+    deriving: Rc<RefCell<Option<Rc<str>>>>,
 }
 
 impl LuaHost<'_> {
@@ -165,19 +167,15 @@ impl LuaHost<'_> {
         HostError::Engine(Error::script(location, message))
     }
 
-    fn push_symbol(&mut self, s: &LuaSymbol, out: &mut ModuleString) -> mlua::Result<()> {
-        match &s.params {
-            _ if s.sym == Sym::PUSH || s.sym == Sym::POP => out.push(s.sym, &[]),
-            None => out.push(s.sym, &[]),
-            Some(t) => {
-                if numeric_params(t, &mut self.numbers)? {
-                    out.push(s.sym, &self.numbers);
-                } else {
-                    let slot = self.side.len() as u32;
-                    self.side.push(Value::Table(t.clone()));
-                    out.push_external(s.sym, slot);
-                }
-            }
+    fn push_symbol(&mut self, sym: Sym, t: &Table, out: &mut ModuleString) -> mlua::Result<()> {
+        if sym == Sym::PUSH || sym == Sym::POP {
+            out.push(sym, &[]);
+        } else if numeric_params(t, &mut self.numbers)? {
+            out.push(sym, &self.numbers);
+        } else {
+            let slot = self.side.len() as u32;
+            self.side.push(Value::Table(t.clone()));
+            out.push_external(sym, slot);
         }
         Ok(())
     }
@@ -196,15 +194,25 @@ impl LuaHost<'_> {
             return Err(self.rule_error(origin, format!("{what} nests arrays too deeply")));
         }
         match v {
-            Value::UserData(ud) => match ud.borrow::<LuaSymbol>() {
-                Ok(s) => self.push_symbol(&s, out)?,
-                Err(_) => {
-                    return Err(self.rule_error(
-                        origin,
-                        format!("{what} contains a {}, not a symbol", type_name(v)),
-                    ));
+            Value::Table(t) => {
+                let sym = self.tags.borrow().symbol_of(t);
+                match sym {
+                    Some(sym) => self.push_symbol(sym, t, out)?,
+                    None => {
+                        // An array: its items; nested arrays are branches.
+                        if depth > 0 {
+                            out.push(Sym::PUSH, &[]);
+                        }
+                        for k in 1..=t.raw_len() {
+                            let item: Value = t.raw_get(k)?;
+                            self.push_value(&item, out, origin, what, depth + 1)?;
+                        }
+                        if depth > 0 {
+                            out.push(Sym::POP, &[]);
+                        }
+                    }
                 }
-            },
+            }
             Value::String(s) => {
                 let text = s.to_str()?.to_string();
                 if let Some(ms) = self.parse_cache.get(&text) {
@@ -221,18 +229,6 @@ impl LuaHost<'_> {
                     out.append(&ms);
                     if self.parse_cache.len() < 4096 {
                         self.parse_cache.insert(text, ms);
-                    }
-                }
-            }
-            Value::Table(t) => {
-                for item in t.sequence_values::<Value>() {
-                    let item = item?;
-                    if let Value::Table(_) = item {
-                        out.push(Sym::PUSH, &[]);
-                        self.push_value(&item, out, origin, what, depth + 1)?;
-                        out.push(Sym::POP, &[]);
-                    } else {
-                        self.push_value(&item, out, origin, what, depth + 1)?;
                     }
                 }
             }
@@ -332,7 +328,7 @@ impl Host for LuaHost<'_> {
     ) -> Result<bool, HostError> {
         let r: &LuaRule = &self.cfg.rrules[rule as usize];
         self.set_this(true)?;
-        set_deriving(self.lua, Some(r.text.clone()));
+        *self.deriving.borrow_mut() = Some(r.text.clone());
         let result = if matched.len() == 1 {
             let arg = self.param_value(src, matched[0])?;
             r.func.call::<Value>(arg)
@@ -343,7 +339,7 @@ impl Host for LuaHost<'_> {
             }
             r.func.call::<Value>(MultiValue::from_vec(args))
         };
-        set_deriving(self.lua, None);
+        *self.deriving.borrow_mut() = None;
         let v = result?;
         if v.is_nil() {
             return Ok(false);
@@ -481,6 +477,8 @@ impl LSystemAlgorithm {
             instance_ud,
             interpret,
             numbers: Vec::new(),
+            tags: tags(lua),
+            deriving: deriving_cell(lua),
         };
         f(&mut host, &self.cfg.system, &self.string, &mut self.scratch)
     }
@@ -778,7 +776,7 @@ impl LSystemAlgorithm {
     ) -> pge_engine::Result<R> {
         let lua = self.upgrade()?;
         let result = f(self, &lua, ctx);
-        with_shared(&lua, |s| s.deriving = None);
+        *deriving_cell(&lua).borrow_mut() = None;
         result.map_err(|e| self.engine_error(&lua, e))
     }
 }

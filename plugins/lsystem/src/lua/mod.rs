@@ -18,7 +18,6 @@ use crate::SymbolTable;
 pub use algorithm::LSystemAlgorithm;
 pub use derive::{Derivation, derive_value};
 pub use object::LuaLSystem;
-pub use symbols::LuaSymbol;
 
 /// Interprets one module for an instance it knows (a turtle): returns `Ok(false)` when the
 /// instance is not of its type or the module is not one of its commands.
@@ -30,8 +29,9 @@ pub type DefaultInterpreter = fn(&Lua, &AnyUserData, &str, &[f64]) -> mlua::Resu
 pub(crate) struct Shared {
     pub symbols: Rc<RefCell<SymbolTable>>,
     pub interpreters: Vec<DefaultInterpreter>,
-    pub deriving: Option<String>,
+    pub deriving: Rc<RefCell<Option<Rc<str>>>>,
     pub instances: u32,
+    pub tags: Rc<RefCell<symbols::SymbolTags>>,
 }
 
 pub(crate) fn with_shared<R>(lua: &Lua, f: impl FnOnce(&mut Shared) -> R) -> R {
@@ -63,15 +63,16 @@ pub(crate) fn interpreters(lua: &Lua) -> Vec<DefaultInterpreter> {
     with_shared(lua, |s| s.interpreters.clone())
 }
 
-pub(crate) fn set_deriving(lua: &Lua, rule: Option<String>) {
-    with_shared(lua, |s| s.deriving = rule);
+/// The cell holding the rewriting rule running now (read by [`check_mutable`]).
+pub(crate) fn deriving_cell(lua: &Lua) -> Rc<RefCell<Option<Rc<str>>>> {
+    with_shared(lua, |s| s.deriving.clone())
 }
 
 /// The error a host object's mutating method raises while a rewriting rule (RRule) runs:
 /// during derivation `this` and the global table are read-only. `what` names the method
 /// (`"turtle:forward"`). Call it at the start of every method that changes the object.
 pub fn check_mutable(lua: &Lua, what: &str) -> mlua::Result<()> {
-    let rule = with_shared(lua, |s| s.deriving.clone());
+    let rule = with_shared(lua, |s| s.deriving.borrow().clone());
     match rule {
         Some(rule) => Err(script_error(
             lua,

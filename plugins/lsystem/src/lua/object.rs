@@ -22,7 +22,7 @@ pub(crate) enum Axiom {
 #[derive(Clone, Debug)]
 pub(crate) struct LuaRule {
     pub func: Function,
-    pub text: String,
+    pub text: std::rc::Rc<str>,
     /// Index into [`Config::locations`].
     pub origin: u32,
 }
@@ -93,11 +93,6 @@ impl UserData for LuaLSystem {
             let axiom = match v {
                 Value::String(s) => Axiom::Text(s.to_str()?.to_string()),
                 Value::Table(t) => Axiom::Lua(t),
-                Value::UserData(ud) if ud.is::<super::LuaSymbol>() => {
-                    let t = lua.create_table()?;
-                    t.raw_push(ud)?;
-                    Axiom::Lua(t)
-                }
                 other => {
                     return Err(script_error(
                         lua,
@@ -174,7 +169,7 @@ impl UserData for LuaLSystem {
                 .map_err(|e| rule_error(lua, e))?;
             me.0.rrules.push(LuaRule {
                 func,
-                text: lhs.trim().to_string(),
+                text: lhs.trim().into(),
                 origin,
             });
             me.0.locations.push(caller_location(lua));

@@ -1,63 +1,91 @@
 //! Symbols in Lua: `A{...}`, `pge.sym(name, params)`.
+//!
+//! A symbol is its own parameter table tagged with the symbol's metatable, so that `A{}` in a
+//! hot rule costs one table and no call into Rust, and a rule reads `a.v` or `a[1]` directly.
+//! Rust recognises a symbol by its metatable (see [`SymbolTags`]).
 
-use mlua::{Lua, MetaMethod, Table, UserData, UserDataMethods, Value};
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::rc::Rc;
+
+use mlua::{Function, Lua, Table, Value};
 use pge_engine::lua::script_error;
 
-use super::session_symbols;
+use super::{session_symbols, with_shared};
 use crate::Sym;
 
-/// A symbol made in Lua: its interned id and its parameter table (any Lua values).
-#[derive(Clone, Debug)]
-pub struct LuaSymbol {
-    /// The symbol.
-    pub sym: Sym,
-    /// Its parameters, `None` for `A()` / `pge.sym("A")`.
-    pub params: Option<Table>,
-}
+/// Hashes a pointer (already well spread) with one multiplication.
+#[derive(Default)]
+pub(crate) struct PointerHasher(u64);
 
-impl UserData for LuaSymbol {
-    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
-        m.add_meta_method(MetaMethod::Index, |lua, me, key: Value| {
-            if let Value::String(s) = &key
-                && s.as_bytes().as_ref() == b"name"
-            {
-                let name = session_symbols(lua).borrow().name(me.sym).to_string();
-                return Ok(Value::String(lua.create_string(name)?));
-            }
-            match &me.params {
-                Some(t) => t.get(key),
-                None => Ok(Value::Nil),
-            }
-        });
-        m.add_meta_method(MetaMethod::ToString, |lua, me, ()| {
-            Ok(session_symbols(lua).borrow().name(me.sym).to_string())
-        });
+impl std::hash::Hasher for PointerHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 = (self.0 << 8 | u64::from(*b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.0 = (n as u64 >> 3).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     }
 }
 
-fn params_arg(lua: &Lua, name: &str, v: Value) -> mlua::Result<Option<Table>> {
-    match v {
-        Value::Nil => Ok(None),
-        Value::Table(t) => Ok(Some(t)),
-        other => Err(script_error(
-            lua,
-            format!(
-                "the parameters of symbol '{name}' must be one table ({name}{{...}}), not {}",
-                other.type_name()
-            ),
-        )),
+/// The metatables that mark symbols, by address, and the constructors already made.
+#[derive(Default)]
+pub(crate) struct SymbolTags {
+    by_meta: HashMap<usize, Sym, std::hash::BuildHasherDefault<PointerHasher>>,
+    constructors: HashMap<Sym, (Table, Function)>,
+}
+
+impl SymbolTags {
+    /// The symbol a table stands for, if it is one.
+    pub fn symbol_of(&self, t: &Table) -> Option<Sym> {
+        let meta = t.metatable()?;
+        self.by_meta.get(&(meta.to_pointer() as usize)).copied()
     }
 }
 
-fn constructor(lua: &Lua, name: String) -> mlua::Result<mlua::Function> {
-    let sym = session_symbols(lua).borrow_mut().intern(&name);
-    lua.create_function(move |lua, v: Value| {
-        let params = params_arg(lua, &name, v)?;
-        Ok(LuaSymbol { sym, params })
-    })
+pub(crate) fn tags(lua: &Lua) -> Rc<RefCell<SymbolTags>> {
+    with_shared(lua, |s| s.tags.clone())
 }
 
-pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
+/// The constructor of `name`: a Lua function `function(p) return setmetatable(p or {}, meta) end`.
+pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
+    let sym = session_symbols(lua).borrow_mut().intern(name);
+    let tags = tags(lua);
+    if let Some((_, f)) = tags.borrow().constructors.get(&sym) {
+        return Ok(f.clone());
+    }
+    let meta = lua.create_table()?;
+    let fields = lua.create_table()?;
+    fields.raw_set("name", name)?;
+    meta.raw_set("__index", fields)?;
+    meta.raw_set("__name", format!("symbol {name}"))?;
+    let factory: Function = lua
+        .load(
+            r#"local meta, name = ...
+            local setmetatable, type, error = setmetatable, type, error
+            return function(p)
+                if p == nil then return setmetatable({}, meta) end
+                if type(p) ~= "table" then
+                    error("the parameters of symbol '" .. name .. "' must be one table ("
+                        .. name .. "{...}), not " .. type(p), 2)
+                end
+                return setmetatable(p, meta)
+            end"#,
+        )
+        .set_name("=pge.sym")
+        .into_function()?;
+    let f: Function = factory.call((meta.clone(), name))?;
+    let mut t = tags.borrow_mut();
+    t.by_meta.insert(meta.to_pointer() as usize, sym);
+    t.constructors.insert(sym, (meta, f.clone()));
+    Ok(f)
+}
+
+pub(crate) fn register(lua: &Lua, pge: &mlua::Table) -> mlua::Result<()> {
     pge.set(
         "sym",
         lua.create_function(|lua, (name, params): (String, Value)| {
@@ -67,12 +95,22 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                     format!("pge.sym: '{name}' is not a symbol name (no spaces, not empty)"),
                 ));
             }
-            let params = params_arg(lua, &name, params)?;
-            let sym = session_symbols(lua).borrow_mut().intern(&name);
-            Ok(LuaSymbol { sym, params })
+            match params {
+                Value::Nil | Value::Table(_) => {}
+                other => {
+                    return Err(script_error(
+                        lua,
+                        format!(
+                            "pge.sym: the parameters of '{name}' must be one table, not {}",
+                            other.type_name()
+                        ),
+                    ));
+                }
+            }
+            constructor(lua, &name)?.call::<Value>(params)
         })?,
     )?;
-    let make = lua.create_function(|lua, name: String| constructor(lua, name))?;
+    let make = lua.create_function(|lua, name: String| constructor(lua, &name))?;
     // Undefined globals starting with an uppercase letter are symbol constructors; the
     // lookup and cache live in Lua so that `A{}` in a hot rule costs one table read.
     lua.load(
@@ -92,6 +130,8 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
             if type(k) == "string" and k:match("^[A-Z]") then
                 c = make(k)
                 cache[k] = c
+                -- Later reads are plain global reads; assigning the name still works.
+                rawset(t, k, c)
                 return c
             end
             return nil
