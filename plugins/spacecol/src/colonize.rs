@@ -50,6 +50,10 @@ pub struct Params {
     pub tropism: Vec3,
     /// Root positions (several for a bush).
     pub roots: Vec<Vec3>,
+    /// Length of a straight vertical trunk each root grows before anything else may pull
+    /// it (0 by default). Lower points meanwhile pull the trunk's nodes into side branches,
+    /// so a long trunk through the crown gives a central leader (a conifer).
+    pub trunk: f32,
     /// Iteration cap; reaching it stops with a warning.
     pub max_iterations: u32,
     /// Bark and leaf options.
@@ -77,6 +81,7 @@ impl Params {
             step,
             tropism: Vec3::ZERO,
             roots: vec![Vec3::ZERO],
+            trunk: 0.0,
             max_iterations: 1000,
             tree: TreeOptions::default(),
         }
@@ -99,6 +104,9 @@ impl Params {
                 "kill ({}) must be smaller than influence ({}): points would be removed before they attract",
                 self.kill, self.influence
             ));
+        }
+        if !(self.trunk.is_finite() && self.trunk >= 0.0) {
+            return Err(format!("trunk must be a number >= 0, got {}", self.trunk));
         }
         if !self.tropism.is_finite() {
             return Err("tropism must be a finite vector".into());
@@ -144,8 +152,9 @@ struct State {
     node_cells: HashMap<[i32; 3], Vec<u32>>,
     /// The iteration in which a node's growth was refused (its pullers are dropped next).
     refused: Vec<u32>,
-    /// Roots still growing their trunk: the trunk's current tip.
-    trunk_tips: Vec<u32>,
+    /// Roots still growing their trunk: the trunk's current tip and the length of straight
+    /// trunk it must still grow.
+    trunk_tips: Vec<(u32, f32)>,
     iteration: u32,
     // Per-step scratch.
     sum: Vec<Vec3>,
@@ -352,8 +361,8 @@ impl Algorithm for SpaceColonization {
         };
         for root in &p.roots {
             let r = st.add_node(*root, None, p);
-            if !st.in_range[r as usize] {
-                st.trunk_tips.push(r);
+            if p.trunk > 0.0 || !st.in_range[r as usize] {
+                st.trunk_tips.push((r, p.trunk));
             }
         }
         self.state = Some(st);
@@ -406,30 +415,46 @@ impl Algorithm for SpaceColonization {
 
         // Growth directions, all from the state before this iteration's new nodes.
         st.touched.sort_unstable();
-        let mut growth: Vec<(u32, Option<Vec3>)> =
+        let mut growth: Vec<(u32, Option<Vec3>, Option<f32>)> =
             Vec::with_capacity(st.touched.len() + st.trunk_tips.len());
         for &n in &st.touched {
             let n = n as usize;
+            if st
+                .trunk_tips
+                .iter()
+                .any(|&(tip, left)| tip as usize == n && left > 0.0)
+            {
+                // A straight trunk still growing is not pulled aside.
+                st.sum[n] = Vec3::ZERO;
+                st.count[n] = 0;
+                st.closest[n] = (f32::INFINITY, NONE);
+                continue;
+            }
             let sum = st.sum[n];
             let dir = if sum.length() > 0.1 {
                 sum.normalize()
             } else {
                 (st.points[st.closest[n].1 as usize] - st.nodes[n]).normalize_or_zero()
             };
-            growth.push((n as u32, (dir + p.tropism).try_normalize()));
+            growth.push((n as u32, (dir + p.tropism).try_normalize(), None));
             st.sum[n] = Vec3::ZERO;
             st.count[n] = 0;
             st.closest[n] = (f32::INFINITY, NONE);
         }
         st.touched.clear();
 
-        // Trunks: toward the sum of unit vectors to every live point.
+        // Trunks: straight up while a straight length is left, then toward the sum of unit
+        // vectors to every live point until a point is within reach.
         let mut trunks = std::mem::take(&mut st.trunk_tips);
-        trunks.retain(|&tip| !st.in_range[tip as usize]);
+        trunks.retain(|&(tip, left)| left > 0.0 || !st.in_range[tip as usize]);
         if st.alive_count == 0 {
             trunks.clear();
         }
-        for &tip in &trunks {
+        for &(tip, left) in &trunks {
+            if left > 0.0 {
+                growth.push((tip, Some(Vec3::Y), Some(left - p.step)));
+                continue;
+            }
             let q = st.nodes[tip as usize];
             let mut sum = Vec3::ZERO;
             let mut closest = (f32::INFINITY, Vec3::ZERO);
@@ -445,19 +470,30 @@ impl Algorithm for SpaceColonization {
                     }
                 }
             }
-            let dir = if sum.length() > 0.1 {
+            // Toward the cloud when it lies to one side; from inside a hollow cloud (the
+            // unit vectors cancel) toward the nearest point. Tropism may bend the trunk but
+            // not turn it away from that point, so the trunk always comes closer.
+            let count = st.alive_count.max(1) as f32;
+            let to_nearest = closest.1.normalize_or_zero();
+            let dir = if sum.length() > 0.3 * count {
                 sum.normalize()
             } else {
-                closest.1.normalize_or_zero()
+                to_nearest
             };
-            growth.push((tip, (dir + p.tropism).try_normalize()));
+            let bent = (dir + p.tropism)
+                .try_normalize()
+                .filter(|d| d.dot(to_nearest) > 0.1);
+            growth.push((
+                tip,
+                bent.or(Some(to_nearest)).filter(|d| *d != Vec3::ZERO),
+                Some(0.0),
+            ));
         }
 
         // Grow.
         let mut next_trunks = Vec::new();
         let attempted = growth.len();
-        for (n, dir) in growth {
-            let is_trunk = trunks.contains(&n);
+        for (n, dir, trunk_left) in growth {
             let grown = dir.map(|d| st.nodes[n as usize] + d * p.step);
             match grown {
                 // Refused: no direction, or a node already stands there. A refused trunk
@@ -468,8 +504,10 @@ impl Algorithm for SpaceColonization {
                 }
                 Some(q) => {
                     let child = st.add_node(q, Some(n), p);
-                    if is_trunk && !st.in_range[child as usize] {
-                        next_trunks.push(child);
+                    if let Some(left) = trunk_left
+                        && (left > 0.0 || !st.in_range[child as usize])
+                    {
+                        next_trunks.push((child, left));
                     }
                 }
             }
@@ -622,6 +660,28 @@ mod tests {
     }
 
     #[test]
+    fn a_straight_trunk_grows_first() {
+        let mut p = crown(1500);
+        p.trunk = 7.0;
+        let (sc, model) = grow(p, 2);
+        let s = sc.skeleton().expect("skeleton");
+        // 28 nodes of 0.25 stand straight above the root, each the parent of the next.
+        let mut below = 0u32;
+        for k in 1..=28 {
+            let above = (0..s.len())
+                .find(|&i| {
+                    s.parents[i] == Some(below)
+                        && s.positions[i].x.abs() < 1e-5
+                        && s.positions[i].z.abs() < 1e-5
+                })
+                .unwrap_or_else(|| panic!("no trunk node {k}"));
+            assert!((s.positions[above].y - 0.25 * k as f32).abs() < 1e-4);
+            below = above as u32;
+        }
+        model.validate().expect("valid");
+    }
+
+    #[test]
     fn opposite_points_do_not_trap_a_node() {
         // Two points exactly on either side of the root: their pulls cancel.
         let pts = Shape::Union(
@@ -638,6 +698,7 @@ mod tests {
             .into(),
         );
         let mut p = Params::new(pts);
+        assert_eq!(p.trunk, 0.0);
         p.points = Some(2);
         p.step = 0.3;
         p.influence = 1.5;

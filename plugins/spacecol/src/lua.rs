@@ -545,6 +545,7 @@ const OPTIONS: &[&str] = &[
     "tropism",
     "root",
     "roots",
+    "trunk",
     "maxIterations",
     "radius",
     "smoothing",
@@ -660,6 +661,9 @@ fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
                 ),
             ));
         }
+    }
+    if let Some(v) = number_opt(lua, w, "trunk", t.get("trunk")?, false)? {
+        p.trunk = v;
     }
     if let Some(n) = integer_opt(
         lua,
