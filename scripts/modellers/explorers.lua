@@ -13,7 +13,7 @@ local p = pge.params{
   steps = {150, min = 1, max = 5000, doc = "frames (derivation steps)"},
   turn = {0.2, min = 0, max = 1, doc = "chance of a new heading at each step"},
   map = {"explorers_map.png", doc = "the environment image (targets in #ff00ff)"},
-  out = {"explorers_trails.png", doc = "where the map with the trails is saved (\"\" for nowhere)"},
+  out = {"", doc = "a PNG file to save the map with the trails to (relative; \"\" for none)"},
 }
 
 local TARGET, TRAIL = "#ff00ff", "#f2eed8"

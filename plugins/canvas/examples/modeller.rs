@@ -18,7 +18,10 @@ const SIZE: usize = 640;
 
 fn main() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);
-    let script = PathBuf::from(args.next().ok_or("usage: modeller SCRIPT OUT_STEM [--set k=v] [--steps n]")?);
+    let script = PathBuf::from(
+        args.next()
+            .ok_or("usage: modeller SCRIPT OUT_STEM [--set k=v] [--steps n]")?,
+    );
     let out = PathBuf::from(args.next().ok_or("missing OUT_STEM")?);
     let mut options = SessionOptions::default();
     while let Some(a) = args.next() {
@@ -70,7 +73,9 @@ fn main() -> Result<(), Box<dyn Error>> {
 /// A z-buffered, Lambert-shaded orthographic view from above-front-right.
 fn render(model: &Model) -> image::RgbImage {
     let mut img = image::RgbImage::from_pixel(SIZE as u32, SIZE as u32, image::Rgb([40, 44, 52]));
-    let Some((lo, hi)) = model.bounds() else { return img };
+    let Some((lo, hi)) = model.bounds() else {
+        return img;
+    };
     let center = (lo + hi) * 0.5;
     let eye_dir = Vec3::new(1.0, 0.9, 1.4).normalize();
     let view = Mat4::look_at_rh(center + eye_dir, center, Vec3::Y);
@@ -99,14 +104,23 @@ fn render(model: &Model) -> image::RgbImage {
     for inst in &model.instances {
         let mesh = &model.meshes[inst.mesh];
         let tex = mesh.material.texture.as_ref().and_then(|t| {
-            textures
-                .entry(inst.mesh)
-                .or_insert_with(|| image::load_from_memory(&t.png).map(|i| i.to_rgba8()).unwrap_or_default());
+            textures.entry(inst.mesh).or_insert_with(|| {
+                image::load_from_memory(&t.png)
+                    .map(|i| i.to_rgba8())
+                    .unwrap_or_default()
+            });
             textures.get(&inst.mesh).cloned()
         });
         let base = Vec4::from(mesh.material.base_color);
-        let world: Vec<Vec3> = mesh.positions.iter().map(|p| inst.transform.transform_point3(*p)).collect();
-        let screen: Vec<Vec3> = world.iter().map(|p| to_screen(view.transform_point3(*p))).collect();
+        let world: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| inst.transform.transform_point3(*p))
+            .collect();
+        let screen: Vec<Vec3> = world
+            .iter()
+            .map(|p| to_screen(view.transform_point3(*p)))
+            .collect();
         let color_of = |i: usize, uv: Option<Vec2>| {
             let mut c = base * mesh.colors.get(i).copied().unwrap_or(Vec4::ONE);
             if let (Some(t), Some(uv)) = (&tex, uv) {
@@ -121,7 +135,9 @@ fn render(model: &Model) -> image::RgbImage {
             Primitive::Triangles => {
                 for t in mesh.indices.chunks_exact(3) {
                     let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
-                    let n = (world[b] - world[a]).cross(world[c] - world[a]).normalize_or_zero();
+                    let n = (world[b] - world[a])
+                        .cross(world[c] - world[a])
+                        .normalize_or_zero();
                     let shade = 0.25 + 0.75 * n.dot(light).abs();
                     let (sa, sb, sc) = (screen[a], screen[b], screen[c]);
                     let area = (sb - sa).truncate().perp_dot((sc - sa).truncate());
@@ -149,7 +165,8 @@ fn render(model: &Model) -> image::RgbImage {
                             depth[k] = z;
                             let uv = (!mesh.uvs.is_empty())
                                 .then(|| mesh.uvs[a] * w0 + mesh.uvs[b] * w1 + mesh.uvs[c] * w2);
-                            let col = color_of(a, uv) * w0 + color_of(b, uv) * w1 + color_of(c, uv) * w2;
+                            let col =
+                                color_of(a, uv) * w0 + color_of(b, uv) * w1 + color_of(c, uv) * w2;
                             img.put_pixel(x as u32, y as u32, pixel(col.truncate() * shade));
                         }
                     }
@@ -181,13 +198,21 @@ fn render(model: &Model) -> image::RgbImage {
 
 fn lin(c: u8) -> f32 {
     let c = c as f32 / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 fn pixel(linear: Vec3) -> image::Rgb<u8> {
     let s = |c: f32| {
         let c = c.clamp(0.0, 1.0);
-        let v = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+        let v = if c <= 0.003_130_8 {
+            c * 12.92
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
         (v * 255.0).round() as u8
     };
     image::Rgb([s(linear.x), s(linear.y), s(linear.z)])
