@@ -31,5 +31,11 @@ pub fn library_folder() -> PathBuf {
 /// An engine builder with every PGE plugin and the script library.
 #[must_use]
 pub fn default_engine() -> pge_engine::EngineBuilder {
-    pge_engine::Engine::builder().library(library_folder())
+    pge_engine::Engine::builder()
+        .library(library_folder())
+        .plugin(pge_lsystem::LSystemPlugin)
+        .plugin(pge_spacecol::SpaceColonizationPlugin)
+        .plugin(pge_extruder::ExtruderPlugin)
+        .plugin(pge_metaballs::MetaballsPlugin)
+        .plugin(pge_canvas::CanvasPlugin)
 }
