@@ -413,11 +413,32 @@ impl Extruder {
             material: self.options.material.clone(),
             ..Mesh::default()
         };
-        for piece in self
-            .done
-            .iter()
-            .chain(self.open.iter().filter(|p| p.rings.len() >= 2))
-        {
+        let pieces = || {
+            self.done
+                .iter()
+                .chain(self.open.iter().filter(|p| p.rings.len() >= 2))
+        };
+        // Reserve the exact sizes of the formulas (caps at most).
+        let (mut vertices, mut indices) = (0usize, 0usize);
+        for piece in pieces() {
+            let (n, r) = (piece.rings[0].points.len(), piece.rings.len());
+            vertices += if self.options.smooth {
+                (n + 1) * r
+            } else {
+                4 * n * (r - 1)
+            };
+            indices += 6 * n * (r - 1);
+            if self.options.caps {
+                vertices += 2 * n;
+                indices += 6 * (n - 2);
+            }
+        }
+        mesh.positions.reserve_exact(vertices);
+        mesh.normals.reserve_exact(vertices);
+        mesh.uvs.reserve_exact(vertices);
+        mesh.colors.reserve_exact(vertices);
+        mesh.indices.reserve_exact(indices);
+        for piece in pieces() {
             self.build_piece(piece, &mut mesh);
         }
         if !self.colored {

@@ -1,0 +1,209 @@
+//! End-to-end tests of the modellers (extruder, metaballs, lines, images) and the thesis'
+//! example scripts in `scripts/modellers/`: `pge run` on the real scripts, checking the
+//! glb, the statistics, the frames of the animated ones, the PNG the explorers write, and
+//! the one-line `FILE:LINE:` errors of bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn script(name: &str) -> PathBuf {
+    root().join("scripts/modellers").join(name)
+}
+
+/// Runs `pge` in `cwd`.
+fn pge(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pge"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("the pge binary runs")
+}
+
+/// `pge run SCRIPT -o out.glb --stats -q EXTRA...` in a fresh folder: the statistics, the
+/// glb bytes and the folder (for files the script wrote).
+fn run(name: &str, extra: &[&str]) -> (serde_json::Value, Vec<u8>, tempfile::TempDir) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = script(name);
+    let mut args = vec![
+        "run",
+        path.to_str().expect("utf-8 path"),
+        "-o",
+        "out.glb",
+        "--stats",
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let o = pge(&args, dir.path());
+    assert!(
+        o.status.success(),
+        "{name} {extra:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let stats: serde_json::Value = serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("{name}: --stats is not JSON: {e}"));
+    let glb = std::fs::read(dir.path().join("out.glb")).expect("the glb was written");
+    let gltf = gltf::Gltf::from_slice(&glb).unwrap_or_else(|e| panic!("{name}: invalid glb: {e}"));
+    assert!(gltf.meshes().count() > 0, "{name}: no mesh");
+    (stats, glb, dir)
+}
+
+fn count(stats: &serde_json::Value, key: &str) -> u64 {
+    stats[key]
+        .as_u64()
+        .unwrap_or_else(|| panic!("stats lack {key}: {stats}"))
+}
+
+/// The line segments in a glb (primitives of mode LINES), from its index accessors.
+fn line_segments(glb: &[u8]) -> usize {
+    let gltf = gltf::Gltf::from_slice(glb).expect("valid glb");
+    gltf.meshes()
+        .flat_map(|m| m.primitives().collect::<Vec<_>>())
+        .filter(|p| p.mode() == gltf::mesh::Mode::Lines)
+        .map(|p| p.indices().map_or(0, |a| a.count() / 2))
+        .sum()
+}
+
+macro_rules! writes_a_glb {
+    ($($name:ident: $file:literal, min_triangles $tris:expr;)*) => {$(
+        #[test]
+        fn $name() {
+            let (stats, glb, _dir) = run($file, &[]);
+            assert!(count(&stats, "triangles") >= $tris, "{}: {stats}", $file);
+            let (_, again, _dir) = run($file, &[]);
+            assert_eq!(glb, again, "{}: the same script and seed give the same bytes", $file);
+        }
+    )*};
+}
+
+writes_a_glb! {
+    sierpinski_writes_a_glb: "sierpinski.lua", min_triangles 968;
+    tower_writes_a_glb: "tower.lua", min_triangles 10_000;
+    crystals_writes_a_glb: "crystals.lua", min_triangles 500;
+    coral_writes_a_glb: "coral.lua", min_triangles 20_000;
+    coral_metaballs_writes_a_glb: "coral_metaballs.lua", min_triangles 10_000;
+    city_writes_a_glb: "city.lua", min_triangles 10_000;
+    explorers_writes_a_glb: "explorers.lua", min_triangles 2;
+}
+
+#[test]
+fn fireworks_writes_a_glb_of_lines() {
+    let (stats, glb, _dir) = run("fireworks.lua", &["--steps", "30"]);
+    assert_eq!(count(&stats, "triangles"), 0);
+    assert!(line_segments(&glb) > 100, "a burst at frame 30");
+}
+
+#[test]
+fn sierpinski_triangles_follow_the_depth() {
+    for depth in 0..5u32 {
+        let set = format!("depth={depth}");
+        let (stats, _, _dir) = run("sierpinski.lua", &["--set", &set]);
+        // (3^(d+1) - 1) / 2 triangular prisms of 2*3 side and 2 cap triangles.
+        let prisms = (3u64.pow(depth + 1) - 1) / 2;
+        assert_eq!(count(&stats, "triangles"), prisms * 8, "depth {depth}");
+    }
+}
+
+#[test]
+fn fireworks_steps_are_frames() {
+    let frames: Vec<usize> = ["1", "10", "25", "40"]
+        .iter()
+        .map(|k| line_segments(&run("fireworks.lua", &["--steps", k]).1))
+        .collect();
+    assert!(
+        frames[0] < frames[1] && frames[1] < frames[2],
+        "rising then bursting: {frames:?}"
+    );
+    let (stats, glb, _dir) = run("fireworks.lua", &["--set", "frames=200"]);
+    assert_eq!(line_segments(&glb), 0, "the show has burnt out");
+    assert!(
+        count(&stats, "modules") <= 8,
+        "B > B removed the spent trails: {stats}"
+    );
+}
+
+#[test]
+fn explorers_write_their_trails_into_a_png() {
+    let (_, early, dir) = run(
+        "explorers.lua",
+        &["--steps", "5", "--set", "out=trails.png"],
+    );
+    let png = std::fs::read(dir.path().join("trails.png")).expect("the map was saved");
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let size = |b: &[u8], at: usize| u32::from_be_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+    assert_eq!((size(&png, 16), size(&png, 20)), (64, 64), "the map's size");
+    let (_, late, dir2) = run("explorers.lua", &["--set", "out=trails.png"]);
+    let png_late = std::fs::read(dir2.path().join("trails.png")).expect("saved");
+    assert_ne!(png, png_late, "more trails after more steps");
+    assert_ne!(early, late);
+}
+
+/// A script that must fail: exit 1, one line `tests/modellers/FILE:LINE: ...` naming the
+/// problem, no panic.
+fn assert_fails(file: &str, extra: &[&str], line: u32, needle: &str) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out.glb");
+    let path = format!("tests/modellers/{file}");
+    let mut args = vec![
+        "run",
+        path.as_str(),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let o = pge(&args, &root());
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "{file}: {err}");
+    assert!(!err.contains("panicked"), "{file}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{file}: one line: {err}");
+    let prefix = format!("{path}:{line}: ");
+    assert!(
+        err.starts_with(&prefix),
+        "{file}: expected '{prefix}...', got: {err}"
+    );
+    assert!(
+        err.contains(needle),
+        "{file}: expected '{needle}' in: {err}"
+    );
+    assert!(!out.exists(), "{file} wrote a model");
+}
+
+#[test]
+fn bad_input_gives_located_errors() {
+    assert_fails(
+        "too_few_points.lua",
+        &[],
+        4,
+        "the shape has 2 point(s); extruding needs at least 3",
+    );
+    assert_fails(
+        "pop_without_push.lua",
+        &[],
+        4,
+        "pop without a matching push",
+    );
+    assert_fails("extruder_pop.lua", &[], 4, "pop without a matching push");
+    assert_fails(
+        "bad_resolution.lua",
+        &[],
+        3,
+        "resolution must be a whole number of cells between 1 and",
+    );
+    assert_fails(
+        "grid_too_large.lua",
+        &["--memory-limit", "16"],
+        6,
+        "memory limit",
+    );
+    assert_fails(
+        "pixel_out_of_range.lua",
+        &[],
+        3,
+        "pixel (16, 2) is outside the 16x8 image",
+    );
+    assert_fails("missing_image.lua", &[], 1, "no_such_map.png");
+}

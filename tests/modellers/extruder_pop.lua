@@ -1,0 +1,5 @@
+local e = pge.Extruder()
+e:push()
+e:pop()
+e:pop()
+return e

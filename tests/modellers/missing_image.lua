@@ -1,0 +1,2 @@
+local img = pge.Image.load("no_such_map.png")
+return img
