@@ -400,7 +400,7 @@ fn mesh(lua: &Lua, v: Value) -> mlua::Result<LuaShape> {
     let (name, (positions, triangles)) = match (path, model) {
         (Some(path), None) => {
             let file = resolve_path(lua, &path)
-                .map_err(|e| script_error(lua, format!("{w}: {}", first_line(&e))))?;
+                .map_err(|e| script_error(lua, format!("{w}: {}", unlocated(lua, &e))))?;
             let bytes = std::fs::read(&file)
                 .map_err(|e| script_error(lua, format!("{w}: cannot read '{path}': {e}")))?;
             let lower = path.to_ascii_lowercase();
@@ -422,7 +422,7 @@ fn mesh(lua: &Lua, v: Value) -> mlua::Result<LuaShape> {
         }
         (None, Some(m)) => {
             let model = to_model(&m)
-                .map_err(|e| script_error(lua, format!("{w}: model: {}", first_line(&e))))?;
+                .map_err(|e| script_error(lua, format!("{w}: model: {}", unlocated(lua, &e))))?;
             ("model".to_string(), TriMesh::model_triangles(&model))
         }
         (Some(_), Some(_)) => {
@@ -523,6 +523,16 @@ fn call_predicate(
             None => pge_engine::Error::script(location.clone(), format!("predicate failed: {e}")),
         }),
     }
+}
+
+/// The first line of an error's message without a leading `FILE:LINE: ` of the calling
+/// code (errors from the engine's helpers are already located; ours add the location again).
+fn unlocated(lua: &Lua, e: &mlua::Error) -> String {
+    let line = first_line(e);
+    let prefix = format!("{}: ", caller_location(lua));
+    line.strip_prefix(&prefix)
+        .map(str::to_string)
+        .unwrap_or(line)
 }
 
 fn first_line(e: &mlua::Error) -> String {
@@ -693,7 +703,7 @@ fn tree_options(lua: &Lua, what: &str, t: &Table) -> mlua::Result<TreeOptions> {
         if let TextureSource::File(path) = source {
             let shown = path.to_string_lossy().into_owned();
             let file = resolve_path(lua, &shown)
-                .map_err(|e| script_error(lua, format!("{what}: {key}: {}", first_line(&e))))?;
+                .map_err(|e| script_error(lua, format!("{what}: {key}: {}", unlocated(lua, &e))))?;
             let texture = pge_tree::load_png(
                 &file,
                 if key.starts_with("leaves") {

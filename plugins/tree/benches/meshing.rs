@@ -80,5 +80,16 @@ fn bench_tree(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench_meshing, bench_tree);
+fn bench_textures(c: &mut Criterion) {
+    // A new bark colour each time defeats the per-process texture cache.
+    let mut k = 0u32;
+    c.bench_function("bark texture (uncached)", |b| {
+        b.iter(|| {
+            k += 1;
+            pge_tree::bark_texture([0.2, 0.1, (k % 100_000) as f32 * 1e-6, 1.0]).expect("bark")
+        })
+    });
+}
+
+criterion_group!(benches, bench_meshing, bench_tree, bench_textures);
 criterion_main!(benches);

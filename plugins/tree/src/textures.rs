@@ -45,31 +45,78 @@ fn cached(
 }
 
 /// The bark texture of `color` (linear RGBA): vertical furrows and plates from 4D Perlin
-/// noise sampled on a torus, so it tiles in both directions.
+/// noise sampled on a torus, so it tiles in both directions. The grey pattern is computed
+/// once per process; each colour only tints and encodes it.
 pub fn bark_texture(color: [f32; 4]) -> Result<Arc<Texture>, TreeError> {
     cached(Key::Bark(color.map(f32::to_bits)), || {
-        let n = BARK_SIZE as usize;
-        let perlin = Perlin::new(7);
-        let mut rgba = Vec::with_capacity(n * n * 4);
-        for y in 0..n {
-            let b = TAU * y as f64 / n as f64;
-            for x in 0..n {
-                let a = TAU * x as f64 / n as f64;
-                // Around the branch the pattern changes fast, along it slowly: furrows.
-                let torus =
-                    |fu: f64, fv: f64| [a.cos() * fu, a.sin() * fu, b.cos() * fv, b.sin() * fv];
-                let furrow = (1.0 - perlin.get(torus(2.2, 0.6)).abs() * 2.0).max(0.0);
-                let detail =
-                    perlin.get(torus(5.0, 3.0)) * 0.5 + perlin.get(torus(10.0, 8.0)) * 0.25;
-                let shade =
-                    (0.62 + 0.38 * furrow.powf(0.7) + 0.18 * detail).clamp(0.15, 1.3) as f32;
-                for c in &color[..3] {
-                    rgba.push(linear_to_srgb8(c * shade));
-                }
-                rgba.push(255);
+        let shade = bark_shade();
+        let mut rgba = Vec::with_capacity(shade.len() * 4);
+        for s in shade {
+            for c in &color[..3] {
+                rgba.push(linear_to_srgb8(c * s));
             }
+            rgba.push(255);
         }
         Ok(Texture::from_rgba("bark", BARK_SIZE, BARK_SIZE, &rgba)?)
+    })
+}
+
+/// Perlin noise sampled on a `g x g` grid over the torus (`fu` cycles-ish around, `fv`
+/// along), to be read back with [`wrapped`].
+fn torus_grid(perlin: &Perlin, g: usize, fu: f64, fv: f64) -> Vec<f32> {
+    let mut out = Vec::with_capacity(g * g);
+    for y in 0..g {
+        let b = TAU * y as f64 / g as f64;
+        for x in 0..g {
+            let a = TAU * x as f64 / g as f64;
+            out.push(perlin.get([a.cos() * fu, a.sin() * fu, b.cos() * fv, b.sin() * fv]) as f32);
+        }
+    }
+    out
+}
+
+/// Bilinear read of a `g x g` periodic grid at `(u, v)` in `[0, 1)`.
+fn wrapped(grid: &[f32], g: usize, u: f32, v: f32) -> f32 {
+    let (x, y) = (u * g as f32, v * g as f32);
+    let (x0, y0) = (x.floor() as usize % g, y.floor() as usize % g);
+    let (x1, y1) = ((x0 + 1) % g, (y0 + 1) % g);
+    let (fx, fy) = (x.fract(), y.fract());
+    let at = |x: usize, y: usize| grid[y * g + x];
+    let top = at(x0, y0) + (at(x1, y0) - at(x0, y0)) * fx;
+    let bottom = at(x0, y1) + (at(x1, y1) - at(x0, y1)) * fx;
+    top + (bottom - top) * fy
+}
+
+/// The grey bark pattern, `BARK_SIZE` squared values around 1, computed once per process.
+/// Noise is sampled on coarse periodic grids and interpolated (a few thousand noise calls
+/// instead of one per pixel and octave), plus a per-pixel hashed grain.
+fn bark_shade() -> &'static [f32] {
+    static SHADE: OnceLock<Vec<f32>> = OnceLock::new();
+    SHADE.get_or_init(|| {
+        let n = BARK_SIZE as usize;
+        let perlin = Perlin::new(7);
+        // Around the branch the pattern changes fast, along it slowly: furrows.
+        let furrows = torus_grid(&perlin, 32, 2.2, 0.6);
+        let plates = torus_grid(&perlin, 48, 5.0, 3.0);
+        let fine = torus_grid(&perlin, 64, 10.0, 8.0);
+        let mut out = Vec::with_capacity(n * n);
+        for y in 0..n {
+            let v = y as f32 / n as f32;
+            for x in 0..n {
+                let u = x as f32 / n as f32;
+                let furrow = (1.0 - wrapped(&furrows, 32, u, v).abs() * 2.0).max(0.0);
+                let detail = wrapped(&plates, 48, u, v) * 0.5 + wrapped(&fine, 64, u, v) * 0.25;
+                let hash = ((x as u32).wrapping_mul(0x9e37_79b1)
+                    ^ (y as u32).wrapping_mul(0x85eb_ca77))
+                .wrapping_mul(0xc2b2_ae3d);
+                let grain = (hash >> 24) as f32 / 255.0 - 0.5;
+                out.push(
+                    (0.62 + 0.38 * furrow.powf(0.7) + 0.18 * detail + 0.06 * grain)
+                        .clamp(0.15, 1.3),
+                );
+            }
+        }
+        out
     })
 }
 
@@ -92,11 +139,11 @@ pub fn leaf_texture() -> Result<Arc<Texture>, TreeError> {
         let mut rgba = Vec::with_capacity(n * n * 4);
         for y in 0..n {
             let v = (y as f64 + 0.5) / n as f64;
+            let t = (v - 0.12) / 0.86;
+            let edge = blade_half_width(t) * (1.0 + 0.06 * perlin.get([v * 40.0, 0.5]));
             for x in 0..n {
                 let u = (x as f64 + 0.5) / n as f64;
                 let across = (u - 0.5).abs();
-                let t = (v - 0.12) / 0.86;
-                let edge = blade_half_width(t) * (1.0 + 0.06 * perlin.get([v * 40.0, 0.5]));
                 let stalk = v < 0.14 && across < 0.018;
                 let inside = stalk || across < edge;
                 let mottle = perlin.get([u * 9.0, v * 9.0]) * 0.06;
