@@ -1,0 +1,174 @@
+//! End-to-end tests of trees: every species script through `pge run`, the glb it writes
+//! (bark and leaf meshes, textures, the skeleton in the extras), `--stats`, determinism, and
+//! the located errors of bad tree scripts.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn pge(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pge"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("the pge binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).to_string()
+}
+
+/// Runs a script to a glb in `dir` with `--stats`; returns the stats and the glb bytes.
+fn run_tree(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec<u8>) {
+    let out = dir.join("tree.glb");
+    let out_s = out.to_string_lossy().to_string();
+    let mut args = vec!["run", script, "-o", out_s.as_str(), "--stats", "-q"];
+    args.extend_from_slice(extra);
+    let o = pge(&args);
+    assert_eq!(o.status.code(), Some(0), "{script}: {}", text(&o.stderr));
+    let stats: serde_json::Value = serde_json::from_str(text(&o.stdout).trim()).expect("stats are JSON");
+    (stats, std::fs::read(&out).expect("glb written"))
+}
+
+/// Checks what a tree's glb must carry (API.md §7) and returns (bark, leaf) triangle counts.
+fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
+    let (doc, buffers, images) = gltf::import_slice(glb).unwrap_or_else(|e| panic!("{script}: {e}"));
+    assert_eq!(images.len(), 2, "{script}: bark and leaf textures embedded");
+    let meshes: Vec<_> = doc.meshes().collect();
+    assert_eq!(meshes.len(), 2, "{script}: a bark mesh and a leaf mesh");
+    let mut counts = [0usize; 2];
+    for (k, mesh) in meshes.iter().enumerate() {
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let positions: Vec<[f32; 3]> = reader.read_positions().expect("positions").collect();
+            let normals: Vec<[f32; 3]> = reader.read_normals().expect("normals").collect();
+            let uvs = reader.read_tex_coords(0).expect("uvs").into_f32().count();
+            let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+            assert_eq!(normals.len(), positions.len());
+            assert_eq!(uvs, positions.len());
+            assert!(indices.iter().all(|i| (*i as usize) < positions.len()), "{script}: index range");
+            assert!(normals.iter().all(|n| {
+                let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                (l - 1.0).abs() < 1e-3
+            }));
+            assert!(positions.iter().flatten().all(|c| c.is_finite()));
+            counts[k] += indices.len() / 3;
+            let material = prim.material();
+            assert!(material.pbr_metallic_roughness().base_color_texture().is_some(), "{script}: textured");
+            if k == 1 {
+                assert_eq!(material.alpha_mode(), gltf::material::AlphaMode::Mask, "{script}: leaves are masked");
+                assert!(material.double_sided(), "{script}: leaves are double-sided");
+                assert!(reader.read_colors(0).is_some(), "{script}: a colour per leaf");
+            }
+        }
+    }
+    let extras: serde_json::Value =
+        serde_json::from_str(meshes[0].extras().as_ref().expect("bark extras").get()).expect("json");
+    let skeleton = &extras["pge"]["skeleton"];
+    let parents = skeleton["parents"].as_array().expect("skeleton parents");
+    assert_eq!(parents[0], -1, "{script}: node 0 is a root");
+    assert_eq!(skeleton["positions"].as_array().expect("positions").len(), 3 * parents.len());
+    assert_eq!(skeleton["radii"].as_array().expect("radii").len(), parents.len());
+    (counts[0], counts[1])
+}
+
+macro_rules! species {
+    ($($name:ident),* $(,)?) => {$(
+        #[test]
+        fn $name() {
+            let script = format!("scripts/species/{}.lua", stringify!($name));
+            let dir = tempfile::tempdir().expect("tempdir");
+            let (stats, glb) = run_tree(&script, dir.path(), &[]);
+            let (bark, leaves) = check_tree_glb(&script, &glb);
+            assert!(stats["nodes"].as_u64().expect("nodes") > 100, "{script}: {stats}");
+            assert!(stats["leaves"].as_u64().expect("leaves") > 100, "{script}: {stats}");
+            assert_eq!(stats["triangles"].as_u64(), Some((bark + leaves) as u64));
+            assert_eq!(leaves as u64, 2 * stats["leaves"].as_u64().expect("leaves"));
+            for phase in ["points", "growth", "radii", "meshing", "leaves", "export"] {
+                assert!(stats["phases"][phase].is_number(), "{script}: phase {phase} in {stats}");
+            }
+        }
+    )*};
+}
+
+species!(oak, poplar, conifer, willow, bush, vase, topiary);
+
+#[test]
+fn same_seed_same_bytes_other_seed_other_tree() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (_, a) = run_tree("scripts/species/bush.lua", dir.path(), &["--seed", "7"]);
+    let (_, b) = run_tree("scripts/species/bush.lua", dir.path(), &["--seed", "7"]);
+    let (_, c) = run_tree("scripts/species/bush.lua", dir.path(), &["--seed", "8"]);
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+}
+
+#[test]
+fn parameters_and_steps_change_the_tree() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (full, _) = run_tree("scripts/species/bush.lua", dir.path(), &[]);
+    let (few, _) = run_tree("scripts/species/bush.lua", dir.path(), &["--set", "points=300"]);
+    let (early, _) = run_tree("scripts/species/bush.lua", dir.path(), &["--steps", "5"]);
+    assert!(few["nodes"].as_u64() < full["nodes"].as_u64());
+    assert!(early["nodes"].as_u64() < few["nodes"].as_u64());
+}
+
+/// A failing tree script: exit 1, one `FILE:LINE: message` line containing `needle`.
+fn assert_tree_error(source: &str, line: u32, needle: &str) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = dir.path().join("bad.lua");
+    std::fs::write(&script, source).expect("write");
+    let out = dir.path().join("bad.glb");
+    let (script_s, out_s) = (script.to_string_lossy().to_string(), out.to_string_lossy().to_string());
+    let o = pge(&["run", &script_s, "-o", &out_s, "-q"]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{source}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.starts_with(&format!("{script_s}:{line}: ")), "located at line {line}: {err}");
+    assert!(err.contains(needle), "expected '{needle}' in: {err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn bad_tree_scripts_fail_with_located_errors() {
+    let sphere = "pge.shape.sphere{ center = {0, 5, 0}, radius = 2 }";
+    assert_tree_error(
+        &format!("-- kill larger than influence\nreturn pge.SpaceColonization{{ envelope = {sphere}, influence = 1, kill = 2 }}\n"),
+        2,
+        "kill (2) must be smaller than influence (1)",
+    );
+    assert_tree_error(&format!("return pge.SpaceColonization{{ envelope = {sphere}, step = 0 }}\n"), 1, "step must be a number > 0");
+    assert_tree_error(&format!("return pge.SpaceColonization{{ envelope = {sphere}, influence = 0/0 }}\n"), 1, "influence must be a number > 0, got NaN");
+    assert_tree_error("local s = pge.shape.mesh{ path = \"no-such-crown.obj\" }\nreturn s\n", 1, "no-such-crown.obj");
+    assert_tree_error(
+        "local never = pge.shape.predicate(function(p) return false end, { min = {-1, 0, -1}, max = {1, 2, 1} })\nreturn pge.SpaceColonization{ envelope = never }\n",
+        2,
+        "yields no attraction points",
+    );
+    assert_tree_error(
+        "local s = pge.shape.sphere{ center = {0, 5, 0}, radius = 2 }\n\nreturn pge.SpaceColonization{ envelope = pge.shape.difference{ s, s } }\n",
+        3,
+        "yields no attraction points",
+    );
+}
+
+#[test]
+fn an_unreachable_crown_stops_at_the_cap_with_a_warning() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = dir.path().join("far.lua");
+    std::fs::write(
+        &script,
+        "return pge.SpaceColonization{ envelope = pge.shape.sphere{ center = {0, 900, 0}, radius = 2 }, step = 0.5, influence = 1, kill = 0.3, maxIterations = 30 }\n",
+    )
+    .expect("write");
+    let out = dir.path().join("far.glb");
+    let o = pge(&["run", &script.to_string_lossy(), "-o", &out.to_string_lossy(), "-q"]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("warning: space colonization stopped at maxIterations = 30"), "{err}");
+    assert!(out.exists());
+}
