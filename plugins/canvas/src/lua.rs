@@ -122,6 +122,7 @@ pub struct LuaLines(pub Rc<RefCell<Lines>>);
 impl UserData for LuaLines {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("add", |lua, me, (a, b, c): (Value, Value, Value)| {
+            pge_lsystem::check_mutable(lua, "lines:add")?;
             let a = vec3(lua, a, "add(a, b [, colour])")?;
             let b = vec3(lua, b, "add(a, b [, colour])")?;
             let c = match c {
@@ -133,7 +134,8 @@ impl UserData for LuaLines {
                 .map_err(|e| script_error(lua, format!("add: {e}")))
         });
         m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
-        m.add_method("clear", |_, me, ()| {
+        m.add_method("clear", |lua, me, ()| {
+            pge_lsystem::check_mutable(lua, "lines:clear")?;
             me.0.borrow_mut().clear();
             Ok(())
         });
@@ -216,6 +218,7 @@ impl UserData for LuaImage {
             })
         });
         m.add_method("set", |lua, me, args: MultiValue| {
+            pge_lsystem::check_mutable(lua, "image:set")?;
             let args: Vec<Value> = args.into_iter().collect();
             if args.len() < 3 {
                 return Err(script_error(
@@ -239,6 +242,7 @@ impl UserData for LuaImage {
                 .map_err(|e| script_error(lua, format!("set: {e}")))
         });
         m.add_method("fill", |lua, me, c: Value| {
+            pge_lsystem::check_mutable(lua, "image:fill")?;
             let px = rgba_bytes(lua, &c, "fill(colour)")?;
             me.0.borrow_mut().fill(px);
             Ok(())

@@ -109,12 +109,22 @@ impl LuaMatrixManipulator {
     }
 }
 
+/// Refuses a change while an L-system's rewriting rule runs (`this` is read-only there).
+fn guard(lua: &Lua, what: &str) -> mlua::Result<()> {
+    pge_lsystem::check_mutable(lua, what)
+}
+
 fn matrix_op(
     lua: &Lua,
     me: &LuaMatrixManipulator,
     what: &str,
     f: impl FnOnce(&mut MatrixManipulator) -> Result<(), crate::MatrixError>,
 ) -> mlua::Result<()> {
+    // An extruder's matrices belong to it; a free-standing matrix is a calculator that a
+    // rewriting rule may use.
+    if !matches!(me.0, Target::Own(_)) {
+        guard(lua, &format!("matrix:{what}"))?;
+    }
     me.with(f)
         .map_err(|e| script_error(lua, format!("{what}: {e}")))
 }
@@ -125,7 +135,10 @@ impl UserData for LuaMatrixManipulator {
             matrix_op(lua, me, "push", |m| m.push())
         });
         m.add_method("pop", |lua, me, ()| matrix_op(lua, me, "pop", |m| m.pop()));
-        m.add_method("reset", |_, me, ()| {
+        m.add_method("reset", |lua, me, ()| {
+            if !matches!(me.0, Target::Own(_)) {
+                guard(lua, "matrix:reset")?;
+            }
             me.with(|m| m.reset());
             Ok(())
         });
@@ -206,12 +219,14 @@ fn extruder_op(
     what: &str,
     f: impl FnOnce(&mut Extruder) -> Result<(), crate::ExtruderError>,
 ) -> mlua::Result<()> {
+    guard(lua, &format!("extruder:{what}"))?;
     f(&mut me.0.borrow_mut()).map_err(|e| script_error(lua, format!("{what}: {e}")))
 }
 
 impl UserData for LuaExtruder {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
-        m.add_method("clearShape", |_, me, ()| {
+        m.add_method("clearShape", |lua, me, ()| {
+            guard(lua, "extruder:clearShape")?;
             me.0.borrow_mut().clear_shape();
             Ok(())
         });
@@ -256,11 +271,13 @@ impl UserData for LuaExtruder {
             let d = number(lua, &d, "extrude(distance)")?;
             extruder_op(lua, me, "extrude", |e| e.extrude(d))
         });
-        m.add_method("start", |_, me, ()| {
+        m.add_method("start", |lua, me, ()| {
+            guard(lua, "extruder:start")?;
             me.0.borrow_mut().start();
             Ok(())
         });
-        m.add_method("finish", |_, me, ()| {
+        m.add_method("finish", |lua, me, ()| {
+            guard(lua, "extruder:finish")?;
             me.0.borrow_mut().finish();
             Ok(())
         });
@@ -445,6 +462,44 @@ mod tests {
             )
             .expect("runs");
         assert_eq!((x, y, z, depth), (1.0, 1.0, 0.0, 1));
+    }
+
+    #[test]
+    fn rewriting_rules_may_not_change_the_extruder() {
+        let engine = Engine::builder()
+            .plugin(crate::ExtruderPlugin)
+            .plugin(pge_lsystem::LSystemPlugin)
+            .build()
+            .expect("engine");
+        let s = engine.session(Default::default()).expect("session");
+        let value = s
+            .eval_value(
+                "local obj = pge.LSystem('x')
+                 obj:axiom{ A{} }
+                 obj:iterations(1)
+                 obj:createInstance(function()
+                   local e = pge.Extruder()
+                   e:polygon(4, 1)
+                   return { e = e, model = function(self) return self.e:model() end }
+                 end)
+                 obj:RRule('A', function()
+                   local m = pge.MatrixManipulator()   -- a free matrix is fine
+                   m:advance(1)
+                   this.e:extrude(1)
+                   return { A{} }
+                 end)
+                 return obj",
+            )
+            .expect("runs");
+        let mut algorithm = s.algorithm_from(value).expect("an algorithm");
+        let err = pge_engine::algorithm::run(&mut *algorithm, &s.context(), &mut |_| {})
+            .expect_err("extrude in an RRule")
+            .to_string();
+        assert!(
+            err.contains("RRule 'A': extruder:extrude is not allowed"),
+            "{err}"
+        );
+        assert!(err.starts_with("eval:12:"), "{err}");
     }
 
     #[test]

@@ -79,6 +79,7 @@ impl UserData for LuaMetaballs {
         m.add_method(
             "addParticle",
             |lua, me, (pos, charge, radius): (Value, Value, Value)| {
+                pge_lsystem::check_mutable(lua, "metaballs:addParticle")?;
                 let p = vec3(lua, pos, "addParticle(position, charge [, radius])")?;
                 let q = match charge {
                     Value::Nil => 1.0,
@@ -120,7 +121,8 @@ impl UserData for LuaMetaballs {
             Ok(t)
         });
         m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
-        m.add_method("update", |_, me, ()| {
+        m.add_method("update", |lua, me, ()| {
+            pge_lsystem::check_mutable(lua, "metaballs:update")?;
             me.0.borrow_mut().update();
             Ok(())
         });
