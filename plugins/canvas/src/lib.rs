@@ -11,6 +11,7 @@
 //! map:save("out/map.png")                          -- relative to the working folder
 //! local m = pge.model()
 //! m:add(lines) m:add(map)                          -- the image as a textured plane
+//! m:add(map:applyTo(pge.Extruder()))               -- or as the texture of any model
 //! return m
 //! ```
 

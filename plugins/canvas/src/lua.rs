@@ -7,7 +7,9 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
-use pge_engine::lua::{LuaMesh, LuaModel, LuaVec3, resolve_path, script_error, writable_path};
+use pge_engine::lua::{
+    LuaMesh, LuaModel, LuaVec3, resolve_path, script_error, to_model, writable_path,
+};
 
 use crate::{Image, Lines};
 
@@ -280,6 +282,29 @@ impl UserData for LuaImage {
                     .map_err(|e| script_error(lua, format!("pngBytes: {e}")))?;
             lua.create_string(&png)
         });
+        m.add_method("applyTo", |lua, me, thing: Value| {
+            let mut model = to_model(&thing).map_err(|e| match e {
+                mlua::Error::RuntimeError(_) => e,
+                other => script_error(lua, format!("applyTo: {other}")),
+            })?;
+            let texture = Arc::new(
+                me.0.borrow()
+                    .texture("image")
+                    .map_err(|e| script_error(lua, format!("applyTo: {e}")))?,
+            );
+            model.meshes = model
+                .meshes
+                .iter()
+                .map(|mesh| {
+                    let mut mesh = (**mesh).clone();
+                    let mut material = (*mesh.material).clone();
+                    material.texture = Some(texture.clone());
+                    mesh.material = Arc::new(material);
+                    Arc::new(mesh)
+                })
+                .collect();
+            Ok(LuaModel(model))
+        });
         m.add_method("model", |lua, me, ()| {
             let mesh =
                 me.0.borrow()
@@ -396,6 +421,9 @@ mod tests {
                  local r, g, b, a = img:get(0, 0)
                  assert(img:texture():width() == 8)
                  assert(img:model():triangleCount() == 2)
+                 local quad = pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2},
+                                        uvs = {0,0, 1,0, 0,1} }
+                 assert(img:applyTo(quad):triangleCount() == 1)
                  return l:count(), img:getHex(7, 3), r, a, img:width()",
             )
             .expect("runs");
