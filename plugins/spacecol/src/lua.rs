@@ -11,7 +11,6 @@ use pge_engine::lua::{
     AlgorithmHandle, LuaVec3, caller_location, resolve_path, script_error, to_engine_error,
     to_model,
 };
-use pge_tree::{TextureSource, TreeOptions};
 
 use crate::colonize::{Params, SpaceColonization};
 use crate::points::Mode;
@@ -685,41 +684,11 @@ fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
     )? {
         p.max_iterations = n;
     }
-    p.tree = tree_options(lua, w, &t)?;
+    p.tree = pge_tree::lua::options_from_lua(lua, w, &t)?;
     let location = caller_location(lua);
     let sc = SpaceColonization::new(p, location).map_err(|e| match e {
         pge_engine::Error::Script { message, .. } => script_error(lua, format!("{w}: {message}")),
         other => script_error(lua, other),
     })?;
     Ok(AlgorithmHandle::new(Box::new(sc)))
-}
-
-/// Tree options of a generator's table, with texture paths resolved next to the script.
-/// Shared shape for every generator that meshes through `pge_tree`.
-fn tree_options(lua: &Lua, what: &str, t: &Table) -> mlua::Result<TreeOptions> {
-    let mut options =
-        TreeOptions::from_lua(t).map_err(|e| script_error(lua, format!("{what}: {e}")))?;
-    let resolve = |source: &mut TextureSource, key: &str| -> mlua::Result<()> {
-        if let TextureSource::File(path) = source {
-            let shown = path.to_string_lossy().into_owned();
-            let file = resolve_path(lua, &shown)
-                .map_err(|e| script_error(lua, format!("{what}: {key}: {}", unlocated(lua, &e))))?;
-            let texture = pge_tree::load_png(
-                &file,
-                if key.starts_with("leaves") {
-                    "leaf"
-                } else {
-                    "bark"
-                },
-            )
-            .map_err(|e| script_error(lua, format!("{what}: {key}: cannot read '{shown}': {e}")))?;
-            *source = TextureSource::Image(texture);
-        }
-        Ok(())
-    };
-    resolve(&mut options.mesh.texture, "mesh.texture")?;
-    if let Some(leaves) = &mut options.leaves {
-        resolve(&mut leaves.texture, "leaves.texture")?;
-    }
-    Ok(options)
 }

@@ -31,6 +31,7 @@
 
 mod cylinders;
 mod leaves;
+pub mod lua;
 mod merge;
 mod options;
 mod radii;
