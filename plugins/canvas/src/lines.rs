@@ -15,9 +15,9 @@ pub enum LinesError {
     /// An end point or colour was NaN or infinite.
     #[error("{0} is not a finite number")]
     NotFinite(&'static str),
-    /// More than [`MAX_SEGMENTS`] segments.
-    #[error("more than {MAX_SEGMENTS} segments")]
-    TooManySegments,
+    /// More segments than the limit ([`MAX_SEGMENTS`] or the memory budget).
+    #[error("more than {0} segments, past the memory limit")]
+    TooManySegments(usize),
 }
 
 /// The thesis' 3D line generator: segments between two points, each with a colour.
@@ -38,18 +38,30 @@ pub struct Lines {
     positions: Vec<Vec3>,
     colors: Vec<Vec4>,
     color: Vec4,
+    max_segments: usize,
 }
 
 impl Lines {
     /// An empty set of lines whose segments default to `color` (linear RGBA).
     #[must_use]
     pub fn new(color: Vec4) -> Lines {
+        Lines::with_max_segments(color, MAX_SEGMENTS)
+    }
+
+    /// An empty set of lines that refuses more than `max` segments (a memory budget; at most
+    /// [`MAX_SEGMENTS`]).
+    #[must_use]
+    pub fn with_max_segments(color: Vec4, max: usize) -> Lines {
         Lines {
             positions: Vec::new(),
             colors: Vec::new(),
             color,
+            max_segments: max.min(MAX_SEGMENTS),
         }
     }
+
+    /// Bytes of mesh per segment (two vertices of position and colour, two indices).
+    pub const BYTES_PER_SEGMENT: usize = 2 * (12 + 16) + 2 * 4;
 
     /// Adds the segment `a`-`b` in `color` (the default colour when `None`).
     pub fn add(&mut self, a: Vec3, b: Vec3, color: Option<Vec4>) -> Result<(), LinesError> {
@@ -60,8 +72,8 @@ impl Lines {
         if !color.is_finite() {
             return Err(LinesError::NotFinite("colour"));
         }
-        if self.positions.len() / 2 >= MAX_SEGMENTS {
-            return Err(LinesError::TooManySegments);
+        if self.positions.len() / 2 >= self.max_segments {
+            return Err(LinesError::TooManySegments(self.max_segments));
         }
         self.positions.extend([a, b]);
         self.colors.extend([color, color]);
@@ -140,5 +152,12 @@ mod tests {
             Err(LinesError::NotFinite("colour"))
         );
         assert!(l.is_empty());
+        let mut l = Lines::with_max_segments(Vec4::ONE, 2);
+        l.add(Vec3::ZERO, Vec3::X, None).expect("1");
+        l.add(Vec3::ZERO, Vec3::Y, None).expect("2");
+        assert_eq!(
+            l.add(Vec3::ZERO, Vec3::Z, None),
+            Err(LinesError::TooManySegments(2))
+        );
     }
 }

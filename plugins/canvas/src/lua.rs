@@ -326,6 +326,35 @@ fn size(lua: &Lua, v: &Value, what: &str) -> mlua::Result<u32> {
     Ok(x as u32)
 }
 
+/// The session's memory limit (the Lua state's; mlua has no getter, so it is read by
+/// setting a limit, which returns the previous one, and putting it back). 1 GiB when unset.
+fn memory_budget(lua: &Lua) -> usize {
+    match lua.set_memory_limit(0) {
+        Ok(previous) => {
+            let _ = lua.set_memory_limit(previous);
+            if previous == 0 { 1 << 30 } else { previous }
+        }
+        Err(_) => 1 << 30,
+    }
+}
+
+/// An image (and its PNG when exported) must fit in the memory limit.
+fn check_image_budget(lua: &Lua, w: u64, h: u64, what: &str) -> mlua::Result<()> {
+    let bytes = w * h * 4 * 2;
+    let budget = memory_budget(lua) as u64;
+    if bytes > budget {
+        return Err(script_error(
+            lua,
+            format!(
+                "{what}: a {w}x{h} image needs {} MiB, past the memory limit of {} MiB",
+                bytes >> 20,
+                budget >> 20
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Adds `pge.Lines` and `pge.Image`.
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
@@ -352,7 +381,8 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                     ));
                 }
             };
-            Ok(LuaLines(Rc::new(RefCell::new(Lines::new(color)))))
+            let max = memory_budget(lua) / Lines::BYTES_PER_SEGMENT;
+            Ok(LuaLines(Rc::new(RefCell::new(Lines::with_max_segments(color, max)))))
         })?,
     )?;
     let image = lua.create_table()?;
@@ -367,6 +397,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                 Value::Nil => [0, 0, 0, 255],
                 c => rgba_bytes(lua, &c, "pge.Image.new: fill colour")?,
             };
+            check_image_budget(lua, u64::from(w), u64::from(h), "pge.Image.new")?;
             let img = Image::new(w, h, fill)
                 .map_err(|e| script_error(lua, format!("pge.Image.new: {e}")))?;
             Ok(LuaImage(Rc::new(RefCell::new(img))))
@@ -387,6 +418,12 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                 .map_err(|e| script_error(lua, format!("pge.Image.load '{p}': {e}")))?;
             let img = Image::decode(&bytes)
                 .map_err(|e| script_error(lua, format!("pge.Image.load '{p}': {e}")))?;
+            check_image_budget(
+                lua,
+                u64::from(img.width()),
+                u64::from(img.height()),
+                "pge.Image.load",
+            )?;
             Ok(LuaImage(Rc::new(RefCell::new(img))))
         })?,
     )?;
@@ -432,6 +469,25 @@ mod tests {
         assert_eq!(r, 1.0);
         assert!((a - 128.0 / 255.0).abs() < 1e-9);
         assert_eq!(w, 8);
+    }
+
+    #[test]
+    fn images_and_lines_respect_the_memory_limit() {
+        let engine = Engine::builder()
+            .plugin(crate::CanvasPlugin)
+            .memory_limit_mib(64)
+            .build()
+            .expect("engine");
+        let s = engine.session(Default::default()).expect("session");
+        let err = s
+            .eval::<()>("local a = 1\nlocal img = pge.Image.new(4096, 4096)")
+            .expect_err("too big");
+        assert!(
+            err.to_string().starts_with("eval:2: pge.Image.new: a 4096x4096 image needs 128 MiB, past the memory limit of 64 MiB"),
+            "{err}"
+        );
+        s.eval::<()>("local img = pge.Image.new(1024, 1024)")
+            .expect("fits");
     }
 
     #[test]

@@ -41,6 +41,9 @@ pub enum ExtruderError {
         "the extruder's state stack is deeper than {MAX_STATE_DEPTH} (a push without pop in a loop?)"
     )]
     StackOverflow,
+    /// The geometry would grow past [`ExtruderOptions::max_points`].
+    #[error("the extrusion has more than {0} ring points, past the memory limit; extrude less")]
+    TooLarge(usize),
     /// An operation of the path or shape matrix failed.
     #[error(transparent)]
     Matrix(#[from] MatrixError),
@@ -56,6 +59,9 @@ pub struct ExtruderOptions {
     pub caps: bool,
     /// The mesh's material.
     pub material: Arc<Material>,
+    /// The most ring points the extruder stores (a memory budget); `extrude` past it is
+    /// an error. Default: unlimited.
+    pub max_points: usize,
 }
 
 impl Default for ExtruderOptions {
@@ -64,6 +70,7 @@ impl Default for ExtruderOptions {
             smooth: false,
             caps: true,
             material: Arc::new(Material::default()),
+            max_points: usize::MAX,
         }
     }
 }
@@ -150,6 +157,8 @@ pub struct Extruder {
     open: Vec<Piece>,
     saved: Vec<Saved>,
     done: Vec<Piece>,
+    /// Ring points stored so far (for memory budgets).
+    stored: usize,
 }
 
 impl Extruder {
@@ -166,6 +175,7 @@ impl Extruder {
             open: vec![Piece::default()],
             saved: Vec::new(),
             done: Vec::new(),
+            stored: 0,
         }
     }
 
@@ -328,6 +338,9 @@ impl Extruder {
             });
         }
         let n = self.shape.len();
+        if self.stored.saturating_add(2 * n) > self.options.max_points {
+            return Err(ExtruderError::TooLarge(self.options.max_points));
+        }
         let needs_new = self
             .open
             .last()
@@ -341,6 +354,7 @@ impl Extruder {
             let flip = self.winding_flip();
             if let Some(top) = self.open.last_mut() {
                 top.flip = flip;
+                self.stored += ring.points.len();
                 top.rings.push(ring);
             }
         }
@@ -355,6 +369,7 @@ impl Extruder {
             ring.length = len + c.distance(centroid(&ring.points));
         }
         if let Some(top) = self.open.last_mut() {
+            self.stored += ring.points.len();
             top.rings.push(ring);
         }
         Ok(())
@@ -397,6 +412,17 @@ impl Extruder {
             length,
         }
     }
+
+    /// Ring points placed so far: the mesh has at most [`Extruder::MESH_BYTES_PER_POINT`]
+    /// bytes per point (flat normals, caps), which bounds its memory.
+    #[must_use]
+    pub fn stored_points(&self) -> usize {
+        self.stored
+    }
+
+    /// An upper bound on the mesh's bytes per stored ring point (4 vertices of position,
+    /// normal, uv and colour, 6 indices, and the ring itself).
+    pub const MESH_BYTES_PER_POINT: usize = 4 * (12 + 12 + 8 + 16) + 6 * 4 + 20;
 
     /// Number of finished and open pieces with geometry.
     #[must_use]
@@ -833,6 +859,20 @@ mod tests {
         e.finish();
         e.extrude(1.0).expect("ok");
         assert_eq!(e.piece_count(), 3);
+    }
+
+    #[test]
+    fn the_point_budget_is_enforced() {
+        let mut e = Extruder::new(ExtruderOptions {
+            max_points: 20,
+            ..ExtruderOptions::default()
+        });
+        e.set_polygon(4, 1.0).expect("ok");
+        e.extrude(1.0).expect("8 points");
+        e.extrude(1.0).expect("12 points");
+        e.extrude(1.0).expect("16 points");
+        assert_eq!(e.extrude(1.0), Err(ExtruderError::TooLarge(20)));
+        assert_eq!(e.stored_points(), 16);
     }
 
     #[test]

@@ -378,6 +378,18 @@ fn options(lua: &Lua, t: Option<Table>) -> mlua::Result<ExtruderOptions> {
     Ok(o)
 }
 
+/// The session's memory limit (the Lua state's; mlua has no getter, so it is read by
+/// setting a limit, which returns the previous one, and putting it back). 1 GiB when unset.
+fn memory_budget(lua: &Lua) -> usize {
+    match lua.set_memory_limit(0) {
+        Ok(previous) => {
+            let _ = lua.set_memory_limit(previous);
+            if previous == 0 { 1 << 30 } else { previous }
+        }
+        Err(_) => 1 << 30,
+    }
+}
+
 /// Adds `pge.Extruder` and `pge.MatrixManipulator`.
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
@@ -396,9 +408,9 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                     ));
                 }
             };
-            Ok(LuaExtruder(Rc::new(RefCell::new(Extruder::new(options(
-                lua, t,
-            )?)))))
+            let mut options = options(lua, t)?;
+            options.max_points = memory_budget(lua) / Extruder::MESH_BYTES_PER_POINT;
+            Ok(LuaExtruder(Rc::new(RefCell::new(Extruder::new(options)))))
         })?,
     )?;
     pge.set(

@@ -220,7 +220,9 @@ impl MarchingCubes {
             .iter()
             .map(|r| r.iter().map(|(a, b)| (b - a) as u64).product::<u64>())
             .sum();
-        if pairs.saturating_mul(4) + block_count as u64 * 8 > o.max_bytes as u64 {
+        if pairs.saturating_mul(4) + block_count as u64 * 8 > o.max_bytes as u64
+            || pairs > u64::from(u32::MAX)
+        {
             return Err(MarchError::MemoryLimit {
                 what: "particle lists per block",
                 limit_mib,
