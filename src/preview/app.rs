@@ -63,6 +63,10 @@ pub struct PreviewApp {
     render_ms: f64,
     log_fps: bool,
     last_fps_log: Instant,
+    /// A model caused by a save was drawn in the last frame: (save time, generation count).
+    drawn_after_save: Option<(Instant, u64)>,
+    /// Save to first frame on screen of the latest model a save caused.
+    save_to_screen: Option<Duration>,
 }
 
 impl PreviewApp {
@@ -103,6 +107,8 @@ impl PreviewApp {
             render_ms: 0.0,
             log_fps: options.log_fps,
             last_fps_log: Instant::now(),
+            drawn_after_save: None,
+            save_to_screen: None,
         })
     }
 
@@ -134,6 +140,9 @@ impl PreviewApp {
                 }
                 if g.settings.steps.is_none() {
                     self.total_steps = Some(g.steps_taken);
+                }
+                if let Some(saved) = self.live.reloader().current_trigger() {
+                    self.drawn_after_save = Some((saved, self.uploaded));
                 }
                 self.viewport_dirty = true;
             }
@@ -392,9 +401,9 @@ impl PreviewApp {
                 row(&format!("⏱ {phase}"), format!("{:.1} ms", secs * 1000.0));
             }
             row("generation", format!("{:.1} ms", g.seconds * 1000.0));
-            if let Some(l) = self.live.reloader().last_latency() {
+            if let Some(l) = self.save_to_screen {
                 row(
-                    "save → model",
+                    "save → screen",
                     format!("{:.0} ms", l.as_secs_f64() * 1000.0),
                 );
             }
@@ -614,6 +623,19 @@ impl PreviewApp {
 
     fn count_frame(&mut self) {
         let now = Instant::now();
+        // The previous frame, which drew a model a save caused, has been presented.
+        if let Some((saved, count)) = self.drawn_after_save.take() {
+            let latency = now.duration_since(saved);
+            self.save_to_screen = Some(latency);
+            if self.log_fps {
+                let generation = self.live.reloader().current().map_or(0.0, |g| g.seconds);
+                eprintln!(
+                    "preview: model {count} on screen {:.0} ms after the save (generation {:.0} ms)",
+                    latency.as_secs_f64() * 1000.0,
+                    generation * 1000.0
+                );
+            }
+        }
         self.frames.push_back(now);
         while self
             .frames
@@ -646,7 +668,7 @@ impl eframe::App for PreviewApp {
             .frame(egui::Frame::NONE)
             .show(ctx, |ui| self.viewport(ui, frame));
         self.screenshot(ctx);
-        if self.turntable {
+        if self.turntable || self.drawn_after_save.is_some() {
             ctx.request_repaint();
         } else if self.live.reloader().is_running() {
             ctx.request_repaint_after(Duration::from_millis(100));

@@ -226,6 +226,8 @@ mod tests {
         let mut s = live.reloader().settings().clone();
         s.set_param("n", "5".into());
         live.reloader_mut().set_settings(s);
-        pump_until(&mut live, "the model with n = 5", |r| triangles_of(r) == Some(5));
+        pump_until(&mut live, "the model with n = 5", |r| {
+            triangles_of(r) == Some(5)
+        });
     }
 }

@@ -9,8 +9,9 @@
 //!
 //! With `--screenshot PNG` the window writes its first complete frame (after the first
 //! generation has ended) to the file and closes; the command then fails if the generation
-//! did. Setting the environment variable `PGE_PREVIEW_FPS=1` prints frames per second to
-//! stderr and starts the turntable (for measuring the viewport's speed).
+//! did. Setting the environment variable `PGE_PREVIEW_LOG=1` starts the turntable and prints
+//! frames per second and the time from each save to its model on screen to stderr (for
+//! measuring the viewport's speed and the reload latency).
 
 mod app;
 pub mod camera;
@@ -87,7 +88,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
         steps: None,
     };
     let screenshot_result = Arc::new(Mutex::new(None));
-    let measuring = std::env::var_os("PGE_PREVIEW_FPS").is_some_and(|v| v == "1");
+    let measuring = std::env::var_os("PGE_PREVIEW_LOG").is_some_and(|v| v == "1");
     let options = AppOptions {
         screenshot: args.screenshot.clone(),
         screenshot_result: screenshot_result.clone(),

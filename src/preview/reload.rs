@@ -153,6 +153,8 @@ pub struct Reloader {
     /// Seconds from the file event that triggered the last successful generation to its
     /// report (save-to-model latency, without drawing).
     last_latency: Option<Duration>,
+    /// The file event that caused the current generation, if one did.
+    current_trigger: Option<Instant>,
     trigger_time: Option<(u64, Instant)>,
 }
 
@@ -177,6 +179,7 @@ impl Reloader {
             status: Status::Running,
             generation_count: 0,
             last_latency: None,
+            current_trigger: None,
             trigger_time: None,
         }
     }
@@ -240,6 +243,13 @@ impl Reloader {
         if let Some((_, cancel, _)) = &self.running {
             cancel.store(true, Ordering::Relaxed);
         }
+    }
+
+    /// When the file event that caused the current generation happened (`None` when the
+    /// generation came from the panel or the start).
+    #[must_use]
+    pub fn current_trigger(&self) -> Option<Instant> {
+        self.current_trigger
     }
 
     /// Notes that `paths` changed at `now`; returns whether any of them is watched.
@@ -319,10 +329,12 @@ impl Reloader {
             Outcome::Generated(generation) => {
                 self.watched = BTreeSet::from([self.key.clone()]);
                 self.watched.extend(generation.loaded.iter().cloned());
+                self.current_trigger = None;
                 if let Some((id, t)) = self.trigger_time.take()
                     && id == report.id
                 {
                     self.last_latency = Some(now.duration_since(t));
+                    self.current_trigger = Some(t);
                 }
                 self.current = Some(*generation);
                 self.generation_count += 1;
@@ -432,6 +444,7 @@ mod tests {
             ms(t0, 300),
         );
         assert_eq!(r.last_latency(), Some(Duration::from_millis(170)));
+        assert_eq!(r.current_trigger(), Some(ms(t0, 130)));
     }
 
     #[test]
