@@ -252,7 +252,6 @@ impl State {
         let mut in_range = false;
         let State {
             grid,
-            points,
             alive,
             alive_count,
             nearest,
@@ -261,12 +260,11 @@ impl State {
             dead_since_grid,
             ..
         } = self;
-        grid.for_each_near(position, p.influence, |i| {
+        grid.for_each_near(position, p.influence, |i, _, d2| {
             let i = i as usize;
             if !alive[i] {
                 return;
             }
-            let d2 = points[i].distance_squared(position);
             if d2 < k2 {
                 alive[i] = false;
                 *alive_count -= 1;
@@ -337,7 +335,7 @@ impl Algorithm for SpaceColonization {
         )?;
         let n = pts.len();
         let alive = vec![true; n];
-        let grid = PointGrid::new(&pts, &alive, p.influence * 0.5);
+        let grid = PointGrid::new(&pts, &alive, p.influence / 3.0);
         let mut st = State {
             points: pts,
             alive,
@@ -514,8 +512,8 @@ impl Algorithm for SpaceColonization {
         }
         st.trunk_tips = next_trunks;
 
-        if st.dead_since_grid * 2 > st.alive_count.max(1024) {
-            st.grid = PointGrid::new(&st.points, &st.alive, p.influence * 0.5);
+        if st.dead_since_grid * 4 > st.alive_count.max(1024) {
+            st.grid = PointGrid::new(&st.points, &st.alive, p.influence / 3.0);
             st.dead_since_grid = 0;
         }
 

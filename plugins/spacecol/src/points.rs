@@ -129,9 +129,12 @@ pub fn generate(
 pub struct PointGrid {
     origin: Vec3,
     inv_cell: f32,
+    cell: f32,
     dims: [usize; 3],
     starts: Vec<u32>,
     items: Vec<u32>,
+    /// The position of each item, stored in cell order next to it for locality.
+    positions: Vec<Vec3>,
 }
 
 /// Grids larger than this many cells get larger cells.
@@ -166,9 +169,11 @@ impl PointGrid {
         let mut grid = PointGrid {
             origin: lo,
             inv_cell: 1.0 / cell,
+            cell,
             dims,
             starts: Vec::new(),
             items: Vec::new(),
+            positions: Vec::new(),
         };
         let cells = dims[0] * dims[1] * dims[2];
         let mut counts = vec![0u32; cells + 1];
@@ -183,9 +188,11 @@ impl PointGrid {
         }
         let mut fill = counts.clone();
         grid.items = vec![0; counts[cells] as usize];
+        grid.positions = vec![Vec3::ZERO; counts[cells] as usize];
         for (i, c) in cell_of.iter().enumerate() {
             if keep[i] {
                 grid.items[fill[*c] as usize] = i as u32;
+                grid.positions[fill[*c] as usize] = points[i];
                 fill[*c] += 1;
             }
         }
@@ -204,9 +211,9 @@ impl PointGrid {
         (x * self.dims[1] + y) * self.dims[2] + z
     }
 
-    /// Calls `f` with every point index in the cells that overlap the cube of half-side `r`
-    /// around `q` (a superset of the points within `r`).
-    pub fn for_each_near(&self, q: Vec3, r: f32, mut f: impl FnMut(u32)) {
+    /// Calls `f(index, position, squared distance)` for every point within `r` of `q`.
+    /// Only cells that the ball touches are read.
+    pub fn for_each_near(&self, q: Vec3, r: f32, mut f: impl FnMut(u32, Vec3, f32)) {
         let lo = q - r;
         let hi = q + r;
         let top = self.origin
@@ -214,10 +221,11 @@ impl PointGrid {
                 self.dims[0] as f32,
                 self.dims[1] as f32,
                 self.dims[2] as f32,
-            ) / self.inv_cell;
+            ) * self.cell;
         if hi.cmplt(self.origin).any() || lo.cmpgt(top).any() {
             return;
         }
+        let r2 = r * r;
         let (x0, x1) = (
             self.coord(lo.x, 0, self.origin.x),
             self.coord(hi.x, 0, self.origin.x),
@@ -230,15 +238,41 @@ impl PointGrid {
             self.coord(lo.z, 2, self.origin.z),
             self.coord(hi.z, 2, self.origin.z),
         );
+        // Squared distance from q to the slab of cell k along one axis.
+        let gap = |k: usize, q: f32, o: f32| {
+            let a = o + k as f32 * self.cell;
+            let d = (a - q).max(q - (a + self.cell)).max(0.0);
+            d * d
+        };
         for x in x0..=x1 {
+            let dx = gap(x, q.x, self.origin.x);
             for y in y0..=y1 {
+                let dxy = dx + gap(y, q.y, self.origin.y);
+                if dxy > r2 {
+                    continue;
+                }
                 let row = (x * self.dims[1] + y) * self.dims[2];
+                // The run of z cells the ball touches in this column.
+                let mut z = z0;
+                while z <= z1 && dxy + gap(z, q.z, self.origin.z) > r2 {
+                    z += 1;
+                }
+                let mut z_end = z1;
+                while z_end > z && dxy + gap(z_end, q.z, self.origin.z) > r2 {
+                    z_end -= 1;
+                }
+                if z > z_end {
+                    continue;
+                }
                 let (s, e) = (
-                    self.starts[row + z0] as usize,
-                    self.starts[row + z1 + 1] as usize,
+                    self.starts[row + z] as usize,
+                    self.starts[row + z_end + 1] as usize,
                 );
-                for &i in &self.items[s..e] {
-                    f(i);
+                for (i, p) in self.items[s..e].iter().zip(&self.positions[s..e]) {
+                    let d2 = p.distance_squared(q);
+                    if d2 < r2 {
+                        f(*i, *p, d2);
+                    }
                 }
             }
         }
@@ -334,14 +368,18 @@ mod tests {
         let g = PointGrid::new(&pts, &keep, 1.5);
         let q = Vec3::new(4.2, 5.1, 3.3);
         let mut found = Vec::new();
-        g.for_each_near(q, 2.0, |i| found.push(i));
-        for (i, p) in pts.iter().enumerate() {
-            if p.distance(q) <= 2.0 {
-                assert!(found.contains(&(i as u32)), "missed point {i}");
-            }
-        }
+        g.for_each_near(q, 2.0, |i, p, d2| {
+            assert_eq!(p, pts[i as usize]);
+            assert_eq!(d2, p.distance_squared(q));
+            found.push(i);
+        });
+        found.sort_unstable();
+        let want: Vec<u32> = (0..pts.len() as u32)
+            .filter(|i| pts[*i as usize].distance(q) < 2.0)
+            .collect();
+        assert_eq!(found, want);
         let mut none = 0;
-        g.for_each_near(Vec3::splat(100.0), 2.0, |_| none += 1);
+        g.for_each_near(Vec3::splat(100.0), 2.0, |_, _, _| none += 1);
         assert_eq!(none, 0);
     }
 }
