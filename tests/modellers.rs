@@ -111,6 +111,22 @@ fn sierpinski_triangles_follow_the_depth() {
 }
 
 #[test]
+fn sierpinski_steps_are_levels_of_the_fractal() {
+    for k in 0..4u32 {
+        let steps = k.to_string();
+        let (stats, _, _dir) = run("sierpinski.lua", &["--steps", &steps]);
+        let prisms = (3u64.pow(k + 1) - 1) / 2;
+        assert_eq!(count(&stats, "triangles"), prisms * 8, "step {k}");
+        // Each refined triangle is P, then three branches Push Corner S Pop.
+        assert_eq!(
+            count(&stats, "modules"),
+            1 + 12 * (prisms - 3u64.pow(k)),
+            "step {k}"
+        );
+    }
+}
+
+#[test]
 fn fireworks_steps_are_frames() {
     // Lines only: two vertices per segment (an empty frame has no glb meshes to count).
     let frames: Vec<u64> = ["1", "10", "25", "40"]

@@ -56,66 +56,16 @@ obj:RRule("RandCity", function(c)
   end
 end)
 
--- A building becomes its parts: its footprint ends at the current position along X and
--- starts at the row's line along Z, so rows of any depth never overlap.
--- (Each part gets the building's table as its first parameter: a table passed as a symbol's
--- own parameter table would be shared by all of them.)
+-- A building becomes its parts (floor, colonnade, architrave, roof): its footprint ends at
+-- the current position along X and starts at the row's line along Z, so rows of any depth
+-- never overlap.
 obj:RRule("Building", function(t)
-  local b = t[1]
-  local w, d = arch.footprint(b)
-  return { Push{}, T{-w / 2, d / 2}, Floor{b}, Colonnade{b}, Architrave{b}, Roof{b}, Pop{} }
+  local w, d = arch.footprint(t[1])
+  local out = { Push{}, T{-w / 2, d / 2} }
+  for _, part in ipairs(arch.parts(t[1], "gable")) do out[#out + 1] = part end
+  out[#out + 1] = Pop{}
+  return out
 end)
 
-local function path() return this.e:getPathMatrix() end
-
-obj:IRule("Push", function() this.e:push() return true end)
-obj:IRule("Pop", function() this.e:pop() return true end)
-obj:IRule("T", function(t) path():translate(t[1], 0, t[2]) return true end)
-
-obj:IRule("Floor", function(t)
-  local b = t[1]
-  local w, d = arch.footprint(b)
-  for s = 1, b.steps do
-    local grow = (b.steps - s + 1) * 0.6
-    arch.box(this.e, w + 2 * grow, d + 2 * grow, 0.35, arch.colors.step)
-    path():advance(0.35)
-  end
-  arch.box(this.e, w, d, 0.35, arch.colors.stone)
-  path():advance(0.35)
-  return true
-end)
-
-obj:IRule("Colonnade", function(t)
-  local b = t[1]
-  local sep = b.column_separation
-  local r = math.min(b.column_height / 14, sep * 0.18)
-  for i = 0, b.width - 1 do
-    for j = 0, b.length - 1 do
-      if i == 0 or j == 0 or i == b.width - 1 or j == b.length - 1 then
-        this.e:push()
-        path():translate((i - (b.width - 1) / 2) * sep, 0, (j - (b.length - 1) / 2) * sep)
-        arch.column(this.e, b.column_height, r)
-        this.e:pop()
-      end
-    end
-  end
-  path():advance(b.column_height)
-  return true
-end)
-
-obj:IRule("Architrave", function(t)
-  local b = t[1]
-  local w, d = arch.footprint(b)
-  arch.box(this.e, w, d, 0.1 * b.column_height, arch.colors.beam)
-  path():advance(0.1 * b.column_height)
-  return true
-end)
-
-obj:IRule("Roof", function(t)
-  local b = t[1]
-  local w, d = arch.footprint(b)
-  arch.gable(this.e, w, d, b.roof_height, 0.3)
-  return true
-end)
-
+arch.interpretation(obj)
 return obj

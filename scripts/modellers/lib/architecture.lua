@@ -87,22 +87,28 @@ function M.footprint(b)
   return (b.width - 1) * sep + 1.2 * sep, (b.length - 1) * sep + 1.2 * sep
 end
 
--- A temple-like building (the thesis' Building symbol): stepped podium, a colonnade on the
--- perimeter, an architrave and a gable roof. `b` holds width and length (columns),
--- column_height, column_separation, roof_height and steps, as in the thesis' RandCity rule.
-function M.building(e, b, roof)
+-- The parts of a temple-like building (the thesis' Building symbol). `b` holds width and
+-- length (columns), column_height, column_separation, roof_height and steps, as in the
+-- thesis' RandCity rule. Each part stands on the frame and leaves the path on its top.
+local STEP_H, STEP_W = 0.35, 0.6
+
+-- The stepped podium and the stylobate the columns stand on.
+function M.floor(e, b)
+  local path = e:getPathMatrix()
+  local w, d = M.footprint(b)
+  for s = 1, b.steps do                     -- widest step first
+    local grow = (b.steps - s + 1) * STEP_W
+    M.box(e, w + 2 * grow, d + 2 * grow, STEP_H, M.colors.step)
+    path:advance(STEP_H)
+  end
+  M.box(e, w, d, STEP_H, M.colors.stone)
+  path:advance(STEP_H)
+end
+
+-- The colonnade on the perimeter.
+function M.colonnade(e, b)
   local path = e:getPathMatrix()
   local sep, h = b.column_separation, b.column_height
-  local w, d = M.footprint(b)
-  local step_h, step_w = 0.35, 0.6
-  e:push()
-  for s = 1, b.steps do                     -- the podium, widest step first
-    local grow = (b.steps - s + 1) * step_w
-    M.box(e, w + 2 * grow, d + 2 * grow, step_h, M.colors.step)
-    path:advance(step_h)
-  end
-  M.box(e, w, d, step_h, M.colors.stone)   -- the stylobate the columns stand on
-  path:advance(step_h)
   local r = math.min(h / 14, sep * 0.18)
   for i = 0, b.width - 1 do
     for j = 0, b.length - 1 do
@@ -115,19 +121,68 @@ function M.building(e, b, roof)
     end
   end
   path:advance(h)
-  M.box(e, w, d, 0.1 * h, M.colors.beam)   -- architrave
-  path:advance(0.1 * h)
-  if roof == "spire" then
+end
+
+-- The architrave on the columns.
+function M.architrave(e, b)
+  local w, d = M.footprint(b)
+  M.box(e, w, d, 0.1 * b.column_height, M.colors.beam)
+  e:getPathMatrix():advance(0.1 * b.column_height)
+end
+
+-- The roof: "gable" (default), "spire" or "none".
+function M.roof(e, b, kind)
+  local w, d = M.footprint(b)
+  if kind == "spire" then
     M.spire(e, w, d, b.roof_height)
-  elseif roof ~= "none" then
+  elseif kind ~= "none" then
     M.gable(e, w, d, b.roof_height, 0.3)
   end
+end
+
+-- The whole building at once.
+function M.building(e, b, roof)
+  e:push()
+  M.floor(e, b)
+  M.colonnade(e, b)
+  M.architrave(e, b)
+  M.roof(e, b, roof)
   e:pop()
+end
+
+-- What a Building symbol is rewritten into: its parts, between Push and Pop so the path
+-- comes back to the ground. (Each part gets the building's table as its first parameter:
+-- a table given as a symbol's own parameter table would be shared by all of them.)
+function M.parts(b, roof)
+  return {
+    pge.sym("Push"), pge.sym("Floor", {b}), pge.sym("Colonnade", {b}),
+    pge.sym("Architrave", {b}), pge.sym("Roof", {b, roof}), pge.sym("Pop"),
+  }
+end
+
+-- Interpretation rules for the parts and for moving the extruder `this.e`: Push, Pop,
+-- T{dx, dz} (a move on the ground), Up{h, scale} (a move up, then a scaling of the frame),
+-- Floor, Colonnade, Architrave, Roof.
+function M.interpretation(obj)
+  local function e() return this.e end
+  obj:IRule("Push", function() e():push() return true end)
+  obj:IRule("Pop", function() e():pop() return true end)
+  obj:IRule("T", function(t) e():getPathMatrix():translate(t[1], 0, t[2]) return true end)
+  obj:IRule("Up", function(t)
+    local path = e():getPathMatrix()
+    path:advance(t[1])
+    path:scale(t[2] or 1)
+    return true
+  end)
+  obj:IRule("Floor", function(t) M.floor(e(), t[1]) return true end)
+  obj:IRule("Colonnade", function(t) M.colonnade(e(), t[1]) return true end)
+  obj:IRule("Architrave", function(t) M.architrave(e(), t[1]) return true end)
+  obj:IRule("Roof", function(t) M.roof(e(), t[1], t[2]) return true end)
 end
 
 -- The height of a building from the ground to the top of its architrave.
 function M.height(b)
-  return (b.steps + 1) * 0.35 + 1.1 * b.column_height
+  return (b.steps + 1) * STEP_H + 1.1 * b.column_height
 end
 
 return M
