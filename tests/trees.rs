@@ -96,6 +96,36 @@ macro_rules! species {
 
 species!(oak, poplar, conifer, willow, bush, vase, topiary);
 
+/// The skeleton in the oak's glb: one tree rooted at node 0, parents before children, tips
+/// at the tip radius and the pipe model `r^n = sum of r_child^n` at every fork (n = 2.2 in
+/// oak.lua).
+#[test]
+fn the_exported_skeleton_is_one_tree_with_pipe_radii() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (_, glb) = run_tree("scripts/species/oak.lua", dir.path(), &[]);
+    let doc = gltf::Gltf::from_slice(&glb).expect("glb");
+    let mesh = doc.meshes().next().expect("bark");
+    let extras: serde_json::Value = serde_json::from_str(mesh.extras().as_ref().expect("extras").get()).expect("json");
+    let skeleton = &extras["pge"]["skeleton"];
+    let parents: Vec<i64> = skeleton["parents"].as_array().expect("parents").iter().map(|p| p.as_i64().expect("int")).collect();
+    let radii: Vec<f64> = skeleton["radii"].as_array().expect("radii").iter().map(|r| r.as_f64().expect("number")).collect();
+    assert_eq!(parents[0], -1);
+    let mut children = vec![Vec::new(); parents.len()];
+    for (i, p) in parents.iter().enumerate().skip(1) {
+        assert!(*p >= 0 && (*p as usize) < i, "node {i} has parent {p}: one tree, parents first");
+        children[*p as usize].push(i);
+    }
+    let n = 2.2f64;
+    for (i, kids) in children.iter().enumerate() {
+        if kids.is_empty() {
+            assert!((radii[i] - 0.025).abs() < 1e-6, "tip {i} has radius {}", radii[i]);
+        } else {
+            let sum: f64 = kids.iter().map(|c| radii[*c].powf(n)).sum();
+            assert!((radii[i].powf(n) - sum).abs() <= 1e-4 * sum, "node {i}: {} vs {}", radii[i].powf(n), sum);
+        }
+    }
+}
+
 #[test]
 fn same_seed_same_bytes_other_seed_other_tree() {
     let dir = tempfile::tempdir().expect("tempdir");

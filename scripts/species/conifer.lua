@@ -18,5 +18,5 @@ return pge.SpaceColonization{
   tropism = {0, -0.3, 0},
   radius = { tip = 0.015, exponent = 2.6 },
   mesh = { sides = 6, mergeStraight = 5, color = "#4a3b30" },
-  leaves = { perTip = {8, 12}, size = 0.16, maxDepth = 3, colors = {"#163b22", "#2c5a30"} },
+  leaves = { perTip = {10, 14}, size = 0.3, width = 0.3, maxDepth = 3, colors = {"#163b22", "#2c5a30"} },
 }

@@ -79,7 +79,7 @@ pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) ->
 
 /// Appends one quad per leaf point to `mesh` (positions, normals, uvs, colors, indices):
 /// the middle of the quad's stalk edge at the point, the quad extending `size` along its
-/// direction and `size` wide along its side; `v` runs from 0 at the stalk to 1 at the tip.
+/// direction and `size * options.width` wide along its side; `v` runs from 0 at the stalk to 1 at the tip.
 /// Each leaf's colour is drawn between `options.colors`. A leaf of size 0 or less takes
 /// `options.size`.
 pub fn append_leaf_quads(
@@ -105,7 +105,7 @@ pub fn append_leaf_quads(
             .try_normalize()
             .unwrap_or_else(|| axis.any_orthonormal_vector());
         let l = axis * size;
-        let s = side * (0.5 * size);
+        let s = side * (0.5 * size * options.width);
         let normal = side.cross(axis);
         let color = c0.lerp(c1, uniform(rng));
         let base = mesh.positions.len() as u32;

@@ -10,7 +10,7 @@
 //!   sides = 8,                                 -- shorthand for mesh.sides
 //!   mesh = { sides = 8, caps = true, exponent = 2.3, tipRadius = 0.02, mergeStraight = 5,
 //!            smoothing = 0, radii = "pipe", color = "#6b5444", texture = "bark.png" },
-//!   leaves = { perTip = {3, 6}, size = 0.25, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
+//!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
 //!              texture = "leaf.png" },
 //! }
 //! ```
@@ -117,8 +117,11 @@ impl Default for MeshOptions {
 pub struct LeafOptions {
     /// Leaves per tip, drawn uniformly in `min..=max` (default 3..=6; max 1000).
     pub per_tip: (u32, u32),
-    /// Leaf length (> 0, default 0.25); leaves are square quads.
+    /// Leaf length (> 0, default 0.25).
     pub size: f32,
+    /// Leaf width as a fraction of its length (> 0 and at most 4, default 1: square quads;
+    /// 0.2 gives needles).
+    pub width: f32,
     /// Each leaf's colour is drawn between these two (linear RGBA).
     pub colors: [[f32; 4]; 2],
     /// A tip's leaves hang on its last `max_depth + 1` segments: 0 puts them on the tip
@@ -133,6 +136,7 @@ impl Default for LeafOptions {
         LeafOptions {
             per_tip: (3, 6),
             size: 0.25,
+            width: 1.0,
             colors: [hex(DEFAULT_LEAF_COLORS[0]), hex(DEFAULT_LEAF_COLORS[1])],
             max_depth: 2,
             texture: TextureSource::Procedural,
@@ -164,7 +168,7 @@ const MESH_KEYS: &[&str] = &[
     "color",
     "texture",
 ];
-const LEAF_KEYS: &[&str] = &["perTip", "size", "colors", "maxDepth", "texture"];
+const LEAF_KEYS: &[&str] = &["perTip", "size", "width", "colors", "maxDepth", "texture"];
 const RADIUS_KEYS: &[&str] = &["tip", "exponent"];
 
 fn hex(s: &str) -> [f32; 4] {
@@ -298,7 +302,7 @@ impl MeshOptions {
 }
 
 impl LeafOptions {
-    /// Reads a `leaves = {...}` table: `perTip = {min, max}` (or one number), `size`,
+    /// Reads a `leaves = {...}` table: `perTip = {min, max}` (or one number), `size`, `width`,
     /// `colors = {"#rrggbb", "#rrggbb"}` (or one colour), `maxDepth`, `texture` (a PNG path).
     pub fn from_lua(table: &Table) -> Result<LeafOptions, OptionError> {
         LeafOptions::from_lua_at(table, "leaves")
@@ -336,6 +340,9 @@ impl LeafOptions {
         }
         if let Some(v) = number_in(t, "size", &path("size"), 0.0, f32::MAX, false)? {
             o.size = v;
+        }
+        if let Some(v) = number_in(t, "width", &path("width"), 0.0, 4.0, false)? {
+            o.width = v;
         }
         match get(t, "colors", &path("colors"))? {
             Value::Nil => {}
@@ -547,7 +554,7 @@ mod tests {
             r##"return { radius = {tip = 0.05, exponent = 2.5}, smoothing = 0.5, sides = 6,
                 mesh = { sides = 12, caps = false, mergeStraight = 3, radii = "keep",
                          color = "#ffffff", texture = "bark.png" },
-                leaves = { perTip = {1, 4}, size = 0.3, colors = {"#000000", "#ffffff"},
+                leaves = { perTip = {1, 4}, size = 0.3, width = 0.25, colors = {"#000000", "#ffffff"},
                            maxDepth = 3, texture = "leaf.png" }, other = 1 }"##,
         )
         .expect("ok");
@@ -563,6 +570,7 @@ mod tests {
         let l = o.leaves.expect("leaves");
         assert_eq!(l.per_tip, (1, 4));
         assert_eq!(l.size, 0.3);
+        assert_eq!(l.width, 0.25);
         assert_eq!(l.colors, [[0.0, 0.0, 0.0, 1.0], [1.0; 4]]);
         assert_eq!(l.max_depth, 3);
         assert_eq!(l.texture, TextureSource::File("leaf.png".into()));
