@@ -34,6 +34,7 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
     pge_engine::Engine::builder()
         .library(library_folder())
         .plugin(pge_lsystem::LSystemPlugin)
+        .plugin(pge_turtle::TurtlePlugin)
         .plugin(pge_spacecol::SpaceColonizationPlugin)
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)

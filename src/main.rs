@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod common;
+mod derive;
 mod run;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other
@@ -20,12 +21,15 @@ struct Cli {
 enum Command {
     /// Run a script and write the model it generates (.glb, or .obj by extension).
     Run(run::RunArgs),
+    /// Print the string an L-system derives (text, count or json).
+    Derive(derive::DeriveArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
+        Command::Derive(args) => args.script.engine().and_then(|engine| derive::derive(&engine, args)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
