@@ -340,7 +340,7 @@ fn memory_budget(lua: &Lua) -> usize {
 
 /// An image (and its PNG when exported) must fit in the memory limit.
 fn check_image_budget(lua: &Lua, w: u64, h: u64, what: &str) -> mlua::Result<()> {
-    let bytes = w * h * 4 * 2;
+    let bytes = w.saturating_mul(h).saturating_mul(8);
     let budget = memory_budget(lua) as u64;
     if bytes > budget {
         return Err(script_error(

@@ -179,6 +179,9 @@ impl MarchingCubes {
             return Ok((mesh, MarchStats::default()));
         };
         let extent = hi - lo;
+        if !extent.is_finite() {
+            return Err(MarchError::BadBounds);
+        }
         let h = extent.max_element() / o.resolution as f32;
         let dims = (extent / h).ceil().max(Vec3::ONE);
         let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
@@ -205,7 +208,8 @@ impl MarchingCubes {
                 let b = ((p.position + r - lo) / h).ceil();
                 let range = |a: f32, b: f32, n: usize| {
                     let last = n as i64 - 1;
-                    let first = ((a as i64 - 1).div_euclid(BLOCK as i64)).clamp(0, last.max(0));
+                    let first = ((a as i64).saturating_sub(1).div_euclid(BLOCK as i64))
+                        .clamp(0, last.max(0));
                     let end = ((b as i64).div_euclid(BLOCK as i64)).clamp(-1, last);
                     (first as usize, (end + 1).max(first) as usize)
                 };
@@ -565,6 +569,24 @@ mod tests {
             .polygonize(&Metaballs::new(1.0), &mut || false)
             .expect("ok");
         assert_eq!(mesh.vertex_count(), 0);
+    }
+
+    #[test]
+    fn far_away_particles_do_not_overflow() {
+        let mut field = Metaballs::new(1.0);
+        field.add_particle(Vec3::ZERO, 1.0, None).expect("ok");
+        field
+            .add_particle(Vec3::new(-3.0e38, 0.0, 0.0), 1.0, None)
+            .expect("ok");
+        let (mesh, _) = MarchingCubes::new(MarchOptions {
+            resolution: 16,
+            bounds: Some((Vec3::splat(-1.0), Vec3::ONE)),
+            ..MarchOptions::default()
+        })
+        .expect("ok")
+        .polygonize(&field, &mut || false)
+        .expect("the far particle is simply outside the grid");
+        assert!(mesh.triangle_count() > 0);
     }
 
     #[test]
