@@ -20,7 +20,7 @@ mod triangulate;
 
 pub use extruder::{Extruder, ExtruderError, ExtruderOptions, MAX_SHAPE_POINTS, MAX_STATE_DEPTH};
 pub use matrix::{MAX_STACK_DEPTH, MatrixError, MatrixManipulator};
-pub use triangulate::triangulate;
+pub use triangulate::{EAR_CLIPPING_MAX, triangulate};
 
 pub use lua::{LuaExtruder, LuaMatrixManipulator};
 

@@ -11,17 +11,24 @@ fn in_triangle(p: Vec2, a: Vec2, b: Vec2, c: Vec2) -> bool {
     cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
 }
 
+/// The most points an outline may have to be triangulated by ear clipping.
+pub const EAR_CLIPPING_MAX: usize = 256;
+
 /// Triangulates the polygon `points` (closed, any orientation) into `n - 2` triangles of
 /// indices into `points`, counter-clockwise in the plane of `points`.
 ///
-/// A simple polygon (convex or not) is triangulated by ear clipping. When no ear can be found
-/// (a self-intersecting or degenerate outline) the rest is closed by a fan, so the count is
-/// always `n - 2`.
+/// A simple polygon (convex or not) of up to [`EAR_CLIPPING_MAX`] points is triangulated by
+/// ear clipping. When no ear can be found (a self-intersecting or degenerate outline), or
+/// the outline has more points (ear clipping is quadratic or worse), the rest is closed by a
+/// fan, which is right for convex outlines such as fine circles. The count is always `n - 2`.
 #[must_use]
 pub fn triangulate(points: &[Vec2]) -> Vec<[usize; 3]> {
     let n = points.len();
     if n < 3 {
         return Vec::new();
+    }
+    if n > EAR_CLIPPING_MAX {
+        return (1..n - 1).map(|k| [0, k, k + 1]).collect();
     }
     let area: f32 = (0..n)
         .map(|i| points[i].perp_dot(points[(i + 1) % n]))
@@ -113,6 +120,19 @@ mod tests {
         let t = triangulate(&cw);
         assert_eq!(t.len(), 2);
         assert!(t.iter().all(|t| cross(cw[t[0]], cw[t[1]], cw[t[2]]) > 0.0));
+    }
+
+    #[test]
+    fn large_outlines_are_fanned() {
+        let circle: Vec<Vec2> = (0..1000)
+            .map(|i| {
+                let a = std::f32::consts::TAU * i as f32 / 1000.0;
+                Vec2::new(a.cos(), a.sin())
+            })
+            .collect();
+        let t = triangulate(&circle);
+        assert_eq!(t.len(), 998);
+        assert!((area(&circle, &t) - std::f32::consts::PI).abs() < 1e-3);
     }
 
     #[test]
