@@ -9,9 +9,11 @@ local p = pge.params{
   height = {6.0, min = 1, max = 50, doc = "column height of the first storey"},
   separation = {3.0, min = 1, max = 20, doc = "distance between columns"},
   taper = {0.72, min = 0.3, max = 1, doc = "scale of each storey relative to the one below"},
+  sides = {16, min = 3, max = 64, doc = "sides of the columns: the model's resolution"},
 }
 
 local arch = require("lib.architecture")
+arch.sides = p.sides
 local block = {
   width = p.columns, length = p.columns, column_height = p.height,
   column_separation = p.separation, roof_height = p.height * 1.2, steps = 2,

@@ -3,6 +3,9 @@
 -- frame where it found it (push/pop), so callers place parts by moving the path.
 local M = {}
 
+-- Sides of a column's shaft: its resolution (the thesis' low and high resolution models).
+M.sides = 16
+
 M.colors = {
   stone = "#d9cfbd", step = "#b8ad98", column = "#f0ebe0", roof = "#a0523c", beam = "#e2d8c4",
 }
@@ -32,9 +35,9 @@ function M.column(e, h, r)
   e:setColor(M.colors.column)
   M.rect(e, 2.6 * r, 2.6 * r)
   e:extrude(0.04 * h)                       -- plinth
-  e:polygon(16, 1.2 * r)
+  e:polygon(M.sides, 1.2 * r)
   e:extrude(0.03 * h)                       -- torus (a new piece: the point count changed)
-  e:polygon(16, r)
+  e:polygon(M.sides, r)
   e:extrude(0)                              -- step in to the shaft, same piece
   shape:push()
   for _ = 1, 4 do                           -- entasis: the shaft narrows upwards
@@ -42,7 +45,7 @@ function M.column(e, h, r)
     shape:scale(0.96)
   end
   shape:pop()
-  e:polygon(16, 1.25 * r)
+  e:polygon(M.sides, 1.25 * r)
   e:extrude(0.05 * h)                       -- echinus flares out
   M.rect(e, 2.8 * r, 2.8 * r)
   e:extrude(0.04 * h)                       -- abacus
