@@ -20,6 +20,7 @@
 //! point, and the iteration cap bounds the rest (with a warning).
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -149,7 +150,7 @@ struct State {
     /// Whether some point was within the influence radius when the node was added.
     in_range: Vec<bool>,
     /// Nodes by cell of side `step`, for the duplicate-growth guard.
-    node_cells: HashMap<[i32; 3], Vec<u32>>,
+    node_cells: HashMap<[i32; 3], Vec<u32>, BuildHasherDefault<CellHasher>>,
     /// The iteration in which a node's growth was refused (its pullers are dropped next).
     refused: Vec<u32>,
     /// Roots still growing their trunk: the trunk's current tip and the length of straight
@@ -312,6 +313,33 @@ impl State {
     }
 }
 
+/// A fast hasher for integer cell keys (multiply-rotate, as rustc's FxHasher); the cell map
+/// is only probed, never iterated, so its order cannot leak into the output.
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(4) {
+            let mut word = [0u8; 4];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from(u32::from_le_bytes(word)));
+        }
+    }
+
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
 fn cell_of(p: Vec3, step: f32) -> [i32; 3] {
     let c = (p / step).floor();
     [c.x as i32, c.y as i32, c.z as i32]
@@ -348,7 +376,7 @@ impl Algorithm for SpaceColonization {
             nodes: Vec::new(),
             parents: Vec::new(),
             in_range: Vec::new(),
-            node_cells: HashMap::new(),
+            node_cells: HashMap::default(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
             iteration: 0,

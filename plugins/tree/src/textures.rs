@@ -136,6 +136,11 @@ pub fn leaf_texture() -> Result<Arc<Texture>, TreeError> {
     cached(Key::Leaf, || {
         let n = LEAF_SIZE as usize;
         let perlin = Perlin::new(11);
+        let mottles: Vec<f32> = (0..16 * 16)
+            .map(|i| {
+                perlin.get([(i % 16) as f64 * 9.0 / 16.0, (i / 16) as f64 * 9.0 / 16.0]) as f32
+            })
+            .collect();
         let mut rgba = Vec::with_capacity(n * n * 4);
         for y in 0..n {
             let v = (y as f64 + 0.5) / n as f64;
@@ -146,7 +151,7 @@ pub fn leaf_texture() -> Result<Arc<Texture>, TreeError> {
                 let across = (u - 0.5).abs();
                 let stalk = v < 0.14 && across < 0.018;
                 let inside = stalk || across < edge;
-                let mottle = perlin.get([u * 9.0, v * 9.0]) * 0.06;
+                let mottle = f64::from(wrapped(&mottles, 16, u as f32, v as f32)) * 0.06;
                 let midrib = across < 0.012;
                 let vein = ((v - across * 0.9) * 9.0).fract() < 0.07 && across < edge * 0.85;
                 let shade = if midrib || stalk {
