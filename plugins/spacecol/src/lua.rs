@@ -634,11 +634,15 @@ fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
         p.kill = 2.0 * step;
         p.step = step;
     }
-    if let Some(v) = number_opt(lua, w, "influence", t.get("influence")?, true)? {
-        p.influence = v;
-    }
-    if let Some(v) = number_opt(lua, w, "kill", t.get("kill")?, true)? {
-        p.kill = v;
+    let influence = number_opt(lua, w, "influence", t.get("influence")?, true)?;
+    let kill = number_opt(lua, w, "kill", t.get("kill")?, true)?;
+    // A default never contradicts a value the script gave: an unset kill stays below a
+    // given influence, an unset influence above a given kill.
+    match (influence, kill) {
+        (Some(i), Some(k)) => (p.influence, p.kill) = (i, k),
+        (Some(i), None) => (p.influence, p.kill) = (i, p.kill.min(0.25 * i)),
+        (None, Some(k)) => (p.influence, p.kill) = (p.influence.max(4.0 * k), k),
+        (None, None) => {}
     }
     if let Some(v) = vec3_opt(lua, w, "tropism", t.get("tropism")?)? {
         p.tropism = v;

@@ -349,3 +349,17 @@ fn an_unreachable_crown_stops_at_the_cap() {
         .expect("stops with a warning, not an error");
     assert_eq!(model.stats.nodes, 41);
 }
+
+#[test]
+fn defaults_follow_the_values_given() {
+    let scene = Scene::new();
+    // Only a small influence: the default kill (two steps) would exceed it, so it shrinks.
+    let model = scene
+        .run("return pge.SpaceColonization{ envelope = pge.shape.sphere{ center = {0, 3, 0}, radius = 1 }, points = 200, step = 0.1, influence = 0.15 }")
+        .expect("kill follows influence");
+    assert!(model.stats.nodes > 10);
+    // Only a large kill: the default influence grows past it.
+    scene
+        .run("return pge.SpaceColonization{ envelope = pge.shape.sphere{ center = {0, 3, 0}, radius = 1 }, points = 200, step = 0.1, kill = 2 }")
+        .expect("influence follows kill");
+}
