@@ -357,10 +357,26 @@ impl MarchingCubes {
                                             let mut step = Vec3::ZERO;
                                             step[axis] = h;
                                             let p = pa + step * t;
-                                            let g: Vec3 = local.iter().map(|q| q.gradient(p)).sum();
+                                            // Where the bounds cut the surface the cap's
+                                            // normal is not the field's: take the
+                                            // triangles' (see fix_degenerate_normals).
+                                            let mut end = [gi, gj, gk];
+                                            end[axis] += 1;
+                                            let on_wall = |q: [usize; 3]| {
+                                                q.contains(&0)
+                                                    || q[0] == nx
+                                                    || q[1] == ny
+                                                    || q[2] == nz
+                                            };
+                                            let normal = if on_wall([gi, gj, gk]) || on_wall(end) {
+                                                Vec3::ZERO
+                                            } else {
+                                                let g: Vec3 =
+                                                    local.iter().map(|q| q.gradient(p)).sum();
+                                                (-g).try_normalize().unwrap_or(Vec3::ZERO)
+                                            };
                                             mesh.positions.push(p);
-                                            mesh.normals
-                                                .push((-g).try_normalize().unwrap_or(Vec3::ZERO));
+                                            mesh.normals.push(normal);
                                             (mesh.positions.len() - 1) as u32
                                         });
                                     }
@@ -384,8 +400,9 @@ impl MarchingCubes {
     }
 }
 
-/// Vertices where the gradient vanished (a saddle exactly on the surface, or a vertex on a
-/// wall of the bounds) take the average normal of their triangles.
+/// Vertices where the gradient vanished (a saddle exactly on the surface) or whose edge
+/// touches a wall of the bounds (where the mesh is closed by a cut) take the average normal
+/// of their triangles.
 fn fix_degenerate_normals(mesh: &mut Mesh) {
     if mesh.normals.iter().all(|n| *n != Vec3::ZERO) {
         return;
@@ -515,6 +532,16 @@ mod tests {
         .expect("ok");
         assert_closed(&mesh);
         assert!(mesh.positions.iter().all(|p| p.y >= -1e-6));
+        // The cut: vertices in the first layer of cells get their triangles' normals, which
+        // lean downwards; the rest keep the field's (radial).
+        let h = 2.0 / 20.0;
+        for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+            if p.y < h * 0.999 {
+                assert!(n.y < 0.0, "cap normal {n} at {p}");
+            } else {
+                assert!(n.dot(p.normalize()) > 0.99, "normal {n} at {p}");
+            }
+        }
     }
 
     #[test]
