@@ -156,9 +156,19 @@ impl Tube<'_> {
             }
             let binormal = dir.cross(side);
             let (centre, radius) = pts[j];
+            // At a bend the ring cuts the tube obliquely: stretch it along the bend by
+            // 1/cos(half the turn) (Bloomenthal) so the joint keeps the branch's thickness.
+            let (bend, stretch) = if j > 0 && j < seg.len() {
+                let turn = (seg[j] - seg[j - 1]).try_normalize().unwrap_or(Vec3::ZERO);
+                let cos_half = dir.dot(seg[j]).clamp(0.5, 1.0);
+                (turn, 1.0 / cos_half - 1.0)
+            } else {
+                (Vec3::ZERO, 0.0)
+            };
             for (k, &(c, s)) in self.trig.iter().enumerate() {
                 let offset = side * c + binormal * s;
-                self.mesh.positions.push(centre + offset * radius);
+                let shape = offset + bend * (stretch * offset.dot(bend));
+                self.mesh.positions.push(centre + shape * radius);
                 self.mesh.normals.push(offset);
                 self.mesh
                     .uvs
@@ -281,13 +291,20 @@ mod tests {
         s.push(Vec3::new(1.0, 1.0, 0.0), Some(a), 0.1, 0);
         let m = bark_mesh(&s, 8, false);
         let bisector = Vec3::new(1.0, 1.0, 0.0).normalize();
+        // The ring is an ellipse in the bisecting plane: 0.1 across the bend, stretched by
+        // 1/cos(45 degrees) along it (Bloomenthal), so the joint keeps its thickness.
+        let along = Vec3::new(1.0, -1.0, 0.0).normalize();
         for k in 0..9 {
-            let p = m.positions[9 + k];
+            let p = m.positions[9 + k] - Vec3::Y;
             assert!(
-                (p - Vec3::Y).dot(bisector).abs() < 1e-5,
+                p.dot(bisector).abs() < 1e-5,
                 "ring 1 is not in the bisecting plane"
             );
-            assert!(((p - Vec3::Y).length() - 0.1).abs() < 1e-5);
+            let (a, b) = (p.dot(along) / (0.1 * 2f32.sqrt()), p.z / 0.1);
+            assert!(
+                (a * a + b * b - 1.0).abs() < 1e-4,
+                "vertex {k} is off the ellipse"
+            );
         }
     }
 
@@ -311,6 +328,45 @@ mod tests {
             / 5.0;
         assert!(approx(centre, Vec3::Y));
         assert!((m.positions[lateral_first].distance(Vec3::Y) - 0.1).abs() < 1e-5);
+    }
+
+    /// Every edge, after welding equal positions, borders an even number of triangles.
+    fn is_closed(m: &Mesh) -> bool {
+        use std::collections::HashMap;
+        let key = |p: Vec3| (p * 1e4).round().to_array().map(|c| c as i64);
+        let mut ids: HashMap<[i64; 3], usize> = HashMap::new();
+        let welded: Vec<usize> = m
+            .positions
+            .iter()
+            .map(|p| {
+                let n = ids.len();
+                *ids.entry(key(*p)).or_insert(n)
+            })
+            .collect();
+        let mut edges: HashMap<(usize, usize), u32> = HashMap::new();
+        for t in m.indices.chunks_exact(3) {
+            for k in 0..3 {
+                let (a, b) = (welded[t[k] as usize], welded[t[(k + 1) % 3] as usize]);
+                *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        edges.values().all(|c| c % 2 == 0)
+    }
+
+    #[test]
+    fn a_capped_branch_is_closed() {
+        let mut s = Skeleton::new();
+        let mut prev = s.push(Vec3::ZERO, None, 0.3, 0);
+        for (k, p) in [Vec3::Y, Vec3::new(0.5, 1.8, 0.1), Vec3::new(0.6, 2.9, -0.4)]
+            .iter()
+            .enumerate()
+        {
+            prev = s.push(*p, Some(prev), 0.25 - 0.05 * k as f32, 0);
+        }
+        let closed = bark_mesh(&s, 7, true);
+        assert!(is_closed(&closed), "caps close the tube");
+        let open = bark_mesh(&s, 7, false);
+        assert!(!is_closed(&open), "without caps the ends are open");
     }
 
     #[test]
