@@ -126,6 +126,18 @@ fn the_exported_skeleton_is_one_tree_with_pipe_radii() {
     }
 }
 
+/// The mesh envelope of topiary.lua in its three modes.
+#[test]
+fn mesh_envelope_modes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for mode in ["fill", "surround", "vertices"] {
+        let set = format!("mode={mode}");
+        let (stats, glb) = run_tree("scripts/species/topiary.lua", dir.path(), &["--set", &set]);
+        check_tree_glb(&format!("topiary {mode}"), &glb);
+        assert!(stats["nodes"].as_u64().expect("nodes") > 50, "{mode}: {stats}");
+    }
+}
+
 #[test]
 fn same_seed_same_bytes_other_seed_other_tree() {
     let dir = tempfile::tempdir().expect("tempdir");
