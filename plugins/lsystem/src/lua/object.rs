@@ -182,6 +182,16 @@ impl UserData for LuaLSystem {
                     format!("IRule '{lhs}': the right side must be a function"),
                 ));
             };
+            // `[` and `]` may be interpreted (a host object saving and restoring its state).
+            if matches!(lhs.trim(), "[" | "]") {
+                let sym = if lhs.trim() == "[" {
+                    Sym::PUSH
+                } else {
+                    Sym::POP
+                };
+                me.0.irules.push(LuaIRule { sym, func });
+                return Ok(());
+            }
             let parsed = classic::parse_lhs(&lhs, &|t| Ok(classic::parse_lua_patterns(t)))
                 .map_err(|e| script_error(lua, format!("IRule '{}': {e}", lhs.trim())))?;
             if !parsed.left.is_empty() || !parsed.right.is_empty() || parsed.condition.is_some() {
