@@ -333,3 +333,22 @@ fn pairs_order_is_the_same_on_every_run() {
     assert_eq!(outs[0], outs[1]);
     assert_eq!(outs[1], outs[2]);
 }
+
+#[test]
+fn material_texture_from_an_image_object() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("t.glb");
+    run_to("tests/scripts/texture_object.lua", &out, &[]);
+    let (doc, _, images) = gltf::import(&out).expect("imports");
+    assert_eq!(doc.images().count(), 1);
+    assert_eq!((images[0].width, images[0].height), (4, 4));
+}
+
+#[test]
+fn an_empty_model_writes_a_glb_that_parses() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("e.glb");
+    run_to("tests/scripts/outside.lua", &out, &[]);
+    let (doc, _, _) = gltf::import(&out).expect("imports");
+    assert_eq!(doc.nodes().count(), 0);
+}

@@ -316,13 +316,17 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
         let n = node(meshes[inst.mesh], &inst.transform);
         nodes.push(b.root.push(n));
     }
-    let scene = b.root.push(json::Scene {
-        extensions: None,
-        extras: None,
-        name: Some("pge".into()),
-        nodes,
-    });
-    b.root.scene = Some(scene);
+    // A scene needs at least one node (and the gltf crate refuses one without), so an empty
+    // model is written without a scene: a valid, empty glTF.
+    if !nodes.is_empty() {
+        let scene = b.root.push(json::Scene {
+            extensions: None,
+            extras: None,
+            name: Some("pge".into()),
+            nodes,
+        });
+        b.root.scene = Some(scene);
+    }
     let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
     let mut pge = Map::new();
     pge.insert("generator".into(), GENERATOR.into());
@@ -464,5 +468,17 @@ mod tests {
         let b = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
         assert_eq!(a, b);
         assert_eq!(a.len() % 4, 0);
+    }
+}
+
+#[cfg(test)]
+mod empty_tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_model_is_a_valid_glb() {
+        let bytes = glb_bytes(&Model::new(), &ExportMeta::default()).expect("exports");
+        let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+        assert_eq!(gltf.nodes().count(), 0);
     }
 }

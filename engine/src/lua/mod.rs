@@ -34,6 +34,14 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
         .unwrap_or_default()
 }
 
+/// The memory limit of the session's Lua state in bytes (what `--memory-limit` set), so that
+/// plugins can refuse a Rust-side allocation that would exceed it.
+#[must_use]
+pub fn memory_limit(lua: &mlua::Lua) -> usize {
+    lua.app_data_ref::<state::SessionState>()
+        .map_or(usize::MAX, |s| s.memory_limit)
+}
+
 /// Registers the support library into the `pge` table.
 pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
     sandbox::register(lua, pge)?;

@@ -172,14 +172,46 @@ pub fn material_from_table(lua: &Lua, t: &Table) -> mlua::Result<Material> {
             ));
         }
     };
-    if let Some(path) = t.raw_get::<Option<String>>("texture")? {
-        let file = resolve_path(lua, &path)?;
-        let bytes = std::fs::read(&file)
-            .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
-        let tex = Texture::from_image_bytes(path.clone(), &bytes)
-            .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
-        m.texture = Some(Arc::new(tex));
-    }
+    m.texture = match t.raw_get::<Value>("texture")? {
+        Value::Nil => None,
+        Value::String(path) => {
+            let path = path.to_string_lossy();
+            let file = resolve_path(lua, &path)?;
+            let bytes = std::fs::read(&file)
+                .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
+            let tex = Texture::from_image_bytes(path.clone(), &bytes)
+                .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
+            Some(Arc::new(tex))
+        }
+        // An object that makes an image (pge.Image's texture()): anything with pngBytes().
+        v @ (Value::UserData(_) | Value::Table(_)) => {
+            let bytes: mlua::LuaString = match &v {
+                Value::UserData(ud) => ud.call_method("pngBytes", ()),
+                Value::Table(tb) => tb.call_method("pngBytes", ()),
+                _ => unreachable!("matched above"),
+            }
+            .map_err(|e| {
+                script_error(
+                    lua,
+                    format!(
+                        "material texture: expected a PNG path or an object with pngBytes() ({e})"
+                    ),
+                )
+            })?;
+            let tex = Texture::from_image_bytes("texture", &bytes.as_bytes())
+                .map_err(|e| script_error(lua, format!("material texture: {e}")))?;
+            Some(Arc::new(tex))
+        }
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "material texture must be a PNG path or an image, not {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
     Ok(m)
 }
 
