@@ -193,7 +193,8 @@ pub fn build_tree(
 
     let t = Instant::now();
     let prepared = Arc::new(prepared);
-    if prepared.len() >= 2 {
+    if prepared.parents.iter().any(Option::is_some) {
+        // At least one segment, so the bark mesh has triangles.
         model.add_mesh(bark_of(prepared.clone(), &options.mesh)?, Mat4::IDENTITY);
     }
     model.stats.add_phase("meshing", t.elapsed().as_secs_f64());
@@ -330,7 +331,11 @@ mod tests {
         let mut s = Skeleton::new();
         s.push(Vec3::ZERO, None, 0.1, 0);
         let m = build_tree(&s, &TreeOptions::default(), 1).expect("ok");
-        assert_eq!(m.triangle_count(), 0);
+        assert_eq!(m.meshes.len(), 0);
+        // Two roots and no segment: still nothing to mesh.
+        s.push(Vec3::X, None, 0.1, 0);
+        let m = build_tree(&s, &TreeOptions::default(), 1).expect("ok");
+        assert_eq!(m.meshes.len(), 0);
         assert_eq!(skeleton_centre(&y_tree()), Vec3::new(0.0, 1.25, 0.1));
     }
 }
