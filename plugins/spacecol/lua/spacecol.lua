@@ -50,7 +50,7 @@ function pge.shape.cylinder(o) end
 function pge.shape.revolve(o) end
 
 ---The inside of a closed mesh: an .obj/.glb/.gltf file next to the script, or a model.
----@param o {path?: string, model?: pge.Modelish}|string
+---@param o {path?: string, model?: pge.Modelish, transform?: pge.Mat4}|string
 ---@return pge.Shape
 function pge.shape.mesh(o) end
 

@@ -8,8 +8,8 @@ use glam::{Vec2, Vec3};
 use mlua::{FromLua, Function, Lua, Table, UserData, UserDataMethods, Value};
 use pge_engine::Plugin;
 use pge_engine::lua::{
-    AlgorithmHandle, LuaVec3, caller_location, resolve_path, script_error, to_engine_error,
-    to_model,
+    AlgorithmHandle, LuaMat4, LuaVec3, caller_location, resolve_path, script_error,
+    to_engine_error, to_model,
 };
 
 use crate::colonize::{Params, SpaceColonization};
@@ -436,6 +436,22 @@ fn mesh(lua: &Lua, v: Value) -> mlua::Result<LuaShape> {
                 format!("{w}: needs path = \"file.obj\" (or .glb) or model = a model"),
             ));
         }
+    };
+    // `transform = pge.mat4...` places the mesh (a unit crown scaled to the tree's size).
+    let transform = match &v {
+        Value::Table(t) => match t.get::<Value>("transform")? {
+            Value::Nil => None,
+            m => Some(
+                LuaMat4::from_lua(m, lua)
+                    .map_err(|_| script_error(lua, format!("{w}: transform must be a pge.mat4")))?
+                    .0,
+            ),
+        },
+        _ => None,
+    };
+    let positions: Vec<Vec3> = match transform {
+        Some(m) => positions.iter().map(|p| m.transform_point3(*p)).collect(),
+        None => positions,
     };
     let mesh = TriMesh::new(name.clone(), &positions, &triangles)
         .map_err(|e| script_error(lua, format!("{w}: '{name}' {e}")))?;

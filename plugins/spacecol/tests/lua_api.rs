@@ -140,6 +140,16 @@ fn mesh_envelopes_from_obj_glb_and_script_models() {
         .run(r#"return pge.SpaceColonization{ envelope = pge.shape.mesh{ path = "data/cube.obj" }, points = 400, step = 0.25, influence = 1.5, kill = 0.4 }"#)
         .expect("obj");
     assert!(from_obj.stats.nodes > 20);
+    // A transform places the mesh: the cube (y from 3 to 7) halved, then raised by 2.
+    scene
+        .run(
+            r#"local s = pge.shape.mesh{ path = "data/cube.obj", transform = pge.mat4.translate{0, 2, 0} * pge.mat4.scale(0.5) }
+local lo, hi = s:bounds()
+assert(math.abs(lo.y - 3.5) < 1e-5 and math.abs(hi.y - 5.5) < 1e-5 and math.abs(hi.x - 1) < 1e-5, "bounds")
+assert(s:contains{0, 4.5, 0} and not s:contains{0, 6, 0})
+return pge.SpaceColonization{ envelope = s, points = 200, step = 0.1, influence = 0.8, kill = 0.2 }"#,
+        )
+        .expect("transformed mesh");
 
     // The same cube as a glb written by the engine's exporter.
     let cube = r#"local v = {-2,3,-2, 2,3,-2, 2,7,-2, -2,7,-2, -2,3,2, 2,3,2, 2,7,2, -2,7,2}
