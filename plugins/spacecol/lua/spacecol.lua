@@ -102,6 +102,7 @@ function pge.shape.predicate(f, bounds) end
 ---@field roots? pge.Vector[] several roots (a bush)
 ---@field trunk? number length of a straight vertical trunk grown first
 ---@field maxIterations? integer iteration cap (1000)
+---@field seed? integer mixed into the run's seed (0)
 ---@field radius? {tip?: number, exponent?: number}
 ---@field smoothing? number
 ---@field sides? integer

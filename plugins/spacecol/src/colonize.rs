@@ -57,6 +57,9 @@ pub struct Params {
     pub trunk: f32,
     /// Iteration cap; reaching it stops with a warning.
     pub max_iterations: u32,
+    /// Mixed into the run's seed, so one script can grow several different trees (forest
+    /// variants) in one run; 0 by default.
+    pub seed: u64,
     /// Bark and leaf options.
     pub tree: TreeOptions,
 }
@@ -84,6 +87,7 @@ impl Params {
             roots: vec![Vec3::ZERO],
             trunk: 0.0,
             max_iterations: 1000,
+            seed: 0,
             tree: TreeOptions::default(),
         }
     }
@@ -313,6 +317,18 @@ impl State {
     }
 }
 
+/// The run's seed combined with a script's own `seed` (splitmix64 of the latter), the
+/// identity for `seed = 0`.
+fn mix(run: u64, own: u64) -> u64 {
+    if own == 0 {
+        return run;
+    }
+    let mut z = own.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    run ^ z ^ (z >> 31)
+}
+
 /// A fast hasher for integer cell keys (multiply-rotate, as rustc's FxHasher); the cell map
 /// is only probed, never iterated, so its order cannot leak into the output.
 #[derive(Default)]
@@ -357,7 +373,7 @@ impl Algorithm for SpaceColonization {
             &p.envelope,
             p.mode,
             p.points,
-            ctx.seed ^ 0x5ace_c010,
+            mix(ctx.seed, self.params.seed) ^ 0x5ace_c010,
             ctx,
             &self.location,
         )?;
@@ -580,7 +596,7 @@ impl Algorithm for SpaceColonization {
         pge_tree::assign_orders(&mut skeleton);
         let mut options = self.params.tree.clone();
         options.mesh.radii = pge_tree::RadiiMode::Keep;
-        let tree = pge_tree::build_tree(&skeleton, &options, ctx.seed)
+        let tree = pge_tree::build_tree(&skeleton, &options, mix(ctx.seed, self.params.seed))
             .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
         let mut model = Model::new();
         model.stats.add_phase("points", self.points_seconds);

@@ -572,6 +572,7 @@ const OPTIONS: &[&str] = &[
     "roots",
     "trunk",
     "maxIterations",
+    "seed",
     "radius",
     "smoothing",
     "sides",
@@ -703,6 +704,22 @@ fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
         1_000_000,
     )? {
         p.max_iterations = n;
+    }
+    match t.get::<Value>("seed")? {
+        Value::Nil => {}
+        Value::Integer(i) if i >= 0 => p.seed = i as u64,
+        Value::Number(n) if n >= 0.0 && n.fract() == 0.0 && n < 9.0e15 => p.seed = n as u64,
+        other => {
+            let shown = match other {
+                Value::Integer(i) => i.to_string(),
+                Value::Number(n) => n.to_string(),
+                v => v.type_name().to_string(),
+            };
+            return Err(script_error(
+                lua,
+                format!("{w}: seed must be an integer >= 0, got {shown}"),
+            ));
+        }
     }
     p.tree = pge_tree::lua::options_from_lua(lua, w, &t)?;
     let location = caller_location(lua);

@@ -373,3 +373,29 @@ fn defaults_follow_the_values_given() {
         .run("return pge.SpaceColonization{ envelope = pge.shape.sphere{ center = {0, 3, 0}, radius = 1 }, points = 200, step = 0.1, kill = 2 }")
         .expect("influence follows kill");
 }
+
+#[test]
+fn a_seed_option_grows_different_trees_in_one_run() {
+    let scene = Scene::new();
+    let model = scene
+        .run(
+            r#"local function tree(seed)
+  return pge.SpaceColonization{ envelope = pge.shape.sphere{ center = {0, 3, 0}, radius = 1 }, points = 200, step = 0.1, seed = seed }:model()
+end
+local m = pge.model()
+m:add(tree(1))
+m:add(tree(2), pge.mat4.translate{5, 0, 0})
+m:add(tree(1), pge.mat4.translate{10, 0, 0})
+return m"#,
+        )
+        .expect("three trees");
+    assert_eq!(model.instances.len(), 3);
+    let bark = |k: usize| &model.meshes[model.instances[k].mesh].positions;
+    assert_ne!(bark(0), bark(1), "seeds 1 and 2 differ");
+    assert_eq!(bark(0), bark(2), "seed 1 twice is the same tree");
+    assert_error(
+        "return pge.SpaceColonization{ envelope = pge.shape.sphere{ radius = 1 }, seed = -3 }",
+        1,
+        "seed must be an integer >= 0, got -3",
+    );
+}
