@@ -775,7 +775,10 @@ impl LSystemAlgorithm {
         f: impl FnOnce(&mut Self, &Lua, &RunContext) -> Result<R, HostError>,
     ) -> pge_engine::Result<R> {
         let lua = self.upgrade()?;
+        // An L-system run inside another one's rule leaves the outer `this` as it found it.
+        let outer_this: Value = lua.globals().raw_get("this").unwrap_or(Value::Nil);
         let result = f(self, &lua, ctx);
+        let _ = lua.globals().raw_set("this", outer_this);
         *deriving_cell(&lua).borrow_mut() = None;
         result.map_err(|e| self.engine_error(&lua, e))
     }

@@ -307,4 +307,61 @@ mod tests {
         let m = pge_engine::algorithm::run(&mut *a, &s.context(), &mut |_| {}).expect("runs");
         assert_eq!(m.stats.modules, 8);
     }
+
+    #[test]
+    fn irules_fall_through_in_order_and_brackets_can_be_interpreted() {
+        let s = session(1);
+        derive_in(
+            &s,
+            r#"log = {}
+            local l = pge.LSystem("t")
+            l:createInstance(function() return {} end)
+            l:axiom("A[B]A")
+            l:IRule("A", function() log[#log + 1] = "first" return false end)
+            l:IRule("A", function() log[#log + 1] = "second" return 1 end)
+            l:IRule("A", function() log[#log + 1] = "never" return true end)
+            l:IRule("[", function() log[#log + 1] = "push" return true end)
+            l:IRule("]", function() log[#log + 1] = "pop" return true end)
+            l:iterations(0)
+            return l"#,
+            None,
+        )
+        .expect("derives");
+        let log: String = s.eval("return table.concat(log, ' ')").expect("log");
+        assert_eq!(log, "first second push pop first second");
+    }
+
+    #[test]
+    fn before_step_may_replace_this_and_pge_sym_builds_any_symbol() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:createInstance(function() return { k = 1 } end)
+            l:beforeStep(function() return { k = 7 } end)
+            l:axiom{ pge.sym("[", {}), A{}, pge.sym("]") }
+            l:RRule("A", function() return pge.sym("Tip", { this.k }) end)
+            l:IRule("Tip", function() return true end)
+            l:iterations(1)
+            return l"#,
+        );
+        assert_eq!(t, "[ Tip(7) ]");
+    }
+
+    #[test]
+    fn the_global_table_is_writable_in_irules() {
+        let s = session(1);
+        derive_in(
+            &s,
+            r#"local l = pge.LSystem("t")
+            l:set("seen", 0)
+            l:axiom("AAA")
+            l:IRule("A", function() l:set("seen", l:get("seen") + 1) return true end)
+            l:iterations(0)
+            L = l
+            return l"#,
+            None,
+        )
+        .expect("derives");
+        let seen: f64 = s.eval("return L:get('seen')").expect("seen");
+        assert_eq!(seen, 3.0);
+    }
 }
