@@ -234,10 +234,15 @@ fn integer_opt(
 
 fn shape_of(lua: &Lua, what: &str, key: &str, v: Value) -> mlua::Result<Shape> {
     let type_name = v.type_name();
+    let hint = if matches!(v, Value::UserData(_)) {
+        " (a mesh or model becomes a shape with pge.shape.mesh{model = m})"
+    } else {
+        ""
+    };
     LuaShape::from_lua(v, lua).map(|s| s.0).map_err(|_| {
         script_error(
             lua,
-            format!("{what}: {key} must be a shape (pge.shape.*), got {type_name}"),
+            format!("{what}: {key} must be a shape (pge.shape.*), got {type_name}{hint}"),
         )
     })
 }

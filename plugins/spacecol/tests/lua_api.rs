@@ -255,6 +255,11 @@ fn bad_parameters_are_located_errors() {
         "envelope must be a shape (pge.shape.*), got integer",
     );
     assert_error(
+        "local m = pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }\nreturn pge.SpaceColonization{ envelope = m }",
+        2,
+        "got userdata (a mesh or model becomes a shape with pge.shape.mesh{model = m})",
+    );
+    assert_error(
         "local s = pge.shape.sphere{ center = {0, 0, 0}, radius = -1 }",
         1,
         "pge.shape.sphere: radius must be a number > 0, got -1",
