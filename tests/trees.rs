@@ -29,13 +29,15 @@ fn run_tree(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec
     args.extend_from_slice(extra);
     let o = pge(&args);
     assert_eq!(o.status.code(), Some(0), "{script}: {}", text(&o.stderr));
-    let stats: serde_json::Value = serde_json::from_str(text(&o.stdout).trim()).expect("stats are JSON");
+    let stats: serde_json::Value =
+        serde_json::from_str(text(&o.stdout).trim()).expect("stats are JSON");
     (stats, std::fs::read(&out).expect("glb written"))
 }
 
 /// Checks what a tree's glb must carry (API.md §7) and returns (bark, leaf) triangle counts.
 fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
-    let (doc, buffers, images) = gltf::import_slice(glb).unwrap_or_else(|e| panic!("{script}: {e}"));
+    let (doc, buffers, images) =
+        gltf::import_slice(glb).unwrap_or_else(|e| panic!("{script}: {e}"));
     assert_eq!(images.len(), 2, "{script}: bark and leaf textures embedded");
     let meshes: Vec<_> = doc.meshes().collect();
     assert_eq!(meshes.len(), 2, "{script}: a bark mesh and a leaf mesh");
@@ -49,7 +51,10 @@ fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
             let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
             assert_eq!(normals.len(), positions.len());
             assert_eq!(uvs, positions.len());
-            assert!(indices.iter().all(|i| (*i as usize) < positions.len()), "{script}: index range");
+            assert!(
+                indices.iter().all(|i| (*i as usize) < positions.len()),
+                "{script}: index range"
+            );
             assert!(normals.iter().all(|n| {
                 let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
                 (l - 1.0).abs() < 1e-3
@@ -57,21 +62,41 @@ fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
             assert!(positions.iter().flatten().all(|c| c.is_finite()));
             counts[k] += indices.len() / 3;
             let material = prim.material();
-            assert!(material.pbr_metallic_roughness().base_color_texture().is_some(), "{script}: textured");
+            assert!(
+                material
+                    .pbr_metallic_roughness()
+                    .base_color_texture()
+                    .is_some(),
+                "{script}: textured"
+            );
             if k == 1 {
-                assert_eq!(material.alpha_mode(), gltf::material::AlphaMode::Mask, "{script}: leaves are masked");
+                assert_eq!(
+                    material.alpha_mode(),
+                    gltf::material::AlphaMode::Mask,
+                    "{script}: leaves are masked"
+                );
                 assert!(material.double_sided(), "{script}: leaves are double-sided");
-                assert!(reader.read_colors(0).is_some(), "{script}: a colour per leaf");
+                assert!(
+                    reader.read_colors(0).is_some(),
+                    "{script}: a colour per leaf"
+                );
             }
         }
     }
     let extras: serde_json::Value =
-        serde_json::from_str(meshes[0].extras().as_ref().expect("bark extras").get()).expect("json");
+        serde_json::from_str(meshes[0].extras().as_ref().expect("bark extras").get())
+            .expect("json");
     let skeleton = &extras["pge"]["skeleton"];
     let parents = skeleton["parents"].as_array().expect("skeleton parents");
     assert_eq!(parents[0], -1, "{script}: node 0 is a root");
-    assert_eq!(skeleton["positions"].as_array().expect("positions").len(), 3 * parents.len());
-    assert_eq!(skeleton["radii"].as_array().expect("radii").len(), parents.len());
+    assert_eq!(
+        skeleton["positions"].as_array().expect("positions").len(),
+        3 * parents.len()
+    );
+    assert_eq!(
+        skeleton["radii"].as_array().expect("radii").len(),
+        parents.len()
+    );
     (counts[0], counts[1])
 }
 
@@ -105,23 +130,46 @@ fn the_exported_skeleton_is_one_tree_with_pipe_radii() {
     let (_, glb) = run_tree("scripts/species/oak.lua", dir.path(), &[]);
     let doc = gltf::Gltf::from_slice(&glb).expect("glb");
     let mesh = doc.meshes().next().expect("bark");
-    let extras: serde_json::Value = serde_json::from_str(mesh.extras().as_ref().expect("extras").get()).expect("json");
+    let extras: serde_json::Value =
+        serde_json::from_str(mesh.extras().as_ref().expect("extras").get()).expect("json");
     let skeleton = &extras["pge"]["skeleton"];
-    let parents: Vec<i64> = skeleton["parents"].as_array().expect("parents").iter().map(|p| p.as_i64().expect("int")).collect();
-    let radii: Vec<f64> = skeleton["radii"].as_array().expect("radii").iter().map(|r| r.as_f64().expect("number")).collect();
+    let parents: Vec<i64> = skeleton["parents"]
+        .as_array()
+        .expect("parents")
+        .iter()
+        .map(|p| p.as_i64().expect("int"))
+        .collect();
+    let radii: Vec<f64> = skeleton["radii"]
+        .as_array()
+        .expect("radii")
+        .iter()
+        .map(|r| r.as_f64().expect("number"))
+        .collect();
     assert_eq!(parents[0], -1);
     let mut children = vec![Vec::new(); parents.len()];
     for (i, p) in parents.iter().enumerate().skip(1) {
-        assert!(*p >= 0 && (*p as usize) < i, "node {i} has parent {p}: one tree, parents first");
+        assert!(
+            *p >= 0 && (*p as usize) < i,
+            "node {i} has parent {p}: one tree, parents first"
+        );
         children[*p as usize].push(i);
     }
     let n = 2.2f64;
     for (i, kids) in children.iter().enumerate() {
         if kids.is_empty() {
-            assert!((radii[i] - 0.025).abs() < 1e-6, "tip {i} has radius {}", radii[i]);
+            assert!(
+                (radii[i] - 0.025).abs() < 1e-6,
+                "tip {i} has radius {}",
+                radii[i]
+            );
         } else {
             let sum: f64 = kids.iter().map(|c| radii[*c].powf(n)).sum();
-            assert!((radii[i].powf(n) - sum).abs() <= 1e-4 * sum, "node {i}: {} vs {}", radii[i].powf(n), sum);
+            assert!(
+                (radii[i].powf(n) - sum).abs() <= 1e-4 * sum,
+                "node {i}: {} vs {}",
+                radii[i].powf(n),
+                sum
+            );
         }
     }
 }
@@ -134,7 +182,10 @@ fn mesh_envelope_modes() {
         let set = format!("mode={mode}");
         let (stats, glb) = run_tree("scripts/species/topiary.lua", dir.path(), &["--set", &set]);
         check_tree_glb(&format!("topiary {mode}"), &glb);
-        assert!(stats["nodes"].as_u64().expect("nodes") > 50, "{mode}: {stats}");
+        assert!(
+            stats["nodes"].as_u64().expect("nodes") > 50,
+            "{mode}: {stats}"
+        );
     }
 }
 
@@ -152,7 +203,11 @@ fn same_seed_same_bytes_other_seed_other_tree() {
 fn parameters_and_steps_change_the_tree() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (full, _) = run_tree("scripts/species/bush.lua", dir.path(), &[]);
-    let (few, _) = run_tree("scripts/species/bush.lua", dir.path(), &["--set", "points=300"]);
+    let (few, _) = run_tree(
+        "scripts/species/bush.lua",
+        dir.path(),
+        &["--set", "points=300"],
+    );
     let (early, _) = run_tree("scripts/species/bush.lua", dir.path(), &["--steps", "5"]);
     assert!(few["nodes"].as_u64() < full["nodes"].as_u64());
     assert!(early["nodes"].as_u64() < few["nodes"].as_u64());
@@ -164,13 +219,19 @@ fn assert_tree_error(source: &str, line: u32, needle: &str) {
     let script = dir.path().join("bad.lua");
     std::fs::write(&script, source).expect("write");
     let out = dir.path().join("bad.glb");
-    let (script_s, out_s) = (script.to_string_lossy().to_string(), out.to_string_lossy().to_string());
+    let (script_s, out_s) = (
+        script.to_string_lossy().to_string(),
+        out.to_string_lossy().to_string(),
+    );
     let o = pge(&["run", &script_s, "-o", &out_s, "-q"]);
     let err = text(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{source}: {err}");
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(err.starts_with(&format!("{script_s}:{line}: ")), "located at line {line}: {err}");
+    assert!(
+        err.starts_with(&format!("{script_s}:{line}: ")),
+        "located at line {line}: {err}"
+    );
     assert!(err.contains(needle), "expected '{needle}' in: {err}");
     assert!(!out.exists());
 }
@@ -179,13 +240,27 @@ fn assert_tree_error(source: &str, line: u32, needle: &str) {
 fn bad_tree_scripts_fail_with_located_errors() {
     let sphere = "pge.shape.sphere{ center = {0, 5, 0}, radius = 2 }";
     assert_tree_error(
-        &format!("-- kill larger than influence\nreturn pge.SpaceColonization{{ envelope = {sphere}, influence = 1, kill = 2 }}\n"),
+        &format!(
+            "-- kill larger than influence\nreturn pge.SpaceColonization{{ envelope = {sphere}, influence = 1, kill = 2 }}\n"
+        ),
         2,
         "kill (2) must be smaller than influence (1)",
     );
-    assert_tree_error(&format!("return pge.SpaceColonization{{ envelope = {sphere}, step = 0 }}\n"), 1, "step must be a number > 0");
-    assert_tree_error(&format!("return pge.SpaceColonization{{ envelope = {sphere}, influence = 0/0 }}\n"), 1, "influence must be a number > 0, got NaN");
-    assert_tree_error("local s = pge.shape.mesh{ path = \"no-such-crown.obj\" }\nreturn s\n", 1, "no-such-crown.obj");
+    assert_tree_error(
+        &format!("return pge.SpaceColonization{{ envelope = {sphere}, step = 0 }}\n"),
+        1,
+        "step must be a number > 0",
+    );
+    assert_tree_error(
+        &format!("return pge.SpaceColonization{{ envelope = {sphere}, influence = 0/0 }}\n"),
+        1,
+        "influence must be a number > 0, got NaN",
+    );
+    assert_tree_error(
+        "local s = pge.shape.mesh{ path = \"no-such-crown.obj\" }\nreturn s\n",
+        1,
+        "no-such-crown.obj",
+    );
     assert_tree_error(
         "local never = pge.shape.predicate(function(p) return false end, { min = {-1, 0, -1}, max = {1, 2, 1} })\nreturn pge.SpaceColonization{ envelope = never }\n",
         2,
@@ -208,9 +283,18 @@ fn an_unreachable_crown_stops_at_the_cap_with_a_warning() {
     )
     .expect("write");
     let out = dir.path().join("far.glb");
-    let o = pge(&["run", &script.to_string_lossy(), "-o", &out.to_string_lossy(), "-q"]);
+    let o = pge(&[
+        "run",
+        &script.to_string_lossy(),
+        "-o",
+        &out.to_string_lossy(),
+        "-q",
+    ]);
     let err = text(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
-    assert!(err.contains("warning: space colonization stopped at maxIterations = 30"), "{err}");
+    assert!(
+        err.contains("warning: space colonization stopped at maxIterations = 30"),
+        "{err}"
+    );
     assert!(out.exists());
 }
