@@ -61,8 +61,8 @@ fn bench_meshing(c: &mut Criterion) {
 }
 
 fn bench_tree(c: &mut Criterion) {
-    // About 20,000 triangles: 900 nodes of 6-sided bark and leaves at the tips.
-    let s = skeleton(900, 6);
+    // About 20,000 triangles: 1,350 nodes of 6-sided bark and leaves at the tips.
+    let s = skeleton(1350, 6);
     let options = TreeOptions {
         mesh: MeshOptions {
             sides: 6,
