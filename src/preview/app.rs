@@ -14,6 +14,8 @@ use super::reload::{Generation, Settings, Status};
 use super::render::{Renderer, Toggles};
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
+/// How long after the last camera motion the viewport is drawn at full quality.
+const MOTION_SETTLE: Duration = Duration::from_millis(200);
 
 /// How a `--screenshot` run ended, read after the window closed.
 pub type ScreenshotResult = Arc<Mutex<Option<anyhow::Result<()>>>>;
@@ -65,6 +67,8 @@ pub struct PreviewApp {
     last_fps_log: Instant,
     /// A model caused by a save was drawn in the last frame: (save time, generation count).
     drawn_after_save: Option<(Instant, u64)>,
+    /// When the camera last moved.
+    last_motion: Option<Instant>,
     /// Save to first frame on screen of the latest model a save caused.
     save_to_screen: Option<Duration>,
 }
@@ -108,6 +112,7 @@ impl PreviewApp {
             log_fps: options.log_fps,
             last_fps_log: Instant::now(),
             drawn_after_save: None,
+            last_motion: None,
             save_to_screen: None,
         })
     }
@@ -450,6 +455,7 @@ impl PreviewApp {
     fn viewport(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
         let (rect, response) =
             ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
+        let camera_before = self.camera;
         let shift = ui.input(|i| i.modifiers.shift);
         let drag = response.drag_delta();
         if response.dragged_by(egui::PointerButton::Primary) && !shift {
@@ -474,7 +480,20 @@ impl PreviewApp {
             self.camera.yaw += 0.5 * dt;
             self.viewport_dirty = true;
         }
-        let ppp = ui.ctx().pixels_per_point();
+        // While the camera moves, draw at half resolution with a quarter of the leaves; once
+        // it rests, draw once more at full quality.
+        let now = Instant::now();
+        if self.camera != camera_before {
+            self.last_motion = Some(now);
+        }
+        let moving = self
+            .last_motion
+            .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE);
+        if moving {
+            ui.ctx().request_repaint_after(MOTION_SETTLE);
+        }
+        let scale = if moving { 0.5 } else { 1.0 };
+        let ppp = ui.ctx().pixels_per_point() * scale;
         let size = [
             (rect.width() * ppp).round() as u32,
             (rect.height() * ppp).round() as u32,
@@ -486,7 +505,7 @@ impl PreviewApp {
                 let vp = self
                     .camera
                     .view_projection(rect.width() / rect.height().max(1.0));
-                let id = renderer.render(&mut rs.renderer.write(), vp, size, self.toggles);
+                let id = renderer.render(&mut rs.renderer.write(), vp, size, self.toggles, moving);
                 self.texture = Some(id);
                 self.render_ms = t0.elapsed().as_secs_f64() * 1000.0;
             }

@@ -63,6 +63,8 @@ struct GpuMesh {
     is_leaf: bool,
     /// Edge list for the wireframe, built when first needed.
     edges: Option<(wgpu::Buffer, u32)>,
+    /// A quarter of the leaves, for frames drawn while the camera moves.
+    coarse: Option<(wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
 }
@@ -414,6 +416,19 @@ impl Renderer {
                 double_sided: mesh.double_sided,
                 is_leaf: mesh.is_leaf,
                 edges: None,
+                coarse: mesh
+                    .coarse_indices
+                    .as_ref()
+                    .filter(|c| !c.is_empty())
+                    .map(|c| {
+                        let buffer = buffer_init(
+                            device,
+                            "coarse leaves",
+                            index_bytes(c),
+                            wgpu::BufferUsages::INDEX,
+                        );
+                        (buffer, c.len() as u32)
+                    }),
                 source: scene.clone(),
                 index_in_scene: index,
             });
@@ -442,13 +457,15 @@ impl Renderer {
     }
 
     /// Draws the model seen by `view_proj` into a `size` pixel texture and returns the egui
-    /// texture showing it.
+    /// texture showing it. While the camera `moving`, a quarter of the leaves are drawn
+    /// (software renderers cannot turn a 100 000-leaf tree smoothly otherwise).
     pub fn render(
         &mut self,
         egui_renderer: &mut egui_wgpu::Renderer,
         view_proj: Mat4,
         size: [u32; 2],
         toggles: Toggles,
+        moving: bool,
     ) -> egui::TextureId {
         let size = [size[0].max(1), size[1].max(1)];
         if self.target.as_ref().is_none_or(|t| t.size != size) {
@@ -526,10 +543,16 @@ impl Renderer {
                             Some((edges, n)) => (&self.mesh_lines, edges, *n),
                             None => continue,
                         }
-                    } else if mesh.double_sided {
-                        (&self.mesh_double, &mesh.indices, mesh.index_count)
                     } else {
-                        (&self.mesh_culled, &mesh.indices, mesh.index_count)
+                        let pipeline = if mesh.double_sided {
+                            &self.mesh_double
+                        } else {
+                            &self.mesh_culled
+                        };
+                        match (&mesh.coarse, moving) {
+                            (Some((coarse, n)), true) => (pipeline, coarse, *n),
+                            _ => (pipeline, &mesh.indices, mesh.index_count),
+                        }
                     };
                     if count == 0 {
                         continue;

@@ -44,6 +44,8 @@ pub struct SceneMesh {
     pub double_sided: bool,
     /// Foliage, hidden by the "leaves" toggle: a masked material or a name saying so.
     pub is_leaf: bool,
+    /// For foliage: a quarter of the leaves (triangle pairs), drawn while the camera moves.
+    pub coarse_indices: Option<Vec<u32>>,
 }
 
 /// Counts shown in the statistics panel.
@@ -126,6 +128,8 @@ impl Scene {
                 },
                 double_sided: mesh.material.double_sided,
                 is_leaf: is_leaf(mesh),
+                coarse_indices: (is_leaf(mesh) && mesh.primitive == Primitive::Triangles)
+                    .then(|| coarse(&mesh.indices)),
             });
         }
         let stats = SceneStats {
@@ -155,6 +159,15 @@ fn is_leaf(mesh: &Mesh) -> bool {
     matches!(mesh.material.alpha, AlphaMode::Mask(_))
         || named(&mesh.name)
         || named(&mesh.material.name)
+}
+
+/// Every fourth pair of triangles (a leaf quad is one pair).
+fn coarse(indices: &[u32]) -> Vec<u32> {
+    indices
+        .chunks(12)
+        .flat_map(|c| c.iter().take(6))
+        .copied()
+        .collect()
 }
 
 fn interleave(mesh: &Mesh) -> Vec<f32> {
@@ -282,6 +295,17 @@ mod tests {
             vec![[0., 0., 1.], [0., 1., 1.], [0., 1., 1.], [1., 2., 1.]]
         );
         assert!(scene.meshes[1].is_leaf);
+        assert_eq!(
+            scene.meshes[1].coarse_indices.as_deref(),
+            Some(&[0, 1, 2][..])
+        );
+        assert_eq!(scene.meshes[0].coarse_indices, None);
+        assert_eq!(
+            coarse(&(0..30).collect::<Vec<u32>>()),
+            vec![
+                0, 1, 2, 3, 4, 5, 12, 13, 14, 15, 16, 17, 24, 25, 26, 27, 28, 29
+            ]
+        );
         assert_eq!(scene.meshes[1].alpha_cutoff, Some(0.5));
     }
 
