@@ -86,6 +86,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     });
     bar.finish_and_clear();
     let mut generated = generated?;
+    for w in &generated.model.stats.warnings {
+        eprintln!("{w}");
+    }
     let te = Instant::now();
     let meta = ExportMeta {
         seed: args.script.seed,
@@ -134,6 +137,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             "instances": m.instances.len(),
             "seconds": t0.elapsed().as_secs_f64(),
             "phases": phases,
+            "warnings": m.stats.warnings,
             "output": output.display().to_string(),
         });
         println!("{stats}");

@@ -27,6 +27,9 @@ pub struct Stats {
     /// Seconds spent per phase, in the order the phases ran. Never exported to the glb
     /// (timings would make the output differ from run to run).
     pub phases: Vec<(String, f64)>,
+    /// Warnings for the user (`FILE:LINE: warning: ...`): the result is usable but may not be
+    /// what was meant. `pge run` prints them; the preview shows them.
+    pub warnings: Vec<String>,
 }
 
 impl Stats {
@@ -46,6 +49,7 @@ impl Stats {
         for (name, s) in &other.phases {
             self.add_phase(name, *s);
         }
+        self.warnings.extend(other.warnings.iter().cloned());
     }
 }
 

@@ -576,7 +576,6 @@ impl Algorithm for SpaceColonization {
                 st.alive_count,
                 st.points.len()
             );
-            eprintln!("{msg}");
             self.warnings.push(msg);
             self.done = true;
             return Ok(Step::Done);
@@ -599,6 +598,7 @@ impl Algorithm for SpaceColonization {
         let tree = pge_tree::build_tree(&skeleton, &options, mix(ctx.seed, self.params.seed))
             .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
         let mut model = Model::new();
+        model.stats.warnings.extend(self.warnings.iter().cloned());
         model.stats.add_phase("points", self.points_seconds);
         model.stats.add_phase("growth", self.growth_seconds);
         model.add_model(&tree, glam::Mat4::IDENTITY);
