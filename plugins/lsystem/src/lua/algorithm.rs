@@ -60,6 +60,7 @@ pub struct LSystemAlgorithm {
     lua_involved: bool,
     max_modules: usize,
     interpreters: Vec<DefaultInterpreter>,
+    callers: Vec<Function>,
 }
 
 /// `genrand` key of an instance: the run's seed and the object's index.
@@ -132,6 +133,8 @@ struct LuaHost<'a> {
     numbers: Vec<f64>,
     tags: Rc<RefCell<SymbolTags>>,
     deriving: Rc<RefCell<Option<Rc<str>>>>,
+    /// `function(f, ...) return f({...}) end` for 0 to 3 numeric parameters.
+    callers: &'a [Function],
 }
 
 impl LuaHost<'_> {
@@ -329,8 +332,21 @@ impl Host for LuaHost<'_> {
         let r: &LuaRule = &self.cfg.rrules[rule as usize];
         self.set_this(true)?;
         *self.deriving.borrow_mut() = Some(r.text.clone());
-        let result = if matched.len() == 1 {
-            let arg = self.param_value(src, matched[0])?;
+        let m = matched[0];
+        let result = if matched.len() == 1 && src.external(m).is_none() && src.params(m).len() <= 3
+        {
+            // The parameter table is built in Lua (cheaper than from Rust).
+            let p = src.params(m);
+            let f = &self.callers[p.len()];
+            match *p {
+                [] => f.call::<Value>(&r.func),
+                [a] => f.call::<Value>((&r.func, a)),
+                [a, b] => f.call::<Value>((&r.func, a, b)),
+                [a, b, c] => f.call::<Value>((&r.func, a, b, c)),
+                _ => unreachable!("at most three parameters here"),
+            }
+        } else if matched.len() == 1 {
+            let arg = self.param_value(src, m)?;
             r.func.call::<Value>(arg)
         } else {
             let mut args = Vec::with_capacity(matched.len());
@@ -383,6 +399,7 @@ impl LSystemAlgorithm {
             lua_involved: false,
             max_modules: 10_000_000,
             interpreters: Vec::new(),
+            callers: Vec::new(),
         }
     }
 
@@ -479,6 +496,7 @@ impl LSystemAlgorithm {
             numbers: Vec::new(),
             tags: tags(lua),
             deriving: deriving_cell(lua),
+            callers: &self.callers,
         };
         f(&mut host, &self.cfg.system, &self.string, &mut self.scratch)
     }
@@ -551,6 +569,15 @@ impl LSystemAlgorithm {
 
     fn init_inner(&mut self, lua: &Lua, ctx: &RunContext) -> Result<(), HostError> {
         self.interpreters = interpreters(lua);
+        self.callers = [
+            "local f = ... return f({})",
+            "local f, a = ... return f({a})",
+            "local f, a, b = ... return f({a, b})",
+            "local f, a, b, c = ... return f({a, b, c})",
+        ]
+        .iter()
+        .map(|code| lua.load(*code).set_name("=pge.lsystem").into_function())
+        .collect::<mlua::Result<_>>()?;
         // Numeric globals become names classic expressions can read.
         for pair in self.cfg.globals.pairs::<Value, Value>() {
             let (k, v) = pair?;
