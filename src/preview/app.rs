@@ -767,3 +767,54 @@ fn save_png(path: &Path, image: &egui::ColorImage) -> anyhow::Result<()> {
     img.save_with_format(path, image::ImageFormat::Png)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+    use pge_engine::geometry::{Mesh, Model};
+
+    use super::super::scene::Scene;
+    use super::*;
+
+    fn generation() -> Generation {
+        let mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        let model = Model::from_mesh(mesh);
+        Generation {
+            scene: Arc::new(Scene::new(&model)),
+            model: Arc::new(model),
+            params: Vec::new(),
+            loaded: Vec::new(),
+            steps_taken: 1,
+            finished: true,
+            seconds: 0.0,
+            settings: Settings {
+                seed: 7,
+                ..Settings::default()
+            },
+        }
+    }
+
+    #[test]
+    fn exports_glb_and_obj_next_to_each_other() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let g = generation();
+        let glb = dir.path().join("tree.glb");
+        assert!(export(&g, &glb).expect("glb").contains("tree.glb"));
+        assert_eq!(&std::fs::read(&glb).expect("written")[0..4], b"glTF");
+        let obj = dir.path().join("tree.obj");
+        export(&g, &obj).expect("obj");
+        let text = std::fs::read_to_string(&obj).expect("written");
+        assert!(text.contains("mtllib tree.mtl"), "{text}");
+        assert!(dir.path().join("tree.mtl").is_file());
+        let err = export(&g, &dir.path().join("missing/tree.glb")).expect_err("no such folder");
+        assert!(err.contains("missing"), "{err}");
+    }
+
+    #[test]
+    fn new_seeds_differ_from_the_old_one() {
+        for old in [0, 1, 999_999, u64::MAX] {
+            assert_ne!(new_seed(old), old);
+        }
+    }
+}

@@ -210,6 +210,45 @@ mod tests {
     }
 
     #[test]
+    fn the_step_scrubber_stops_step_wise_algorithms_early() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let script = dir.path().join("grow.lua");
+        std::fs::write(
+            &script,
+            r#"
+            local n = 0
+            local tri = pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }
+            return pge.Algorithm{
+                init = function() n = 0 end,
+                step = function() n = n + 1; return n < 5 end,
+                finish = function()
+                    local m = pge.model()
+                    for i = 1, n do m:add(tri) end
+                    return m
+                end,
+            }
+            "#,
+        )
+        .expect("write");
+        let engine = Engine::builder().build().expect("engine");
+        let Outcome::Generated(full) = generate(&engine, &request(1, &script, Settings::default()))
+        else {
+            panic!("expected a model")
+        };
+        assert_eq!((full.steps_taken, full.finished), (5, true));
+        assert_eq!(full.model.triangle_count(), 5);
+        let two = Settings {
+            steps: Some(2),
+            ..Settings::default()
+        };
+        let Outcome::Generated(part) = generate(&engine, &request(2, &script, two)) else {
+            panic!("expected a model")
+        };
+        assert_eq!((part.steps_taken, part.finished), (2, false));
+        assert_eq!(part.model.triangle_count(), 2);
+    }
+
+    #[test]
     fn script_errors_missing_scripts_and_cancellation() {
         let dir = tempfile::tempdir().expect("tempdir");
         let script = dir.path().join("bad.lua");
