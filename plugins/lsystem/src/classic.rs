@@ -47,7 +47,10 @@ type RawModule<'a> = (&'a str, Option<Vec<&'a str>>);
 
 /// Splits a classic string into (name, argument texts) pairs. `declared` holds multi-letter
 /// names, longest first.
-fn split_modules<'a>(text: &'a str, declared: &[String]) -> Result<Vec<RawModule<'a>>, String> {
+pub(crate) fn split_modules<'a>(
+    text: &'a str,
+    declared: &[String],
+) -> Result<Vec<RawModule<'a>>, String> {
     let mut out = Vec::new();
     let mut rest = text;
     loop {

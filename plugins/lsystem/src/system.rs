@@ -386,23 +386,28 @@ impl System {
             text: text.trim().into(),
             message,
         };
-        let modules = classic::parse_modules(text, &self.declared).map_err(err)?;
+        let modules = classic::split_modules(text, &self.declared).map_err(err)?;
         let mut out = ModuleString::new();
+        out.reserve(modules.len());
         let mut params = Vec::new();
-        for m in &modules {
+        for (name, args) in modules {
             params.clear();
-            for a in &m.args {
-                let e = Expr::compile(a, &mut |n| self.global(n).map(Operand::Const))
+            for a in args.iter().flatten() {
+                if a.trim().is_empty() {
+                    return Err(err(format!("empty argument of '{name}'")));
+                }
+                let ast = crate::expr::parse(a).map_err(|e| err(e.0))?;
+                let e = Expr::compile(&ast, &mut |n| self.global(n).map(Operand::Const))
                     .map_err(|e| err(e.0))?;
                 let v = e.eval(&[], &[], rand);
                 if !v.is_finite() {
-                    return Err(err(format!("an argument of '{}' is {v}", m.name)));
+                    return Err(err(format!("an argument of '{name}' is {v}")));
                 }
                 params.push(v);
             }
-            let sym = symbols.intern(&m.name);
+            let sym = symbols.intern(name);
             if (sym == Sym::PUSH || sym == Sym::POP) && !params.is_empty() {
-                return Err(err(format!("'{}' takes no parameters", m.name)));
+                return Err(err(format!("'{name}' takes no parameters")));
             }
             out.push(sym, &params);
         }

@@ -190,7 +190,7 @@ impl LuaHost<'_> {
         v: &Value,
         out: &mut ModuleString,
         origin: u32,
-        what: &str,
+        what: &dyn std::fmt::Display,
         depth: u32,
     ) -> Result<(), HostError> {
         if depth > 100 {
@@ -296,6 +296,15 @@ impl LuaHost<'_> {
     }
 }
 
+/// Names a rule's successor in error messages (formatted only when one is raised).
+struct SuccessorOf<'a>(&'a str);
+
+impl std::fmt::Display for SuccessorOf<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the successor returned by RRule '{}'", self.0)
+    }
+}
+
 fn type_name(v: &Value) -> String {
     match v {
         Value::UserData(ud) => match ud.type_name() {
@@ -360,8 +369,7 @@ impl Host for LuaHost<'_> {
         if v.is_nil() {
             return Ok(false);
         }
-        let what = format!("the successor returned by RRule '{}'", r.text);
-        self.push_value(&v, out, r.origin, &what, 0)?;
+        self.push_value(&v, out, r.origin, &SuccessorOf(&r.text), 0)?;
         Ok(true)
     }
 
@@ -644,7 +652,7 @@ impl LSystemAlgorithm {
                         &Value::Table(t.clone()),
                         &mut string,
                         u32::MAX,
-                        "the axiom",
+                        &"the axiom",
                         0,
                     )?;
                 }
