@@ -73,7 +73,7 @@ fn parse_seconds(text: &str) -> Result<f64, String> {
 
 /// Opens the preview window for `args.script` with every plugin of the `pge` command.
 pub fn preview(args: &PreviewArgs) -> anyhow::Result<()> {
-    preview_with(args, crate::default_engine())
+    preview_with(args, pge::default_engine())
 }
 
 /// Opens the preview window with the engine `builder` makes (plugins of a host application).
