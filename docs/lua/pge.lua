@@ -168,7 +168,7 @@ function pge.load(path, params) end
 ---@field metallic? number
 ---@field alpha? "opaque"|"mask"|"blend"
 ---@field alphaCutoff? number
----@field texture? string a PNG path relative to the script
+---@field texture? string|pge.Image|pge.Texture a PNG path relative to the script, or anything with :pngBytes() (an image)
 ---@field name? string
 
 ---@class pge.Mesh
