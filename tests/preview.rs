@@ -32,7 +32,10 @@ fn pge_with_display() -> Result<Command, String> {
     if std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty()) {
         return Ok(Command::new(pge));
     }
-    Err("no X server: xvfb-run is not installed and DISPLAY is not set (run .ci/preview-deps)".into())
+    Err(
+        "no X server: xvfb-run is not installed and DISPLAY is not set (run .ci/preview-deps)"
+            .into(),
+    )
 }
 
 /// Runs `pge preview ARGS` with a display; `None` (after printing why) when the test must be
@@ -48,7 +51,9 @@ fn preview(args: &[&str], dir: &Path) -> Option<Output> {
         Err(why) => panic!("CI is set but the preview cannot run: {why}"),
     };
     cmd.arg("preview").args(args).current_dir(dir);
-    cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null());
+    cmd.stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .stdin(Stdio::null());
     let mut child = cmd.spawn().expect("start pge preview");
     let end = Instant::now() + Duration::from_secs(300);
     loop {
@@ -94,7 +99,13 @@ fn look_at(png: &Path) -> Picture {
             reddish += 1;
         }
     }
-    Picture { width, height, colours: colours.len(), bluish, reddish }
+    Picture {
+        width,
+        height,
+        colours: colours.len(),
+        bluish,
+        reddish,
+    }
 }
 
 #[test]
@@ -103,7 +114,11 @@ fn screenshot_of_an_example_shows_the_model() {
     let png = dir.path().join("spiral.png");
     let script = root().join("scripts/examples/spiral.lua");
     let Some(out) = preview(
-        &[script.to_str().expect("utf-8 path"), "--screenshot", png.to_str().expect("utf-8 path")],
+        &[
+            script.to_str().expect("utf-8 path"),
+            "--screenshot",
+            png.to_str().expect("utf-8 path"),
+        ],
         dir.path(),
     ) else {
         return;
@@ -111,8 +126,17 @@ fn screenshot_of_an_example_shows_the_model() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "pge preview failed: {stderr}");
     let pic = look_at(&png);
-    assert!(pic.width >= 640 && pic.height >= 400, "{}x{}", pic.width, pic.height);
-    assert!(pic.colours > 50, "a lit model has many shades, this one {}", pic.colours);
+    assert!(
+        pic.width >= 640 && pic.height >= 400,
+        "{}x{}",
+        pic.width,
+        pic.height
+    );
+    assert!(
+        pic.colours > 50,
+        "a lit model has many shades, this one {}",
+        pic.colours
+    );
     // The spiral's boxes go from blue at the bottom to orange at the top: both must fill a
     // good part of the viewport (the red and blue axis lines alone are a few hundred pixels).
     assert!(pic.bluish > 5000, "blue boxes: {} pixels", pic.bluish);
@@ -122,7 +146,11 @@ fn screenshot_of_an_example_shows_the_model() {
 #[test]
 fn a_script_error_is_shown_and_fails_the_screenshot_run() {
     let dir = tempfile::tempdir().expect("tempdir");
-    std::fs::write(dir.path().join("broken.lua"), "local x = 1\nlocal y = = 2\nreturn x\n").expect("write");
+    std::fs::write(
+        dir.path().join("broken.lua"),
+        "local x = 1\nlocal y = = 2\nreturn x\n",
+    )
+    .expect("write");
     let Some(out) = preview(&["broken.lua", "--screenshot", "broken.png"], dir.path()) else {
         return;
     };
@@ -132,7 +160,11 @@ fn a_script_error_is_shown_and_fails_the_screenshot_run() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     // The window still showed the error: the picture was taken.
     let pic = look_at(&dir.path().join("broken.png"));
-    assert!(pic.reddish > 200, "the error banner is red: {} pixels", pic.reddish);
+    assert!(
+        pic.reddish > 200,
+        "the error banner is red: {} pixels",
+        pic.reddish
+    );
 }
 
 #[test]
@@ -149,9 +181,19 @@ fn a_missing_script_is_reported_as_gone() {
 #[test]
 fn a_script_that_runs_forever_is_stopped_by_the_time_limit() {
     let dir = tempfile::tempdir().expect("tempdir");
-    std::fs::write(dir.path().join("forever.lua"), "local n = 0\nwhile true do n = n + 1 end\n").expect("write");
+    std::fs::write(
+        dir.path().join("forever.lua"),
+        "local n = 0\nwhile true do n = n + 1 end\n",
+    )
+    .expect("write");
     let Some(out) = preview(
-        &["forever.lua", "--time-limit", "1", "--screenshot", "forever.png"],
+        &[
+            "forever.lua",
+            "--time-limit",
+            "1",
+            "--screenshot",
+            "forever.png",
+        ],
         dir.path(),
     ) else {
         return;
