@@ -92,12 +92,14 @@ function LSystem:rule(production, weight) end
 ---@param f fun(...: table): pge.Successor?
 function LSystem:RRule(lhs, f) end
 
----An interpretation rule for one symbol (`[` and `]` included): applies when `f` returns a
----value other than nil and false; otherwise the next IRule, then the instance's default
----interpretation (a turtle's commands).
----@param symbol string
----@param f fun(params: table): any
-function LSystem:IRule(symbol, f) end
+---An interpretation rule: `"S"` or `"L < S"` (`[` and `]` may be interpreted too; a left
+---context is matched in the string interpreted so far; no right context). `f` receives the
+---parameter tables, leftmost first, and applies when it returns a value other than nil and
+---false; otherwise the next IRule, then the instance's default interpretation (a turtle's
+---commands).
+---@param lhs string
+---@param f fun(...: table): any
+function LSystem:IRule(lhs, f) end
 
 ---The L-system as an algorithm (what returning the object from a script does).
 ---@return pge.AlgorithmHandle

@@ -581,9 +581,35 @@ impl System {
         i: usize,
         out: &mut Vec<usize>,
     ) -> bool {
+        self.match_left_syms(left.iter().map(|p| p.sym), src, matches, i, out)
+    }
+
+    /// Matches a left context of symbols (leftmost first) for module `i` of `src`: the path
+    /// toward the root, skipping whole branches, climbing out of enclosing ones and skipping
+    /// ignored symbols. `matches` pairs brackets (see [`ModuleString::bracket_matches`]); only
+    /// the entries of `]` before `i` are read. Pushes the matched indices, leftmost first.
+    pub fn match_left_context(
+        &self,
+        left: &[Sym],
+        src: &ModuleString,
+        matches: &[u32],
+        i: usize,
+        out: &mut Vec<usize>,
+    ) -> bool {
+        self.match_left_syms(left.iter().copied(), src, matches, i, out)
+    }
+
+    fn match_left_syms(
+        &self,
+        left: impl DoubleEndedIterator<Item = Sym>,
+        src: &ModuleString,
+        matches: &[u32],
+        i: usize,
+        out: &mut Vec<usize>,
+    ) -> bool {
         let base = out.len();
         let mut j = i;
-        for p in left.iter().rev() {
+        for p in left.rev() {
             loop {
                 if j == 0 {
                     return false;
@@ -600,7 +626,7 @@ impl System {
                     break;
                 }
             }
-            if src.sym(j) != p.sym {
+            if src.sym(j) != p {
                 return false;
             }
             out.push(j);

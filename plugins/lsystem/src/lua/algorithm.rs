@@ -68,6 +68,15 @@ fn instance_rng(seed: u64, index: u32) -> Mt {
     Mt::new_with_key([seed as u32, (seed >> 32) as u32, index, 0x4c53_5953])
 }
 
+/// A parameter as Lua sees it: integral values as integers (as the script wrote them).
+fn lua_number(v: f64) -> Value {
+    if v.fract() == 0.0 && v.abs() < 9_007_199_254_740_992.0 {
+        Value::Integer(v as i64)
+    } else {
+        Value::Number(v)
+    }
+}
+
 fn truthy(v: &Value) -> bool {
     !matches!(v, Value::Nil | Value::Boolean(false))
 }
@@ -135,6 +144,11 @@ struct LuaHost<'a> {
     deriving: Rc<RefCell<Option<Rc<str>>>>,
     /// `function(f, ...) return f({...}) end` for 0 to 3 numeric parameters.
     callers: &'a [Function],
+    /// Bracket pairs of the string interpreted so far (for IRules with a left context).
+    imatches: Vec<u32>,
+    istack: Vec<u32>,
+    track_brackets: bool,
+    imatched: Vec<usize>,
 }
 
 impl LuaHost<'_> {
@@ -154,9 +168,14 @@ impl LuaHost<'_> {
     fn param_value(&self, s: &ModuleString, i: usize) -> mlua::Result<Value> {
         match s.external(i) {
             Some(slot) => Ok(self.side[slot as usize].clone()),
-            None => Ok(Value::Table(
-                self.lua.create_sequence_from(s.params(i).iter().copied())?,
-            )),
+            None => {
+                let params = s.params(i);
+                let t = self.lua.create_table_with_capacity(params.len(), 0)?;
+                for (k, p) in params.iter().enumerate() {
+                    t.raw_set(k + 1, lua_number(*p))?;
+                }
+                Ok(Value::Table(t))
+            }
         }
     }
 
@@ -251,6 +270,19 @@ impl LuaHost<'_> {
 
     fn interpret_module(&mut self, s: &ModuleString, i: usize) -> Result<(), HostError> {
         let sym = s.sym(i);
+        if self.track_brackets {
+            if self.imatches.len() <= i {
+                self.imatches.resize(i + 1, u32::MAX);
+            }
+            if sym == Sym::PUSH {
+                self.istack.push(i as u32);
+            } else if sym == Sym::POP
+                && let Some(open) = self.istack.pop()
+            {
+                self.imatches[i] = open;
+                self.imatches[open as usize] = i as u32;
+            }
+        }
         if let Some(list) = self.irules_by_sym.get(sym.index())
             && !list.is_empty()
         {
@@ -258,7 +290,31 @@ impl LuaHost<'_> {
             self.set_this(false)?;
             for &k in list {
                 let rule: &LuaIRule = &self.cfg.irules[k as usize];
-                let v: Value = rule.func.call(arg.clone())?;
+                let v: Value = if rule.left.is_empty() {
+                    rule.func.call(arg.clone())?
+                } else {
+                    let mut matched = std::mem::take(&mut self.imatched);
+                    matched.clear();
+                    let found = self.system.match_left_context(
+                        &rule.left,
+                        s,
+                        &self.imatches,
+                        i,
+                        &mut matched,
+                    );
+                    let mut args = Vec::with_capacity(matched.len() + 1);
+                    if found {
+                        for &m in &matched {
+                            args.push(self.param_value(s, m)?);
+                        }
+                        args.push(arg.clone());
+                    }
+                    self.imatched = matched;
+                    if !found {
+                        continue;
+                    }
+                    rule.func.call(MultiValue::from_vec(args))?
+                };
                 if truthy(&v) {
                     return Ok(());
                 }
@@ -349,9 +405,11 @@ impl Host for LuaHost<'_> {
             let f = &self.callers[p.len()];
             match *p {
                 [] => f.call::<Value>(&r.func),
-                [a] => f.call::<Value>((&r.func, a)),
-                [a, b] => f.call::<Value>((&r.func, a, b)),
-                [a, b, c] => f.call::<Value>((&r.func, a, b, c)),
+                [a] => f.call::<Value>((&r.func, lua_number(a))),
+                [a, b] => f.call::<Value>((&r.func, lua_number(a), lua_number(b))),
+                [a, b, c] => {
+                    f.call::<Value>((&r.func, lua_number(a), lua_number(b), lua_number(c)))
+                }
                 _ => unreachable!("at most three parameters here"),
             }
         } else if matched.len() == 1 {
@@ -505,6 +563,10 @@ impl LSystemAlgorithm {
             tags: tags(lua),
             deriving: deriving_cell(lua),
             callers: &self.callers,
+            imatches: Vec::new(),
+            istack: Vec::new(),
+            track_brackets: self.cfg.irules.iter().any(|r| !r.left.is_empty()),
+            imatched: Vec::new(),
         };
         f(&mut host, &self.cfg.system, &self.string, &mut self.scratch)
     }

@@ -364,4 +364,32 @@ mod tests {
         let seen: f64 = s.eval("return L:get('seen')").expect("seen");
         assert_eq!(seen, 3.0);
     }
+
+    #[test]
+    fn irules_match_left_contexts_in_the_interpreted_string() {
+        let s = session(1);
+        derive_in(
+            &s,
+            r#"log = {}
+            local l = pge.LSystem("t")
+            l:createInstance(function() return {} end)
+            l:ignore("+")
+            l:axiom("A(1)+B[A(2)C]D(3)B")
+            l:IRule("A < B", function(a, b) log[#log + 1] = "AB" .. a[1] return true end)
+            l:IRule("D < B", function(d, b) log[#log + 1] = "DB" .. d[1] return true end)
+            l:IRule("A < C", function(a, c) log[#log + 1] = "AC" .. a[1] return true end)
+            l:IRule("B < D", function(b, d) log[#log + 1] = "BD" return true end)
+            l:iterations(0)
+            return l"#,
+            None,
+        )
+        .expect("derives");
+        let log: String = s.eval("return table.concat(log, ' ')").expect("log");
+        assert_eq!(log, "AB1 AC2 BD DB3");
+        let e = error("local l = pge.LSystem('t')\nl:IRule('A > B', function() end)\nreturn l");
+        assert!(
+            e.starts_with("eval:2: IRule 'A > B': an interpretation rule has no right context"),
+            "{e}"
+        );
+    }
 }

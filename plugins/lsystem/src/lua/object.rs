@@ -31,6 +31,8 @@ pub(crate) struct LuaRule {
 #[derive(Clone, Debug)]
 pub(crate) struct LuaIRule {
     pub sym: Sym,
+    /// Left context, leftmost first (matched in the string interpreted so far).
+    pub left: Vec<Sym>,
     pub func: Function,
 }
 
@@ -189,23 +191,30 @@ impl UserData for LuaLSystem {
                 } else {
                     Sym::POP
                 };
-                me.0.irules.push(LuaIRule { sym, func });
+                me.0.irules.push(LuaIRule {
+                    sym,
+                    left: Vec::new(),
+                    func,
+                });
                 return Ok(());
             }
             let parsed = classic::parse_lhs(&lhs, &|t| Ok(classic::parse_lua_patterns(t)))
                 .map_err(|e| script_error(lua, format!("IRule '{}': {e}", lhs.trim())))?;
-            if !parsed.left.is_empty() || !parsed.right.is_empty() || parsed.condition.is_some() {
+            if !parsed.right.is_empty() {
                 return Err(script_error(
                     lua,
                     format!(
-                        "IRule '{}': interpretation rules take one symbol (contexts are for \
-                         RRules)",
+                        "IRule '{}': an interpretation rule has no right context (the modules \
+                         to its right are not derived yet when it is interpreted)",
                         lhs.trim()
                     ),
                 ));
             }
-            let sym = session_symbols(lua).borrow_mut().intern(&parsed.pred.name);
-            me.0.irules.push(LuaIRule { sym, func });
+            let symbols = session_symbols(lua);
+            let mut table = symbols.borrow_mut();
+            let sym = table.intern(&parsed.pred.name);
+            let left = parsed.left.iter().map(|p| table.intern(&p.name)).collect();
+            me.0.irules.push(LuaIRule { sym, left, func });
             Ok(())
         });
         m.add_method("name", |_, me, ()| Ok(me.0.name.clone()));
