@@ -149,6 +149,7 @@ struct LuaHost<'a> {
     istack: Vec<u32>,
     track_brackets: bool,
     imatched: Vec<usize>,
+    name: String,
 }
 
 impl LuaHost<'_> {
@@ -328,10 +329,11 @@ impl LuaHost<'_> {
                 }
                 None => s.params(i),
             };
-            let symbols = self.symbols.borrow();
-            let name = symbols.name(sym);
+            // The name is copied so an interpreter may run Lua code that makes symbols.
+            self.name.clear();
+            self.name.push_str(self.symbols.borrow().name(sym));
             for f in self.interpreters {
-                if f(self.lua, ud, name, params)? {
+                if f(self.lua, ud, &self.name, params)? {
                     break;
                 }
             }
@@ -567,6 +569,7 @@ impl LSystemAlgorithm {
             istack: Vec::new(),
             track_brackets: self.cfg.irules.iter().any(|r| !r.left.is_empty()),
             imatched: Vec::new(),
+            name: String::new(),
         };
         f(&mut host, &self.cfg.system, &self.string, &mut self.scratch)
     }
