@@ -183,7 +183,6 @@ pub struct System {
     ignored: Vec<bool>,
     uses_context: bool,
     all_plain: bool,
-    has_external: bool,
     prepared: bool,
 }
 
@@ -506,7 +505,6 @@ impl System {
             .dispatch
             .iter()
             .all(|d| !matches!(d, Dispatch::Rules { .. }));
-        self.has_external = self.has_external();
         self.rules = rules;
         self.prepared = true;
         Ok(())
