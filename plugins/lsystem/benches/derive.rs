@@ -2,13 +2,14 @@
 //!
 //! Each benchmark reports modules produced per second (criterion's "elements").
 //!
-//! Measured on the 2-core development machine while other builds ran (load average 3-5),
+//! Measured on the 2-core development machine while other builds ran (load average 2.7-5),
 //! so these are lower bounds (targets of the L-system issue in brackets):
-//! - `classic_plain` (`X -> F[+X]F[-X]+X`, `F -> FF`, 12 steps): 590-840 M modules/s (100 M)
-//! - `classic_parametric` (ABOP fig. 2.6, 16 steps): 63-85 M modules/s (30 M)
-//! - `context` (signal propagation on 100 000 modules with branches): 44-63 M modules/s (10 M)
-//! - `lua_rules` (`RRule("A", ...)` returning three symbols, 100 000 calls): 1.6-2.6 M
-//!   modules/s (3 M); about a tenth of it is the session's instruction-count hook
+//! - `classic_plain` (`X -> F[+X]F[-X]+X`, `F -> FF`, 12 steps): 590-890 M modules/s (100 M)
+//! - `classic_parametric` (ABOP fig. 2.6, 16 steps): 63-89 M modules/s (30 M)
+//! - `context` (signal propagation on 100 000 modules with branches): 44-89 M modules/s (10 M)
+//! - `lua_rules` (`RRule("A", ...)` returning three symbols, 100 000 calls, including the
+//!   set-up of the instance and the axiom): 2.6-3.1 M modules/s (3 M); about a tenth of it is
+//!   the session's instruction-count hook
 //! - memory: 10^6 modules with two parameters take 24 MiB, 48 MiB during a step (64 MiB)
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
