@@ -103,12 +103,15 @@ function LSystem:rule(production, weight) end
 ---@param f fun(...: table): pge.Successor?
 function LSystem:RRule(lhs, f) end
 
----An interpretation rule for one symbol (`[` and `]` included): applies when `f` returns a
----value other than nil and false; otherwise the next IRule, then the instance's default
----interpretation (a turtle's commands); a module nobody interprets is skipped.
----@param symbol string
----@param f fun(params: table): any
-function LSystem:IRule(symbol, f) end
+---An interpretation rule: `"S"` or `"L < S"` (`[` and `]` may be interpreted too). A left
+---context is matched in the string interpreted so far; a right context is an error. `f`
+---receives the parameter tables of the left context and of S, leftmost first, and applies
+---when it returns a value other than nil and false; otherwise the next IRule, then the
+---instance's default interpretation (a turtle's commands); a module nobody interprets is
+---skipped.
+---@param lhs string
+---@param f fun(...: table): any
+function LSystem:IRule(lhs, f) end
 
 ---The L-system as an algorithm (what returning the object from a script does).
 ---@return pge.AlgorithmHandle
