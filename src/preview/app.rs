@@ -401,11 +401,22 @@ impl PreviewApp {
             if s.modules > 0 {
                 row("modules", s.modules.to_string());
             }
-            row("steps", g.steps_taken.to_string());
+            let steps = if g.finished {
+                g.steps_taken.to_string()
+            } else {
+                format!("{} (stopped early)", g.steps_taken)
+            };
+            row("steps", steps);
             for (phase, secs) in &s.phases {
                 row(&format!("⏱ {phase}"), format!("{:.1} ms", secs * 1000.0));
             }
             row("generation", format!("{:.1} ms", g.seconds * 1000.0));
+            if let Some(l) = self.live.reloader().last_latency() {
+                row(
+                    "save → model",
+                    format!("{:.0} ms", l.as_secs_f64() * 1000.0),
+                );
+            }
             if let Some(l) = self.save_to_screen {
                 row(
                     "save → screen",
