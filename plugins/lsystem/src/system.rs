@@ -381,6 +381,20 @@ impl System {
         symbols: &mut SymbolTable,
         rand: &mut dyn FnMut() -> f64,
     ) -> Result<ModuleString, LsError> {
+        self.parse_string_constness(text, symbols, rand)
+            .map(|(s, _)| s)
+    }
+
+    /// Like [`System::parse_string`], and tells whether the result is the same on every
+    /// call: true unless an argument drew `rand()` or read a global (which may change
+    /// between steps), so that callers may cache only constant strings.
+    pub fn parse_string_constness(
+        &self,
+        text: &str,
+        symbols: &mut SymbolTable,
+        rand: &mut dyn FnMut() -> f64,
+    ) -> Result<(ModuleString, bool), LsError> {
+        let mut constant = true;
         let err = |message: String| LsError::Syntax {
             text: text.trim().into(),
             message,
@@ -396,9 +410,17 @@ impl System {
                     return Err(err(format!("empty argument of '{name}'")));
                 }
                 let ast = crate::expr::parse(a).map_err(|e| err(e.0))?;
-                let e = Expr::compile(&ast, &mut |n| self.global(n).map(Operand::Const))
-                    .map_err(|e| err(e.0))?;
-                let v = e.eval(&[], &[], rand);
+                let e = Expr::compile(&ast, &mut |n| {
+                    constant = false;
+                    self.global(n).map(Operand::Const)
+                })
+                .map_err(|e| err(e.0))?;
+                let mut drew = false;
+                let v = e.eval(&[], &[], &mut || {
+                    drew = true;
+                    rand()
+                });
+                constant &= !drew;
                 if !v.is_finite() {
                     return Err(err(format!("an argument of '{name}' is {v}")));
                 }
@@ -410,7 +432,7 @@ impl System {
             }
             out.push(sym, &params);
         }
-        Ok(out)
+        Ok((out, constant))
     }
 
     /// Compiles every rule: names resolve against formals and globals, dispatch tables are

@@ -246,11 +246,13 @@ impl LuaHost<'_> {
                     let parsed = {
                         let mut table = symbols.borrow_mut();
                         let mut rand = || self.random();
-                        system.parse_string(&text, &mut table, &mut rand)
+                        system.parse_string_constness(&text, &mut table, &mut rand)
                     };
-                    let ms = parsed.map_err(|e| self.rule_error(origin, format!("{what}: {e}")))?;
+                    let (ms, constant) =
+                        parsed.map_err(|e| self.rule_error(origin, format!("{what}: {e}")))?;
                     out.append(&ms);
-                    if self.parse_cache.len() < 4096 {
+                    // Only strings that evaluate the same every time may be reused.
+                    if constant && self.parse_cache.len() < 4096 {
                         self.parse_cache.insert(text, ms);
                     }
                 }

@@ -143,6 +143,43 @@ mod tests {
     }
 
     #[test]
+    fn one_table_never_stands_for_two_symbols() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            local b = {1}
+            l:axiom{ Floor(b), Roof(b) }
+            l:iterations(0)
+            return l"#,
+        );
+        assert_eq!(t, "Floor(1) Roof(1)");
+    }
+
+    #[test]
+    fn successor_strings_with_rand_or_globals_are_evaluated_each_time() {
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:axiom{ A{}, A{}, A{} }
+            l:RRule("A", function() return "B(rand())" end)
+            l:iterations(1)
+            return l"#,
+        );
+        let values: Vec<&str> = t.split(' ').collect();
+        assert_eq!(values.len(), 3, "{t}");
+        assert_ne!(values[0], values[1], "{t}");
+        assert_ne!(values[1], values[2], "{t}");
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:axiom{ A{} }
+            l:set("k", 0)
+            l:beforeStep(function() l:set("k", l:get("k") + 1) end)
+            l:RRule("A", function() return "A B(k)" end)
+            l:iterations(3)
+            return l"#,
+        );
+        assert_eq!(t, "A B(3) B(2) B(1)");
+    }
+
+    #[test]
     fn classic_rules_through_lua() {
         let t = text(
             r#"local l = pge.LSystem("t")

@@ -66,12 +66,20 @@ pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
     let factory: Function = lua
         .load(
             r#"local meta, name = ...
-            local setmetatable, type, error = setmetatable, type, error
+            local setmetatable, getmetatable, type, error, next =
+                setmetatable, getmetatable, type, error, next
             return function(p)
                 if p == nil then return setmetatable({}, meta) end
                 if type(p) ~= "table" then
                     error("the parameters of symbol '" .. name .. "' must be one table ("
                         .. name .. "{...}), not " .. type(p), 2)
+                end
+                if getmetatable(p) ~= nil then
+                    -- Already a symbol (`Floor(b), Roof(b)`): tag a copy, so that one
+                    -- table never stands for two symbols.
+                    local c = {}
+                    for k, v in next, p do c[k] = v end
+                    return setmetatable(c, meta)
                 end
                 return setmetatable(p, meta)
             end"#,
