@@ -352,3 +352,10 @@ fn an_empty_model_writes_a_glb_that_parses() {
     let (doc, _, _) = gltf::import(&out).expect("imports");
     assert_eq!(doc.nodes().count(), 0);
 }
+script_error!(
+    a_failing_model_method_shows_its_own_error,
+    &format!("{E}/model_fails.lua"),
+    &[],
+    &format!("{E}/model_fails.lua:4: "),
+    "the roof has no walls"
+);

@@ -164,19 +164,43 @@ pub fn algorithm_from(
         }
         .map_err(|e| to_engine_error(lua, e))?;
     }
-    match to_model(&value) {
-        Ok(model) => Ok(Box::new(Finished(model))),
-        Err(mlua::Error::RuntimeError(m)) if super::errors::split_location(&m).is_some() => {
-            Err(to_engine_error(lua, mlua::Error::RuntimeError(m)))
+    let model_like = match &value {
+        Value::UserData(ud) => {
+            ud.is::<LuaModel>()
+                || ud.is::<super::model::LuaMesh>()
+                || has_function(ud.get::<Value>("model"))
         }
-        Err(_) => Err(Error::script(
+        Value::Table(t) => has_function(t.get::<Value>("model")),
+        _ => false,
+    };
+    if !model_like {
+        return Err(Error::script(
             location.clone(),
             format!(
                 "the script returned {}; expected a model, a mesh, or something that grows \
                  (pge.LSystem, pge.SpaceColonization, pge.Algorithm, ...)",
                 describe_value(&value)
             ),
-        )),
+        ));
+    }
+    // Something that makes a model: its own failure is the error to show.
+    match to_model(&value) {
+        Ok(model) => Ok(Box::new(Finished(model))),
+        Err(e) => {
+            let e = to_engine_error(lua, e);
+            match e {
+                Error::Script {
+                    location: l,
+                    message,
+                    traceback,
+                } if l.file == "?" => Err(Error::Script {
+                    location: location.clone(),
+                    message,
+                    traceback,
+                }),
+                other => Err(other),
+            }
+        }
     }
 }
 
