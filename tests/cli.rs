@@ -359,3 +359,23 @@ script_error!(
     &format!("{E}/model_fails.lua:4: "),
     "the roof has no walls"
 );
+
+#[test]
+fn turtle_textures_are_found_next_to_the_script_from_any_folder() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("t.glb");
+    let script = root().join("tests/scripts/textured/turtle.lua");
+    let o = Command::new(env!("CARGO_BIN_EXE_pge"))
+        .arg("run")
+        .arg(&script)
+        .arg("-o")
+        .arg(&out)
+        .arg("-q")
+        .current_dir(dir.path())
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (doc, _, images) = gltf::import(&out).expect("imports");
+    assert_eq!(doc.images().count(), 1);
+    assert_eq!((images[0].width, images[0].height), (64, 64));
+}

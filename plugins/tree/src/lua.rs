@@ -14,23 +14,32 @@ use crate::textures::load_png;
 pub fn options_from_lua(lua: &Lua, what: &str, table: &Table) -> mlua::Result<TreeOptions> {
     let mut options =
         TreeOptions::from_lua(table).map_err(|e| script_error(lua, format!("{what}: {e}")))?;
-    let load = |source: &mut TextureSource, key: &str, name: &str| -> mlua::Result<()> {
-        if let TextureSource::File(path) = source {
-            let shown = path.to_string_lossy().into_owned();
-            let file = resolve_path(lua, &shown)
-                .map_err(|e| script_error(lua, format!("{what}: {key}: {}", unlocated(lua, &e))))?;
-            let texture = load_png(&file, name).map_err(|e| {
-                script_error(lua, format!("{what}: {key}: cannot read '{shown}': {e}"))
-            })?;
-            *source = TextureSource::Image(texture);
-        }
-        Ok(())
-    };
-    load(&mut options.mesh.texture, "mesh.texture", "bark")?;
+    load_texture(lua, what, "mesh.texture", "bark", &mut options.mesh.texture)?;
     if let Some(leaves) = &mut options.leaves {
-        load(&mut leaves.texture, "leaves.texture", "leaf")?;
+        load_texture(lua, what, "leaves.texture", "leaf", &mut leaves.texture)?;
     }
     Ok(options)
+}
+
+/// Reads a texture given as a file path, relative to the calling script and inside the
+/// folders scripts may read (recorded for live reload), and replaces the path by the image.
+/// `what` and `key` name the option in errors; `name` names the texture in the glb.
+pub fn load_texture(
+    lua: &Lua,
+    what: &str,
+    key: &str,
+    name: &str,
+    source: &mut TextureSource,
+) -> mlua::Result<()> {
+    if let TextureSource::File(path) = source {
+        let shown = path.to_string_lossy().into_owned();
+        let file = resolve_path(lua, &shown)
+            .map_err(|e| script_error(lua, format!("{what}: {key}: {}", unlocated(lua, &e))))?;
+        let texture = load_png(&file, name)
+            .map_err(|e| script_error(lua, format!("{what}: {key}: cannot read '{shown}': {e}")))?;
+        *source = TextureSource::Image(texture);
+    }
+    Ok(())
 }
 
 /// The first line of an error's message without the `FILE:LINE: ` of the calling code that

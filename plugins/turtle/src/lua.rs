@@ -105,6 +105,13 @@ impl LuaTurtle {
             if let Value::Table(m) = t.get::<Value>("mesh")? {
                 let has_radii = !m.get::<Value>("radii")?.is_nil();
                 mesh = MeshOptions::from_lua(&m).map_err(|e| options_error(lua, e))?;
+                pge_tree::lua::load_texture(
+                    lua,
+                    "pge.turtle",
+                    "mesh.texture",
+                    "bark",
+                    &mut mesh.texture,
+                )?;
                 if !has_radii {
                     mesh.radii = RadiiMode::Keep;
                 }
@@ -121,7 +128,15 @@ impl LuaTurtle {
             match t.get::<Value>("leaves")? {
                 Value::Nil => {}
                 Value::Table(l) => {
-                    leaves = Some(LeafOptions::from_lua(&l).map_err(|e| options_error(lua, e))?);
+                    let mut l = LeafOptions::from_lua(&l).map_err(|e| options_error(lua, e))?;
+                    pge_tree::lua::load_texture(
+                        lua,
+                        "pge.turtle",
+                        "leaves.texture",
+                        "leaf",
+                        &mut l.texture,
+                    )?;
+                    leaves = Some(l);
                 }
                 other => {
                     return Err(options_error(
