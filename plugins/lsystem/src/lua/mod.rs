@@ -180,6 +180,19 @@ mod tests {
     }
 
     #[test]
+    fn rule_functions_refuse_conditions() {
+        for kind in ["RRule", "IRule"] {
+            let e = error(&format!(
+                r#"local l = pge.LSystem("t")
+                l:axiom("A(1)")
+                l:{kind}("A(x) : x > 2", function(a) return {{}} end)
+                return l"#
+            ));
+            assert!(e.contains("condition"), "{kind}: {e}");
+        }
+    }
+
+    #[test]
     fn classic_rules_through_lua() {
         let t = text(
             r#"local l = pge.LSystem("t")

@@ -200,6 +200,16 @@ impl UserData for LuaLSystem {
             }
             let parsed = classic::parse_lhs(&lhs, &|t| Ok(classic::parse_lua_patterns(t)))
                 .map_err(|e| script_error(lua, format!("IRule '{}': {e}", lhs.trim())))?;
+            if parsed.condition.is_some() {
+                return Err(script_error(
+                    lua,
+                    format!(
+                        "IRule '{}': a rule function takes no ':' condition; test the \
+                         parameters in the function and return nil when it does not apply",
+                        lhs.trim()
+                    ),
+                ));
+            }
             if !parsed.right.is_empty() {
                 return Err(script_error(
                     lua,
