@@ -29,7 +29,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
-        Command::Derive(args) => args.script.engine().and_then(|engine| derive::derive(&engine, args)),
+        Command::Derive(args) => args
+            .script
+            .engine()
+            .and_then(|engine| derive::derive(&engine, args)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
