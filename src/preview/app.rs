@@ -491,7 +491,7 @@ impl PreviewApp {
             self.camera.yaw += 0.5 * dt;
             self.viewport_dirty = true;
         }
-        // While the camera moves, draw at half resolution with a quarter of the leaves; once
+        // While the camera moves, draw at 40 % resolution with a quarter of the leaves; once
         // it rests, draw once more at full quality.
         let now = Instant::now();
         if self.camera != camera_before {
@@ -503,7 +503,7 @@ impl PreviewApp {
         if moving {
             ui.ctx().request_repaint_after(MOTION_SETTLE);
         }
-        let scale = if moving { 0.5 } else { 1.0 };
+        let scale = if moving { 0.4 } else { 1.0 };
         let ppp = ui.ctx().pixels_per_point() * scale;
         let size = [
             (rect.width() * ppp).round() as u32,

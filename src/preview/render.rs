@@ -63,8 +63,9 @@ struct GpuMesh {
     is_leaf: bool,
     /// Edge list for the wireframe, built when first needed.
     edges: Option<(wgpu::Buffer, u32)>,
-    /// A quarter of the leaves, for frames drawn while the camera moves.
-    coarse: Option<(wgpu::Buffer, u32)>,
+    /// A quarter of the leaves (vertices, indices, index count), for frames drawn while the
+    /// camera moves.
+    coarse: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
 }
@@ -417,17 +418,25 @@ impl Renderer {
                 is_leaf: mesh.is_leaf,
                 edges: None,
                 coarse: mesh
-                    .coarse_indices
+                    .coarse
                     .as_ref()
-                    .filter(|c| !c.is_empty())
-                    .map(|c| {
-                        let buffer = buffer_init(
-                            device,
-                            "coarse leaves",
-                            index_bytes(c),
-                            wgpu::BufferUsages::INDEX,
-                        );
-                        (buffer, c.len() as u32)
+                    .filter(|(_, c)| !c.is_empty())
+                    .map(|(v, c)| {
+                        (
+                            buffer_init(
+                                device,
+                                "coarse leaves",
+                                bytemuck::cast_slice(v),
+                                wgpu::BufferUsages::VERTEX,
+                            ),
+                            buffer_init(
+                                device,
+                                "coarse leaves",
+                                index_bytes(c),
+                                wgpu::BufferUsages::INDEX,
+                            ),
+                            c.len() as u32,
+                        )
                     }),
                 source: scene.clone(),
                 index_in_scene: index,
@@ -457,7 +466,7 @@ impl Renderer {
     }
 
     /// Draws the model seen by `view_proj` into a `size` pixel texture and returns the egui
-    /// texture showing it. While the camera `moving`, a quarter of the leaves are drawn
+    /// texture showing it. While the camera is `moving`, a quarter of the leaves are drawn
     /// (software renderers cannot turn a 100 000-leaf tree smoothly otherwise).
     pub fn render(
         &mut self,
@@ -536,6 +545,7 @@ impl Renderer {
                     if mesh.is_leaf && !toggles.leaves {
                         continue;
                     }
+                    let mut vertices = &mesh.vertices;
                     let (pipeline, indices, count) = if mesh.lines {
                         (&self.mesh_lines, &mesh.indices, mesh.index_count)
                     } else if toggles.wireframe {
@@ -550,7 +560,10 @@ impl Renderer {
                             &self.mesh_culled
                         };
                         match (&mesh.coarse, moving) {
-                            (Some((coarse, n)), true) => (pipeline, coarse, *n),
+                            (Some((coarse_vertices, coarse, n)), true) => {
+                                vertices = coarse_vertices;
+                                (pipeline, coarse, *n)
+                            }
                             _ => (pipeline, &mesh.indices, mesh.index_count),
                         }
                     };
@@ -559,7 +572,7 @@ impl Renderer {
                     }
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(1, &mesh.material, &[]);
-                    pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                    pass.set_vertex_buffer(0, vertices.slice(..));
                     pass.set_vertex_buffer(1, mesh.instances.slice(..));
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..count, 0, 0..mesh.instance_count);

@@ -44,8 +44,10 @@ pub struct SceneMesh {
     pub double_sided: bool,
     /// Foliage, hidden by the "leaves" toggle: a masked material or a name saying so.
     pub is_leaf: bool,
-    /// For foliage: a quarter of the leaves (triangle pairs), drawn while the camera moves.
-    pub coarse_indices: Option<Vec<u32>>,
+    /// For foliage: a quarter of the leaves (triangle pairs) as a compact mesh of their own
+    /// (interleaved vertices, indices), drawn while the camera moves. Compact, because a
+    /// software renderer shades every vertex in the index range, used or not.
+    pub coarse: Option<(Vec<f32>, Vec<u32>)>,
 }
 
 /// Counts shown in the statistics panel.
@@ -115,8 +117,11 @@ impl Scene {
                     .or_insert_with(|| decode(t).map(Arc::new))
                     .clone()
             });
+            let vertices = interleave(mesh);
+            let coarse = (is_leaf(mesh) && mesh.primitive == Primitive::Triangles)
+                .then(|| coarse_leaves(&vertices, &mesh.indices));
             meshes.push(SceneMesh {
-                vertices: interleave(mesh),
+                vertices,
                 indices: mesh.indices.clone(),
                 lines: mesh.primitive == Primitive::Lines,
                 instances,
@@ -128,8 +133,7 @@ impl Scene {
                 },
                 double_sided: mesh.material.double_sided,
                 is_leaf: is_leaf(mesh),
-                coarse_indices: (is_leaf(mesh) && mesh.primitive == Primitive::Triangles)
-                    .then(|| coarse(&mesh.indices)),
+                coarse,
             });
         }
         let stats = SceneStats {
@@ -161,13 +165,66 @@ fn is_leaf(mesh: &Mesh) -> bool {
         || named(&mesh.material.name)
 }
 
-/// Every fourth pair of triangles (a leaf quad is one pair).
+/// One leaf (a pair of triangles) in [`COARSE_KEEP`], each grown about its centre so the
+/// crown keeps most of its density: a compact mesh of its own.
+fn coarse_leaves(vertices: &[f32], indices: &[u32]) -> (Vec<f32>, Vec<u32>) {
+    let (mut out, kept) = compact(vertices, &coarse(indices));
+    // Half the leaf area of the full crown: enough to keep its look, and software renderers
+    // are bound by the area of alpha-tested leaves.
+    let grow = (COARSE_KEEP as f32 / 2.0).sqrt();
+    let mut i = 0;
+    for pair in kept.chunks(6) {
+        // Vertices of a pair are numbered consecutively by `compact` (first use order).
+        let (lo, hi) = match (pair.iter().min(), pair.iter().max()) {
+            (Some(a), Some(b)) => (*a as usize, *b as usize + 1),
+            _ => continue,
+        };
+        if lo < i {
+            continue; // shares vertices with an earlier pair: leave it as it is
+        }
+        i = hi;
+        let n = (hi - lo) as f32;
+        let mut centre = Vec3::ZERO;
+        for v in lo..hi {
+            centre += Vec3::from_slice(&out[v * VERTEX_FLOATS..v * VERTEX_FLOATS + 3]);
+        }
+        centre /= n;
+        for v in lo..hi {
+            let p = &mut out[v * VERTEX_FLOATS..v * VERTEX_FLOATS + 3];
+            let q = centre + (Vec3::from_slice(p) - centre) * grow;
+            p.copy_from_slice(&q.to_array());
+        }
+    }
+    (out, kept)
+}
+
+/// One leaf of how many is kept while the camera moves.
+const COARSE_KEEP: usize = 4;
+
+/// Every [`COARSE_KEEP`]th pair of triangles (a leaf quad is one pair).
 fn coarse(indices: &[u32]) -> Vec<u32> {
     indices
-        .chunks(12)
+        .chunks(6 * COARSE_KEEP)
         .flat_map(|c| c.iter().take(6))
         .copied()
         .collect()
+}
+
+/// The vertices `indices` use, in order of first use, and the indices renumbered to them.
+fn compact(vertices: &[f32], indices: &[u32]) -> (Vec<f32>, Vec<u32>) {
+    let mut map: HashMap<u32, u32> = HashMap::new();
+    let mut out_vertices = Vec::new();
+    let mut out_indices = Vec::with_capacity(indices.len());
+    for &i in indices {
+        let next = map.len() as u32;
+        let j = *map.entry(i).or_insert_with(|| {
+            let at = i as usize * VERTEX_FLOATS;
+            out_vertices.extend_from_slice(&vertices[at..at + VERTEX_FLOATS]);
+            next
+        });
+        out_indices.push(j);
+    }
+    (out_vertices, out_indices)
 }
 
 fn interleave(mesh: &Mesh) -> Vec<f32> {
@@ -295,16 +352,39 @@ mod tests {
             vec![[0., 0., 1.], [0., 1., 1.], [0., 1., 1.], [1., 2., 1.]]
         );
         assert!(scene.meshes[1].is_leaf);
-        assert_eq!(
-            scene.meshes[1].coarse_indices.as_deref(),
-            Some(&[0, 1, 2][..])
+        let (coarse_vertices, coarse_indices) = scene.meshes[1].coarse.as_ref().expect("foliage");
+        assert_eq!(coarse_indices, &[0, 1, 2]);
+        // One triangle, grown by sqrt(2) about its centre (1/3, 1/3).
+        let grown: Vec<f32> = coarse_vertices
+            .chunks(VERTEX_FLOATS)
+            .flat_map(|v| v[0..3].to_vec())
+            .collect();
+        let (t, g) = (1.0 / 3.0, 2f32.sqrt());
+        let expect = [
+            t - t * g,
+            t - t * g,
+            0.0,
+            t + (1.0 - t) * g,
+            t - t * g,
+            0.0,
+            t - t * g,
+            t + (1.0 - t) * g,
+            0.0,
+        ];
+        assert!(
+            grown.iter().zip(expect).all(|(a, b)| (a - b).abs() < 1e-5),
+            "{grown:?}"
         );
-        assert_eq!(scene.meshes[0].coarse_indices, None);
+        assert_eq!(scene.meshes[0].coarse, None);
+        let vertices: Vec<f32> = (0..4 * VERTEX_FLOATS).map(|i| i as f32).collect();
+        let (v, i) = compact(&vertices, &[3, 1, 3]);
+        assert_eq!(i, vec![0, 1, 0]);
+        assert_eq!(v[0], (3 * VERTEX_FLOATS) as f32);
+        assert_eq!(v[VERTEX_FLOATS], VERTEX_FLOATS as f32);
+        assert_eq!(v.len(), 2 * VERTEX_FLOATS);
         assert_eq!(
             coarse(&(0..30).collect::<Vec<u32>>()),
-            vec![
-                0, 1, 2, 3, 4, 5, 12, 13, 14, 15, 16, 17, 24, 25, 26, 27, 28, 29
-            ]
+            vec![0, 1, 2, 3, 4, 5, 24, 25, 26, 27, 28, 29]
         );
         assert_eq!(scene.meshes[1].alpha_cutoff, Some(0.5));
     }
