@@ -30,6 +30,8 @@ pub struct AppOptions {
     pub log_fps: bool,
     /// Start with the turntable on.
     pub turntable: bool,
+    /// Draw moving frames at full quality too (for measurements).
+    pub full_quality_motion: bool,
 }
 
 enum Shot {
@@ -64,6 +66,7 @@ pub struct PreviewApp {
     frames: VecDeque<Instant>,
     render_ms: f64,
     log_fps: bool,
+    full_quality_motion: bool,
     last_fps_log: Instant,
     /// A model caused by a save was drawn in the last frame: (save time, generation count).
     drawn_after_save: Option<(Instant, u64)>,
@@ -110,6 +113,7 @@ impl PreviewApp {
             frames: VecDeque::new(),
             render_ms: 0.0,
             log_fps: options.log_fps,
+            full_quality_motion: options.full_quality_motion,
             last_fps_log: Instant::now(),
             drawn_after_save: None,
             last_motion: None,
@@ -497,9 +501,10 @@ impl PreviewApp {
         if self.camera != camera_before {
             self.last_motion = Some(now);
         }
-        let moving = self
-            .last_motion
-            .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE);
+        let moving = !self.full_quality_motion
+            && self
+                .last_motion
+                .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE);
         if moving {
             ui.ctx().request_repaint_after(MOTION_SETTLE);
         }

@@ -11,7 +11,8 @@
 //! generation has ended) to the file and closes; the command then fails if the generation
 //! did. Setting the environment variable `PGE_PREVIEW_LOG=1` starts the turntable and prints
 //! frames per second and the time from each save to its model on screen to stderr (for
-//! measuring the viewport's speed and the reload latency).
+//! measuring the viewport's speed and the reload latency); `PGE_PREVIEW_LOG=full` does the
+//! same with every frame drawn at full quality (no reduced detail while moving).
 
 mod app;
 pub mod camera;
@@ -88,12 +89,14 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
         steps: None,
     };
     let screenshot_result = Arc::new(Mutex::new(None));
-    let measuring = std::env::var_os("PGE_PREVIEW_LOG").is_some_and(|v| v == "1");
+    let log = std::env::var("PGE_PREVIEW_LOG").unwrap_or_default();
+    let measuring = log == "1" || log == "full";
     let options = AppOptions {
         screenshot: args.screenshot.clone(),
         screenshot_result: screenshot_result.clone(),
         log_fps: measuring,
         turntable: measuring,
+        full_quality_motion: log == "full",
     };
     let title = format!("PGE preview: {}", args.script.display());
     let native = eframe::NativeOptions {
