@@ -58,6 +58,8 @@ pub struct PreviewApp {
     edits: BTreeMap<String, ParamValue>,
     text_edits: BTreeMap<String, String>,
     total_steps: Option<u32>,
+    /// The step scrubber advances by itself after each generation.
+    playing: bool,
     export_path: String,
     export_message: Option<Result<String, String>>,
     shown_error: Option<String>,
@@ -105,6 +107,7 @@ impl PreviewApp {
             edits: BTreeMap::new(),
             text_edits: BTreeMap::new(),
             total_steps: None,
+            playing: false,
             export_path,
             export_message: None,
             shown_error: None,
@@ -124,6 +127,7 @@ impl PreviewApp {
     /// File events, worker reports, new requests, the watch list.
     fn pump(&mut self) {
         self.live.pump(Instant::now());
+        self.play();
         match self.live.reloader().status() {
             Status::Error(message) if self.shown_error.as_ref() != Some(message) => {
                 // A screenshot run reports its error when the window closes.
@@ -155,6 +159,25 @@ impl PreviewApp {
                 }
                 self.viewport_dirty = true;
             }
+        }
+    }
+
+    /// While playing, asks for the next step once the current one is on screen.
+    fn play(&mut self) {
+        let reloader = self.live.reloader();
+        if !self.playing || reloader.is_running() {
+            return;
+        }
+        if matches!(reloader.status(), Status::Error(_) | Status::Gone) {
+            self.playing = false;
+            return;
+        }
+        let (Some(total), Some(shown)) = (self.total_steps, reloader.current()) else {
+            return;
+        };
+        if let Some(next) = next_play_step(total, &shown.settings, reloader.settings()) {
+            self.playing = next.steps.is_some();
+            self.settings_changed(next);
         }
     }
 
@@ -351,6 +374,21 @@ impl PreviewApp {
                 }
                 if ui.button("⏭").on_hover_text("to the end").clicked() {
                     s.steps = None;
+                }
+                let label = if self.playing {
+                    "⏸ pause"
+                } else {
+                    "⏵ play"
+                };
+                if ui
+                    .button(label)
+                    .on_hover_text("grow step by step")
+                    .clicked()
+                {
+                    self.playing = !self.playing;
+                    if self.playing && s.steps.is_none() {
+                        s.steps = Some(0);
+                    }
                 }
             });
         } else {
@@ -714,6 +752,18 @@ impl eframe::App for PreviewApp {
     }
 }
 
+/// The settings of the next step of playback, once the `shown` generation is the one
+/// `requested`: one step further, or to the end (`steps: None`) after the last.
+fn next_play_step(total: u32, shown: &Settings, requested: &Settings) -> Option<Settings> {
+    if shown != requested {
+        return None;
+    }
+    let mut next = requested.clone();
+    let step = requested.steps.map_or(total, |k| k + 1);
+    next.steps = (step < total).then_some(step);
+    Some(next)
+}
+
 fn gone_message(script: &Path) -> String {
     format!(
         "{}: file is gone; waiting for it to come back",
@@ -825,6 +875,25 @@ mod tests {
         assert!(dir.path().join("tree.mtl").is_file());
         let err = export(&g, &dir.path().join("missing/tree.glb")).expect_err("no such folder");
         assert!(err.contains("missing"), "{err}");
+    }
+
+    #[test]
+    fn playback_steps_to_the_end_once_each_step_is_shown() {
+        let at = |k| Settings {
+            steps: Some(k),
+            ..Settings::default()
+        };
+        assert_eq!(next_play_step(3, &at(0), &at(0)), Some(at(1)));
+        assert_eq!(
+            next_play_step(3, &at(1), &at(2)),
+            None,
+            "step 2 is not shown yet"
+        );
+        assert_eq!(
+            next_play_step(3, &at(2), &at(2)).map(|s| s.steps),
+            Some(None),
+            "the end"
+        );
     }
 
     #[test]
