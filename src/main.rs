@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 
 mod common;
 mod derive;
+mod preview;
 mod run;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other
@@ -23,12 +24,15 @@ enum Command {
     Run(run::RunArgs),
     /// Print the string an L-system derives (text, count or json).
     Derive(derive::DeriveArgs),
+    /// Open a window that shows the script's model and regenerates it on every save.
+    Preview(preview::PreviewArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
+        Command::Preview(args) => preview::preview(args),
         Command::Derive(args) => args
             .script
             .engine()

@@ -232,6 +232,28 @@ fn glb_parses_back_and_carries_the_extras() {
                 let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                 (l - 1.0).abs() < 1e-4
             }));
+            // Front faces (counter-clockwise) agree with the vertex normals.
+            let p: Vec<[f32; 3]> = reader.read_positions().expect("positions").collect();
+            let nr: Vec<[f32; 3]> = reader.read_normals().expect("normals").collect();
+            let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            for t in idx.chunks_exact(3) {
+                let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+                let (u, v) = (sub(p[b], p[a]), sub(p[c], p[a]));
+                let face = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                let n = [
+                    nr[a][0] + nr[b][0] + nr[c][0],
+                    nr[a][1] + nr[b][1] + nr[c][1],
+                    nr[a][2] + nr[b][2] + nr[c][2],
+                ];
+                assert!(
+                    face[0] * n[0] + face[1] * n[1] + face[2] * n[2] > 0.0,
+                    "triangle {t:?} faces away from its normals"
+                );
+            }
         }
     }
     let extras: serde_json::Value =
