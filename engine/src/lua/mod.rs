@@ -39,7 +39,30 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
 #[must_use]
 pub fn memory_limit(lua: &mlua::Lua) -> usize {
     lua.app_data_ref::<state::SessionState>()
-        .map_or(usize::MAX, |s| s.memory_limit)
+        .map_or(crate::Limits::default().memory, |s| s.memory_limit)
+}
+
+/// A finite number from a script value, or a `FILE:LINE:` error that names `what` (the
+/// method and argument) and says what was wrong.
+pub fn finite_number(lua: &mlua::Lua, v: &mlua::Value, what: &str) -> mlua::Result<f64> {
+    let x = match v {
+        mlua::Value::Integer(i) => *i as f64,
+        mlua::Value::Number(n) => *n,
+        other => {
+            return Err(script_error(
+                lua,
+                format!("{what}: expected a number, got {}", other.type_name()),
+            ));
+        }
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(script_error(
+            lua,
+            format!("{what}: the number is NaN or infinite"),
+        ))
+    }
 }
 
 /// Registers the support library into the `pge` table.

@@ -13,24 +13,9 @@ use pge_engine::lua::{
 
 use crate::{Image, Lines};
 
+/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
 fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f64> {
-    let x = match v {
-        Value::Integer(i) => *i as f64,
-        Value::Number(n) => *n,
-        other => {
-            return Err(script_error(
-                lua,
-                format!("{what}: expected a number, got {}", other.type_name()),
-            ));
-        }
-    };
-    if !x.is_finite() {
-        return Err(script_error(
-            lua,
-            format!("{what}: the number is NaN or infinite"),
-        ));
-    }
-    Ok(x)
+    pge_engine::lua::finite_number(lua, v, what).map(|x| x)
 }
 
 fn short(e: &mlua::Error) -> String {
@@ -326,16 +311,9 @@ fn size(lua: &Lua, v: &Value, what: &str) -> mlua::Result<u32> {
     Ok(x as u32)
 }
 
-/// The session's memory limit (the Lua state's; mlua has no getter, so it is read by
-/// setting a limit, which returns the previous one, and putting it back). 1 GiB when unset.
+/// The session's memory limit: what one object's Rust-side buffers may take at most.
 fn memory_budget(lua: &Lua) -> usize {
-    match lua.set_memory_limit(0) {
-        Ok(previous) => {
-            let _ = lua.set_memory_limit(previous);
-            if previous == 0 { 1 << 30 } else { previous }
-        }
-        Err(_) => 1 << 30,
-    }
+    pge_engine::lua::memory_limit(lua)
 }
 
 /// An image (and its PNG when exported) must fit in the memory limit.

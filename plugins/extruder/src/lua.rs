@@ -11,25 +11,9 @@ use pge_engine::lua::{LuaMat4, LuaMesh, LuaModel, LuaVec3, material_from_table, 
 
 use crate::{Extruder, ExtruderOptions, MatrixManipulator};
 
-/// A number argument, or a `FILE:LINE:` error naming the method and the argument.
+/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
 fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
-    let x = match v {
-        Value::Integer(i) => *i as f64,
-        Value::Number(n) => *n,
-        other => {
-            return Err(script_error(
-                lua,
-                format!("{what}: expected a number, got {}", other.type_name()),
-            ));
-        }
-    };
-    if !x.is_finite() {
-        return Err(script_error(
-            lua,
-            format!("{what}: the number is NaN or infinite"),
-        ));
-    }
-    Ok(x as f32)
+    pge_engine::lua::finite_number(lua, v, what).map(|x| x as f32)
 }
 
 /// A vector given as a `pge.vec3`, a table, or three numbers.
@@ -378,16 +362,9 @@ fn options(lua: &Lua, t: Option<Table>) -> mlua::Result<ExtruderOptions> {
     Ok(o)
 }
 
-/// The session's memory limit (the Lua state's; mlua has no getter, so it is read by
-/// setting a limit, which returns the previous one, and putting it back). 1 GiB when unset.
+/// The session's memory limit: what one object's Rust-side buffers may take at most.
 fn memory_budget(lua: &Lua) -> usize {
-    match lua.set_memory_limit(0) {
-        Ok(previous) => {
-            let _ = lua.set_memory_limit(previous);
-            if previous == 0 { 1 << 30 } else { previous }
-        }
-        Err(_) => 1 << 30,
-    }
+    pge_engine::lua::memory_limit(lua)
 }
 
 /// Adds `pge.Extruder` and `pge.MatrixManipulator`.

@@ -11,27 +11,9 @@ use pge_engine::lua::{LuaMesh, LuaModel, LuaVec3, material_from_table, run_conte
 
 use crate::{MarchError, MarchOptions, MarchingCubes, Metaballs};
 
-/// The memory budget when the session sets none.
-const DEFAULT_MEMORY: usize = 1 << 30;
-
+/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
 fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
-    let x = match v {
-        Value::Integer(i) => *i as f64,
-        Value::Number(n) => *n,
-        other => {
-            return Err(script_error(
-                lua,
-                format!("{what}: expected a number, got {}", other.type_name()),
-            ));
-        }
-    };
-    if !x.is_finite() {
-        return Err(script_error(
-            lua,
-            format!("{what}: the number is NaN or infinite"),
-        ));
-    }
-    Ok(x as f32)
+    pge_engine::lua::finite_number(lua, v, what).map(|x| x as f32)
 }
 
 fn short(e: &mlua::Error) -> String {
@@ -169,20 +151,9 @@ impl LuaMarchingCubes {
     }
 }
 
-/// The session's memory limit (the budget for the grid and the mesh too).
+/// The session's memory limit: what one object's Rust-side buffers may take at most.
 fn memory_budget(lua: &Lua) -> usize {
-    // mlua has no getter: setting a limit returns the previous one, which is put back.
-    match lua.set_memory_limit(0) {
-        Ok(previous) => {
-            let _ = lua.set_memory_limit(previous);
-            if previous == 0 {
-                DEFAULT_MEMORY
-            } else {
-                previous
-            }
-        }
-        Err(_) => DEFAULT_MEMORY,
-    }
+    pge_engine::lua::memory_limit(lua)
 }
 
 impl UserData for LuaMarchingCubes {
