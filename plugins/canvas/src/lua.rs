@@ -15,7 +15,7 @@ use crate::{Image, Lines};
 
 /// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
 fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f64> {
-    pge_engine::lua::finite_number(lua, v, what).map(|x| x)
+    pge_engine::lua::finite_number(lua, v, what)
 }
 
 fn short(e: &mlua::Error) -> String {
