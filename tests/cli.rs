@@ -1,19 +1,10 @@
 //! End-to-end tests of the `pge` command: scripts in, files and messages out.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{pge, root};
+use std::path::Path;
 use std::process::{Command, Output};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn pge(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pge"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("the pge binary runs")
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()

@@ -1,20 +1,11 @@
 //! End-to-end tests of L-systems: `pge derive` and `pge run` on the scripts of
 //! `scripts/lsystems/`, and the errors bad L-system scripts get.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn pge(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pge"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("the pge binary runs")
-}
+use common::pge;
+use std::path::Path;
+use std::process::Output;
 
 fn stdout_of(o: &Output) -> String {
     assert!(

@@ -3,24 +3,13 @@
 //! glb, the statistics, the frames of the animated ones, the PNG the explorers write, and
 //! the one-line `FILE:LINE:` errors of bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use common::{pge_in, root};
+use std::path::PathBuf;
 
 fn script(name: &str) -> PathBuf {
     root().join("scripts/modellers").join(name)
-}
-
-/// Runs `pge` in `cwd`.
-fn pge(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pge"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the pge binary runs")
 }
 
 /// `pge run SCRIPT -o out.glb --stats -q EXTRA...` in a fresh folder: the statistics, the
@@ -37,7 +26,7 @@ fn run(name: &str, extra: &[&str]) -> (serde_json::Value, Vec<u8>, tempfile::Tem
         "-q",
     ];
     args.extend_from_slice(extra);
-    let o = pge(&args, dir.path());
+    let o = pge_in(&args, dir.path());
     assert!(
         o.status.success(),
         "{name} {extra:?}: {}",
@@ -179,7 +168,7 @@ fn assert_fails(file: &str, extra: &[&str], line: u32, needle: &str) {
         "-q",
     ];
     args.extend_from_slice(extra);
-    let o = pge(&args, &root());
+    let o = pge_in(&args, &root());
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert_eq!(o.status.code(), Some(1), "{file}: {err}");
     assert!(!err.contains("panicked"), "{file}: {err}");

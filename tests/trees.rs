@@ -2,20 +2,10 @@
 //! (bark and leaf meshes, textures, the skeleton in the extras), `--stats`, determinism, and
 //! the located errors of bad tree scripts.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn pge(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pge"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("the pge binary runs")
-}
+use common::pge;
+use std::path::Path;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).to_string()
