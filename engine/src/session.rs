@@ -16,7 +16,7 @@ use crate::lua::to_engine_error;
 use crate::{Algorithm, Engine, Error, Limits, Location, Result, RunContext};
 
 /// How often (in VM instructions) the hook checks the limits.
-const HOOK_INTERVAL: u32 = 1000;
+const HOOK_INTERVAL: u32 = 4096;
 
 /// What a session is created with.
 #[derive(Clone, Debug)]
@@ -259,18 +259,26 @@ impl Session {
 fn install_hook(lua: &Lua) -> mlua::Result<()> {
     let triggers = HookTriggers::new().every_nth_instruction(HOOK_INTERVAL);
     lua.set_global_hook(triggers, |lua, debug| {
-        let here = {
-            let source = debug.source();
-            let name = source.source.as_deref().unwrap_or("?");
-            Location {
-                file: name.strip_prefix('@').unwrap_or(name).to_string(),
-                line: debug.current_line().map(|l| l as u32),
-            }
-        };
         let Some(mut st) = lua.app_data_mut::<SessionState>() else {
             return Ok(VmState::Continue);
         };
         st.instructions += HOOK_INTERVAL as u64;
+        // Remember where the script is, allocating only when it moved to another chunk.
+        let line = debug.current_line().map(|l| l as u32);
+        {
+            let source = debug.source();
+            let name = source.source.as_deref().unwrap_or("?");
+            let file = name.strip_prefix('@').unwrap_or(name);
+            match &mut st.last_location {
+                Some(loc) if loc.file == file => loc.line = line,
+                other => {
+                    *other = Some(Location {
+                        file: file.to_string(),
+                        line,
+                    })
+                }
+            }
+        }
         let problem = if st
             .ctx
             .cancel
@@ -288,10 +296,11 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
         } else {
             None
         };
-        st.last_location = Some(here.clone());
-        drop(st);
         match problem {
-            Some(message) => Err(mlua::Error::RuntimeError(format!("{here}: {message}"))),
+            Some(message) => {
+                let here = st.last_location.clone().unwrap_or_default();
+                Err(mlua::Error::RuntimeError(format!("{here}: {message}")))
+            }
             None => Ok(VmState::Continue),
         }
     })?;
