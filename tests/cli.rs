@@ -392,3 +392,17 @@ fn turtle_textures_are_found_next_to_the_script_from_any_folder() {
     assert_eq!(doc.images().count(), 1);
     assert_eq!((images[0].width, images[0].height), (64, 64));
 }
+script_error!(
+    an_unbalanced_bracket_names_the_lsystem,
+    &format!("{E}/unbalanced.lua"),
+    &[],
+    &format!("{E}/unbalanced.lua:2: "),
+    "L-system 'x': turtle: ']' (pop) without a matching '['"
+);
+script_error!(
+    a_nan_turtle_option,
+    &format!("{E}/turtle_nan.lua"),
+    &[],
+    &format!("{E}/turtle_nan.lua:2: "),
+    "'angle' must be a finite number, got NaN"
+);

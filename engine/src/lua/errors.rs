@@ -44,7 +44,12 @@ pub fn caller_location(lua: &Lua) -> Location {
 /// returns when a script passes something wrong.
 #[must_use]
 pub fn script_error(lua: &Lua, message: impl std::fmt::Display) -> mlua::Error {
-    mlua::Error::RuntimeError(format!("{}: {message}", caller_location(lua)))
+    let location = caller_location(lua);
+    if location.file == "?" {
+        // No Lua code is running (a plugin called from Rust): the caller adds the place.
+        return mlua::Error::RuntimeError(message.to_string());
+    }
+    mlua::Error::RuntimeError(format!("{location}: {message}"))
 }
 
 /// Converts an mlua error into an engine error with the script's file and line.

@@ -40,7 +40,12 @@ fn number(lua: &Lua, t: &Table, key: &str, min: f64) -> mlua::Result<Option<f32>
         other => Err(script_error(
             lua,
             format!(
-                "pge.turtle: '{key}' must be a number of at least {min}, got {}",
+                "pge.turtle: '{key}' must be a finite number{}, got {}",
+                if min > f64::MIN {
+                    format!(" of at least {min}")
+                } else {
+                    String::new()
+                },
                 match other {
                     Value::Integer(i) => i.to_string(),
                     Value::Number(n) => n.to_string(),

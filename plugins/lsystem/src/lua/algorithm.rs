@@ -510,7 +510,20 @@ impl LSystemAlgorithm {
 
     fn engine_error(&self, lua: &Lua, e: HostError) -> Error {
         match e {
-            HostError::Lua(e) => to_engine_error(lua, e),
+            // Errors raised while no Lua code runs (the default interpretation of a
+            // module) carry no place: they belong to this L-system.
+            HostError::Lua(e) => match to_engine_error(lua, e) {
+                Error::Script {
+                    location,
+                    message,
+                    traceback,
+                } if location.file == "?" => Error::Script {
+                    location: self.cfg.location.clone(),
+                    message: format!("L-system '{}': {message}", self.cfg.name),
+                    traceback,
+                },
+                other => other,
+            },
             HostError::Engine(e) => e,
             HostError::Ls(e @ LsError::Rule { origin, .. }) => Error::script(
                 self.cfg

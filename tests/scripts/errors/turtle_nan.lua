@@ -1,0 +1,2 @@
+-- NaN angle.
+return pge.turtle{ angle = 0/0 }
