@@ -29,6 +29,7 @@ struct Builder {
     bin: Vec<u8>,
     materials: Vec<(Arc<Material>, json::Index<json::Material>)>,
     textures: Vec<(Arc<Texture>, json::Index<json::Texture>)>,
+    images: Vec<(Arc<Texture>, json::Index<json::Image>)>,
     sampler: Option<json::Index<json::texture::Sampler>>,
 }
 
@@ -120,6 +121,29 @@ impl Builder {
         )
     }
 
+    /// The embedded PNG image of `tex`, written once however many textures (and the
+    /// environment) use it.
+    fn image(&mut self, tex: &Arc<Texture>) -> json::Index<json::Image> {
+        if let Some((_, i)) = self
+            .images
+            .iter()
+            .find(|(t, _)| Arc::ptr_eq(t, tex) || **t == **tex)
+        {
+            return *i;
+        }
+        let view = self.view(&tex.png, None);
+        let index = self.root.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType("image/png".into())),
+            name: Some(tex.name.clone()),
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+        self.images.push((tex.clone(), index));
+        index
+    }
+
     fn texture(&mut self, tex: &Arc<Texture>) -> json::Index<json::Texture> {
         if let Some((_, i)) = self
             .textures
@@ -128,15 +152,7 @@ impl Builder {
         {
             return *i;
         }
-        let view = self.view(&tex.png, None);
-        let image = self.root.push(json::Image {
-            buffer_view: Some(view),
-            mime_type: Some(json::image::MimeType("image/png".into())),
-            name: Some(tex.name.clone()),
-            uri: None,
-            extensions: None,
-            extras: None,
-        });
+        let image = self.image(tex);
         let sampler = *self.sampler.get_or_insert_with(|| {
             self.root.push(json::texture::Sampler {
                 mag_filter: Some(Valid(json::texture::MagFilter::Linear)),
@@ -295,7 +311,9 @@ fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
 }
 
 /// The `.glb` bytes of a model: one buffer, u32 indices, embedded PNG textures, one node per
-/// instance, and the root `extras.pge` with generator, seed, params and stats.
+/// instance, and the root `extras.pge` with generator, seed, params and stats (and, when the
+/// model has an environment, `environment = {image = <image index>, mapping =
+/// "equirectangular"}`).
 pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
     model.validate()?;
     let mut b = Builder::default();
@@ -342,6 +360,13 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
             "modules": model.stats.modules,
         }),
     );
+    if let Some(env) = &model.environment {
+        let image = b.image(env).value();
+        pge.insert(
+            "environment".into(),
+            json!({ "image": image, "mapping": "equirectangular" }),
+        );
+    }
     for (k, v) in &model.extras {
         pge.entry(k.clone()).or_insert_with(|| v.clone());
     }
@@ -468,6 +493,77 @@ mod tests {
         let b = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
         assert_eq!(a, b);
         assert_eq!(a.len() % 4, 0);
+    }
+}
+
+#[cfg(test)]
+mod environment_tests {
+    use super::*;
+    use glam::Vec2;
+
+    #[test]
+    fn the_environment_is_an_embedded_image_named_by_the_root_extras() {
+        let mut rgba = Vec::new();
+        for _ in 0..2 {
+            rgba.extend_from_slice(&[40, 90, 220, 255, 40, 90, 220, 255]);
+        }
+        for _ in 0..2 {
+            rgba.extend_from_slice(&[90, 70, 40, 255, 90, 70, 40, 255]);
+        }
+        let sky = Arc::new(Texture::from_rgba("sky", 4, 2, &rgba).expect("png"));
+        let mut mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+        let mut model = Model::from_mesh(mesh);
+        model.environment = Some(sky.clone());
+        let bytes = glb_bytes(&model, &ExportMeta::default()).expect("exports");
+        let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+        let extras: JsonValue = serde_json::from_str(
+            gltf.document
+                .as_json()
+                .extras
+                .as_ref()
+                .expect("extras")
+                .get(),
+        )
+        .expect("json");
+        let env = &extras["pge"]["environment"];
+        assert_eq!(env["mapping"], "equirectangular");
+        let index = env["image"].as_u64().expect("an image index") as usize;
+        let image = gltf.images().nth(index).expect("the image exists");
+        let gltf::image::Source::View { view, mime_type } = image.source() else {
+            panic!("embedded, not a uri");
+        };
+        assert_eq!(mime_type, "image/png");
+        let blob = gltf.blob.as_ref().expect("binary chunk");
+        let png = &blob[view.offset()..view.offset() + view.length()];
+        assert_eq!(png, sky.png.as_slice());
+        let decoded = image::load_from_memory(png).expect("png").to_rgba8();
+        assert_eq!(decoded.dimensions(), (4, 2));
+        assert_eq!(decoded.as_raw(), &rgba);
+
+        // The same picture as a material texture is stored once.
+        let mut textured = Model::new();
+        let mut mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+        mesh.material = Arc::new(Material {
+            texture: Some(Arc::new((*sky).clone())),
+            ..Material::default()
+        });
+        textured.add_mesh(mesh, Mat4::IDENTITY);
+        textured.environment = Some(sky);
+        let bytes = glb_bytes(&textured, &ExportMeta::default()).expect("exports");
+        let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+        assert_eq!(gltf.images().count(), 1);
+        assert_eq!(gltf.textures().count(), 1);
+    }
+
+    #[test]
+    fn without_an_environment_nothing_is_written() {
+        let bytes = glb_bytes(&Model::new(), &ExportMeta::default()).expect("exports");
+        let text = String::from_utf8_lossy(&bytes);
+        assert!(!text.contains("environment"));
     }
 }
 

@@ -2,7 +2,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::{GeometryError, Mesh};
+use super::{GeometryError, Mesh, Texture};
 
 /// One placement of a mesh in the model (a glTF node).
 #[derive(Clone, Debug, PartialEq)]
@@ -64,6 +64,10 @@ pub struct Model {
     pub extras: serde_json::Map<String, serde_json::Value>,
     /// Counts and timings.
     pub stats: Stats,
+    /// An equirectangular sky image (row 0 straight up, the middle row the horizon), exported
+    /// as an image referenced by the root `extras.pge.environment` and drawn by the preview
+    /// as the background.
+    pub environment: Option<Arc<Texture>>,
 }
 
 impl Model {
@@ -92,7 +96,8 @@ impl Model {
     }
 
     /// Adds every instance of `other`, placed by `transform`, sharing meshes by `Arc`.
-    /// Stats are merged; extras of `other` are copied where this model has no such key.
+    /// Stats are merged; extras of `other` are copied where this model has no such key; the
+    /// environment of `other` is taken when this model has none.
     pub fn add_model(&mut self, other: &Model, transform: Mat4) {
         let map: Vec<usize> = other
             .meshes
@@ -108,6 +113,9 @@ impl Model {
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+        if self.environment.is_none() {
+            self.environment.clone_from(&other.environment);
         }
     }
 
@@ -216,5 +224,29 @@ mod tests {
         assert_eq!(lo, Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(hi, Vec3::new(2.0, 2.0, 1.0));
         outer.validate().expect("valid");
+    }
+
+    #[test]
+    fn add_model_keeps_the_receivers_environment_else_takes_the_others() {
+        let sky = |name: &str| {
+            Arc::new(
+                Texture::from_rgba(name, 2, 1, &[0, 0, 255, 255, 0, 0, 128, 255]).expect("png"),
+            )
+        };
+        let mut inner = Model::from_mesh(triangle());
+        inner.environment = Some(sky("inner"));
+        let mut outer = Model::new();
+        outer.add_model(&inner, Mat4::IDENTITY);
+        assert_eq!(
+            outer.environment.as_ref().map(|t| t.name.as_str()),
+            Some("inner")
+        );
+        let mut own = Model::new();
+        own.environment = Some(sky("own"));
+        own.add_model(&inner, Mat4::IDENTITY);
+        assert_eq!(
+            own.environment.as_ref().map(|t| t.name.as_str()),
+            Some("own")
+        );
     }
 }

@@ -44,6 +44,14 @@ impl UserData for LuaModel {
         m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
         m.add_method("triangleCount", |_, me, ()| Ok(me.0.triangle_count()));
         m.add_method("meshCount", |_, me, ()| Ok(me.0.meshes.len()));
+        m.add_method_mut("setEnvironment", |lua, me, image: Value| {
+            let mut tex = texture_from_value(lua, &image, "model:setEnvironment")?;
+            if tex.name == "texture" {
+                Arc::make_mut(&mut tex).name = "environment".into();
+            }
+            me.0.environment = Some(tex);
+            Ok(())
+        });
         m.add_method("instanceCount", |_, me, ()| Ok(me.0.instances.len()));
         m.add_function("model", |_, me: AnyUserData| Ok(me));
     }
@@ -134,6 +142,46 @@ fn floats(lua: &Lua, t: &Table, key: &str, per: usize) -> mlua::Result<Option<Ve
     Ok(Some(out))
 }
 
+/// An image given by a script: a PNG path relative to the script, or an object that makes one
+/// (anything with a `pngBytes()` method: `pge.Image`, `img:texture()`). `what` starts errors.
+pub fn texture_from_value(lua: &Lua, value: &Value, what: &str) -> mlua::Result<Arc<Texture>> {
+    let tex = match value {
+        Value::String(path) => {
+            let path = path.to_string_lossy();
+            let file = resolve_path(lua, &path)?;
+            let bytes = std::fs::read(&file)
+                .map_err(|e| script_error(lua, format!("{what} '{path}': {e}")))?;
+            Texture::from_image_bytes(path.clone(), &bytes)
+                .map_err(|e| script_error(lua, format!("{what} '{path}': {e}")))?
+        }
+        Value::UserData(_) | Value::Table(_) => {
+            let bytes: mlua::LuaString = match value {
+                Value::UserData(ud) => ud.call_method("pngBytes", ()),
+                Value::Table(tb) => tb.call_method("pngBytes", ()),
+                _ => unreachable!("matched above"),
+            }
+            .map_err(|e| {
+                script_error(
+                    lua,
+                    format!("{what}: expected a PNG path or an object with pngBytes() ({e})"),
+                )
+            })?;
+            Texture::from_image_bytes("texture", &bytes.as_bytes())
+                .map_err(|e| script_error(lua, format!("{what}: {e}")))?
+        }
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{what} must be a PNG path or an image, not {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
+    Ok(Arc::new(tex))
+}
+
 /// A material from a script table: `color = "#rrggbb"`, `doubleSided`, `roughness`,
 /// `metallic`, `alpha = "opaque"|"mask"|"blend"`, `alphaCutoff`, `texture = "file.png"`,
 /// `name`.
@@ -174,43 +222,7 @@ pub fn material_from_table(lua: &Lua, t: &Table) -> mlua::Result<Material> {
     };
     m.texture = match t.raw_get::<Value>("texture")? {
         Value::Nil => None,
-        Value::String(path) => {
-            let path = path.to_string_lossy();
-            let file = resolve_path(lua, &path)?;
-            let bytes = std::fs::read(&file)
-                .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
-            let tex = Texture::from_image_bytes(path.clone(), &bytes)
-                .map_err(|e| script_error(lua, format!("texture '{path}': {e}")))?;
-            Some(Arc::new(tex))
-        }
-        // An object that makes an image (pge.Image's texture()): anything with pngBytes().
-        v @ (Value::UserData(_) | Value::Table(_)) => {
-            let bytes: mlua::LuaString = match &v {
-                Value::UserData(ud) => ud.call_method("pngBytes", ()),
-                Value::Table(tb) => tb.call_method("pngBytes", ()),
-                _ => unreachable!("matched above"),
-            }
-            .map_err(|e| {
-                script_error(
-                    lua,
-                    format!(
-                        "material texture: expected a PNG path or an object with pngBytes() ({e})"
-                    ),
-                )
-            })?;
-            let tex = Texture::from_image_bytes("texture", &bytes.as_bytes())
-                .map_err(|e| script_error(lua, format!("material texture: {e}")))?;
-            Some(Arc::new(tex))
-        }
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "material texture must be a PNG path or an image, not {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        v => Some(texture_from_value(lua, &v, "material texture")?),
     };
     Ok(m)
 }
