@@ -203,3 +203,51 @@ fn a_script_that_runs_forever_is_stopped_by_the_time_limit() {
     assert!(stderr.contains("forever.lua:2:"), "{stderr}");
     assert!(stderr.contains("time limit"), "{stderr}");
 }
+
+#[test]
+fn an_environment_is_the_viewport_background() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let png = dir.path().join("environment.png");
+    let script = root().join("tests/scripts/environment.lua");
+    let Some(out) = preview(
+        &[
+            script.to_str().expect("utf-8 path"),
+            "--screenshot",
+            png.to_str().expect("utf-8 path"),
+        ],
+        dir.path(),
+    ) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "pge preview failed: {stderr}");
+    let img = image::open(&png).expect("a PNG").to_rgba8();
+    let (width, height) = img.dimensions();
+    // The fraction of a band of viewport rows (right of the side panel) whose pixels pass.
+    let band = |rows: std::ops::Range<u32>, test: &dyn Fn([i32; 4]) -> bool| {
+        let (mut hits, mut all) = (0usize, 0usize);
+        for y in rows {
+            for x in (width * 3 / 8)..width {
+                all += 1;
+                if test(img.get_pixel(x, y).0.map(i32::from)) {
+                    hits += 1;
+                }
+            }
+        }
+        hits as f64 / all.max(1) as f64
+    };
+    // The camera looks slightly down: above the model is the script's blue sky, below it
+    // the brown ground half of the image (the plain background is a dark grey).
+    let sky = band(height / 20..height / 8, &|[r, g, b, _]| {
+        b > 200 && b > r + 60 && b > g + 20
+    });
+    let ground = band(height * 15 / 16..height, &|[r, g, b, _]| {
+        r > b + 25 && r > g && (60..160).contains(&r)
+    });
+    assert!(sky > 0.9, "sky blue on top: {:.0} %", sky * 100.0);
+    assert!(
+        ground > 0.6,
+        "brown ground at the bottom: {:.0} %",
+        ground * 100.0
+    );
+}

@@ -11,7 +11,7 @@ use eframe::egui_wgpu::{self, wgpu};
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
-use super::scene::{Scene, SceneMesh, TextureData, VERTEX_FLOATS};
+use super::scene::{Environment, Scene, SceneMesh, TextureData, VERTEX_FLOATS};
 
 /// The viewport texture holds sRGB-encoded values in a plain format: egui samples every
 /// texture as gamma-encoded colour. The shaders encode.
@@ -19,7 +19,7 @@ const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Model textures are sRGB images, decoded to linear when sampled for lighting.
 const IMAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Background, sRGB-encoded.
+/// Background without an environment, sRGB-encoded.
 const CLEAR: wgpu::Color = wgpu::Color {
     r: 0.11,
     g: 0.12,
@@ -88,6 +88,11 @@ pub struct Renderer {
     mesh_culled: wgpu::RenderPipeline,
     mesh_double: wgpu::RenderPipeline,
     mesh_lines: wgpu::RenderPipeline,
+    sky: wgpu::RenderPipeline,
+    sky_sampler: wgpu::Sampler,
+    /// The environment's sky (its material bind group) and ambient factor, when the model
+    /// has one.
+    environment: Option<(wgpu::BindGroup, [f32; 3])>,
     overlay_depth: wgpu::RenderPipeline,
     overlay_top: wgpu::RenderPipeline,
     meshes: Vec<GpuMesh>,
@@ -122,7 +127,7 @@ impl Renderer {
         });
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
-            size: 80,
+            size: GLOBALS_BYTES,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -288,6 +293,17 @@ impl Renderer {
             (true, LessEqual),
             None,
         );
+        let sky = pipeline(
+            "sky",
+            &layout,
+            &[],
+            "vs_sky",
+            "fs_sky",
+            TriangleList,
+            None,
+            (false, Always),
+            None,
+        );
         let overlay_depth = pipeline(
             "grid",
             &line_layout,
@@ -319,6 +335,14 @@ impl Renderer {
             mipmap_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        let sky_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("sky"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
         let white_data = TextureData {
             width: 1,
             height: 1,
@@ -336,6 +360,9 @@ impl Renderer {
             mesh_culled,
             mesh_double,
             mesh_lines,
+            sky,
+            sky_sampler,
+            environment: None,
             overlay_depth,
             overlay_top,
             meshes: Vec::new(),
@@ -348,6 +375,10 @@ impl Renderer {
 
     /// Replaces the model on the GPU.
     pub fn upload(&mut self, scene: &Arc<Scene>) {
+        self.environment = scene
+            .environment
+            .as_ref()
+            .map(|env| (self.sky_group(env), ambient_tint(env.average)));
         let device = &self.device;
         let mut textures: Vec<(*const TextureData, wgpu::TextureView)> = Vec::new();
         self.meshes.clear();
@@ -505,8 +536,11 @@ impl Renderer {
             self.build_edges();
         }
         let sun = Vec3::new(0.45, 0.8, 0.35).normalize();
+        let ambient = self.environment.as_ref().map_or([1.0; 3], |(_, a)| *a);
         let mut globals = view_proj.to_cols_array().to_vec();
         globals.extend_from_slice(&[sun.x, sun.y, sun.z, 0.0]);
+        globals.extend_from_slice(&view_proj.inverse().to_cols_array());
+        globals.extend_from_slice(&[ambient[0], ambient[1], ambient[2], 1.0]);
         self.queue
             .write_buffer(&self.globals, 0, bytemuck::cast_slice(&globals));
         let mut encoder = self
@@ -539,6 +573,11 @@ impl Renderer {
                 occlusion_query_set: None,
             });
             pass.set_bind_group(0, &self.globals_group, &[]);
+            if let Some((sky, _)) = &self.environment {
+                pass.set_pipeline(&self.sky);
+                pass.set_bind_group(1, sky, &[]);
+                pass.draw(0..3, 0..1);
+            }
             // Opaque first, then foliage.
             for leaves_pass in [false, true] {
                 for mesh in self.meshes.iter().filter(|m| m.is_leaf == leaves_pass) {
@@ -595,6 +634,36 @@ impl Renderer {
         }
         self.queue.submit([encoder.finish()]);
         self.texture_id.unwrap_or_default()
+    }
+
+    /// The sky's bind group: the material layout with the sky image and a sampler that wraps
+    /// around the horizon and clamps at the poles.
+    fn sky_group(&self, env: &Environment) -> wgpu::BindGroup {
+        let view = upload_texture(&self.device, &self.queue, &env.texture);
+        let uniform = buffer_init(
+            &self.device,
+            "sky",
+            bytemuck::cast_slice(&[1.0f32, 1.0, 1.0, 1.0, -1.0, 0.0, 0.0, 0.0]),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sky"),
+            layout: &self.material_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sky_sampler),
+                },
+            ],
+        })
     }
 
     fn make_target(&self, size: [u32; 2]) -> Target {
@@ -759,6 +828,18 @@ fn probe_front_face(
     }
 }
 
+/// Bytes of the shader's `Globals`: view_proj, sun, inv_view_proj, ambient.
+const GLOBALS_BYTES: u64 = (16 + 4 + 16 + 4) * 4;
+
+/// The ambient light's factor under a sky of linear average colour `average`: half neutral,
+/// half the sky's hue at unchanged brightness (so a blue sky cools the shadows, a sunset
+/// warms them, and a dark sky does not black them out).
+#[must_use]
+pub fn ambient_tint(average: [f32; 3]) -> [f32; 3] {
+    let luma = 0.2126 * average[0] + 0.7152 * average[1] + 0.0722 * average[2];
+    average.map(|c| 0.5 + 0.5 * (c / luma.max(0.05)).min(2.5))
+}
+
 /// wgpu refuses empty buffers; an empty index list still gets one (unused) index.
 fn index_bytes(indices: &[u32]) -> &[u8] {
     if indices.is_empty() {
@@ -873,6 +954,16 @@ pub fn grid_lines(bounds: Option<(Vec3, Vec3)>) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ambient_tint_follows_the_skys_hue() {
+        let grey = ambient_tint([0.3, 0.3, 0.3]);
+        assert!(grey.iter().all(|c| (c - 1.0).abs() < 1e-5), "{grey:?}");
+        let blue = ambient_tint([0.1, 0.2, 0.6]);
+        assert!(blue[2] > 1.2 && blue[0] < 0.9, "{blue:?}");
+        let black = ambient_tint([0.0; 3]);
+        assert_eq!(black, [0.5; 3]);
+    }
 
     #[test]
     fn edges_of_two_triangles() {

@@ -50,6 +50,16 @@ pub struct SceneMesh {
     pub coarse: Option<(Vec<f32>, Vec<u32>)>,
 }
 
+/// The model's environment: an equirectangular sky drawn behind everything, whose average
+/// colour tints the ambient light.
+#[derive(Debug)]
+pub struct Environment {
+    /// The decoded sky image.
+    pub texture: Arc<TextureData>,
+    /// Average colour of the image, linear RGB.
+    pub average: [f32; 3],
+}
+
 /// Counts shown in the statistics panel.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SceneStats {
@@ -78,6 +88,8 @@ pub struct Scene {
     pub bounds: Option<(Vec3, Vec3)>,
     /// Counts.
     pub stats: SceneStats,
+    /// The sky, when the model has one (and it decodes).
+    pub environment: Option<Environment>,
 }
 
 impl Scene {
@@ -144,11 +156,20 @@ impl Scene {
             modules: model.stats.modules,
             phases: model.stats.phases.clone(),
         };
+        let environment = model.environment.as_ref().and_then(|t| {
+            let texture = decode(t)?;
+            let average = average_linear(texture.levels.first()?);
+            Some(Environment {
+                texture: Arc::new(texture),
+                average,
+            })
+        });
         Scene {
             meshes,
             skeleton,
             bounds: model.bounds(),
             stats,
+            environment,
         }
     }
 }
@@ -259,6 +280,21 @@ fn decode(texture: &Texture) -> Option<TextureData> {
         height,
         levels,
     })
+}
+
+/// The average linear RGB of sRGB-encoded RGBA8 pixels (alpha ignored).
+fn average_linear(rgba: &[u8]) -> [f32; 3] {
+    let to_linear = |c: u8| (c as f32 / 255.0).powf(2.2);
+    let mut acc = [0.0f64; 3];
+    let mut n = 0usize;
+    for p in rgba.chunks_exact(4) {
+        for k in 0..3 {
+            acc[k] += f64::from(to_linear(p[k]));
+        }
+        n += 1;
+    }
+    let n = n.max(1) as f64;
+    acc.map(|a| (a / n) as f32)
 }
 
 fn downsample(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
@@ -387,6 +423,25 @@ mod tests {
             vec![0, 1, 2, 3, 4, 5, 24, 25, 26, 27, 28, 29]
         );
         assert_eq!(scene.meshes[1].alpha_cutoff, Some(0.5));
+    }
+
+    #[test]
+    fn the_environment_is_decoded_with_its_average_colour() {
+        let mut model = Model::from_mesh(triangle());
+        assert!(Scene::new(&model).environment.is_none());
+        // Half white, half black: the linear average is one half.
+        let rgba = [255, 255, 255, 255, 0, 0, 0, 255];
+        model.environment = Some(Arc::new(
+            Texture::from_rgba("sky", 2, 1, &rgba).expect("png"),
+        ));
+        let scene = Scene::new(&model);
+        let env = scene.environment.as_ref().expect("decoded");
+        assert_eq!((env.texture.width, env.texture.height), (2, 1));
+        assert!(
+            env.average.iter().all(|c| (c - 0.5).abs() < 1e-6),
+            "{:?}",
+            env.average
+        );
     }
 
     #[test]

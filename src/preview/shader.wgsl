@@ -1,10 +1,15 @@
-// The preview's shaders: lit instanced meshes, unlit lines. Colours are linear until the
+// The preview's shaders: lit instanced meshes, unlit lines, the environment's sky. Colours are linear until the
 // fragment output, which is sRGB-encoded; overlay line colours are given encoded.
 
 struct Globals {
     view_proj: mat4x4<f32>,
     // xyz: direction towards the sun.
     sun: vec4<f32>,
+    // The inverse of view_proj: clip space back to world space (the sky's view rays).
+    inv_view_proj: mat4x4<f32>,
+    // xyz: factor of the ambient light (white without an environment, tinted by the sky's
+    // average colour with one).
+    ambient: vec4<f32>,
 };
 @group(0) @binding(0) var<uniform> g: Globals;
 
@@ -58,7 +63,8 @@ fn fs_mesh(in: MeshOut, @builtin(front_facing) front: bool) -> @location(0) vec4
     }
     let sun = max(dot(n, g.sun.xyz), 0.0);
     // Hemisphere ambient: warm ground below, cool sky above.
-    let ambient = mix(vec3<f32>(0.16, 0.14, 0.12), vec3<f32>(0.38, 0.42, 0.50), n.y * 0.5 + 0.5);
+    let ambient = mix(vec3<f32>(0.16, 0.14, 0.12), vec3<f32>(0.38, 0.42, 0.50), n.y * 0.5 + 0.5)
+        * g.ambient.xyz;
     let light = ambient + vec3<f32>(1.0, 0.95, 0.85) * sun * 0.85;
     return vec4<f32>(srgb(c.rgb * light), 1.0);
 }
@@ -72,6 +78,39 @@ fn srgb(c: vec3<f32>) -> vec3<f32> {
 @fragment
 fn fs_mesh_lines(in: MeshOut) -> @location(0) vec4<f32> {
     let c = m.base_color * in.color;
+    return vec4<f32>(srgb(c.rgb), 1.0);
+}
+
+// The environment: one triangle covering the viewport, drawn first and without depth, so
+// every mesh and line lands in front of it. Each pixel looks up the equirectangular sky
+// (bound as a material texture) in the direction its view ray goes.
+struct SkyOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) ndc: vec2<f32>,
+};
+
+@vertex
+fn vs_sky(@builtin(vertex_index) i: u32) -> SkyOut {
+    var corners = array<vec2<f32>, 3>(vec2<f32>(-1.0, -1.0), vec2<f32>(3.0, -1.0), vec2<f32>(-1.0, 3.0));
+    var out: SkyOut;
+    out.clip = vec4<f32>(corners[i], 1.0, 1.0);
+    out.ndc = corners[i];
+    return out;
+}
+
+const PI: f32 = 3.14159265;
+
+@fragment
+fn fs_sky(in: SkyOut) -> @location(0) vec4<f32> {
+    let a = g.inv_view_proj * vec4<f32>(in.ndc, 0.0, 1.0);
+    let b = g.inv_view_proj * vec4<f32>(in.ndc, 0.5, 1.0);
+    let d = normalize(b.xyz / b.w - a.xyz / a.w);
+    // Row 0 straight up, the middle row the horizon; the middle column looks along -Z,
+    // a quarter further along +X.
+    let u = 0.5 + atan2(d.x, -d.z) / (2.0 * PI);
+    let v = acos(clamp(d.y, -1.0, 1.0)) / PI;
+    // Level 0 only: the seam where u wraps would otherwise pick the smallest mip level.
+    let c = textureSampleLevel(base_tex, base_sampler, vec2<f32>(u, v), 0.0);
     return vec4<f32>(srgb(c.rgb), 1.0);
 }
 
