@@ -108,3 +108,35 @@ fn set_environment_accepts_a_png_path_and_locates_bad_arguments() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.starts_with("missing.lua:2:"), "{err}");
 }
+
+#[test]
+fn the_sky_example_writes_its_environment() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sky.glb");
+    let out_s = out.to_string_lossy().to_string();
+    let o = pge(&[
+        "run",
+        "scripts/examples/sky.lua",
+        "-o",
+        out_s.as_str(),
+        "-q",
+        "--set",
+        "width=64",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let gltf = gltf::Gltf::open(&out).expect("valid glTF");
+    let extras: serde_json::Value = serde_json::from_str(
+        gltf.document
+            .as_json()
+            .extras
+            .as_ref()
+            .expect("root extras")
+            .get(),
+    )
+    .expect("json");
+    let index = extras["pge"]["environment"]["image"]
+        .as_u64()
+        .expect("an environment image") as usize;
+    assert!(gltf.images().nth(index).is_some());
+    assert_eq!(gltf.nodes().count(), 9, "nine stones");
+}

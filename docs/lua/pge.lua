@@ -197,6 +197,11 @@ function Model:triangleCount() end
 function Model:meshCount() end
 ---@return integer
 function Model:instanceCount() end
+---Gives the model an equirectangular sky (row 0 straight up, the middle row the horizon):
+---written to the glb as an image named by `extras.pge.environment`, drawn by the preview
+---behind the model.
+---@param image string|pge.Image|pge.Texture a PNG path relative to the script, or anything with :pngBytes()
+function Model:setEnvironment(image) end
 ---@return pge.Model
 function Model:model() end
 
