@@ -63,8 +63,8 @@ struct GpuMesh {
     is_leaf: bool,
     /// Edge list for the wireframe, built when first needed.
     edges: Option<(wgpu::Buffer, u32)>,
-    /// A quarter of the leaves (vertices, indices, index count), for frames drawn while the
-    /// camera moves.
+    /// An eighth of the leaves or the largest eighth of a big bark mesh (vertices, indices,
+    /// index count), for frames drawn while the camera moves.
     coarse: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
@@ -497,8 +497,9 @@ impl Renderer {
     }
 
     /// Draws the model seen by `view_proj` into a `size` pixel texture and returns the egui
-    /// texture showing it. While the camera is `moving`, a quarter of the leaves are drawn
-    /// (software renderers cannot turn a 100 000-leaf tree smoothly otherwise).
+    /// texture showing it. While the camera is `moving`, an eighth of the leaves and of a big
+    /// bark mesh are drawn (software renderers cannot turn a 100 000-leaf tree smoothly
+    /// otherwise).
     pub fn render(
         &mut self,
         egui_renderer: &mut egui_wgpu::Renderer,

@@ -44,8 +44,9 @@ pub struct SceneMesh {
     pub double_sided: bool,
     /// Foliage, hidden by the "leaves" toggle: a masked material or a name saying so.
     pub is_leaf: bool,
-    /// For foliage: a quarter of the leaves (triangle pairs) as a compact mesh of their own
-    /// (interleaved vertices, indices), drawn while the camera moves. Compact, because a
+    /// For foliage: an eighth of the leaves (triangle pairs); for a big bark mesh: its
+    /// largest eighth of triangles. A compact mesh of its own (interleaved vertices,
+    /// indices), drawn while the camera moves. Compact, because a
     /// software renderer shades every vertex in the index range, used or not.
     pub coarse: Option<(Vec<f32>, Vec<u32>)>,
 }
@@ -130,8 +131,13 @@ impl Scene {
                     .clone()
             });
             let vertices = interleave(mesh);
-            let coarse = (is_leaf(mesh) && mesh.primitive == Primitive::Triangles)
-                .then(|| coarse_leaves(&vertices, &mesh.indices));
+            let coarse = if mesh.primitive != Primitive::Triangles {
+                None
+            } else if is_leaf(mesh) {
+                Some(coarse_leaves(&vertices, &mesh.indices))
+            } else {
+                coarse_bark(&vertices, &mesh.indices)
+            };
             meshes.push(SceneMesh {
                 vertices,
                 indices: mesh.indices.clone(),
@@ -220,7 +226,43 @@ fn coarse_leaves(vertices: &[f32], indices: &[u32]) -> (Vec<f32>, Vec<u32>) {
 }
 
 /// One leaf of how many is kept while the camera moves.
-const COARSE_KEEP: usize = 4;
+const COARSE_KEEP: usize = 8;
+
+/// Bark meshes with at least this many triangles get a coarse version for moving frames.
+const COARSE_BARK_MIN: usize = 20_000;
+
+/// The largest eighth of a big bark mesh's triangles (by area: trunk and limbs stay, twigs
+/// go), compacted, for frames drawn while the camera moves; `None` for small meshes.
+fn coarse_bark(vertices: &[f32], indices: &[u32]) -> Option<(Vec<f32>, Vec<u32>)> {
+    let triangles = indices.len() / 3;
+    if triangles < COARSE_BARK_MIN {
+        return None;
+    }
+    let position = |i: u32| {
+        let at = i as usize * VERTEX_FLOATS;
+        vertices
+            .get(at..at + 3)
+            .map_or(Vec3::ZERO, Vec3::from_slice)
+    };
+    let areas: Vec<f32> = indices
+        .chunks_exact(3)
+        .map(|t| {
+            let (a, b, c) = (position(t[0]), position(t[1]), position(t[2]));
+            (b - a).cross(c - a).length_squared()
+        })
+        .collect();
+    let mut sorted = areas.clone();
+    let nth = triangles - triangles / 8;
+    sorted.select_nth_unstable_by(nth, f32::total_cmp);
+    let threshold = sorted[nth];
+    let kept: Vec<u32> = indices
+        .chunks_exact(3)
+        .zip(&areas)
+        .filter(|(_, a)| **a >= threshold)
+        .flat_map(|(t, _)| t.iter().copied())
+        .collect();
+    Some(compact(vertices, &kept))
+}
 
 /// Every [`COARSE_KEEP`]th pair of triangles (a leaf quad is one pair).
 fn coarse(indices: &[u32]) -> Vec<u32> {
@@ -390,12 +432,12 @@ mod tests {
         assert!(scene.meshes[1].is_leaf);
         let (coarse_vertices, coarse_indices) = scene.meshes[1].coarse.as_ref().expect("foliage");
         assert_eq!(coarse_indices, &[0, 1, 2]);
-        // One triangle, grown by sqrt(2) about its centre (1/3, 1/3).
+        // One triangle, grown by sqrt(COARSE_KEEP / 2) about its centre (1/3, 1/3).
         let grown: Vec<f32> = coarse_vertices
             .chunks(VERTEX_FLOATS)
             .flat_map(|v| v[0..3].to_vec())
             .collect();
-        let (t, g) = (1.0 / 3.0, 2f32.sqrt());
+        let (t, g) = (1.0 / 3.0, (COARSE_KEEP as f32 / 2.0).sqrt());
         let expect = [
             t - t * g,
             t - t * g,
@@ -419,10 +461,36 @@ mod tests {
         assert_eq!(v[VERTEX_FLOATS], VERTEX_FLOATS as f32);
         assert_eq!(v.len(), 2 * VERTEX_FLOATS);
         assert_eq!(
-            coarse(&(0..30).collect::<Vec<u32>>()),
-            vec![0, 1, 2, 3, 4, 5, 24, 25, 26, 27, 28, 29]
+            coarse(&(0..60).collect::<Vec<u32>>()),
+            vec![0, 1, 2, 3, 4, 5, 48, 49, 50, 51, 52, 53]
         );
         assert_eq!(scene.meshes[1].alpha_cutoff, Some(0.5));
+    }
+
+    #[test]
+    fn big_bark_keeps_its_largest_eighth_while_moving() {
+        // Triangle k has legs of length k + 1: the largest are the last ones.
+        let n = COARSE_BARK_MIN as u32;
+        let mut vertices = Vec::new();
+        for k in 0..n {
+            let s = (k + 1) as f32;
+            for p in [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0]] {
+                vertices.extend_from_slice(&p);
+                vertices.extend_from_slice(&[0.0; VERTEX_FLOATS - 3]);
+            }
+        }
+        let indices: Vec<u32> = (0..3 * n).collect();
+        let (v, i) = coarse_bark(&vertices, &indices).expect("big enough");
+        assert_eq!(i.len() / 3, (n / 8) as usize);
+        assert_eq!(v.len(), i.len() * VERTEX_FLOATS);
+        assert!(
+            v.chunks(VERTEX_FLOATS)
+                .all(|p| p[0] == 0.0 || p[0] > (n - n / 8) as f32)
+        );
+        assert_eq!(
+            coarse_bark(&vertices[..9 * VERTEX_FLOATS], &[0, 1, 2]),
+            None
+        );
     }
 
     #[test]
