@@ -1,7 +1,7 @@
 //! End-to-end tests of `pge preview --screenshot`: the real window, under Xvfb with Mesa's
 //! software renderer (`.ci/preview-deps` installs both).
 //!
-//! Without an X server (no `xvfb-run`, no `DISPLAY`) the tests print why and pass, unless the
+//! Without an X server (no `Xvfb`, no `DISPLAY`) the tests print why and pass, unless the
 //! `CI` variable is set: in CI they must run.
 
 use std::path::{Path, PathBuf};
@@ -9,7 +9,7 @@ use std::process::{Command, Output, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-/// One window at a time: `xvfb-run -a` picks display numbers racily.
+/// One window at a time (software rendering is slow enough with one).
 static DISPLAY_LOCK: Mutex<()> = Mutex::new(());
 
 fn root() -> PathBuf {
@@ -21,29 +21,78 @@ fn on_path(program: &str) -> bool {
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
 }
 
-/// The command that runs `pge` with a display, or why there is none.
-fn pge_with_display() -> Result<Command, String> {
+/// An Xvfb server started for one test, stopped when dropped. The server picks a free
+/// display itself (`-displayfd`), so no wrapper script and no display-number race.
+struct Xvfb {
+    child: std::process::Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Result<Xvfb, String> {
+        use std::io::BufRead;
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1280x1024x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .stdin(Stdio::null())
+            .spawn()
+            .map_err(|e| format!("cannot start Xvfb: {e}"))?;
+        let mut line = String::new();
+        let stdout = child.stdout.take().ok_or("Xvfb has no stdout")?;
+        std::io::BufReader::new(stdout)
+            .read_line(&mut line)
+            .map_err(|e| format!("Xvfb did not report its display: {e}"))?;
+        let number = line.trim();
+        if number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit()) {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!("Xvfb reported no display number ({line:?})"));
+        }
+        Ok(Xvfb {
+            display: format!(":{number}"),
+            child,
+        })
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The command that runs `pge` with a display (and the server it needs, if any), or why
+/// there is none.
+fn pge_with_display() -> Result<(Command, Option<Xvfb>), String> {
     let pge = env!("CARGO_BIN_EXE_pge");
-    if on_path("xvfb-run") && on_path("Xvfb") {
-        let mut cmd = Command::new("xvfb-run");
-        cmd.args(["-a", "-s", "-screen 0 1280x1024x24 -nolisten tcp", pge]);
-        return Ok(cmd);
+    if on_path("Xvfb") {
+        let server = Xvfb::start()?;
+        let mut cmd = Command::new(pge);
+        cmd.env("DISPLAY", &server.display);
+        return Ok((cmd, Some(server)));
     }
     if std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty()) {
-        return Ok(Command::new(pge));
+        return Ok((Command::new(pge), None));
     }
-    Err(
-        "no X server: xvfb-run is not installed and DISPLAY is not set (run .ci/preview-deps)"
-            .into(),
-    )
+    Err("no X server: Xvfb is not installed and DISPLAY is not set (run .ci/preview-deps)".into())
 }
 
 /// Runs `pge preview ARGS` with a display; `None` (after printing why) when the test must be
 /// skipped.
 fn preview(args: &[&str], dir: &Path) -> Option<Output> {
     let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let mut cmd = match pge_with_display() {
-        Ok(cmd) => cmd,
+    let (mut cmd, _server) = match pge_with_display() {
+        Ok(found) => found,
         Err(why) if std::env::var_os("CI").is_none() => {
             eprintln!("skipping the preview window test: {why}");
             return None;
