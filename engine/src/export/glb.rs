@@ -39,6 +39,13 @@ fn raw(value: &JsonValue) -> Result<json::Extras> {
         .map_err(|e| Error::Export(e.to_string()))
 }
 
+/// The index already written for `item` (the same `Arc` or an equal value), if any.
+fn written<T: PartialEq, I: Copy>(list: &[(Arc<T>, I)], item: &Arc<T>) -> Option<I> {
+    list.iter()
+        .find(|(x, _)| Arc::ptr_eq(x, item) || **x == **item)
+        .map(|(_, i)| *i)
+}
+
 impl Builder {
     fn view(
         &mut self,
@@ -124,12 +131,8 @@ impl Builder {
     /// The embedded PNG image of `tex`, written once however many textures (and the
     /// environment) use it.
     fn image(&mut self, tex: &Arc<Texture>) -> json::Index<json::Image> {
-        if let Some((_, i)) = self
-            .images
-            .iter()
-            .find(|(t, _)| Arc::ptr_eq(t, tex) || **t == **tex)
-        {
-            return *i;
+        if let Some(i) = written(&self.images, tex) {
+            return i;
         }
         let view = self.view(&tex.png, None);
         let index = self.root.push(json::Image {
@@ -145,12 +148,8 @@ impl Builder {
     }
 
     fn texture(&mut self, tex: &Arc<Texture>) -> json::Index<json::Texture> {
-        if let Some((_, i)) = self
-            .textures
-            .iter()
-            .find(|(t, _)| Arc::ptr_eq(t, tex) || **t == **tex)
-        {
-            return *i;
+        if let Some(i) = written(&self.textures, tex) {
+            return i;
         }
         let image = self.image(tex);
         let sampler = *self.sampler.get_or_insert_with(|| {
@@ -174,12 +173,8 @@ impl Builder {
     }
 
     fn material(&mut self, m: &Arc<Material>) -> json::Index<json::Material> {
-        if let Some((_, i)) = self
-            .materials
-            .iter()
-            .find(|(x, _)| Arc::ptr_eq(x, m) || **x == **m)
-        {
-            return *i;
+        if let Some(i) = written(&self.materials, m) {
+            return i;
         }
         let base_color_texture = m.texture.as_ref().map(|t| json::texture::Info {
             index: self.texture(t),
