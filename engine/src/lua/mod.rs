@@ -15,21 +15,29 @@ pub mod options;
 pub mod params;
 pub(crate) mod random;
 mod sandbox;
+pub mod services;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
 pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
-pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
+pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};
 pub use options::{Bounds, KeyStyle, Options};
-pub use random::{LuaRng, swap_rng, uniform};
+pub use random::{LuaRng, current_uniform, swap_rng, uniform};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub use sandbox::{resolve_path, writable_path};
+pub use services::{
+    DefaultInterpreter, InstanceFactory, ModelMaker, ReadOnlyPhase, check_mutable,
+    default_instance, interpreters, read_only_phase, register_interpreter, register_model_maker,
+    set_default_instance,
+};
 
 use crate::RunContext;
 
 /// The run context of the session this Lua state belongs to (seed, `--steps`, deadline,
-/// module cap, cancel flag).
+/// module cap, cancel flag): what a method called from a script (`turtle:model()`,
+/// `algorithm:model()`) runs with. Code that is handed a [`RunContext`] (an algorithm's
+/// `init`, `step`, `finish`) uses that one instead.
 #[must_use]
 pub fn run_context(lua: &mlua::Lua) -> RunContext {
     lua.app_data_ref::<state::SessionState>()

@@ -31,7 +31,7 @@
 //! let e = session.eval::<String>("return pge.Forest{ minDistanse = 3 }").unwrap_err();
 //! assert_eq!(
 //!     e.to_string(),
-//!     "eval:1: pge.Forest: unknown option 'minDistanse' (known: minDistance, species, layout)"
+//!     "eval:1: pge.Forest: unknown option 'minDistanse': 'minDistanse' is not an option (known: minDistance, species, layout)"
 //! );
 //! ```
 //!
@@ -40,7 +40,9 @@
 //! - wrong type or range: `pge.Forest: minDistance must be a number > 0, got -3` (`got` is
 //!   the number, the quoted string for choices and colours, or the type name);
 //! - missing: `pge.shape.sphere: radius is required (a number > 0)`;
-//! - unknown key: `pge.Forest: unknown option 'minDistanse' (known: minDistance, species)`;
+//! - unknown key: `pge.Forest: unknown option 'minDistanse': 'minDistanse' is not an option
+//!   (known: minDistance, species)` (both phrasings plugins used before, so that messages
+//!   users have seen still read the same);
 //! - not a table: `pge.Forest takes a table of options, got number`.
 //!
 //! Nested tables ([`Options::table`]) name their options by path (`leaves.perTip`).
@@ -135,6 +137,17 @@ impl Options {
     pub fn new(lua: &Lua, value: Value, what: &str) -> mlua::Result<Options> {
         match value {
             Value::Nil => Ok(Options::build(lua, None, what)),
+            Value::Table(t) => Ok(Options::build(lua, Some(t), what)),
+            other => Err(script_error(
+                lua,
+                format!("{what} takes a table of options, got {}", other.type_name()),
+            )),
+        }
+    }
+
+    /// The options of constructor `what`, which must be a table: nil is an error too.
+    pub fn table_required(lua: &Lua, value: Value, what: &str) -> mlua::Result<Options> {
+        match value {
             Value::Table(t) => Ok(Options::build(lua, Some(t), what)),
             other => Err(script_error(
                 lua,
@@ -394,7 +407,9 @@ impl Options {
         self.vec3_of(key, &v)
     }
 
-    fn vec3_of(&self, key: &str, v: &Value) -> mlua::Result<Option<Vec3>> {
+    /// A vector as [`Options::vec3`] reads it, from a value found elsewhere (a list's items);
+    /// `key` names it in errors (`roots[2]`).
+    pub fn vec3_of(&self, key: &str, v: &Value) -> mlua::Result<Option<Vec3>> {
         const NEED: &str = "a vector {x, y, z}";
         match v {
             Value::Nil => Ok(None),
@@ -491,7 +506,8 @@ impl Options {
     }
 
     /// Refuses every key that no getter asked for (and that [`Options::allow`] did not
-    /// allow): `unknown option 'minDistanse' (known: minDistance, species)`. Positional
+    /// allow): `unknown option 'minDistanse': 'minDistanse' is not an option (known:
+    /// minDistance, species)`. Positional
     /// values declared with [`Options::positional`] are known.
     pub fn finish(&self) -> mlua::Result<()> {
         let Some(t) = &self.table else {
@@ -511,9 +527,9 @@ impl Options {
                     Value::Integer(i) => format!("[{i}]"),
                     other => format!("[{}]", other.type_name()),
                 };
+                let key = format!("{}{key}", self.prefix);
                 return Err(self.error(format!(
-                    "unknown option '{}{key}' (known: {})",
-                    self.prefix,
+                    "unknown option '{key}': '{key}' is not an option (known: {})",
                     known.join(", ")
                 )));
             }
@@ -761,7 +777,7 @@ mod tests {
             .expect_err("extra");
         assert_eq!(
             e.to_string(),
-            "eval:1: pge.P: unknown option '[3]' (known: center, radius)"
+            "eval:1: pge.P: unknown option '[3]': '[3]' is not an option (known: center, radius)"
         );
     }
 
@@ -789,7 +805,7 @@ mod tests {
         );
         assert_eq!(
             read("return read{ leaves = { sise = 2 } }", f),
-            Err("eval:1: pge.Test: unknown option 'leaves.sise' (known: size)".into())
+            Err("eval:1: pge.Test: unknown option 'leaves.sise': 'leaves.sise' is not an option (known: size)".into())
         );
         assert_eq!(
             read("return read{ leaves = 3 }", f),
@@ -797,7 +813,10 @@ mod tests {
         );
         assert_eq!(
             read("return read{ leaf = {} }", f),
-            Err("eval:1: pge.Test: unknown option 'leaf' (known: leaves)".into())
+            Err(
+                "eval:1: pge.Test: unknown option 'leaf': 'leaf' is not an option (known: leaves)"
+                    .into()
+            )
         );
     }
 

@@ -8,7 +8,7 @@ use glam::{Vec3, Vec4};
 use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
-    LuaMesh, LuaModel, LuaVec3, resolve_path, script_error, to_model, writable_path,
+    LuaMesh, LuaModel, LuaVec3, Options, resolve_path, script_error, to_model, writable_path,
 };
 
 use crate::{Image, Lines};
@@ -109,7 +109,7 @@ pub struct LuaLines(pub Rc<RefCell<Lines>>);
 impl UserData for LuaLines {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("add", |lua, me, (a, b, c): (Value, Value, Value)| {
-            pge_lsystem::check_mutable(lua, "lines:add")?;
+            pge_engine::lua::check_mutable(lua, "lines:add")?;
             let a = vec3(lua, a, "add(a, b [, colour])")?;
             let b = vec3(lua, b, "add(a, b [, colour])")?;
             let c = match c {
@@ -122,7 +122,7 @@ impl UserData for LuaLines {
         });
         m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
         m.add_method("clear", |lua, me, ()| {
-            pge_lsystem::check_mutable(lua, "lines:clear")?;
+            pge_engine::lua::check_mutable(lua, "lines:clear")?;
             me.0.borrow_mut().clear();
             Ok(())
         });
@@ -205,7 +205,7 @@ impl UserData for LuaImage {
             })
         });
         m.add_method("set", |lua, me, args: MultiValue| {
-            pge_lsystem::check_mutable(lua, "image:set")?;
+            pge_engine::lua::check_mutable(lua, "image:set")?;
             let args: Vec<Value> = args.into_iter().collect();
             if args.len() < 3 {
                 return Err(script_error(
@@ -229,7 +229,7 @@ impl UserData for LuaImage {
                 .map_err(|e| script_error(lua, format!("set: {e}")))
         });
         m.add_method("fill", |lua, me, c: Value| {
-            pge_lsystem::check_mutable(lua, "image:fill")?;
+            pge_engine::lua::check_mutable(lua, "image:fill")?;
             let px = rgba_bytes(lua, &c, "fill(colour)")?;
             me.0.borrow_mut().fill(px);
             Ok(())
@@ -338,29 +338,16 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
         "Lines",
         lua.create_function(|lua, t: Value| {
-            let color = match &t {
+            let o = Options::new(lua, t, "pge.Lines")?;
+            let color = match o.value("color")? {
                 Value::Nil => Vec4::ONE,
-                Value::Table(t) => {
-                    for pair in t.pairs::<Value, Value>() {
-                        let (k, _) = pair?;
-                        if !matches!(&k, Value::String(s) if s.to_str().is_ok_and(|s| &*s == "color")) {
-                            return Err(script_error(lua, "pge.Lines: unknown option (options: color)"));
-                        }
-                    }
-                    match t.raw_get::<Value>("color")? {
-                        Value::Nil => Vec4::ONE,
-                        c => linear(lua, &c, "pge.Lines: color")?,
-                    }
-                }
-                other => {
-                    return Err(script_error(
-                        lua,
-                        format!("pge.Lines: expected an options table or nothing, got {}", other.type_name()),
-                    ));
-                }
+                c => linear(lua, &c, "pge.Lines: color")?,
             };
+            o.finish()?;
             let max = memory_budget(lua) / Lines::BYTES_PER_SEGMENT;
-            Ok(LuaLines(Rc::new(RefCell::new(Lines::with_max_segments(color, max)))))
+            Ok(LuaLines(Rc::new(RefCell::new(Lines::with_max_segments(
+                color, max,
+            )))))
         })?,
     )?;
     let image = lua.create_table()?;

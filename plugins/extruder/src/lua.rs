@@ -7,7 +7,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Material, Model};
-use pge_engine::lua::{LuaMat4, LuaMesh, LuaModel, LuaVec3, material_from_table, script_error};
+use pge_engine::lua::{
+    LuaMat4, LuaMesh, LuaModel, LuaVec3, Options, material_from_table, script_error,
+};
 
 use crate::{Extruder, ExtruderOptions, MatrixManipulator};
 
@@ -95,7 +97,7 @@ impl LuaMatrixManipulator {
 
 /// Refuses a change while an L-system's rewriting rule runs (`this` is read-only there).
 fn guard(lua: &Lua, what: &str) -> mlua::Result<()> {
-    pge_lsystem::check_mutable(lua, what)
+    pge_engine::lua::check_mutable(lua, what)
 }
 
 fn matrix_op(
@@ -304,62 +306,29 @@ fn model_of(e: &Extruder) -> Model {
     }
 }
 
-fn options(lua: &Lua, t: Option<Table>) -> mlua::Result<ExtruderOptions> {
-    let mut o = ExtruderOptions::default();
-    let Some(t) = t else { return Ok(o) };
-    for pair in t.pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let known = matches!(&k, Value::String(s) if matches!(s.to_str().as_deref(), Ok("smooth" | "caps" | "material" | "color")));
-        if !known {
-            let name = match &k {
-                Value::String(s) => s.to_string_lossy(),
-                other => format!("{other:?}"),
-            };
-            return Err(script_error(
-                lua,
-                format!(
-                    "pge.Extruder: unknown option '{name}' (options: smooth, caps, color, material)"
-                ),
-            ));
-        }
+/// `pge.Extruder{ smooth =, caps =, material =, color = }`.
+fn options(o: &Options) -> mlua::Result<ExtruderOptions> {
+    let mut options = ExtruderOptions::default();
+    if let Some(smooth) = o.boolean("smooth")? {
+        options.smooth = smooth;
     }
-    let flag = |key: &str, default: bool| -> mlua::Result<bool> {
-        match t.raw_get::<Value>(key)? {
-            Value::Nil => Ok(default),
-            Value::Boolean(b) => Ok(b),
-            other => Err(script_error(
-                lua,
-                format!(
-                    "pge.Extruder: {key} must be true or false, got {}",
-                    other.type_name()
-                ),
-            )),
-        }
-    };
-    o.smooth = flag("smooth", o.smooth)?;
-    o.caps = flag("caps", o.caps)?;
-    let mut material = match t.raw_get::<Value>("material")? {
+    if let Some(caps) = o.boolean("caps")? {
+        options.caps = caps;
+    }
+    let mut material = match o.value("material")? {
         Value::Nil => Material {
             name: "extrusion".into(),
             ..Material::default()
         },
-        Value::Table(mt) => material_from_table(lua, &mt)?,
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "pge.Extruder: material must be a table, got {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        Value::Table(mt) => material_from_table(o.lua(), &mt)?,
+        other => return Err(o.wrong_type("material", "a table", &other)),
     };
-    match t.raw_get::<Value>("color")? {
-        Value::Nil => {}
-        c => material.base_color = colour(lua, &c, "pge.Extruder: color")?.to_array(),
+    if let Some(c) = o.color("color")? {
+        material.base_color = c;
     }
-    o.material = Arc::new(material);
-    Ok(o)
+    o.finish()?;
+    options.material = Arc::new(material);
+    Ok(options)
 }
 
 /// The session's memory limit: what one object's Rust-side buffers may take at most.
@@ -372,20 +341,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
         "Extruder",
         lua.create_function(|lua, t: Value| {
-            let t = match t {
-                Value::Nil => None,
-                Value::Table(t) => Some(t),
-                other => {
-                    return Err(script_error(
-                        lua,
-                        format!(
-                            "pge.Extruder: expected an options table or nothing, got {}",
-                            other.type_name()
-                        ),
-                    ));
-                }
-            };
-            let mut options = options(lua, t)?;
+            let mut options = options(&Options::new(lua, t, "pge.Extruder")?)?;
             options.max_points = memory_budget(lua) / Extruder::MESH_BYTES_PER_POINT;
             Ok(LuaExtruder(Rc::new(RefCell::new(Extruder::new(options)))))
         })?,

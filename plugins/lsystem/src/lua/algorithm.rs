@@ -7,15 +7,19 @@ use std::rc::Rc;
 
 use mlua::{AnyUserData, Function, Lua, MultiValue, ObjectLike, Table, Value, WeakLua};
 use pge_engine::geometry::Model;
-use pge_engine::lua::{script_error, swap_rng, to_engine_error, to_model};
+use pge_engine::lua::{script_error, swap_rng, to_engine_error, to_model_in};
 use pge_engine::{Algorithm, Error, Location, RunContext, Step};
 use rand_mt::Mt;
 
 use super::object::{Axiom, Config, LuaIRule, LuaRule};
+use super::session_symbols;
 use super::symbols::{SymbolTags, tags};
-use super::{DefaultInterpreter, deriving_cell, interpreters, session_symbols};
 use crate::system::uniform;
 use crate::{Host, LsError, ModuleString, StepOptions, Sym, SymbolTable, System};
+use pge_engine::lua::{
+    DefaultInterpreter, ReadOnlyPhase, check_mutable, current_uniform, default_instance,
+    interpreters, read_only_phase,
+};
 
 /// Why a step stopped: a Lua error, an engine error, or a rewriting error.
 #[derive(Debug)]
@@ -56,7 +60,6 @@ pub struct LSystemAlgorithm {
     skip_interpretation: bool,
     irules_by_sym: Vec<Vec<u32>>,
     parse_cache: HashMap<String, ModuleString>,
-    random_fn: Option<Function>,
     lua_involved: bool,
     max_modules: usize,
     interpreters: Vec<DefaultInterpreter>,
@@ -131,7 +134,6 @@ struct LuaHost<'a> {
     parse_cache: &'a mut HashMap<String, ModuleString>,
     rng: &'a mut Mt,
     rng_in_lua: bool,
-    random_fn: Option<&'a Function>,
     this_rw: &'a Value,
     this_ro: &'a Value,
     this_is_ro: Option<bool>,
@@ -141,7 +143,7 @@ struct LuaHost<'a> {
     interpret: bool,
     numbers: Vec<f64>,
     tags: Rc<RefCell<SymbolTags>>,
-    deriving: Rc<RefCell<Option<Rc<str>>>>,
+    read_only: ReadOnlyPhase,
     /// `function(f, ...) return f({...}) end` for 0 to 3 numeric parameters.
     callers: &'a [Function],
     /// Bracket pairs of the string interpreted so far (for IRules with a left context).
@@ -379,9 +381,12 @@ impl Host for LuaHost<'_> {
     type Error = HostError;
 
     fn random(&mut self) -> f64 {
-        match (self.rng_in_lua, self.random_fn) {
-            (true, Some(f)) => f.call::<f64>(()).unwrap_or_default(),
-            _ => uniform(self.rng),
+        // Inside rule calls the instance's generator is the session's current one (see
+        // `with_rng`); elsewhere it is ours.
+        if self.rng_in_lua {
+            current_uniform(self.lua)
+        } else {
+            uniform(self.rng)
         }
     }
 
@@ -400,7 +405,7 @@ impl Host for LuaHost<'_> {
     ) -> Result<bool, HostError> {
         let r: &LuaRule = &self.cfg.rrules[rule as usize];
         self.set_this(true)?;
-        *self.deriving.borrow_mut() = Some(r.text.clone());
+        self.read_only.enter(r.text.clone());
         let m = matched[0];
         let result = if matched.len() == 1 && src.external(m).is_none() && src.params(m).len() <= 3
         {
@@ -426,7 +431,7 @@ impl Host for LuaHost<'_> {
             }
             r.func.call::<Value>(MultiValue::from_vec(args))
         };
-        *self.deriving.borrow_mut() = None;
+        self.read_only.leave();
         let v = result?;
         if v.is_nil() {
             return Ok(false);
@@ -465,7 +470,6 @@ impl LSystemAlgorithm {
             skip_interpretation,
             irules_by_sym: Vec::new(),
             parse_cache: HashMap::new(),
-            random_fn: None,
             lua_involved: false,
             max_modules: 10_000_000,
             interpreters: Vec::new(),
@@ -533,6 +537,13 @@ impl LSystemAlgorithm {
                     .unwrap_or_default(),
                 e.to_string(),
             ),
+            HostError::Ls(LsError::TooManyModules { step, count, max }) => Error::ModuleLimit {
+                location: self.cfg.location.clone(),
+                system: self.cfg.name.clone(),
+                step,
+                count,
+                max,
+            },
             HostError::Ls(e) => Error::script(
                 self.cfg.location.clone(),
                 format!("L-system '{}': {e}", self.cfg.name),
@@ -568,7 +579,6 @@ impl LSystemAlgorithm {
             parse_cache: &mut self.parse_cache,
             rng: &mut self.rng,
             rng_in_lua,
-            random_fn: self.random_fn.as_ref(),
             this_rw: &self.this_rw,
             this_ro: &self.this_ro,
             this_is_ro: None,
@@ -578,7 +588,7 @@ impl LSystemAlgorithm {
             interpret,
             numbers: Vec::new(),
             tags: tags(lua),
-            deriving: deriving_cell(lua),
+            read_only: read_only_phase(lua),
             callers: &self.callers,
             imatches: Vec::new(),
             istack: Vec::new(),
@@ -620,7 +630,7 @@ impl LSystemAlgorithm {
                 let fail =
                     lua.create_function(|lua, (_, k): (Value, Value)| -> mlua::Result<()> {
                         let key = k.to_string().unwrap_or_else(|_| "?".into());
-                        super::check_mutable(lua, &format!("writing this.{key}"))?;
+                        check_mutable(lua, &format!("writing this.{key}"))?;
                         Err(script_error(lua, format!("this.{key} is read-only here")))
                     })?;
                 let meta = lua.create_table()?;
@@ -678,11 +688,6 @@ impl LSystemAlgorithm {
         self.cfg.system.prepare(&self.symbols.borrow())?;
         self.max_modules = self.cfg.max_modules.unwrap_or(ctx.max_modules);
         self.rng = instance_rng(ctx.seed, self.cfg.index);
-        self.random_fn = lua
-            .globals()
-            .get::<Table>("pge")
-            .and_then(|p| p.get::<Function>("random"))
-            .ok();
         self.lua_involved = !self.cfg.rrules.is_empty()
             || !self.cfg.irules.is_empty()
             || self.cfg.before.is_some()
@@ -701,9 +706,10 @@ impl LSystemAlgorithm {
         let instance = self.with_rng(lua, |_| -> mlua::Result<Value> {
             match &create {
                 Some(f) => f.call::<Value>(()),
-                None => match lua.globals().get::<Table>("pge")?.get::<Value>("turtle")? {
-                    Value::Function(t) => t.call::<Value>(lua.create_table()?),
-                    _ => Ok(Value::Table(lua.create_table()?)),
+                // The default instance a plugin registered with the engine (the turtle).
+                None => match default_instance(lua)? {
+                    Some(instance) => Ok(instance),
+                    None => Ok(Value::Table(lua.create_table()?)),
                 },
             }
         })?;
@@ -875,7 +881,7 @@ impl LSystemAlgorithm {
             _ => false,
         };
         let mut model = if has_model {
-            to_model(&self.this_rw)?
+            to_model_in(lua, &self.this_rw, ctx)?
         } else {
             Model::new()
         };
@@ -894,7 +900,7 @@ impl LSystemAlgorithm {
         let outer_this: Value = lua.globals().raw_get("this").unwrap_or(Value::Nil);
         let result = f(self, &lua, ctx);
         let _ = lua.globals().raw_set("this", outer_this);
-        *deriving_cell(&lua).borrow_mut() = None;
+        read_only_phase(&lua).leave();
         result.map_err(|e| self.engine_error(&lua, e))
     }
 }

@@ -5,9 +5,10 @@ use pge_engine::Location;
 use pge_engine::lua::{AlgorithmHandle, caller_location, script_error};
 
 use super::algorithm::LSystemAlgorithm;
-use super::{check_mutable, session_symbols, with_shared};
+use super::{session_symbols, with_shared};
 use crate::classic;
 use crate::{LsError, Sym, System};
+use pge_engine::lua::check_mutable;
 
 /// Where an axiom comes from.
 #[derive(Clone, Debug)]
@@ -240,7 +241,7 @@ impl UserData for LuaLSystem {
             };
             pge_engine::algorithm::run(&mut algorithm, &ctx, &mut |_| {})
                 .map(pge_engine::lua::LuaModel)
-                .map_err(|e| mlua::Error::RuntimeError(e.to_string()))
+                .map_err(mlua::Error::external)
         });
     }
 }
