@@ -3,7 +3,10 @@
 //! ([`pge_engine::lua::services`]).
 
 mod algorithm;
+mod config;
 mod derive;
+mod host;
+mod interpret;
 mod object;
 mod symbols;
 
