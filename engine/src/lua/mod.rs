@@ -7,6 +7,7 @@
 //! resolve files with [`resolve_path`].
 
 mod algorithm;
+mod args;
 mod errors;
 mod math;
 mod model;
@@ -19,6 +20,7 @@ pub mod services;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
+pub use args::{conversion_message, finite_f32, finite_number, vec3_arg};
 pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};
@@ -51,29 +53,6 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
 pub fn memory_limit(lua: &mlua::Lua) -> usize {
     lua.app_data_ref::<state::SessionState>()
         .map_or(crate::Limits::default().memory, |s| s.memory_limit)
-}
-
-/// A finite number from a script value, or a `FILE:LINE:` error that names `what` (the
-/// method and argument) and says what was wrong.
-pub fn finite_number(lua: &mlua::Lua, v: &mlua::Value, what: &str) -> mlua::Result<f64> {
-    let x = match v {
-        mlua::Value::Integer(i) => *i as f64,
-        mlua::Value::Number(n) => *n,
-        other => {
-            return Err(script_error(
-                lua,
-                format!("{what}: expected a number, got {}", other.type_name()),
-            ));
-        }
-    };
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(script_error(
-            lua,
-            format!("{what}: the number is NaN or infinite"),
-        ))
-    }
 }
 
 /// Registers the support library into the `pge` table.

@@ -8,15 +8,11 @@ use glam::{Vec2, Vec3, Vec4};
 use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Material, Model};
 use pge_engine::lua::{
-    LuaMat4, LuaMesh, LuaModel, LuaVec3, Options, material_from_table, script_error,
+    LuaMat4, LuaMesh, LuaModel, LuaVec3, Options, conversion_message, finite_f32,
+    material_from_table, script_error,
 };
 
 use crate::{Extruder, ExtruderOptions, MatrixManipulator};
-
-/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
-fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
-    pge_engine::lua::finite_number(lua, v, what).map(|x| x as f32)
-}
 
 /// A vector given as a `pge.vec3`, a table, or three numbers.
 fn vector(lua: &Lua, args: &[Value], what: &str) -> mlua::Result<Vec3> {
@@ -29,28 +25,18 @@ fn vector(lua: &Lua, args: &[Value], what: &str) -> mlua::Result<Vec3> {
                 ));
             }
             Ok(Vec3::new(
-                number(lua, &args[0], what)?,
-                number(lua, &args[1], what)?,
-                number(lua, &args[2], what)?,
+                finite_f32(lua, &args[0], what)?,
+                finite_f32(lua, &args[1], what)?,
+                finite_f32(lua, &args[2], what)?,
             ))
         }
         [v, ..] => LuaVec3::from_lua(v.clone(), lua)
             .map(|v| v.0)
-            .map_err(|e| script_error(lua, format!("{what}: {}", short(&e)))),
+            .map_err(|e| script_error(lua, format!("{what}: {}", conversion_message(&e)))),
         [] => Err(script_error(
             lua,
             format!("{what}: expected x, y, z or a vector"),
         )),
-    }
-}
-
-/// The message of a conversion error without mlua's framing.
-fn short(e: &mlua::Error) -> String {
-    match e {
-        mlua::Error::FromLuaConversionError {
-            message: Some(m), ..
-        } => m.clone(),
-        other => other.to_string(),
     }
 }
 
@@ -130,7 +116,7 @@ impl UserData for LuaMatrixManipulator {
         });
         m.add_method("rotate", |lua, me, args: MultiValue| {
             let args: Vec<Value> = args.into_iter().collect();
-            let deg = number(
+            let deg = finite_f32(
                 lua,
                 args.first().unwrap_or(&Value::Nil),
                 "rotate(degrees, axis)",
@@ -144,7 +130,7 @@ impl UserData for LuaMatrixManipulator {
             ("rotateZ", Vec3::Z),
         ] {
             m.add_method(name, move |lua, me, deg: Value| {
-                let deg = number(lua, &deg, name)?;
+                let deg = finite_f32(lua, &deg, name)?;
                 matrix_op(lua, me, name, |m| m.rotate(axis, deg))
             });
         }
@@ -152,7 +138,7 @@ impl UserData for LuaMatrixManipulator {
             let args: Vec<Value> = args.into_iter().collect();
             let factors = match args.as_slice() {
                 [v @ (Value::Integer(_) | Value::Number(_))] => {
-                    Vec3::splat(number(lua, v, "scale")?)
+                    Vec3::splat(finite_f32(lua, v, "scale")?)
                 }
                 rest => vector(lua, rest, "scale(s) or scale(x, y, z)")?,
             };
@@ -160,7 +146,7 @@ impl UserData for LuaMatrixManipulator {
         });
         for (name, axis) in [("scaleX", 0usize), ("scaleY", 1), ("scaleZ", 2)] {
             m.add_method(name, move |lua, me, f: Value| {
-                let f = number(lua, &f, name)?;
+                let f = finite_f32(lua, &f, name)?;
                 let mut v = Vec3::ONE;
                 v[axis] = f;
                 matrix_op(lua, me, name, |m| m.scale(v))
@@ -172,7 +158,7 @@ impl UserData for LuaMatrixManipulator {
             matrix_op(lua, me, "translate", |m| m.translate(v))
         });
         m.add_method("advance", |lua, me, d: Value| {
-            let d = number(lua, &d, "advance")?;
+            let d = finite_f32(lua, &d, "advance")?;
             matrix_op(lua, me, "advance", |m| m.advance(d))
         });
         m.add_method("getMatrix", |_, me, ()| {
@@ -180,7 +166,7 @@ impl UserData for LuaMatrixManipulator {
         });
         m.add_method("setMatrix", |lua, me, mat: Value| {
             let mat = LuaMat4::from_lua(mat, lua)
-                .map_err(|e| script_error(lua, format!("setMatrix: {}", short(&e))))?;
+                .map_err(|e| script_error(lua, format!("setMatrix: {}", conversion_message(&e))))?;
             matrix_op(lua, me, "setMatrix", |m| m.set_matrix(mat.0))
         });
         m.add_method("transformPoint", |lua, me, args: MultiValue| {
@@ -220,14 +206,14 @@ impl UserData for LuaExtruder {
             let args: Vec<Value> = args.into_iter().collect();
             let p = match args.as_slice() {
                 [x @ (Value::Integer(_) | Value::Number(_)), z, ..] => Vec2::new(
-                    number(lua, x, "addPoint2(x, z)")?,
-                    number(lua, z, "addPoint2(x, z)")?,
+                    finite_f32(lua, x, "addPoint2(x, z)")?,
+                    finite_f32(lua, z, "addPoint2(x, z)")?,
                 ),
                 [Value::Table(t)] => {
                     let (x, z): (Value, Value) = (t.raw_get(1)?, t.raw_get(2)?);
                     Vec2::new(
-                        number(lua, &x, "addPoint2{x, z}")?,
-                        number(lua, &z, "addPoint2{x, z}")?,
+                        finite_f32(lua, &x, "addPoint2{x, z}")?,
+                        finite_f32(lua, &z, "addPoint2{x, z}")?,
                     )
                 }
                 _ => return Err(script_error(lua, "addPoint2: expected x, z (two numbers)")),
@@ -240,21 +226,21 @@ impl UserData for LuaExtruder {
             extruder_op(lua, me, "addPoint3", |e| e.add_point3(p))
         });
         m.add_method("polygon", |lua, me, (n, r): (Value, Value)| {
-            let sides = number(lua, &n, "polygon(sides, radius)")?;
+            let sides = finite_f32(lua, &n, "polygon(sides, radius)")?;
             if sides.fract() != 0.0 || sides < 0.0 {
                 return Err(script_error(
                     lua,
                     format!("polygon: sides must be a whole number, got {sides}"),
                 ));
             }
-            let radius = number(lua, &r, "polygon(sides, radius)")?;
+            let radius = finite_f32(lua, &r, "polygon(sides, radius)")?;
             extruder_op(lua, me, "polygon", |e| {
                 e.set_polygon(sides as usize, radius)
             })
         });
         m.add_method("pointCount", |_, me, ()| Ok(me.0.borrow().shape().len()));
         m.add_method("extrude", |lua, me, d: Value| {
-            let d = number(lua, &d, "extrude(distance)")?;
+            let d = finite_f32(lua, &d, "extrude(distance)")?;
             extruder_op(lua, me, "extrude", |e| e.extrude(d))
         });
         m.add_method("start", |lua, me, ()| {

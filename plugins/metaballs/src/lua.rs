@@ -4,35 +4,15 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use glam::Vec3;
-use mlua::{AnyUserData, FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
+use mlua::{AnyUserData, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::RunContext;
 use pge_engine::geometry::{Material, Mesh, Model};
 use pge_engine::lua::{
-    Bounds, LuaMesh, LuaModel, LuaVec3, Options, material_from_table, run_context, script_error,
+    Bounds, LuaMesh, LuaModel, LuaVec3, Options, finite_f32, material_from_table, run_context,
+    script_error, vec3_arg,
 };
 
 use crate::{MarchError, MarchOptions, MarchingCubes, Metaballs};
-
-/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
-fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
-    pge_engine::lua::finite_number(lua, v, what).map(|x| x as f32)
-}
-
-fn short(e: &mlua::Error) -> String {
-    match e {
-        mlua::Error::FromLuaConversionError {
-            message: Some(m), ..
-        } => m.clone(),
-        other => other.to_string(),
-    }
-}
-
-fn vec3(lua: &Lua, v: Value, what: &str) -> mlua::Result<Vec3> {
-    LuaVec3::from_lua(v, lua)
-        .map(|v| v.0)
-        .map_err(|e| script_error(lua, format!("{what}: {}", short(&e))))
-}
 
 /// `pge.Metaballs{ radius = 1 }`: a field of charged particles.
 #[derive(Clone)]
@@ -44,14 +24,14 @@ impl UserData for LuaMetaballs {
             "addParticle",
             |lua, me, (pos, charge, radius): (Value, Value, Value)| {
                 pge_engine::lua::check_mutable(lua, "metaballs:addParticle")?;
-                let p = vec3(lua, pos, "addParticle(position, charge [, radius])")?;
+                let p = vec3_arg(lua, pos, "addParticle(position, charge [, radius])")?;
                 let q = match charge {
                     Value::Nil => 1.0,
-                    c => number(lua, &c, "addParticle: charge")?,
+                    c => finite_f32(lua, &c, "addParticle: charge")?,
                 };
                 let r = match radius {
                     Value::Nil => None,
-                    r => Some(number(lua, &r, "addParticle: radius")?),
+                    r => Some(finite_f32(lua, &r, "addParticle: radius")?),
                 };
                 let index =
                     me.0.borrow_mut()
@@ -61,16 +41,16 @@ impl UserData for LuaMetaballs {
             },
         );
         m.add_method("calc", |lua, me, p: Value| {
-            let p = vec3(lua, p, "calc(position)")?;
+            let p = vec3_arg(lua, p, "calc(position)")?;
             Ok(me.0.borrow().value(p))
         });
         m.add_method("gradient", |lua, me, p: Value| {
-            let p = vec3(lua, p, "gradient(position)")?;
+            let p = vec3_arg(lua, p, "gradient(position)")?;
             Ok(LuaVec3(me.0.borrow().gradient(p)))
         });
         m.add_method("getParticle", |lua, me, i: Value| {
             let n = me.0.borrow().len();
-            let i = number(lua, &i, "getParticle(i)")?;
+            let i = finite_f32(lua, &i, "getParticle(i)")?;
             if i.fract() != 0.0 || i < 1.0 || i as usize > n {
                 return Err(script_error(
                     lua,
