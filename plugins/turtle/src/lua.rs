@@ -230,61 +230,21 @@ pub(crate) fn interpret(
 
 #[cfg(test)]
 mod tests {
+    use pge_engine::lua::{interpreters, read_only_phase};
     use pge_engine::{Engine, Session, SessionOptions};
 
+    // Turtles inside L-systems are tested with both plugins in the workspace's
+    // `tests/plugins.rs`; here the turtle alone and the engine services it fills.
     fn session() -> Session {
         let engine = Engine::builder()
-            .plugin(pge_lsystem::LSystemPlugin)
             .plugin(crate::TurtlePlugin)
             .build()
             .expect("engine");
         engine.session(SessionOptions::default()).expect("session")
     }
 
-    fn model_of(s: &Session, code: &str) -> pge_engine::Result<pge_engine::geometry::Model> {
-        let v = s.eval_value(code)?;
-        let mut a = s.algorithm_from(v)?;
-        pge_engine::algorithm::run(&mut *a, &s.context(), &mut |_| {})
-    }
-
-    const PLANT: &str = r#"
-        local l = pge.LSystem("plant")
-        l:createInstance(function() return pge.turtle{ angle = 25.7, width = 0.2, sides = 5 } end)
-        l:axiom("F")
-        l:rule("F -> F[+F]F[-F]F")
-        l:iterations(2)
-        return l"#;
-
     #[test]
-    fn an_lsystem_draws_with_its_turtle_and_the_mesh_is_sound() {
-        let s = session();
-        let m = model_of(&s, PLANT).expect("grows");
-        m.validate().expect("valid");
-        assert_eq!(m.stats.modules, 61);
-        // 25 segments plus the root.
-        assert_eq!(m.stats.nodes, 26);
-        let mesh = &m.meshes[0];
-        let n = mesh.positions.len() as u32;
-        assert!(mesh.indices.iter().all(|i| *i < n));
-        assert!(mesh.normals.iter().all(|v| (v.length() - 1.0).abs() < 1e-3));
-        assert!(mesh.positions.iter().all(|p| p.is_finite()));
-        let (lo, hi) = m.bounds().expect("not empty");
-        assert!(hi.y - lo.y > 4.0, "the plant grows up: {lo} {hi}");
-    }
-
-    #[test]
-    fn the_same_seed_gives_the_same_bytes() {
-        let a = model_of(&session(), PLANT).expect("grows");
-        let b = model_of(&session(), PLANT).expect("grows");
-        let meta = Default::default();
-        assert_eq!(
-            pge_engine::export::glb_bytes(&a, &meta).expect("glb"),
-            pge_engine::export::glb_bytes(&b, &meta).expect("glb")
-        );
-    }
-
-    #[test]
-    fn turtle_methods_and_open_lsystems() {
+    fn turtle_methods() {
         let s = session();
         let y: f64 = s
             .eval(
@@ -293,49 +253,57 @@ mod tests {
             )
             .expect("runs");
         assert!((y - 2.0).abs() < 1e-6);
-        // An open L-system: the bud reads the turtle's height and stops above 3.
-        let m = model_of(
-            &s,
-            r#"local l = pge.LSystem("open")
-            l:axiom{ A{} }
-            l:RRule("A", function()
-                if this:position().y < 3 then return { F{}, A{} } end
-                return {}
-            end)
-            l:iterations(10)
-            return l"#,
-        )
-        .expect("grows");
-        assert_eq!(m.stats.modules, 3);
-        assert_eq!(m.stats.nodes, 4);
     }
 
     #[test]
-    fn a_turtle_is_read_only_during_rrules() {
-        let s = session();
-        let e = model_of(
-            &s,
-            "local l = pge.LSystem('t')\nl:axiom('A')\nl:RRule('A', function()\n  this:forward(1)\n  return 'B'\nend)\nl:iterations(1)\nreturn l",
-        )
-        .expect_err("read-only");
-        let e = e.to_string();
-        assert!(
-            e.starts_with("eval:4: RRule 'A': turtle:forward is not allowed"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn bad_options_and_commands_are_errors() {
+    fn bad_options_are_located_errors() {
         let s = session();
         let e = s
             .eval_value("return pge.turtle{ angel = 3 }")
             .expect_err("typo")
             .to_string();
         assert!(e.contains("unknown option 'angel'"), "{e}");
-        let e = model_of(&s, "local l = pge.LSystem('t')\nl:axiom('F]')\nreturn l")
-            .expect_err("pop")
+        let e = s
+            .eval_value("\nreturn pge.turtle{ angle = 0/0 }")
+            .expect_err("nan")
             .to_string();
-        assert!(e.contains("']' (pop) without a matching '['"), "{e}");
+        assert_eq!(
+            e,
+            "eval:2: pge.turtle: 'angle' must be a finite number, got NaN"
+        );
+        let e = s
+            .eval_value("return pge.turtle{ sides = 100 }")
+            .expect_err("range")
+            .to_string();
+        assert_eq!(
+            e,
+            "eval:1: pge.turtle: 'sides' must be an integer between 3 and 64, got 100"
+        );
+    }
+
+    #[test]
+    fn the_turtle_fills_the_engine_registry() {
+        let s = session();
+        let lua = s.lua();
+        let Some(mlua::Value::UserData(ud)) = pge_engine::lua::default_instance(lua).expect("made")
+        else {
+            panic!("a turtle");
+        };
+        for f in interpreters(lua) {
+            assert!(f(lua, &ud, "F", &[2.0]).expect("interprets"));
+        }
+        let t = ud.borrow::<crate::LuaTurtle>().expect("a turtle");
+        assert_eq!(t.turtle.state().position.y, 2.0);
+        drop(t);
+        // Changing a turtle during a rewriting rule is refused.
+        s.lua().globals().set("t", ud).expect("global");
+        read_only_phase(lua).enter("A".into());
+        let e = s.eval::<()>("t:forward(1)").expect_err("read-only");
+        read_only_phase(lua).leave();
+        assert!(
+            e.to_string()
+                .starts_with("eval:1: RRule 'A': turtle:forward is not allowed"),
+            "{e}"
+        );
     }
 }
