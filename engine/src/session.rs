@@ -94,6 +94,8 @@ impl Session {
             ..SessionState::default()
         });
         lua.set_app_data(CurrentRng(crate::lua::random::mt_from_seed(options.seed)));
+        // The registry of session services the plugins fill while they register.
+        lua.set_app_data(crate::lua::services::Services::default());
         install_hook(&lua).map_err(|e| Error::Plugin {
             plugin: "lua".into(),
             message: e.to_string(),
