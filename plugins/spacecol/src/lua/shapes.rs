@@ -411,3 +411,59 @@ fn call_predicate(
         }),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use pge_engine::{Engine, Session, SessionOptions};
+
+    fn session() -> Session {
+        let engine = Engine::builder()
+            .plugin(crate::SpaceColonizationPlugin)
+            .build()
+            .expect("engine");
+        engine.session(SessionOptions::default()).expect("session")
+    }
+
+    #[test]
+    fn shapes_read_named_or_positional_options_and_refuse_unknown_ones() {
+        let s = session();
+        let kind: String = s
+            .eval("return pge.shape.sphere{ {0, 1, 0}, 2 }:kind()")
+            .expect("positional");
+        assert_eq!(kind, "sphere");
+        let inside: bool = s
+            .eval("return pge.shape.box{ min = {0, 0, 0}, max = {1, 1, 1} }:contains({0.5, 0.5, 0.5})")
+            .expect("named");
+        assert!(inside);
+        let cases = [
+            (
+                "pge.shape.sphere{ centre = {0, 0, 0}, radius = 1 }",
+                "eval:1: pge.shape.sphere: unknown option 'centre': 'centre' is not an option \
+                 (known: center, radius)",
+            ),
+            (
+                "pge.shape.sphere{ center = {0, 0, 0} }",
+                "eval:1: pge.shape.sphere: radius is required (a number > 0)",
+            ),
+            (
+                "pge.shape.cone{ base = {0, 0, 0}, apex = {0, 0, 0}, radius = 1 }",
+                "eval:1: pge.shape.cone: base and apex must differ",
+            ),
+            (
+                "pge.shape.sphere(3)",
+                "eval:1: pge.shape.sphere takes a table of options, got integer",
+            ),
+            (
+                "pge.shape.difference{ 1, 2 }",
+                "eval:1: pge.shape.difference: a must be a shape (pge.shape.*), got integer",
+            ),
+        ];
+        for (code, want) in cases {
+            let e = s
+                .eval::<()>(&format!("local s = {code}"))
+                .expect_err(code)
+                .to_string();
+            assert_eq!(e, want, "{code}");
+        }
+    }
+}
