@@ -36,17 +36,20 @@ pub struct ReadOnlyPhase(Rc<RefCell<Option<Rc<str>>>>);
 
 impl ReadOnlyPhase {
     /// Enters the phase for rewriting rule `rule` (its left side, named in errors).
+    #[inline]
     pub fn enter(&self, rule: Rc<str>) {
         *self.0.borrow_mut() = Some(rule);
     }
 
     /// Leaves the phase.
+    #[inline]
     pub fn leave(&self) {
         *self.0.borrow_mut() = None;
     }
 
     /// The rule running now, if any.
     #[must_use]
+    #[inline]
     pub fn rule(&self) -> Option<Rc<str>> {
         self.0.borrow().clone()
     }
