@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 
 mod common;
 mod derive;
+mod output;
 mod preview;
 mod run;
 

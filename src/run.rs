@@ -1,15 +1,13 @@
 //! `pge run`: run a script and write its model.
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pge_engine::export::{ExportMeta, glb_bytes, obj_files};
 
 use crate::common::ScriptArgs;
+use crate::output::{export_meta, write_model};
 
 /// Arguments of `pge run`.
 #[derive(Args, Debug)]
@@ -28,22 +26,6 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same folder, so that a failure
-/// never leaves a half-written file.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir)
-        .with_context(|| format!("cannot write in {}", dir.display()))?;
-    tmp.write_all(bytes)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    tmp.persist(path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
 }
 
 fn progress_bar(quiet: bool) -> ProgressBar {
@@ -90,31 +72,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         eprintln!("{w}");
     }
     let te = Instant::now();
-    let meta = ExportMeta {
-        seed: args.script.seed,
-        params: generated
-            .params
-            .iter()
-            .map(|p| (p.name.clone(), p.value.to_json()))
-            .collect(),
-    };
-    if ext.as_deref() == Some("obj") {
-        let stem = output
-            .file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .to_string();
-        let mtl = format!("{stem}.mtl");
-        let files = obj_files(&generated.model, &mtl, &stem)?;
-        let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
-        for (name, png) in &files.textures {
-            write_atomically(&dir.join(name), png)?;
-        }
-        write_atomically(&dir.join(&mtl), files.mtl.as_bytes())?;
-        write_atomically(&output, files.obj.as_bytes())?;
-    } else {
-        write_atomically(&output, &glb_bytes(&generated.model, &meta)?)?;
-    }
+    let meta = export_meta(args.script.seed, &generated.params);
+    write_model(&generated.model, &meta, &output)?;
     generated
         .model
         .stats

@@ -12,6 +12,7 @@ use super::camera::OrbitCamera;
 use super::live::Live;
 use super::reload::{Generation, Settings, Status};
 use super::render::{Renderer, Toggles};
+use crate::output::{export_meta, write_model};
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
 /// How long after the last camera motion the viewport is drawn at full quality.
@@ -782,45 +783,11 @@ fn new_seed(old: u64) -> u64 {
     if seed == old { seed + 1 } else { seed }
 }
 
-/// Writes the generation's model to `path` (`.glb`, or `.obj` with its `.mtl` and textures).
+/// Writes the generation's model to `path` (`.glb`, or `.obj` with its `.mtl` and textures)
+/// exactly as `pge run` does.
 fn export(g: &Generation, path: &Path) -> Result<String, String> {
-    let write = |p: &Path, bytes: &[u8]| {
-        std::fs::write(p, bytes).map_err(|e| format!("{}: {e}", p.display()))
-    };
-    match path.extension().and_then(|e| e.to_str()) {
-        Some("obj") => {
-            let stem = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let mtl = path.with_extension("mtl");
-            let mtl_name = mtl
-                .file_name()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let files = pge_engine::export::obj_files(&g.model, &mtl_name, &stem)
-                .map_err(|e| e.to_string())?;
-            write(path, files.obj.as_bytes())?;
-            write(&mtl, files.mtl.as_bytes())?;
-            let dir = path.parent().unwrap_or(Path::new("."));
-            for (name, bytes) in &files.textures {
-                write(&dir.join(name), bytes)?;
-            }
-        }
-        _ => {
-            let meta = pge_engine::export::ExportMeta {
-                seed: g.settings.seed,
-                params: g
-                    .params
-                    .iter()
-                    .map(|p| (p.name.clone(), p.value.to_json()))
-                    .collect(),
-            };
-            let bytes =
-                pge_engine::export::glb_bytes(&g.model, &meta).map_err(|e| e.to_string())?;
-            write(path, &bytes)?;
-        }
-    }
+    let meta = export_meta(g.settings.seed, &g.params);
+    write_model(&g.model, &meta, path).map_err(|e| format!("{e:#}"))?;
     Ok(format!("wrote {}", path.display()))
 }
 

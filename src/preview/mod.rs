@@ -17,9 +17,11 @@
 mod app;
 pub mod camera;
 pub mod live;
+mod pipeline;
 pub mod reload;
 pub mod render;
 pub mod scene;
+mod texture;
 pub mod watch;
 pub mod worker;
 

@@ -11,14 +11,10 @@ use eframe::egui_wgpu::{self, wgpu};
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
-use super::scene::{Environment, Scene, SceneMesh, TextureData, VERTEX_FLOATS};
+use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines};
+use super::scene::{Environment, Scene, SceneMesh, TextureData};
+use super::texture::{Samplers, upload_texture};
 
-/// The viewport texture holds sRGB-encoded values in a plain format: egui samples every
-/// texture as gamma-encoded colour. The shaders encode.
-const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-/// Model textures are sRGB images, decoded to linear when sampled for lighting.
-const IMAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Background without an environment, sRGB-encoded.
 const CLEAR: wgpu::Color = wgpu::Color {
     r: 0.11,
@@ -102,6 +98,28 @@ pub struct Renderer {
     texture_id: Option<egui::TextureId>,
 }
 
+/// The buffer of the shader's `Globals` and its bind group (group 0).
+fn globals_binding(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+) -> (wgpu::Buffer, wgpu::BindGroup) {
+    let globals = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("globals"),
+        size: GLOBALS_BYTES,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("globals"),
+        layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: globals.as_entire_binding(),
+        }],
+    });
+    (globals, globals_group)
+}
+
 fn buffer_init(
     device: &wgpu::Device,
     label: &str,
@@ -121,247 +139,30 @@ impl Renderer {
     pub fn new(state: &egui_wgpu::RenderState) -> Renderer {
         let device = state.device.clone();
         let queue = state.queue.clone();
-        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("pge preview"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
-        });
-        let globals = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("globals"),
-            size: GLOBALS_BYTES,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let uniform_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let globals_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("globals"),
-            entries: &[uniform_entry(0)],
-        });
-        let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &globals_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals.as_entire_binding(),
-            }],
-        });
-        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("material"),
-            entries: &[
-                uniform_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mesh"),
-            bind_group_layouts: &[&globals_layout, &material_layout],
-            push_constant_ranges: &[],
-        });
-        let line_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("lines"),
-            bind_group_layouts: &[&globals_layout],
-            push_constant_ranges: &[],
-        });
-        let front_face = probe_front_face(&device, &queue, &shader);
-        let f32x = |n: u64| n * 4;
-        let vertex_attributes = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
-        ];
-        let instance_attributes = wgpu::vertex_attr_array![
-            4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4
-        ];
-        let mesh_buffers = [
-            wgpu::VertexBufferLayout {
-                array_stride: f32x(VERTEX_FLOATS as u64),
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &vertex_attributes,
-            },
-            wgpu::VertexBufferLayout {
-                array_stride: f32x(16),
-                step_mode: wgpu::VertexStepMode::Instance,
-                attributes: &instance_attributes,
-            },
-        ];
-        let line_attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
-        let line_buffers = [wgpu::VertexBufferLayout {
-            array_stride: f32x(7),
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &line_attributes,
-        }];
-        let pipeline = |label: &str,
-                        layout: &wgpu::PipelineLayout,
-                        buffers: &[wgpu::VertexBufferLayout],
-                        vs: &str,
-                        fs: &str,
-                        topology: wgpu::PrimitiveTopology,
-                        cull: Option<wgpu::Face>,
-                        depth: (bool, wgpu::CompareFunction),
-                        blend: Option<wgpu::BlendState>| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module: &shader,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers,
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology,
-                    front_face,
-                    cull_mode: cull,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: depth.0,
-                    depth_compare: depth.1,
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &shader,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: COLOR_FORMAT,
-                        blend,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview: None,
-                cache: None,
-            })
-        };
-        use wgpu::CompareFunction::{Always, Less, LessEqual};
-        use wgpu::PrimitiveTopology::{LineList, TriangleList};
-        let alpha = Some(wgpu::BlendState::ALPHA_BLENDING);
-        let mesh_culled = pipeline(
-            "mesh",
-            &layout,
-            &mesh_buffers,
-            "vs_mesh",
-            "fs_mesh",
-            TriangleList,
-            Some(wgpu::Face::Back),
-            (true, Less),
-            None,
-        );
-        let mesh_double = pipeline(
-            "mesh double-sided",
-            &layout,
-            &mesh_buffers,
-            "vs_mesh",
-            "fs_mesh",
-            TriangleList,
-            None,
-            (true, Less),
-            None,
-        );
-        let mesh_lines = pipeline(
-            "mesh lines",
-            &layout,
-            &mesh_buffers,
-            "vs_mesh",
-            "fs_mesh_lines",
-            LineList,
-            None,
-            (true, LessEqual),
-            None,
-        );
-        let sky = pipeline(
-            "sky",
-            &layout,
-            &[],
-            "vs_sky",
-            "fs_sky",
-            TriangleList,
-            None,
-            (false, Always),
-            None,
-        );
-        let overlay_depth = pipeline(
-            "grid",
-            &line_layout,
-            &line_buffers,
-            "vs_line",
-            "fs_line",
-            LineList,
-            None,
-            (false, LessEqual),
-            alpha,
-        );
-        let overlay_top = pipeline(
-            "skeleton",
-            &line_layout,
-            &line_buffers,
-            "vs_line",
-            "fs_line",
-            LineList,
-            None,
-            (false, Always),
-            alpha,
-        );
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("base colour"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
-        let sky_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("sky"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
-        let white_data = TextureData {
-            width: 1,
-            height: 1,
-            levels: vec![vec![255; 4]],
-        };
-        let white = upload_texture(&device, &queue, &white_data);
+        let layouts = BindLayouts::new(&device);
+        let (globals, globals_group) = globals_binding(&device, &layouts.globals);
+        let Pipelines {
+            mesh_culled,
+            mesh_double,
+            mesh_lines,
+            sky,
+            overlay_depth,
+            overlay_top,
+        } = Pipelines::new(&device, &queue, &layouts);
+        let samplers = Samplers::new(&device, &queue);
         Renderer {
             device,
             queue,
             globals,
             globals_group,
-            material_layout,
-            sampler,
-            white,
+            material_layout: layouts.material,
+            sampler: samplers.material,
+            white: samplers.white,
             mesh_culled,
             mesh_double,
             mesh_lines,
             sky,
-            sky_sampler,
+            sky_sampler: samplers.sky,
             environment: None,
             overlay_depth,
             overlay_top,
@@ -717,118 +518,6 @@ impl Renderer {
     }
 }
 
-/// The front-face winding to declare so that triangles counter-clockwise in normalized
-/// device coordinates (the glTF convention) are front faces.
-///
-/// wgpu promises that `FrontFace::Ccw` means exactly that, but its OpenGL backend flips the
-/// image vertically when drawing into a texture, which mirrors the winding on some drivers
-/// (seen with Mesa's llvmpipe): closed meshes then show their inside. One probe triangle,
-/// read back once, tells which way this device goes.
-fn probe_front_face(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    shader: &wgpu::ShaderModule,
-) -> wgpu::FrontFace {
-    let format = wgpu::TextureFormat::Rgba8Unorm;
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("winding probe"),
-        size: wgpu::Extent3d {
-            width: 1,
-            height: 1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("winding probe"),
-        bind_group_layouts: &[],
-        push_constant_ranges: &[],
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("winding probe"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: shader,
-            entry_point: Some("vs_probe"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState {
-            front_face: wgpu::FrontFace::Ccw,
-            ..Default::default()
-        },
-        depth_stencil: None,
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: shader,
-            entry_point: Some("fs_probe"),
-            compilation_options: Default::default(),
-            targets: &[Some(format.into())],
-        }),
-        multiview: None,
-        cache: None,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("winding probe"),
-        size: 256,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let view = target.create_view(&Default::default());
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("winding probe"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
-                resolve_target: None,
-                depth_slice: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::RED),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.draw(0..3, 0..1);
-    }
-    encoder.copy_texture_to_buffer(
-        target.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &readback,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(256),
-                rows_per_image: Some(1),
-            },
-        },
-        wgpu::Extent3d {
-            width: 1,
-            height: 1,
-            depth_or_array_layers: 1,
-        },
-    );
-    queue.submit([encoder.finish()]);
-    readback.map_async(wgpu::MapMode::Read, .., |_| {});
-    let front = match device.poll(wgpu::PollType::wait_indefinitely()) {
-        Ok(_) => readback.get_mapped_range(..).first().copied(),
-        Err(_) => None,
-    };
-    // White: as promised; black: mirrored; anything else (the probe failed): trust wgpu.
-    match front {
-        Some(0) => wgpu::FrontFace::Cw,
-        _ => wgpu::FrontFace::Ccw,
-    }
-}
-
 /// Bytes of the shader's `Globals`: view_proj, sun, inv_view_proj, ambient.
 const GLOBALS_BYTES: u64 = (16 + 4 + 16 + 4) * 4;
 
@@ -848,51 +537,6 @@ fn index_bytes(indices: &[u32]) -> &[u8] {
     } else {
         bytemuck::cast_slice(indices)
     }
-}
-
-fn upload_texture(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    data: &TextureData,
-) -> wgpu::TextureView {
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("base colour"),
-        size: wgpu::Extent3d {
-            width: data.width,
-            height: data.height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: data.levels.len() as u32,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: IMAGE_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let (mut w, mut h) = (data.width, data.height);
-    for (level, pixels) in data.levels.iter().enumerate() {
-        queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: level as u32,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            pixels,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * w),
-                rows_per_image: Some(h),
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-        (w, h) = ((w / 2).max(1), (h / 2).max(1));
-    }
-    texture.create_view(&Default::default())
 }
 
 /// The three edges of every triangle as line pairs (shared edges are drawn twice, which

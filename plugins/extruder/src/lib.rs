@@ -17,6 +17,7 @@ mod extruder;
 mod lua;
 mod matrix;
 mod triangulate;
+mod tube;
 
 pub use extruder::{Extruder, ExtruderError, ExtruderOptions, MAX_SHAPE_POINTS, MAX_STATE_DEPTH};
 pub use matrix::{MAX_STACK_DEPTH, MatrixError, MatrixManipulator};

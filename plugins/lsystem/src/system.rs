@@ -1,158 +1,24 @@
-//! Rules, context matching and the derivation step.
+//! An L-system's rules and how they are added; compilation ([`compile`]), context matching
+//! ([`context`]) and the derivation step ([`derive`]) live in their own files.
 
-use rand_mt::Mt;
+mod compile;
+mod context;
+mod derive;
+mod host;
+mod rule;
 
-use crate::classic::{self, LhsAst, ModuleAst, PatternAst};
+use self::compile::Tables;
+use self::derive::Deriver;
+use self::rule::{Kind, Lhs, RuleDef, normalise, pattern_items};
+use crate::classic::{self, LhsAst};
 use crate::error::LsError;
 use crate::expr::{Ast, Expr, Operand};
 use crate::module_string::ModuleString;
 use crate::symbol::{Sym, SymbolTable};
 
-/// A uniform draw in `[0, 1)` with 53 random bits (MT19937's `genrand_res53`).
-#[must_use]
-pub fn uniform(mt: &mut Mt) -> f64 {
-    let a = f64::from(mt.next_u32() >> 5);
-    let b = f64::from(mt.next_u32() >> 6);
-    (a * 67_108_864.0 + b) / 9_007_199_254_740_992.0
-}
+pub use self::derive::StepOptions;
+pub use self::host::{Host, NativeHost, uniform};
 
-/// What the derivation needs from its environment: randomness, limits, rules written in
-/// another language (Lua functions) and the interpretation of new modules.
-pub trait Host {
-    /// The error type of the host; engine errors convert into it.
-    type Error: From<LsError>;
-
-    /// A uniform draw in `[0, 1)` from the instance's generator.
-    fn random(&mut self) -> f64;
-
-    /// Called every 65 536 modules: an error stops the step (time limit, cancellation).
-    fn check(&mut self) -> Result<(), Self::Error> {
-        Ok(())
-    }
-
-    /// Applies external rule `rule` (the id given to [`System::add_external`]) to the modules
-    /// `matched` of `src` (left context, predecessor, right context, brackets excluded),
-    /// appending its successor to `out`. Returns false when the rule does not apply.
-    fn apply(
-        &mut self,
-        rule: u32,
-        matched: &[usize],
-        src: &ModuleString,
-        out: &mut ModuleString,
-    ) -> Result<bool, Self::Error>;
-
-    /// Interprets the modules `out[from..]` just produced (streaming interpretation).
-    fn interpret(&mut self, out: &ModuleString, from: usize) -> Result<(), Self::Error> {
-        let _ = (out, from);
-        Ok(())
-    }
-}
-
-/// A host for systems without external rules: randomness from a Mersenne Twister.
-pub struct NativeHost<'a> {
-    /// The instance's generator.
-    pub rng: &'a mut Mt,
-}
-
-impl Host for NativeHost<'_> {
-    type Error = LsError;
-    fn random(&mut self) -> f64 {
-        uniform(self.rng)
-    }
-    fn apply(
-        &mut self,
-        rule: u32,
-        _: &[usize],
-        _: &ModuleString,
-        _: &mut ModuleString,
-    ) -> Result<bool, LsError> {
-        Err(LsError::Syntax {
-            text: format!("external rule {rule}"),
-            message: "this host runs no external rules".into(),
-        })
-    }
-}
-
-/// Options of one derivation step.
-#[derive(Clone, Copy, Debug)]
-pub struct StepOptions {
-    /// The step's number (1-based), for error messages.
-    pub step: u32,
-    /// The module cap.
-    pub max_modules: usize,
-    /// Call [`Host::interpret`] after each module's successor.
-    pub stream: bool,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct PatternItem {
-    sym: Sym,
-    /// The number of formal parameters, when the pattern names them.
-    arity: Option<u16>,
-}
-
-#[derive(Clone, Debug)]
-struct Lhs {
-    left: Vec<PatternItem>,
-    pred: PatternItem,
-    right: Vec<PatternItem>,
-}
-
-#[derive(Clone, Debug)]
-enum Kind {
-    Classic {
-        condition: Option<Ast>,
-        successor: Vec<ModuleAst>,
-        weight: Option<f64>,
-    },
-    External(u32),
-}
-
-#[derive(Clone, Debug)]
-struct RuleDef {
-    text: String,
-    origin: u32,
-    lhs: Lhs,
-    /// Formal names of the parameter-reading items, in matching order.
-    formals: Vec<String>,
-    kind: Kind,
-    /// The normalised left side, grouping stochastic alternatives.
-    key: String,
-}
-
-#[derive(Clone, Debug)]
-struct Succ {
-    sym: Sym,
-    args: Box<[Expr]>,
-}
-
-#[derive(Clone, Debug)]
-enum CKind {
-    Classic {
-        condition: Option<Expr>,
-        successor: Box<[Succ]>,
-        /// Stochastic alternatives (cumulative normalised weight, rule), on the group's head.
-        choices: Option<Box<[(f64, usize)]>>,
-    },
-    External(u32),
-}
-
-#[derive(Clone, Debug)]
-struct Compiled {
-    kind: CKind,
-    /// A non-head member of a stochastic group: reached through its head only.
-    skip: bool,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Dispatch {
-    Copy,
-    Plain { start: u32, len: u32 },
-    Rules { start: u32, len: u32 },
-}
-
-/// An L-system's rules: classic productions compiled to bytecode and external rules whose
-/// successors a [`Host`] computes, with contexts, `ignore` and stochastic weights.
 ///
 /// ```
 /// use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
@@ -176,28 +42,8 @@ pub struct System {
     ignore_syms: Vec<Sym>,
     global_names: Vec<String>,
     global_values: Vec<f64>,
-    rules: Vec<Compiled>,
-    dispatch: Vec<Dispatch>,
-    rule_lists: Vec<u32>,
-    plain_pool: Vec<u32>,
-    ignored: Vec<bool>,
-    uses_context: bool,
-    all_plain: bool,
+    tables: Tables,
     prepared: bool,
-}
-
-fn normalise(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-fn pattern_items(patterns: &[PatternAst], symbols: &mut SymbolTable) -> Vec<PatternItem> {
-    patterns
-        .iter()
-        .map(|p| PatternItem {
-            sym: symbols.intern(&p.name),
-            arity: p.formals.as_ref().map(|f| f.len() as u16),
-        })
-        .collect()
 }
 
 impl System {
@@ -438,170 +284,9 @@ impl System {
     /// Compiles every rule: names resolve against formals and globals, dispatch tables are
     /// built. Called before the first step and again after any change.
     pub fn prepare(&mut self, symbols: &SymbolTable) -> Result<(), LsError> {
-        let n = symbols.len();
-        let mut rules = Vec::with_capacity(self.defs.len());
-        for def in &self.defs {
-            rules.push(self.compile(def, symbols)?);
-        }
-        // Stochastic groups: alternatives with the same left side; the first is the head.
-        let mut seen: Vec<(String, usize)> = Vec::new();
-        let mut members: Vec<Vec<(f64, usize)>> = Vec::new();
-        for (i, def) in self.defs.iter().enumerate() {
-            if let Kind::Classic {
-                weight: Some(w), ..
-            } = def.kind
-            {
-                match seen.iter().find(|(k, _)| *k == def.key) {
-                    Some((_, g)) => {
-                        members[*g].push((w, i));
-                        rules[i].skip = true;
-                    }
-                    None => {
-                        seen.push((def.key.clone(), members.len()));
-                        members.push(vec![(w, i)]);
-                    }
-                }
-            }
-        }
-        for group in members.iter().filter(|g| g.len() > 1) {
-            let total: f64 = group.iter().map(|m| m.0).sum();
-            let mut acc = 0.0;
-            let choices: Box<[(f64, usize)]> = group
-                .iter()
-                .map(|&(w, r)| {
-                    acc += w / total;
-                    (acc, r)
-                })
-                .collect();
-            if let CKind::Classic { choices: c, .. } = &mut rules[group[0].1].kind {
-                *c = Some(choices);
-            }
-        }
-        self.ignored = vec![false; n];
-        for s in &self.ignore_syms {
-            self.ignored[s.index()] = true;
-        }
-        self.uses_context = self
-            .defs
-            .iter()
-            .any(|d| !d.lhs.left.is_empty() || !d.lhs.right.is_empty());
-        self.dispatch = vec![Dispatch::Copy; n];
-        self.rule_lists.clear();
-        self.plain_pool.clear();
-        for s in 0..n {
-            let list: Vec<u32> = (0..self.defs.len())
-                .filter(|&r| self.defs[r].lhs.pred.sym.index() == s && !rules[r].skip)
-                .map(|r| r as u32)
-                .collect();
-            if list.is_empty() {
-                continue;
-            }
-            let r = list[0] as usize;
-            let def = &self.defs[r];
-            let plain = list.len() == 1
-                && def.lhs.left.is_empty()
-                && def.lhs.right.is_empty()
-                && def.lhs.pred.arity.is_none()
-                && matches!(&rules[r].kind, CKind::Classic { condition: None, successor, choices: None }
-                    if successor.iter().all(|s| s.args.is_empty()));
-            if plain {
-                let CKind::Classic { successor, .. } = &rules[r].kind else {
-                    continue;
-                };
-                let start = self.plain_pool.len() as u32;
-                self.plain_pool.extend(successor.iter().map(|s| s.sym.0));
-                self.dispatch[s] = Dispatch::Plain {
-                    start,
-                    len: successor.len() as u32,
-                };
-            } else {
-                let start = self.rule_lists.len() as u32;
-                self.rule_lists.extend(&list);
-                self.dispatch[s] = Dispatch::Rules {
-                    start,
-                    len: list.len() as u32,
-                };
-            }
-        }
-        self.all_plain = self
-            .dispatch
-            .iter()
-            .all(|d| !matches!(d, Dispatch::Rules { .. }));
-        self.rules = rules;
+        self.tables = Tables::build(&self.defs, &self.ignore_syms, &self.global_names, symbols)?;
         self.prepared = true;
         Ok(())
-    }
-
-    fn compile(&self, def: &RuleDef, symbols: &SymbolTable) -> Result<Compiled, LsError> {
-        let err = |message: String| LsError::Rule {
-            origin: def.origin,
-            rule: def.text.clone(),
-            message,
-        };
-        let kind = match &def.kind {
-            Kind::External(id) => CKind::External(*id),
-            Kind::Classic {
-                condition,
-                successor,
-                ..
-            } => {
-                let mut resolve = |name: &str| {
-                    if let Some(i) = def.formals.iter().position(|f| f == name) {
-                        return Some(Operand::Param(i as u16));
-                    }
-                    self.global_names
-                        .iter()
-                        .position(|g| g == name)
-                        .map(|i| Operand::Global(i as u16))
-                };
-                let condition = match condition {
-                    Some(c) => Some(
-                        Expr::compile(c, &mut resolve)
-                            .map_err(|e| err(format!("condition: {e}")))?,
-                    ),
-                    None => None,
-                };
-                let mut succ = Vec::with_capacity(successor.len());
-                for m in successor {
-                    let sym = symbols
-                        .get(&m.name)
-                        .ok_or_else(|| err(format!("symbol '{}' was not interned", m.name)))?;
-                    if (sym == Sym::PUSH || sym == Sym::POP) && !m.args.is_empty() {
-                        return Err(err(format!("'{}' takes no parameters", m.name)));
-                    }
-                    let args = m
-                        .args
-                        .iter()
-                        .map(|a| Expr::compile(a, &mut resolve).map_err(|e| err(e.to_string())))
-                        .collect::<Result<Box<[Expr]>, LsError>>()?;
-                    succ.push(Succ { sym, args });
-                }
-                CKind::Classic {
-                    condition,
-                    successor: succ.into_boxed_slice(),
-                    choices: None,
-                }
-            }
-        };
-        Ok(Compiled { kind, skip: false })
-    }
-
-    #[inline]
-    fn is_ignored(&self, s: Sym) -> bool {
-        self.ignored.get(s.index()).copied().unwrap_or(false)
-    }
-
-    /// Matches the left context: the path toward the root, skipping whole branches and
-    /// climbing out of enclosing ones. Pushes matched indices leftmost first.
-    fn match_left(
-        &self,
-        left: &[PatternItem],
-        src: &ModuleString,
-        matches: &[u32],
-        i: usize,
-        out: &mut Vec<usize>,
-    ) -> bool {
-        self.match_left_syms(left.iter().map(|p| p.sym), src, matches, i, out)
     }
 
     /// Matches a left context of symbols (leftmost first) for module `i` of `src`: the path
@@ -616,109 +301,20 @@ impl System {
         i: usize,
         out: &mut Vec<usize>,
     ) -> bool {
-        self.match_left_syms(left.iter().copied(), src, matches, i, out)
-    }
-
-    fn match_left_syms(
-        &self,
-        left: impl DoubleEndedIterator<Item = Sym>,
-        src: &ModuleString,
-        matches: &[u32],
-        i: usize,
-        out: &mut Vec<usize>,
-    ) -> bool {
-        let base = out.len();
-        let mut j = i;
-        for p in left.rev() {
-            loop {
-                if j == 0 {
-                    return false;
-                }
-                j -= 1;
-                let s = src.sym(j);
-                if s == Sym::POP {
-                    let open = matches[j];
-                    if open == u32::MAX {
-                        return false;
-                    }
-                    j = open as usize;
-                } else if s != Sym::PUSH && !self.is_ignored(s) {
-                    break;
-                }
-            }
-            if src.sym(j) != p {
-                return false;
-            }
-            out.push(j);
-        }
-        out[base..].reverse();
-        true
-    }
-
-    /// Matches the right context: along the axis, skipping branches the pattern does not
-    /// enter; `[` in the pattern enters a branch, `]` skips the rest of the current one.
-    fn match_right(
-        &self,
-        right: &[PatternItem],
-        src: &ModuleString,
-        matches: &[u32],
-        i: usize,
-        out: &mut Vec<usize>,
-    ) -> bool {
-        let n = src.len();
-        let mut j = i + 1;
-        for p in right {
-            if p.sym == Sym::POP {
-                loop {
-                    if j >= n {
-                        return false;
-                    }
-                    let s = src.sym(j);
-                    if s == Sym::POP {
-                        j += 1;
-                        break;
-                    }
-                    if s == Sym::PUSH {
-                        let close = matches[j];
-                        if close == u32::MAX {
-                            return false;
-                        }
-                        j = close as usize + 1;
-                    } else {
-                        j += 1;
-                    }
-                }
-                continue;
-            }
-            loop {
-                if j >= n {
-                    return false;
-                }
-                let s = src.sym(j);
-                if self.is_ignored(s) {
-                    j += 1;
-                } else if s == Sym::PUSH && p.sym != Sym::PUSH {
-                    let close = matches[j];
-                    if close == u32::MAX {
-                        return false;
-                    }
-                    j = close as usize + 1;
-                } else {
-                    break;
-                }
-            }
-            if src.sym(j) != p.sym {
-                return false;
-            }
-            if p.sym != Sym::PUSH {
-                out.push(j);
-            }
-            j += 1;
-        }
-        true
+        context::match_left(
+            &self.tables.ignored,
+            left.iter().copied(),
+            src,
+            matches,
+            i,
+            out,
+        )
     }
 
     /// One derivation step: rewrites `src` into `out` (cleared first).
+    ///
+    /// # Panics
+    /// If the rules changed since the last [`System::prepare`].
     pub fn step<H: Host>(
         &self,
         src: &ModuleString,
@@ -730,237 +326,19 @@ impl System {
             self.prepared,
             "System::prepare must be called after changing the rules"
         );
-        out.clear();
-        let too_many = |count: u64| LsError::TooManyModules {
-            step: opts.step,
-            count,
-            max: opts.max_modules,
+        let deriver = Deriver {
+            defs: &self.defs,
+            globals: &self.global_values,
+            tables: &self.tables,
         };
-        if self.all_plain && src.is_flat() && !opts.stream {
-            // Fast path: count first (fail before allocating), then copy slices.
-            let syms = src.raw_syms();
-            let mut total = 0u64;
-            for &s in syms {
-                total += match self.dispatch.get(s as usize) {
-                    Some(Dispatch::Plain { len, .. }) => u64::from(*len),
-                    _ => 1,
-                };
-            }
-            if total > opts.max_modules as u64 {
-                return Err(too_many(total).into());
-            }
-            out.reserve(total as usize);
-            for chunk in syms.chunks(1 << 16) {
-                host.check()?;
-                for &s in chunk {
-                    match self.dispatch.get(s as usize) {
-                        Some(Dispatch::Plain { start, len }) => out.extend_plain(
-                            &self.plain_pool[*start as usize..(*start + *len) as usize],
-                        ),
-                        _ => out.extend_plain(&[s]),
-                    }
-                }
-            }
-            return Ok(());
-        }
-        let matches = if self.uses_context {
-            src.bracket_matches()
-        } else {
-            Vec::new()
-        };
-        let mut matched: Vec<usize> = Vec::with_capacity(16);
-        let mut gathered: Vec<f64> = Vec::with_capacity(16);
-        let max = opts.max_modules;
-        for i in 0..src.len() {
-            if i & 0xFFFF == 0 {
-                host.check()?;
-            }
-            let from = out.len();
-            let s = src.sym(i);
-            match self.dispatch.get(s.index()) {
-                Some(Dispatch::Plain { start, len }) => {
-                    out.extend_plain(&self.plain_pool[*start as usize..(*start + *len) as usize])
-                }
-                Some(Dispatch::Rules { start, len }) => {
-                    let list = &self.rule_lists[*start as usize..(*start + *len) as usize];
-                    let applied = self.apply_rules(
-                        list,
-                        src,
-                        &matches,
-                        i,
-                        out,
-                        host,
-                        &mut matched,
-                        &mut gathered,
-                    )?;
-                    if !applied {
-                        out.push_from(src, i);
-                    }
-                }
-                _ => out.push_from(src, i),
-            }
-            if out.len() > max {
-                return Err(too_many(out.len() as u64).into());
-            }
-            if opts.stream {
-                host.interpret(out, from)?;
-            }
-        }
-        Ok(())
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn apply_rules<H: Host>(
-        &self,
-        list: &[u32],
-        src: &ModuleString,
-        matches: &[u32],
-        i: usize,
-        out: &mut ModuleString,
-        host: &mut H,
-        matched: &mut Vec<usize>,
-        gathered: &mut Vec<f64>,
-    ) -> Result<bool, H::Error> {
-        for &r in list {
-            let r = r as usize;
-            let def = &self.defs[r];
-            let lhs = &def.lhs;
-            matched.clear();
-            if !lhs.left.is_empty() && !self.match_left(&lhs.left, src, matches, i, matched) {
-                continue;
-            }
-            matched.push(i);
-            if !lhs.right.is_empty() && !self.match_right(&lhs.right, src, matches, i, matched) {
-                continue;
-            }
-            match &self.rules[r].kind {
-                CKind::External(id) => {
-                    if host.apply(*id, matched, src, out)? {
-                        return Ok(true);
-                    }
-                }
-                CKind::Classic {
-                    condition,
-                    successor,
-                    choices,
-                } => {
-                    let params: &[f64] = if lhs.left.is_empty() && lhs.right.is_empty() {
-                        match lhs.pred.arity {
-                            None => &[],
-                            Some(k) => {
-                                self.check_arity(def, src, i, k)?;
-                                src.params(i)
-                            }
-                        }
-                    } else {
-                        gathered.clear();
-                        let items = lhs.left.iter().chain(std::iter::once(&lhs.pred)).chain(
-                            lhs.right
-                                .iter()
-                                .filter(|p| p.sym != Sym::PUSH && p.sym != Sym::POP),
-                        );
-                        for (p, &m) in items.zip(matched.iter()) {
-                            if let Some(k) = p.arity {
-                                self.check_arity(def, src, m, k)?;
-                                gathered.extend_from_slice(src.params(m));
-                            }
-                        }
-                        gathered
-                    };
-                    let globals = &self.global_values;
-                    if let Some(c) = condition
-                        && c.eval(params, globals, &mut || host.random()) == 0.0
-                    {
-                        continue;
-                    }
-                    let (succ, def) = match choices {
-                        Some(choices) => {
-                            let x = host.random();
-                            let pick = choices
-                                .iter()
-                                .find(|(cum, _)| x < *cum)
-                                .map_or(choices[choices.len() - 1].1, |c| c.1);
-                            match &self.rules[pick].kind {
-                                CKind::Classic { successor, .. } => (successor, &self.defs[pick]),
-                                CKind::External(_) => (successor, def),
-                            }
-                        }
-                        None => (successor, def),
-                    };
-                    for item in succ.iter() {
-                        if item.args.is_empty() {
-                            out.push(item.sym, &[]);
-                            continue;
-                        }
-                        out.begin(item.sym);
-                        for a in item.args.iter() {
-                            let v = a.eval(params, globals, &mut || host.random());
-                            if !v.is_finite() {
-                                return Err(LsError::Rule {
-                                    origin: def.origin,
-                                    rule: def.text.clone(),
-                                    message: format!(
-                                        "a parameter of the successor evaluated to {v}"
-                                    ),
-                                }
-                                .into());
-                            }
-                            out.push_param(v);
-                        }
-                        out.end();
-                    }
-                    return Ok(true);
-                }
-            }
-        }
-        Ok(false)
-    }
-
-    #[cold]
-    fn arity_error(&self, def: &RuleDef, src: &ModuleString, m: usize, k: u16) -> LsError {
-        let message = if src.external(m).is_some() {
-            format!(
-                "a classic production cannot read the non-numeric parameters of module #{} ({})",
-                m + 1,
-                def.text
-                    .split(['<', '>', ':', '-'])
-                    .next()
-                    .unwrap_or("")
-                    .trim()
-            )
-        } else {
-            format!(
-                "expects {k} parameter{} but module #{} has {}",
-                if k == 1 { "" } else { "s" },
-                m + 1,
-                src.params(m).len()
-            )
-        };
-        LsError::Rule {
-            origin: def.origin,
-            rule: def.text.clone(),
-            message,
-        }
-    }
-
-    #[inline]
-    fn check_arity(
-        &self,
-        def: &RuleDef,
-        src: &ModuleString,
-        m: usize,
-        k: u16,
-    ) -> Result<(), LsError> {
-        if src.external(m).is_some() || src.params(m).len() != k as usize {
-            return Err(self.arity_error(def, src, m, k));
-        }
-        Ok(())
+        deriver.step(src, out, host, opts)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_mt::Mt;
     use std::collections::HashMap;
 
     struct Run {

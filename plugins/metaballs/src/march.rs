@@ -164,13 +164,19 @@ impl MarchingCubes {
 
     /// Extracts the surface. `interrupt` is called between blocks; returning `true` stops
     /// with [`MarchError::Interrupted`].
+    ///
+    /// The stages: lay the grid over the bounds (`Grid::new`), list the particles that
+    /// reach each block (`BlockLists::build`), then per block: skip it when the field's
+    /// interval bound stays on one side of `iso` (`may_cross`), sample its corners
+    /// (`Marcher::sample`) and march its cells (`Marcher::march`); last, patch the normals
+    /// the gradient could not give (`fix_degenerate_normals`).
     pub fn polygonize(
         &self,
         field: &Metaballs,
         interrupt: &mut dyn FnMut() -> bool,
     ) -> Result<(Mesh, MarchStats), MarchError> {
         let o = &self.options;
-        let mut mesh = Mesh {
+        let mesh = Mesh {
             name: "metaballs".into(),
             material: o.material.clone(),
             ..Mesh::default()
@@ -178,6 +184,79 @@ impl MarchingCubes {
         let Some((lo, hi)) = o.bounds.or_else(|| field.bounds()) else {
             return Ok((mesh, MarchStats::default()));
         };
+        let grid = Grid::new(lo, hi, o)?;
+        let limit_mib = o.max_bytes >> 20;
+        let blocks = BlockLists::build(field.particles(), &grid, o.max_bytes)?;
+        let mut marcher = Marcher {
+            grid: &grid,
+            iso: o.iso,
+            tables: table(),
+            welded: HashMap::new(),
+            local: Vec::new(),
+            values: vec![0.0f32; (BLOCK + 1).pow(3)],
+            mesh,
+            stats: MarchStats {
+                grid_cells: grid.cells(),
+                blocks: grid.block_count() as u64,
+                ..MarchStats::default()
+            },
+        };
+        let nb = grid.blocks;
+        for bz in 0..nb[2] {
+            for by in 0..nb[1] {
+                for bx in 0..nb[0] {
+                    if interrupt() {
+                        return Err(MarchError::Interrupted);
+                    }
+                    let list = blocks.list(grid.block_index(bx, by, bz));
+                    if list.is_empty() {
+                        continue;
+                    }
+                    let (i0, i1) = grid.block_cells(bx, by, bz);
+                    marcher.local.clear();
+                    marcher
+                        .local
+                        .extend(list.iter().map(|&i| field.particles()[i as usize]));
+                    if !may_cross(&grid, &marcher.local, i0, i1, o.iso) {
+                        continue;
+                    }
+                    marcher.stats.visited_blocks += 1;
+                    marcher.sample(i0, i1);
+                    marcher.march(i0, i1);
+                    let mesh = &marcher.mesh;
+                    let bytes = mesh.positions.len() * 48 + mesh.indices.len() * 4;
+                    if bytes > o.max_bytes {
+                        return Err(MarchError::MemoryLimit {
+                            what: "the mesh",
+                            limit_mib,
+                        });
+                    }
+                }
+            }
+        }
+        let Marcher {
+            mut mesh, stats, ..
+        } = marcher;
+        fix_degenerate_normals(&mut mesh);
+        Ok((mesh, stats))
+    }
+}
+
+/// The sampling grid over the bounds: cubic cells of side `h` from `lo`, visited in blocks
+/// of `BLOCK³` cells.
+struct Grid {
+    lo: Vec3,
+    h: f32,
+    /// Cells along each axis.
+    n: [usize; 3],
+    /// Blocks along each axis.
+    blocks: [usize; 3],
+}
+
+impl Grid {
+    /// Cells of `1 / resolution` of the longest side over `lo..hi`; an error when the grid
+    /// is not finite or has more than `max_cells` cells.
+    fn new(lo: Vec3, hi: Vec3, o: &MarchOptions) -> Result<Grid, MarchError> {
         let extent = hi - lo;
         if !extent.is_finite() {
             return Err(MarchError::BadBounds);
@@ -194,13 +273,67 @@ impl MarchingCubes {
                 max: o.max_cells,
             });
         }
-        let limit_mib = o.max_bytes >> 20;
-        let nb = [nx.div_ceil(BLOCK), ny.div_ceil(BLOCK), nz.div_ceil(BLOCK)];
-        let block_count = nb[0] * nb[1] * nb[2];
+        Ok(Grid {
+            lo,
+            h,
+            n: [nx, ny, nz],
+            blocks: [nx.div_ceil(BLOCK), ny.div_ceil(BLOCK), nz.div_ceil(BLOCK)],
+        })
+    }
 
+    fn cells(&self) -> u64 {
+        self.n[0] as u64 * self.n[1] as u64 * self.n[2] as u64
+    }
+
+    fn block_count(&self) -> usize {
+        self.blocks[0] * self.blocks[1] * self.blocks[2]
+    }
+
+    fn block_index(&self, bx: usize, by: usize, bz: usize) -> usize {
+        (bz * self.blocks[1] + by) * self.blocks[0] + bx
+    }
+
+    /// The first and one-past-last grid points of a block's cells.
+    fn block_cells(&self, bx: usize, by: usize, bz: usize) -> ([usize; 3], [usize; 3]) {
+        let i0 = [bx * BLOCK, by * BLOCK, bz * BLOCK];
+        let i1 = [
+            (i0[0] + BLOCK).min(self.n[0]),
+            (i0[1] + BLOCK).min(self.n[1]),
+            (i0[2] + BLOCK).min(self.n[2]),
+        ];
+        (i0, i1)
+    }
+
+    /// The position of grid point `(i, j, k)`.
+    fn point(&self, i: usize, j: usize, k: usize) -> Vec3 {
+        self.lo + Vec3::new(i as f32, j as f32, k as f32) * self.h
+    }
+
+    /// Whether grid point `q` lies on a wall of the bounds (where the field counts as 0).
+    fn on_wall(&self, q: [usize; 3]) -> bool {
+        q.contains(&0) || q[0] == self.n[0] || q[1] == self.n[1] || q[2] == self.n[2]
+    }
+}
+
+/// The particles each block lists (compressed rows, each in particle order): those whose
+/// radius may reach a grid point of the block.
+struct BlockLists {
+    start: Vec<u32>,
+    lists: Vec<u32>,
+}
+
+impl BlockLists {
+    /// Lists `particles` per block of `grid`; an error when the lists would take more than
+    /// `max_bytes`.
+    fn build(
+        particles: &[Particle],
+        grid: &Grid,
+        max_bytes: usize,
+    ) -> Result<BlockLists, MarchError> {
+        let (lo, h, nb) = (grid.lo, grid.h, grid.blocks);
+        let block_count = grid.block_count();
         // Which blocks each particle reaches (points it may affect, conservatively).
-        let ranges: Vec<[(usize, usize); 3]> = field
-            .particles()
+        let ranges: Vec<[(usize, usize); 3]> = particles
             .iter()
             .map(|p| {
                 let r = Vec3::splat(p.radius);
@@ -224,22 +357,20 @@ impl MarchingCubes {
             .iter()
             .map(|r| r.iter().map(|(a, b)| (b - a) as u64).product::<u64>())
             .sum();
-        if pairs.saturating_mul(4) + block_count as u64 * 8 > o.max_bytes as u64
+        if pairs.saturating_mul(4) + block_count as u64 * 8 > max_bytes as u64
             || pairs > u64::from(u32::MAX)
         {
             return Err(MarchError::MemoryLimit {
                 what: "particle lists per block",
-                limit_mib,
+                limit_mib: max_bytes >> 20,
             });
         }
-        // Particle lists per block, compressed (CSR), each in particle order.
         let mut start = vec![0u32; block_count + 1];
-        let block_index = |bx: usize, by: usize, bz: usize| (bz * nb[1] + by) * nb[0] + bx;
         for r in &ranges {
             for bz in r[2].0..r[2].1 {
                 for by in r[1].0..r[1].1 {
                     for bx in r[0].0..r[0].1 {
-                        start[block_index(bx, by, bz) + 1] += 1;
+                        start[grid.block_index(bx, by, bz) + 1] += 1;
                     }
                 }
             }
@@ -253,150 +384,145 @@ impl MarchingCubes {
             for bz in r[2].0..r[2].1 {
                 for by in r[1].0..r[1].1 {
                     for bx in r[0].0..r[0].1 {
-                        let b = block_index(bx, by, bz);
+                        let b = grid.block_index(bx, by, bz);
                         lists[fill[b] as usize] = pi as u32;
                         fill[b] += 1;
                     }
                 }
             }
         }
+        Ok(BlockLists { start, lists })
+    }
 
-        let mut stats = MarchStats {
-            grid_cells: cells,
-            blocks: block_count as u64,
-            ..MarchStats::default()
-        };
-        let mut edge_vertex: HashMap<u64, u32> = HashMap::new();
-        let mut local: Vec<Particle> = Vec::new();
-        let mut values = vec![0.0f32; (BLOCK + 1).pow(3)];
-        let point = |i: usize, j: usize, k: usize| lo + Vec3::new(i as f32, j as f32, k as f32) * h;
-        let iso = o.iso;
-        let tables = table();
-        for bz in 0..nb[2] {
-            for by in 0..nb[1] {
-                for bx in 0..nb[0] {
-                    if interrupt() {
-                        return Err(MarchError::Interrupted);
-                    }
-                    let b = block_index(bx, by, bz);
-                    let list = &lists[start[b] as usize..start[b + 1] as usize];
-                    if list.is_empty() {
-                        continue;
-                    }
-                    let i0 = [bx * BLOCK, by * BLOCK, bz * BLOCK];
-                    let i1 = [
-                        (i0[0] + BLOCK).min(nx),
-                        (i0[1] + BLOCK).min(ny),
-                        (i0[2] + BLOCK).min(nz),
-                    ];
-                    let (blo, bhi) = (point(i0[0], i0[1], i0[2]), point(i1[0], i1[1], i1[2]));
-                    local.clear();
-                    local.extend(list.iter().map(|&i| field.particles()[i as usize]));
-                    // Interval bound of the field over the block.
-                    let (mut fmin, mut fmax) = (0.0f32, 0.0f32);
-                    for p in &local {
-                        let near = p.position.clamp(blo, bhi).distance_squared(p.position);
-                        let far_corner =
-                            Vec3::select(p.position.cmplt((blo + bhi) * 0.5), bhi, blo);
-                        let far = far_corner.distance_squared(p.position);
-                        let (a, b) = (p.falloff(far), p.falloff(near));
-                        fmin += a.min(b);
-                        fmax += a.max(b);
-                    }
-                    let touches_wall = i0.contains(&0) || i1[0] == nx || i1[1] == ny || i1[2] == nz;
-                    if fmax <= iso || (fmin > iso && !touches_wall) {
-                        continue;
-                    }
-                    stats.visited_blocks += 1;
-                    // Sample the block's corners.
-                    let (sx, sy) = (i1[0] - i0[0] + 1, i1[1] - i0[1] + 1);
-                    let at = |i: usize, j: usize, k: usize| {
-                        ((k - i0[2]) * sy + (j - i0[1])) * sx + (i - i0[0])
+    /// The particles of block `b`.
+    fn list(&self, b: usize) -> &[u32] {
+        &self.lists[self.start[b] as usize..self.start[b + 1] as usize]
+    }
+}
+
+/// Whether the surface may cross the block `i0..i1` whose particles are `local`: false when
+/// the interval bound of the field over the block (from each particle's nearest and farthest
+/// distance) stays on one side of `iso`. A block on the bounds' walls, where the field
+/// counts as 0, is kept whenever some of it is inside.
+fn may_cross(grid: &Grid, local: &[Particle], i0: [usize; 3], i1: [usize; 3], iso: f32) -> bool {
+    let (blo, bhi) = (
+        grid.point(i0[0], i0[1], i0[2]),
+        grid.point(i1[0], i1[1], i1[2]),
+    );
+    let (mut fmin, mut fmax) = (0.0f32, 0.0f32);
+    for p in local {
+        let near = p.position.clamp(blo, bhi).distance_squared(p.position);
+        let far_corner = Vec3::select(p.position.cmplt((blo + bhi) * 0.5), bhi, blo);
+        let far = far_corner.distance_squared(p.position);
+        let (a, b) = (p.falloff(far), p.falloff(near));
+        fmin += a.min(b);
+        fmax += a.max(b);
+    }
+    let n = grid.n;
+    let touches_wall = i0.contains(&0) || i1[0] == n[0] || i1[1] == n[1] || i1[2] == n[2];
+    !(fmax <= iso || (fmin > iso && !touches_wall))
+}
+
+/// The state of one extraction: the mesh so far, its vertices welded per grid edge, and the
+/// current block's particles and corner values.
+struct Marcher<'a> {
+    grid: &'a Grid,
+    iso: f32,
+    tables: &'static [Vec<[u8; 3]>; 256],
+    /// The vertex of each grid edge already cut (key: grid point and axis).
+    welded: HashMap<u64, u32>,
+    /// The current block's particles, in particle order.
+    local: Vec<Particle>,
+    /// The current block's corner values.
+    values: Vec<f32>,
+    mesh: Mesh,
+    stats: MarchStats,
+}
+
+impl Marcher<'_> {
+    /// The index of grid point `(i, j, k)` in `values` for the block starting at `i0`
+    /// with `i1` as its far corner.
+    fn at(i0: [usize; 3], i1: [usize; 3], i: usize, j: usize, k: usize) -> usize {
+        let (sx, sy) = (i1[0] - i0[0] + 1, i1[1] - i0[1] + 1);
+        ((k - i0[2]) * sy + (j - i0[1])) * sx + (i - i0[0])
+    }
+
+    /// Samples the field at the block's grid points (0 on the walls), summing the block's
+    /// particles in particle order.
+    fn sample(&mut self, i0: [usize; 3], i1: [usize; 3]) {
+        let grid = self.grid;
+        for k in i0[2]..=i1[2] {
+            for j in i0[1]..=i1[1] {
+                for i in i0[0]..=i1[0] {
+                    self.values[Self::at(i0, i1, i, j, k)] = if grid.on_wall([i, j, k]) {
+                        0.0
+                    } else {
+                        let p = grid.point(i, j, k);
+                        self.local.iter().map(|q| q.value(p)).sum()
                     };
-                    for k in i0[2]..=i1[2] {
-                        for j in i0[1]..=i1[1] {
-                            for i in i0[0]..=i1[0] {
-                                let wall =
-                                    i == 0 || j == 0 || k == 0 || i == nx || j == ny || k == nz;
-                                values[at(i, j, k)] = if wall {
-                                    0.0
-                                } else {
-                                    let p = point(i, j, k);
-                                    local.iter().map(|q| q.value(p)).sum()
-                                };
-                            }
+                }
+            }
+        }
+    }
+
+    /// Marches the block's cells: classifies each cell's corners and adds the triangles of
+    /// its case, reusing the vertex of every grid edge already cut.
+    fn march(&mut self, i0: [usize; 3], i1: [usize; 3]) {
+        for k in i0[2]..i1[2] {
+            for j in i0[1]..i1[1] {
+                for i in i0[0]..i1[0] {
+                    self.stats.visited_cells += 1;
+                    let mut case = 0usize;
+                    let mut v = [0.0f32; 8];
+                    for (c, vc) in v.iter_mut().enumerate() {
+                        let [dx, dy, dz] = corner_offset(c);
+                        *vc = self.values[Self::at(i0, i1, i + dx, j + dy, k + dz)];
+                        if *vc > self.iso {
+                            case |= 1 << c;
                         }
                     }
-                    // March its cells.
-                    for k in i0[2]..i1[2] {
-                        for j in i0[1]..i1[1] {
-                            for i in i0[0]..i1[0] {
-                                stats.visited_cells += 1;
-                                let mut case = 0usize;
-                                let mut v = [0.0f32; 8];
-                                for (c, vc) in v.iter_mut().enumerate() {
-                                    let [dx, dy, dz] = corner_offset(c);
-                                    *vc = values[at(i + dx, j + dy, k + dz)];
-                                    if *vc > iso {
-                                        case |= 1 << c;
-                                    }
-                                }
-                                for tri in &tables[case] {
-                                    let mut ids = [0u32; 3];
-                                    for (slot, &e) in ids.iter_mut().zip(tri) {
-                                        let (ca, cb, axis) = EDGES[e as usize];
-                                        let [dx, dy, dz] = corner_offset(ca);
-                                        let (gi, gj, gk) = (i + dx, j + dy, k + dz);
-                                        let key = (((gk * (ny + 1) + gj) * (nx + 1) + gi) * 3
-                                            + axis)
-                                            as u64;
-                                        *slot = *edge_vertex.entry(key).or_insert_with(|| {
-                                            let (va, vb) = (v[ca], v[cb]);
-                                            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-                                            let pa = point(gi, gj, gk);
-                                            let mut step = Vec3::ZERO;
-                                            step[axis] = h;
-                                            let p = pa + step * t;
-                                            // Where the bounds cut the surface the cap's
-                                            // normal is not the field's: take the
-                                            // triangles' (see fix_degenerate_normals).
-                                            let mut end = [gi, gj, gk];
-                                            end[axis] += 1;
-                                            let on_wall = |q: [usize; 3]| {
-                                                q.contains(&0)
-                                                    || q[0] == nx
-                                                    || q[1] == ny
-                                                    || q[2] == nz
-                                            };
-                                            let normal = if on_wall([gi, gj, gk]) || on_wall(end) {
-                                                Vec3::ZERO
-                                            } else {
-                                                let g: Vec3 =
-                                                    local.iter().map(|q| q.gradient(p)).sum();
-                                                (-g).try_normalize().unwrap_or(Vec3::ZERO)
-                                            };
-                                            mesh.positions.push(p);
-                                            mesh.normals.push(normal);
-                                            (mesh.positions.len() - 1) as u32
-                                        });
-                                    }
-                                    mesh.indices.extend(ids);
-                                }
-                            }
+                    for tri in &self.tables[case] {
+                        let mut ids = [0u32; 3];
+                        for (slot, &e) in ids.iter_mut().zip(tri) {
+                            let (ca, cb, axis) = EDGES[e as usize];
+                            let [dx, dy, dz] = corner_offset(ca);
+                            *slot = self.edge_vertex([i + dx, j + dy, k + dz], axis, v[ca], v[cb]);
                         }
-                    }
-                    let bytes = mesh.positions.len() * 48 + mesh.indices.len() * 4;
-                    if bytes > o.max_bytes {
-                        return Err(MarchError::MemoryLimit {
-                            what: "the mesh",
-                            limit_mib,
-                        });
+                        self.mesh.indices.extend(ids);
                     }
                 }
             }
         }
-        fix_degenerate_normals(&mut mesh);
-        Ok((mesh, stats))
+    }
+
+    /// The vertex where the surface cuts the grid edge from point `g` along `axis`, whose
+    /// end values are `va` and `vb`: made on first use, then reused.
+    fn edge_vertex(&mut self, g: [usize; 3], axis: usize, va: f32, vb: f32) -> u32 {
+        let grid = self.grid;
+        let [gi, gj, gk] = g;
+        let [nx, ny, _] = grid.n;
+        let key = (((gk * (ny + 1) + gj) * (nx + 1) + gi) * 3 + axis) as u64;
+        let (iso, local, mesh) = (self.iso, &self.local, &mut self.mesh);
+        *self.welded.entry(key).or_insert_with(|| {
+            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+            let pa = grid.point(gi, gj, gk);
+            let mut step = Vec3::ZERO;
+            step[axis] = grid.h;
+            let p = pa + step * t;
+            // Where the bounds cut the surface the cap's normal is not the field's: take
+            // the triangles' (see fix_degenerate_normals).
+            let mut end = g;
+            end[axis] += 1;
+            let normal = if grid.on_wall(g) || grid.on_wall(end) {
+                Vec3::ZERO
+            } else {
+                let g: Vec3 = local.iter().map(|q| q.gradient(p)).sum();
+                (-g).try_normalize().unwrap_or(Vec3::ZERO)
+            };
+            mesh.positions.push(p);
+            mesh.normals.push(normal);
+            (mesh.positions.len() - 1) as u32
+        })
     }
 }
 

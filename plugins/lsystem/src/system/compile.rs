@@ -1,0 +1,220 @@
+//! Compilation: rules to bytecode, stochastic groups and the per-symbol dispatch tables.
+
+use super::rule::{Kind, RuleDef};
+use crate::error::LsError;
+use crate::expr::{Expr, Operand};
+use crate::symbol::{Sym, SymbolTable};
+
+/// One module of a compiled successor.
+#[derive(Clone, Debug)]
+pub(super) struct Succ {
+    pub(super) sym: Sym,
+    pub(super) args: Box<[Expr]>,
+}
+
+/// A compiled rule's successor.
+#[derive(Clone, Debug)]
+pub(super) enum CKind {
+    Classic {
+        condition: Option<Expr>,
+        successor: Box<[Succ]>,
+        /// Stochastic alternatives (cumulative normalised weight, rule), on the group's head.
+        choices: Option<Box<[(f64, usize)]>>,
+    },
+    External(u32),
+}
+
+/// A compiled rule.
+#[derive(Clone, Debug)]
+pub(super) struct Compiled {
+    pub(super) kind: CKind,
+    /// A non-head member of a stochastic group: reached through its head only.
+    pub(super) skip: bool,
+}
+
+/// What a symbol turns into: itself, a fixed string of symbols (`plain_pool[start..]`), or
+/// the first applicable of some rules (`rule_lists[start..]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Dispatch {
+    Copy,
+    Plain { start: u32, len: u32 },
+    Rules { start: u32, len: u32 },
+}
+
+/// The compiled form of a system's rules, rebuilt by [`Tables::build`] after every change.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Tables {
+    pub(super) rules: Vec<Compiled>,
+    pub(super) dispatch: Vec<Dispatch>,
+    pub(super) rule_lists: Vec<u32>,
+    pub(super) plain_pool: Vec<u32>,
+    pub(super) ignored: Vec<bool>,
+    pub(super) uses_context: bool,
+    pub(super) all_plain: bool,
+}
+
+impl Tables {
+    /// Compiles every rule: names resolve against formals and `global_names`, dispatch
+    /// tables are built.
+    pub(super) fn build(
+        defs: &[RuleDef],
+        ignore_syms: &[Sym],
+        global_names: &[String],
+        symbols: &SymbolTable,
+    ) -> Result<Tables, LsError> {
+        let n = symbols.len();
+        let mut rules = Vec::with_capacity(defs.len());
+        for def in defs {
+            rules.push(compile(def, global_names, symbols)?);
+        }
+        // Stochastic groups: alternatives with the same left side; the first is the head.
+        let mut seen: Vec<(String, usize)> = Vec::new();
+        let mut members: Vec<Vec<(f64, usize)>> = Vec::new();
+        for (i, def) in defs.iter().enumerate() {
+            if let Kind::Classic {
+                weight: Some(w), ..
+            } = def.kind
+            {
+                match seen.iter().find(|(k, _)| *k == def.key) {
+                    Some((_, g)) => {
+                        members[*g].push((w, i));
+                        rules[i].skip = true;
+                    }
+                    None => {
+                        seen.push((def.key.clone(), members.len()));
+                        members.push(vec![(w, i)]);
+                    }
+                }
+            }
+        }
+        for group in members.iter().filter(|g| g.len() > 1) {
+            let total: f64 = group.iter().map(|m| m.0).sum();
+            let mut acc = 0.0;
+            let choices: Box<[(f64, usize)]> = group
+                .iter()
+                .map(|&(w, r)| {
+                    acc += w / total;
+                    (acc, r)
+                })
+                .collect();
+            if let CKind::Classic { choices: c, .. } = &mut rules[group[0].1].kind {
+                *c = Some(choices);
+            }
+        }
+        let mut ignored = vec![false; n];
+        for s in ignore_syms {
+            ignored[s.index()] = true;
+        }
+        let uses_context = defs
+            .iter()
+            .any(|d| !d.lhs.left.is_empty() || !d.lhs.right.is_empty());
+        let mut dispatch = vec![Dispatch::Copy; n];
+        let mut rule_lists = Vec::new();
+        let mut plain_pool = Vec::new();
+        for (s, slot) in dispatch.iter_mut().enumerate() {
+            let list: Vec<u32> = (0..defs.len())
+                .filter(|&r| defs[r].lhs.pred.sym.index() == s && !rules[r].skip)
+                .map(|r| r as u32)
+                .collect();
+            if list.is_empty() {
+                continue;
+            }
+            let r = list[0] as usize;
+            let def = &defs[r];
+            let plain = list.len() == 1
+                && def.lhs.left.is_empty()
+                && def.lhs.right.is_empty()
+                && def.lhs.pred.arity.is_none()
+                && matches!(&rules[r].kind, CKind::Classic { condition: None, successor, choices: None }
+                    if successor.iter().all(|s| s.args.is_empty()));
+            if plain {
+                let CKind::Classic { successor, .. } = &rules[r].kind else {
+                    continue;
+                };
+                let start = plain_pool.len() as u32;
+                plain_pool.extend(successor.iter().map(|s| s.sym.0));
+                *slot = Dispatch::Plain {
+                    start,
+                    len: successor.len() as u32,
+                };
+            } else {
+                let start = rule_lists.len() as u32;
+                rule_lists.extend(&list);
+                *slot = Dispatch::Rules {
+                    start,
+                    len: list.len() as u32,
+                };
+            }
+        }
+        let all_plain = dispatch
+            .iter()
+            .all(|d| !matches!(d, Dispatch::Rules { .. }));
+        Ok(Tables {
+            rules,
+            dispatch,
+            rule_lists,
+            plain_pool,
+            ignored,
+            uses_context,
+            all_plain,
+        })
+    }
+}
+
+/// Compiles one rule; names resolve against its formals, then `global_names`.
+fn compile(
+    def: &RuleDef,
+    global_names: &[String],
+    symbols: &SymbolTable,
+) -> Result<Compiled, LsError> {
+    let err = |message: String| LsError::Rule {
+        origin: def.origin,
+        rule: def.text.clone(),
+        message,
+    };
+    let kind = match &def.kind {
+        Kind::External(id) => CKind::External(*id),
+        Kind::Classic {
+            condition,
+            successor,
+            ..
+        } => {
+            let mut resolve = |name: &str| {
+                if let Some(i) = def.formals.iter().position(|f| f == name) {
+                    return Some(Operand::Param(i as u16));
+                }
+                global_names
+                    .iter()
+                    .position(|g| g == name)
+                    .map(|i| Operand::Global(i as u16))
+            };
+            let condition = match condition {
+                Some(c) => Some(
+                    Expr::compile(c, &mut resolve).map_err(|e| err(format!("condition: {e}")))?,
+                ),
+                None => None,
+            };
+            let mut succ = Vec::with_capacity(successor.len());
+            for m in successor {
+                let sym = symbols
+                    .get(&m.name)
+                    .ok_or_else(|| err(format!("symbol '{}' was not interned", m.name)))?;
+                if (sym == Sym::PUSH || sym == Sym::POP) && !m.args.is_empty() {
+                    return Err(err(format!("'{}' takes no parameters", m.name)));
+                }
+                let args = m
+                    .args
+                    .iter()
+                    .map(|a| Expr::compile(a, &mut resolve).map_err(|e| err(e.to_string())))
+                    .collect::<Result<Box<[Expr]>, LsError>>()?;
+                succ.push(Succ { sym, args });
+            }
+            CKind::Classic {
+                condition,
+                successor: succ.into_boxed_slice(),
+                choices: None,
+            }
+        }
+    };
+    Ok(Compiled { kind, skip: false })
+}

@@ -1,0 +1,112 @@
+//! Writing a model to disk, shared by `pge run` and the preview's export: `.glb`, or `.obj`
+//! with its `.mtl` and textures next to it, every file written atomically.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use pge_engine::ParamInfo;
+use pge_engine::export::{ExportMeta, glb_bytes, obj_files};
+use pge_engine::geometry::Model;
+
+/// The metadata a `.glb` records: the seed and the parameters' values, in order.
+#[must_use]
+pub fn export_meta(seed: u64, params: &[ParamInfo]) -> ExportMeta {
+    ExportMeta {
+        seed,
+        params: params
+            .iter()
+            .map(|p| (p.name.clone(), p.value.to_json()))
+            .collect(),
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder, renamed over
+/// `path` at the end, so that a failure never leaves a half-written file. The file gets
+/// the permissions of any new file (`0666` less the umask), not the temporary file's
+/// private `0600`.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // The kernel applies the umask to the mode given at creation.
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder
+        .tempfile_in(&dir)
+        .with_context(|| format!("cannot write in {}", dir.display()))?;
+    tmp.write_all(bytes)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    tmp.persist(path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+/// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
+/// folder (those first, the `.obj` last), anything else as `.glb` with `meta`.
+pub fn write_model(model: &Model, meta: &ExportMeta, output: &Path) -> anyhow::Result<()> {
+    let is_obj = output
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if is_obj {
+        let stem = output
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .to_string();
+        let mtl = format!("{stem}.mtl");
+        let files = obj_files(model, &mtl, &stem)?;
+        let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
+        for (name, png) in &files.textures {
+            write_atomically(&dir.join(name), png)?;
+        }
+        write_atomically(&dir.join(&mtl), files.mtl.as_bytes())?;
+        write_atomically(output, files.obj.as_bytes())?;
+    } else {
+        write_atomically(output, &glb_bytes(model, meta)?)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_write_leaves_nothing_and_names_the_folder() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let missing = dir.path().join("missing").join("tree.glb");
+        let err = write_atomically(&missing, b"glTF").expect_err("no such folder");
+        assert!(format!("{err:#}").contains("missing"), "{err:#}");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 0);
+    }
+
+    #[test]
+    fn an_existing_file_is_replaced_whole() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("out.glb");
+        std::fs::write(&path, b"an older and longer content").expect("write");
+        write_atomically(&path, b"new").expect("replaced");
+        assert_eq!(std::fs::read(&path).expect("read"), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn written_files_honour_the_umask_like_any_new_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().expect("tempdir");
+        let reference = dir.path().join("reference");
+        std::fs::File::create(&reference).expect("create");
+        let path = dir.path().join("model.glb");
+        write_atomically(&path, b"glTF").expect("written");
+        let mode = |p: &Path| std::fs::metadata(p).expect("metadata").permissions().mode() & 0o777;
+        assert_eq!(mode(&path), mode(&reference));
+    }
+}
