@@ -7,10 +7,14 @@
 //! of a node are removed. Before a root's node is within reach of any point, that root grows
 //! a trunk toward the cloud (the sum of unit vectors to all points, seed 000).
 //!
-//! Cost: a point's nearest node only changes when a node is added nearby, so each point
-//! caches its nearest node and every new node updates only the points in the grid cells
-//! around it (a [`PointGrid`] with cells of half the influence radius). An iteration then
-//! costs O(attracted points + new nodes x points near them), not points x nodes.
+//! Cost: a point's nearest node only changes when a node is added closer to it, so each
+//! point keeps its nearest node and its distance to it (its *reach*), and a new node visits
+//! only the points it changes: those within the influence radius and closer to it than to
+//! their nearest node (or within the kill distance). The [`PointGrid`] (cells of a third
+//! of the influence radius, split again where points are dense) keeps the largest reach of
+//! each cell and sub-cell, and a new node skips, unread, every cell whose distance exceeds
+//! that bound. An iteration then costs O(attracted points + the points each new node
+//! changes + the cells around it), not points x nodes nor new nodes x points in reach.
 //!
 //! The known failure of the method, a node pulled by points on opposite sides (its sum of
 //! directions cancels) or one that keeps regrowing where a node already stands, is guarded:
@@ -151,8 +155,6 @@ struct State {
     dead_since_grid: usize,
     nodes: Vec<Vec3>,
     parents: Vec<Option<u32>>,
-    /// Whether some point was within the influence radius when the node was added.
-    in_range: Vec<bool>,
     /// Nodes by cell of side `step`, for the duplicate-growth guard.
     node_cells: HashMap<[i32; 3], Vec<u32>, BuildHasherDefault<CellHasher>>,
     /// The iteration in which a node's growth was refused (its pullers are dropped next).
@@ -241,6 +243,10 @@ impl SpaceColonization {
 }
 
 impl State {
+    /// Adds a node and updates the points it changes: those within the kill distance die,
+    /// those within the influence radius that are closer to it than to their nearest node
+    /// take it as their nearest. The grid skips every other point without reading it (a
+    /// point's reach is its squared distance to its nearest node).
     fn add_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
         let index = self.nodes.len() as u32;
         self.nodes.push(position);
@@ -253,8 +259,7 @@ impl State {
             .entry(cell_of(position, p.step))
             .or_default()
             .push(index);
-        let (r2, k2) = (p.influence * p.influence, p.kill * p.kill);
-        let mut in_range = false;
+        let k2 = p.kill * p.kill;
         let State {
             grid,
             alive,
@@ -265,28 +270,38 @@ impl State {
             dead_since_grid,
             ..
         } = self;
-        grid.for_each_near(position, p.influence, |i, _, d2| {
+        grid.update_near(position, p.influence, |i, d2| {
             let i = i as usize;
             if !alive[i] {
-                return;
+                return 0.0;
             }
             if d2 < k2 {
                 alive[i] = false;
                 *alive_count -= 1;
                 *dead_since_grid += 1;
-            } else if d2 < r2 {
-                in_range = true;
-                if d2 < nearest_d2[i] {
-                    if nearest[i] == NONE {
-                        active.push(i as u32);
-                    }
-                    nearest[i] = index;
-                    nearest_d2[i] = d2;
-                }
+                return 0.0;
             }
+            if d2 < nearest_d2[i] {
+                if nearest[i] == NONE {
+                    active.push(i as u32);
+                }
+                nearest[i] = index;
+                nearest_d2[i] = d2;
+            }
+            nearest_d2[i]
         });
-        self.in_range.push(in_range);
         index
+    }
+
+    /// Whether a live point lies within the influence radius of `q` (and outside the kill
+    /// distance, as after a node at `q` was added).
+    fn in_range(&self, q: Vec3, p: &Params) -> bool {
+        let k2 = p.kill * p.kill;
+        let mut found = false;
+        self.grid.for_each_near(q, p.influence, |i, _, d2| {
+            found |= d2 >= k2 && self.alive[i as usize];
+        });
+        found
     }
 
     /// Whether a node stands within `eps` of `q`.
@@ -391,7 +406,6 @@ impl Algorithm for SpaceColonization {
             dead_since_grid: 0,
             nodes: Vec::new(),
             parents: Vec::new(),
-            in_range: Vec::new(),
             node_cells: HashMap::default(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
@@ -403,7 +417,7 @@ impl Algorithm for SpaceColonization {
         };
         for root in &p.roots {
             let r = st.add_node(*root, None, p);
-            if p.trunk > 0.0 || !st.in_range[r as usize] {
+            if p.trunk > 0.0 || !st.in_range(*root, p) {
                 st.trunk_tips.push((r, p.trunk));
             }
         }
@@ -487,8 +501,9 @@ impl Algorithm for SpaceColonization {
 
         // Trunks: straight up while a straight length is left, then toward the sum of unit
         // vectors to every live point until a point is within reach.
+        // A tip is kept only while it has straight trunk left or no point in reach (checked
+        // when it was added).
         let mut trunks = std::mem::take(&mut st.trunk_tips);
-        trunks.retain(|&(tip, left)| left > 0.0 || !st.in_range[tip as usize]);
         if st.alive_count == 0 {
             trunks.clear();
         }
@@ -547,7 +562,7 @@ impl Algorithm for SpaceColonization {
                 Some(q) => {
                     let child = st.add_node(q, Some(n), p);
                     if let Some(left) = trunk_left
-                        && (left > 0.0 || !st.in_range[child as usize])
+                        && (left > 0.0 || !st.in_range(q, p))
                     {
                         next_trunks.push((child, left));
                     }
@@ -558,6 +573,8 @@ impl Algorithm for SpaceColonization {
 
         if st.dead_since_grid * 4 > st.alive_count.max(1024) {
             st.grid = PointGrid::new(&st.points, &st.alive, p.influence / 3.0);
+            let nearest_d2 = &st.nearest_d2;
+            st.grid.set_reaches(|i| nearest_d2[i as usize]);
             st.dead_since_grid = 0;
         }
 
