@@ -10,6 +10,7 @@ mod errors;
 mod math;
 mod model;
 mod noise;
+mod order;
 pub mod params;
 pub(crate) mod random;
 mod sandbox;
@@ -19,7 +20,8 @@ pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
 pub use errors::{caller_location, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
-pub use random::{LuaRng, swap_rng, uniform};
+pub use order::{key_order, sorted_keys, sorted_pairs};
+pub use random::{LuaRng, swap_rng};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub use sandbox::{resolve_path, writable_path};
 
@@ -68,6 +70,7 @@ pub fn finite_number(lua: &mlua::Lua, v: &mlua::Value, what: &str) -> mlua::Resu
 /// Registers the support library into the `pge` table.
 pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
     sandbox::register(lua, pge)?;
+    order::register(lua)?;
     params::register(lua, pge)?;
     random::register(lua, pge)?;
     math::register(lua, pge)?;

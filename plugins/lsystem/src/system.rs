@@ -8,13 +8,7 @@ use crate::expr::{Ast, Expr, Operand};
 use crate::module_string::ModuleString;
 use crate::symbol::{Sym, SymbolTable};
 
-/// A uniform draw in `[0, 1)` with 53 random bits (MT19937's `genrand_res53`).
-#[must_use]
-pub fn uniform(mt: &mut Mt) -> f64 {
-    let a = f64::from(mt.next_u32() >> 5);
-    let b = f64::from(mt.next_u32() >> 6);
-    (a * 67_108_864.0 + b) / 9_007_199_254_740_992.0
-}
+pub(crate) use pge_engine::random::uniform;
 
 /// What the derivation needs from its environment: randomness, limits, rules written in
 /// another language (Lua functions) and the interpretation of new modules.

@@ -1,6 +1,7 @@
 //! Attraction points drawn from an envelope, and the uniform grid that finds them again.
 
 use glam::Vec3;
+use pge_engine::random::uniform24;
 use pge_engine::{Error, Location, RunContext};
 use rand_mt::Mt64;
 
@@ -26,11 +27,6 @@ pub const DEFAULT_POINTS: u32 = 2000;
 
 /// Candidates tried without finding one inside before the envelope is declared empty.
 const EMPTY_AFTER: u64 = 100_000;
-
-/// A uniform draw in `[0, 1)` with 24 random bits.
-fn unit(rng: &mut Mt64) -> f32 {
-    (rng.next_u64() >> 40) as f32 / (1u32 << 24) as f32
-}
 
 /// Draws the attraction points: `count` of them (default [`DEFAULT_POINTS`]; in the
 /// `vertices` mode every vertex unless `count` asks for fewer) by rejection sampling in the
@@ -99,7 +95,13 @@ pub fn generate(
         if out.is_empty() && attempts > EMPTY_AFTER {
             break;
         }
-        let p = lo + size * Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng));
+        let p = lo
+            + size
+                * Vec3::new(
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                );
         let keep = match mode {
             Mode::Surround { thickness } => shape
                 .signed_distance(p)
