@@ -14,29 +14,77 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 pub use pge_engine;
 
-/// The folder of the script library: `$PGE_LIBRARY` if set, else the `scripts/` folder of
-/// this source tree.
+/// The file that marks a folder as PGE's script library (the repository's `scripts/`).
+pub const LIBRARY_MARKER: &str = ".pge-library";
+
+/// The folder of the script library, found at run time: `$PGE_LIBRARY` if set; else the
+/// first folder named `scripts` holding a [`LIBRARY_MARKER`] file, looked for beside the
+/// running program and in each folder above it (so `target/release/pge` of a checkout finds
+/// the checkout's `scripts/`), then in the current folder and each folder above it. `None`
+/// when there is none: scripts then read only their own folder tree.
+///
+/// A host that ships the library elsewhere passes its folder to
+/// [`EngineBuilder::library`](pge_engine::EngineBuilder::library) instead.
 #[must_use]
-pub fn library_folder() -> PathBuf {
-    match std::env::var_os("PGE_LIBRARY") {
-        Some(p) => PathBuf::from(p),
-        None => PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts")),
+pub fn library_folder() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("PGE_LIBRARY").filter(|p| !p.is_empty()) {
+        return Some(PathBuf::from(p));
     }
+    let exe = std::env::current_exe().ok();
+    let cwd = std::env::current_dir().ok();
+    exe.as_deref()
+        .and_then(Path::parent)
+        .and_then(find_library)
+        .or_else(|| cwd.as_deref().and_then(find_library))
 }
 
-/// An engine builder with every PGE plugin and the script library.
+/// The first `scripts` folder with the marker in `start` or a folder above it.
+fn find_library(start: &Path) -> Option<PathBuf> {
+    start
+        .ancestors()
+        .map(|dir| dir.join("scripts"))
+        .find(|candidate| candidate.join(LIBRARY_MARKER).is_file())
+}
+
+/// An engine builder with every PGE plugin and the script library ([`library_folder`]).
 #[must_use]
 pub fn default_engine() -> pge_engine::EngineBuilder {
-    pge_engine::Engine::builder()
-        .library(library_folder())
+    let builder = match library_folder() {
+        Some(folder) => pge_engine::Engine::builder().library(folder),
+        None => pge_engine::Engine::builder(),
+    };
+    builder
         .plugin(pge_lsystem::LSystemPlugin)
         .plugin(pge_turtle::TurtlePlugin)
         .plugin(pge_spacecol::SpaceColonizationPlugin)
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_library_is_the_marked_scripts_folder_above_a_start() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let deep = dir.path().join("target/release/deps");
+        std::fs::create_dir_all(&deep).expect("folders");
+        std::fs::create_dir_all(dir.path().join("target/scripts")).expect("unmarked");
+        assert_eq!(find_library(&deep), None);
+        std::fs::create_dir_all(dir.path().join("scripts")).expect("library");
+        std::fs::write(dir.path().join("scripts").join(LIBRARY_MARKER), "").expect("marker");
+        assert_eq!(find_library(&deep), Some(dir.path().join("scripts")));
+    }
+
+    #[test]
+    fn this_checkout_has_a_marked_library() {
+        let scripts = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts");
+        assert!(scripts.join(LIBRARY_MARKER).is_file());
+    }
 }

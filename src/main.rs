@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod common;
 mod derive;
 mod output;
+#[cfg(feature = "preview")]
 mod preview;
 mod run;
 
@@ -26,6 +27,7 @@ enum Command {
     /// Print the string an L-system derives (text, count or json).
     Derive(derive::DeriveArgs),
     /// Open a window that shows the script's model and regenerates it on every save.
+    #[cfg(feature = "preview")]
     Preview(preview::PreviewArgs),
 }
 
@@ -33,6 +35,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
+        #[cfg(feature = "preview")]
         Command::Preview(args) => preview::preview(args),
         Command::Derive(args) => args
             .script

@@ -345,6 +345,13 @@ fn pairs_order_is_the_same_on_every_run() {
         .collect();
     assert_eq!(outs[0], outs[1]);
     assert_eq!(outs[1], outs[2]);
+    let (doc, _, _) = gltf::import(dir.path().join("0.glb")).expect("imports");
+    assert_eq!(
+        doc.meshes()
+            .next()
+            .and_then(|m| m.name().map(str::to_string)),
+        Some("alpha,beta,delta,epsilon,eta,gamma,iota,kappa,theta,zeta".to_string())
+    );
 }
 
 #[test]

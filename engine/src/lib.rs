@@ -20,20 +20,30 @@
 //! ```
 
 pub mod algorithm;
+#[cfg(feature = "lua")]
 mod engine;
 mod error;
 pub mod export;
 pub mod geometry;
+#[cfg(feature = "lua")]
 pub mod lua;
+#[cfg(feature = "lua")]
 mod plugin;
+pub mod random;
+#[cfg(feature = "lua")]
 mod session;
 
 pub use algorithm::{Algorithm, RunContext, Step};
+#[cfg(feature = "lua")]
 pub use engine::{Engine, EngineBuilder, Limits};
 pub use error::{Error, Location, Result};
+#[cfg(feature = "lua")]
 pub use lua::params::{ParamInfo, ParamValue};
+#[cfg(feature = "lua")]
 pub use plugin::Plugin;
+#[cfg(feature = "lua")]
 pub use session::{Generated, Session, SessionOptions};
 
 /// The `mlua` crate the engine is built with, for plugins and host applications.
+#[cfg(feature = "lua")]
 pub use mlua;

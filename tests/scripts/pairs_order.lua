@@ -1,4 +1,4 @@
--- Builds a name in `pairs` order: the same on every run (Lua's hash seed is fixed).
+-- Builds a name in `pairs` order: the same on every run (keys are visited in a defined order).
 local t = {}
 for _, k in ipairs{"alpha","beta","gamma","delta","epsilon","zeta","eta","theta","iota","kappa"} do t[k] = true end
 local s = {}

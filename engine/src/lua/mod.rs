@@ -13,6 +13,7 @@ mod math;
 mod model;
 mod noise;
 pub mod options;
+mod order;
 pub mod params;
 pub(crate) mod random;
 mod sandbox;
@@ -25,7 +26,8 @@ pub use errors::{caller_location, engine_error_of, error_message, script_error, 
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};
 pub use options::{Bounds, KeyStyle, Options};
-pub use random::{LuaRng, current_uniform, swap_rng, uniform};
+pub use order::{key_order, sorted_keys, sorted_pairs};
+pub use random::{LuaRng, current_uniform, swap_rng};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub use sandbox::{resolve_path, writable_path};
 pub use services::{
@@ -58,6 +60,7 @@ pub fn memory_limit(lua: &mlua::Lua) -> usize {
 /// Registers the support library into the `pge` table.
 pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
     sandbox::register(lua, pge)?;
+    order::register(lua)?;
     params::register(lua, pge)?;
     random::register(lua, pge)?;
     math::register(lua, pge)?;

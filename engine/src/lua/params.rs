@@ -188,8 +188,8 @@ pub(crate) fn end_main(lua: &Lua) -> Result<(), (Location, String)> {
 pub(crate) fn push_scope(lua: &Lua, script: &str, overrides: Option<Table>) -> mlua::Result<()> {
     let mut list = Vec::new();
     if let Some(t) = overrides {
-        for pair in t.pairs::<String, Value>() {
-            let (k, v) = pair?;
+        for (k, v) in super::sorted_pairs(&t)? {
+            let k = <String as mlua::FromLua>::from_lua(k, lua)?;
             let value = ParamValue::from_lua(&v).ok_or_else(|| {
                 script_error(
                     lua,

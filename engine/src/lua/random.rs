@@ -6,34 +6,10 @@ use rand_mt::Mt;
 
 use super::errors::script_error;
 use super::state::SessionState;
+use crate::random::{int_in, mt_from_seed, normal, uniform};
 
 /// The generator `pge.random()` and `math.random()` draw from.
 pub(crate) struct CurrentRng(pub Mt);
-
-/// A uniform number in [0, 1) with 53 random bits (MT19937's `genrand_res53`).
-pub fn uniform(rng: &mut Mt) -> f64 {
-    let a = (rng.next_u32() >> 5) as f64;
-    let b = (rng.next_u32() >> 6) as f64;
-    (a * 67_108_864.0 + b) / 9_007_199_254_740_992.0
-}
-
-/// An integer in `[a, b]` (inclusive).
-fn int_in(rng: &mut Mt, a: i64, b: i64) -> i64 {
-    let span = (b - a) as f64 + 1.0;
-    (a + (uniform(rng) * span).floor() as i64).min(b)
-}
-
-fn normal(rng: &mut Mt, mu: f64, sigma: f64) -> f64 {
-    let u1 = 1.0 - uniform(rng);
-    let u2 = uniform(rng);
-    mu + sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
-/// The MT19937 of a seed (both halves of a 64-bit seed are used).
-#[must_use]
-pub(crate) fn mt_from_seed(seed: u64) -> Mt {
-    Mt::new_with_key([seed as u32, (seed >> 32) as u32])
-}
 
 /// Replaces the generator `pge.random()` draws from and returns the previous one. An
 /// L-system swaps its instance's generator in around its rule calls.
@@ -147,31 +123,4 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
         })?,
     )?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn uniform_is_in_range_and_repeatable() {
-        let mut a = mt_from_seed(7);
-        let mut b = mt_from_seed(7);
-        for _ in 0..1000 {
-            let x = uniform(&mut a);
-            assert!((0.0..1.0).contains(&x));
-            assert_eq!(x, uniform(&mut b));
-        }
-    }
-
-    #[test]
-    fn int_is_inclusive() {
-        let mut r = mt_from_seed(1);
-        let mut seen = [false; 3];
-        for _ in 0..200 {
-            let v = int_in(&mut r, 1, 3);
-            seen[(v - 1) as usize] = true;
-        }
-        assert_eq!(seen, [true; 3]);
-    }
 }

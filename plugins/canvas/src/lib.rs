@@ -17,16 +17,20 @@
 
 mod image;
 mod lines;
+#[cfg(feature = "lua")]
 mod lua;
 
 pub use crate::image::{Image, ImageError, MAX_PIXELS};
 pub use lines::{Lines, LinesError, MAX_SEGMENTS};
+#[cfg(feature = "lua")]
 pub use lua::{LuaImage, LuaLines, LuaTexture};
 
+#[cfg(feature = "lua")]
 /// Registers `pge.Lines` and `pge.Image`.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CanvasPlugin;
 
+#[cfg(feature = "lua")]
 impl pge_engine::Plugin for CanvasPlugin {
     fn name(&self) -> &str {
         "canvas"

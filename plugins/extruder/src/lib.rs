@@ -14,6 +14,7 @@
 //! ```
 
 mod extruder;
+#[cfg(feature = "lua")]
 mod lua;
 mod matrix;
 mod triangulate;
@@ -23,12 +24,15 @@ pub use extruder::{Extruder, ExtruderError, ExtruderOptions, MAX_SHAPE_POINTS, M
 pub use matrix::{MAX_STACK_DEPTH, MatrixError, MatrixManipulator};
 pub use triangulate::{EAR_CLIPPING_MAX, triangulate};
 
+#[cfg(feature = "lua")]
 pub use lua::{LuaExtruder, LuaMatrixManipulator};
 
+#[cfg(feature = "lua")]
 /// Registers `pge.Extruder` and `pge.MatrixManipulator`.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ExtruderPlugin;
 
+#[cfg(feature = "lua")]
 impl pge_engine::Plugin for ExtruderPlugin {
     fn name(&self) -> &str {
         "extruder"

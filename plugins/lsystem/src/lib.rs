@@ -28,13 +28,15 @@
 mod classic;
 mod error;
 pub mod expr;
+#[cfg(feature = "lua")]
 mod lua;
 mod module_string;
 mod symbol;
 mod system;
 
 pub use error::LsError;
+#[cfg(feature = "lua")]
 pub use lua::{Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, derive_value};
 pub use module_string::ModuleString;
 pub use symbol::{Sym, SymbolTable};
-pub use system::{Host, NativeHost, StepOptions, System, uniform};
+pub use system::{Host, NativeHost, StepOptions, System};

@@ -17,7 +17,8 @@ use crate::module_string::ModuleString;
 use crate::symbol::{Sym, SymbolTable};
 
 pub use self::derive::StepOptions;
-pub use self::host::{Host, NativeHost, uniform};
+pub use self::host::{Host, NativeHost};
+pub(crate) use pge_engine::random::uniform;
 
 ///
 /// ```

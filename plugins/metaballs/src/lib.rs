@@ -13,18 +13,22 @@
 //! ```
 
 mod field;
+#[cfg(feature = "lua")]
 mod lua;
 mod march;
 pub mod table;
 
 pub use field::{FieldError, MAX_PARTICLES, Metaballs, Particle};
+#[cfg(feature = "lua")]
 pub use lua::{LuaMarchingCubes, LuaMetaballs};
 pub use march::{MAX_RESOLUTION, MarchError, MarchOptions, MarchStats, MarchingCubes};
 
+#[cfg(feature = "lua")]
 /// Registers `pge.Metaballs` and `pge.MarchingCubes`.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct MetaballsPlugin;
 
+#[cfg(feature = "lua")]
 impl pge_engine::Plugin for MetaballsPlugin {
     fn name(&self) -> &str {
         "metaballs"

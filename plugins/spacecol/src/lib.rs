@@ -20,12 +20,14 @@
 //! ```
 
 mod colonize;
+#[cfg(feature = "lua")]
 mod lua;
 mod points;
 mod shape;
 mod trimesh;
 
 pub use colonize::{Params, SpaceColonization};
+#[cfg(feature = "lua")]
 pub use lua::{LuaShape, SpaceColonizationPlugin};
 pub use points::{DEFAULT_POINTS, Mode, PointGrid, generate};
 pub use shape::{PredicateFn, Shape};

@@ -1,6 +1,7 @@
 //! Attraction points drawn from an envelope, and the uniform grid that finds them again.
 
 use glam::Vec3;
+use pge_engine::random::uniform24;
 use pge_engine::{Error, Location, RunContext};
 use rand_mt::Mt64;
 
@@ -26,11 +27,6 @@ pub const DEFAULT_POINTS: u32 = 2000;
 
 /// Candidates tried without finding one inside before the envelope is declared empty.
 const EMPTY_AFTER: u64 = 100_000;
-
-/// A uniform draw in `[0, 1)` with 24 random bits.
-fn unit(rng: &mut Mt64) -> f32 {
-    (rng.next_u64() >> 40) as f32 / (1u32 << 24) as f32
-}
 
 /// Draws the attraction points: `count` of them (default [`DEFAULT_POINTS`]; in the
 /// `vertices` mode every vertex unless `count` asks for fewer) by rejection sampling in the
@@ -99,7 +95,13 @@ pub fn generate(
         if out.is_empty() && attempts > EMPTY_AFTER {
             break;
         }
-        let p = lo + size * Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng));
+        let p = lo
+            + size
+                * Vec3::new(
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                );
         let keep = match mode {
             Mode::Surround { thickness } => shape
                 .signed_distance(p)
@@ -576,7 +578,7 @@ mod tests {
     fn updates_visit_exactly_the_points_within_reach_in_cell_order() {
         let mut rng = Mt64::new(3);
         let pts: Vec<Vec3> = (0..20_000)
-            .map(|_| Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) * 2.0)
+            .map(|_| Vec3::new(uniform24(&mut rng), uniform24(&mut rng), uniform24(&mut rng)) * 2.0)
             .collect();
         let keep: Vec<bool> = (0..pts.len()).map(|i| i % 7 != 0).collect();
         let mut g = PointGrid::new(&pts, &keep, 0.3);
@@ -587,7 +589,7 @@ mod tests {
         let r = 0.5;
         let mut visited_total = 0;
         for round in 0..300 {
-            let q = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) * 2.2 - 0.1;
+            let q = Vec3::new(uniform24(&mut rng), uniform24(&mut rng), uniform24(&mut rng)) * 2.2 - 0.1;
             let mut want: Vec<(usize, u32)> = (0..pts.len() as u32)
                 .filter(|&i| {
                     let d2 = pts[i as usize].distance_squared(q);

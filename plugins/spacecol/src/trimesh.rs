@@ -1,9 +1,16 @@
 //! Closed triangle meshes as envelopes: reading `.obj` and `.glb`, welding, the closedness
-//! check and the inside test by ray parity (seed 000).
+//! check, and the inside test by ray parity (seed 000) and distance queries through a BVH
+//! (`obvhs`) built once per mesh.
 
 use std::collections::HashMap;
+use std::time::Duration;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::builder::build_bvh2;
+use obvhs::ray::Ray;
 use pge_engine::geometry::{Model, Primitive};
 
 /// Why a mesh cannot be an envelope.
@@ -45,8 +52,9 @@ pub enum MeshError {
     NotFinite,
 }
 
-/// A welded triangle mesh with a grid that speeds up the ray-parity inside test.
-#[derive(Clone, Debug)]
+/// A welded triangle mesh with a bounding volume hierarchy over its triangles, built once,
+/// for the ray-parity inside test and the distance queries.
+#[derive(Clone)]
 pub struct TriMesh {
     /// Where the mesh came from (a file name, "model"), for messages.
     pub name: String,
@@ -56,9 +64,20 @@ pub struct TriMesh {
     triangles: Vec<[u32; 3]>,
     min: Vec3,
     max: Vec3,
-    /// Triangles by cell of a `cells x cells` grid over the bounds projected on YZ.
-    grid: Vec<Vec<u32>>,
-    cells: usize,
+    /// The triangles' bounds, each grown by `pad` (so that rays along a face's plane and
+    /// rounding in the distance bound never drop a triangle), in a BVH2.
+    bvh: Bvh2,
+}
+
+impl std::fmt::Debug for TriMesh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TriMesh")
+            .field("name", &self.name)
+            .field("vertices", &self.vertices.len())
+            .field("triangles", &self.triangles.len())
+            .field("closed", &self.open.is_none())
+            .finish_non_exhaustive()
+    }
 }
 
 impl TriMesh {
@@ -100,39 +119,34 @@ impl TriMesh {
             min = min.min(*v);
             max = max.max(*v);
         }
-        let cells = ((triangles.len() as f32).sqrt() as usize).clamp(1, 256);
-        let mut mesh = TriMesh {
+        // Larger than the ray's nudge in `contains` and than any rounding of a distance.
+        let pad = (max - min).max_element() * 1e-4;
+        let boxes: Vec<Aabb> = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|k| Vec3A::from(vertices[k as usize]));
+                Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
+            })
+            .collect();
+        let bvh = build_bvh2(
+            &boxes,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        Ok(TriMesh {
             name: name.into(),
             open,
             vertices,
             triangles,
             min,
             max,
-            grid: vec![Vec::new(); cells * cells],
-            cells,
-        };
-        for (i, t) in mesh.triangles.iter().enumerate() {
-            let ps = t.map(|k| mesh.vertices[k as usize]);
-            let lo = ps[0].min(ps[1]).min(ps[2]);
-            let hi = ps[0].max(ps[1]).max(ps[2]);
-            let (y0, z0) = mesh.cell(lo);
-            let (y1, z1) = mesh.cell(hi);
-            for y in y0..=y1 {
-                for z in z0..=z1 {
-                    mesh.grid[y * cells + z].push(i as u32);
-                }
-            }
-        }
-        Ok(mesh)
+            bvh,
+        })
     }
 
-    /// The grid cell of a point's (y, z), clamped.
-    fn cell(&self, p: Vec3) -> (usize, usize) {
-        let size = (self.max - self.min).max(Vec3::splat(f32::MIN_POSITIVE));
-        let f = |v: f32, lo: f32, s: f32| {
-            (((v - lo) / s * self.cells as f32) as isize).clamp(0, self.cells as isize - 1) as usize
-        };
-        (f(p.y, self.min.y, size.y), f(p.z, self.min.z, size.z))
+    /// The corners of triangle `t`.
+    fn corners(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|k| self.vertices[k as usize])
     }
 
     /// `Ok` when every edge borders an even number of triangles (the inside test needs a
@@ -163,7 +177,8 @@ impl TriMesh {
     }
 
     /// Whether `p` is inside: a ray toward +x crosses the surface an odd number of times.
-    /// The ray is nudged off axis by a tiny fixed amount so it does not run along edges.
+    /// The ray is nudged off axis by a tiny fixed amount so it does not run along edges; the
+    /// BVH hands over the triangles whose (padded) bounds the ray meets.
     #[must_use]
     pub fn contains(&self, p: Vec3) -> bool {
         if p.cmplt(self.min).any() || p.cmpgt(self.max).any() {
@@ -171,41 +186,78 @@ impl TriMesh {
         }
         let extent = (self.max - self.min).max_element();
         let (py, pz) = (p.y + extent * 1.234_567e-6, p.z + extent * 2.345_678e-6);
-        let (cy, cz) = self.cell(Vec3::new(p.x, py, pz));
+        let ray = Ray::new_inf(Vec3A::new(p.x, py, pz), Vec3A::X);
         let mut crossings = 0u32;
-        for &t in &self.grid[cy * self.cells + cz] {
-            let [a, b, c] = self.triangles[t as usize].map(|k| self.vertices[k as usize]);
+        self.bvh.ray_traverse_anyhit(ray, |_, id| {
+            let [a, b, c] = self.corners(self.bvh.primitive_indices[id] as usize);
             // Barycentric coordinates of (py, pz) in the triangle projected on YZ.
             let d = (b.y - a.y) * (c.z - a.z) - (c.y - a.y) * (b.z - a.z);
             if d == 0.0 {
-                continue;
+                return;
             }
             let u = ((py - a.y) * (c.z - a.z) - (c.y - a.y) * (pz - a.z)) / d;
             let v = ((b.y - a.y) * (pz - a.z) - (py - a.y) * (b.z - a.z)) / d;
             if u < 0.0 || v < 0.0 || u + v > 1.0 {
-                continue;
+                return;
             }
             let x = a.x + u * (b.x - a.x) + v * (c.x - a.x);
             if x > p.x {
                 crossings += 1;
             }
-        }
+        });
         crossings % 2 == 1
+    }
+
+    /// The squared distance from `p` to the nearest triangle: a depth-first walk of the BVH,
+    /// nearer child first, skipping boxes farther than the best triangle so far. The boxes
+    /// are padded, so a skipped triangle is never nearer than the result.
+    #[must_use]
+    pub fn distance_squared(&self, p: Vec3) -> f32 {
+        let box_d2 = |aabb: &Aabb| {
+            let q = Vec3A::from(p);
+            (aabb.min - q)
+                .max(q - aabb.max)
+                .max(Vec3A::ZERO)
+                .length_squared()
+        };
+        let nodes = &self.bvh.nodes;
+        let mut best = f32::INFINITY;
+        let Some(root) = nodes.first() else {
+            return best;
+        };
+        let mut stack = vec![(box_d2(root.aabb()), 0usize)];
+        while let Some((d2, index)) = stack.pop() {
+            if d2 > best {
+                continue;
+            }
+            let node = &nodes[index];
+            if node.is_leaf() {
+                let first = node.first_index as usize;
+                for id in &self.bvh.primitive_indices[first..first + node.prim_count as usize] {
+                    let [a, b, c] = self.corners(*id as usize);
+                    best = best.min(p.distance_squared(closest_on_triangle(p, a, b, c)));
+                }
+            } else {
+                let (l, r) = (node.first_index as usize, node.first_index as usize + 1);
+                let (dl, dr) = (box_d2(nodes[l].aabb()), box_d2(nodes[r].aabb()));
+                // Pushed farther first, so the nearer child is walked first.
+                if dl <= dr {
+                    stack.push((dr, r));
+                    stack.push((dl, l));
+                } else {
+                    stack.push((dl, l));
+                    stack.push((dr, r));
+                }
+            }
+        }
+        best
     }
 
     /// Distance to the nearest triangle, negative inside.
     #[must_use]
     pub fn signed_distance(&self, p: Vec3) -> f32 {
-        let mut d2 = f32::INFINITY;
-        for t in &self.triangles {
-            let [a, b, c] = t.map(|k| self.vertices[k as usize]);
-            d2 = d2.min(p.distance_squared(closest_on_triangle(p, a, b, c)));
-        }
-        if self.contains(p) {
-            -d2.sqrt()
-        } else {
-            d2.sqrt()
-        }
+        let d = self.distance_squared(p).sqrt();
+        if self.contains(p) { -d } else { d }
     }
 
     /// Reads a Wavefront `.obj`: `v x y z` and `f a b c ...` lines (1-based or negative
@@ -463,6 +515,82 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
         ];
         let m = TriMesh::new("square", &p, &[[0, 1, 2], [3, 4, 5]]).expect("ok");
         assert_eq!(m.vertices().len(), 4);
+    }
+
+    /// A closed, lumpy ball: a UV sphere with `n` rings whose radius varies with direction.
+    fn lumpy_ball(n: u32) -> TriMesh {
+        let mut p = vec![Vec3::new(0.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        for i in 1..n {
+            let theta = std::f32::consts::PI * i as f32 / n as f32;
+            for j in 0..2 * n {
+                let phi = std::f32::consts::PI * j as f32 / n as f32;
+                let r = 1.0 + 0.3 * (3.0 * phi).sin() * (2.0 * theta).sin();
+                p.push(
+                    r * Vec3::new(
+                        theta.sin() * phi.cos(),
+                        -theta.cos(),
+                        theta.sin() * phi.sin(),
+                    ),
+                );
+            }
+        }
+        let ring = |i: u32, j: u32| 2 + (i - 1) * 2 * n + j % (2 * n);
+        let mut t = Vec::new();
+        for j in 0..2 * n {
+            t.push([0, ring(1, j), ring(1, j + 1)]);
+            t.push([1, ring(n - 1, j + 1), ring(n - 1, j)]);
+            for i in 1..n - 1 {
+                t.push([ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)]);
+                t.push([ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)]);
+            }
+        }
+        let m = TriMesh::new("ball", &p, &t).expect("valid");
+        m.closed().expect("closed");
+        m
+    }
+
+    #[test]
+    fn bvh_queries_agree_with_testing_every_triangle() {
+        let m = lumpy_ball(12);
+        let mut rng = rand_mt::Mt64::new(5);
+        let mut inside = 0;
+        for _ in 0..2000 {
+            let p = Vec3::new(
+                pge_engine::random::uniform24(&mut rng),
+                pge_engine::random::uniform24(&mut rng),
+                pge_engine::random::uniform24(&mut rng),
+            ) * 3.0
+                - 1.5;
+            let brute = m
+                .triangles()
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|k| m.vertices()[k as usize]);
+                    p.distance_squared(closest_on_triangle(p, a, b, c))
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(m.distance_squared(p), brute, "at {p}");
+            // Parity by every triangle, as the inside test did before the BVH.
+            let extent = (m.max - m.min).max_element();
+            let (py, pz) = (p.y + extent * 1.234_567e-6, p.z + extent * 2.345_678e-6);
+            let crossings = (0..m.triangles().len())
+                .filter(|t| {
+                    let [a, b, c] = m.corners(*t);
+                    let d = (b.y - a.y) * (c.z - a.z) - (c.y - a.y) * (b.z - a.z);
+                    let u = ((py - a.y) * (c.z - a.z) - (c.y - a.y) * (pz - a.z)) / d;
+                    let v = ((b.y - a.y) * (pz - a.z) - (py - a.y) * (b.z - a.z)) / d;
+                    d != 0.0
+                        && u >= 0.0
+                        && v >= 0.0
+                        && u + v <= 1.0
+                        && a.x + u * (b.x - a.x) + v * (c.x - a.x) > p.x
+                })
+                .count();
+            let in_bounds = !(p.cmplt(m.min).any() || p.cmpgt(m.max).any());
+            assert_eq!(m.contains(p), in_bounds && crossings % 2 == 1, "at {p}");
+            inside += usize::from(m.contains(p));
+        }
+        assert!(inside > 200 && inside < 1800, "{inside} of 2000 inside");
     }
 
     #[test]

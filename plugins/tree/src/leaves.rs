@@ -8,9 +8,9 @@ use rand_mt::Mt64;
 
 use crate::options::LeafOptions;
 
-/// A uniform draw in `[0, 1)` (53 random bits).
+/// A uniform draw in `[0, 1)` (53 random bits, rounded to `f32`).
 pub(crate) fn uniform(rng: &mut Mt64) -> f32 {
-    ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64) as f32
+    pge_engine::random::uniform64(rng) as f32
 }
 
 /// A uniform integer in `lo..=hi`.

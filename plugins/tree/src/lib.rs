@@ -31,6 +31,7 @@
 
 mod cylinders;
 mod leaves;
+#[cfg(feature = "lua")]
 pub mod lua;
 mod merge;
 mod options;

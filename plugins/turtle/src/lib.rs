@@ -18,19 +18,25 @@
 //! assert_eq!(skeleton.tips().len(), 2);
 //! ```
 
+#[cfg(feature = "lua")]
 mod lua;
 mod turtle;
 
+#[cfg(feature = "lua")]
 use mlua::{Lua, Table, Value};
+#[cfg(feature = "lua")]
 use pge_engine::Plugin;
 
+#[cfg(feature = "lua")]
 pub use lua::LuaTurtle;
 pub use turtle::{State, Turtle, TurtleError, TurtleOptions};
 
+#[cfg(feature = "lua")]
 /// The `pge.turtle` plugin; it also makes turtles interpret L-system modules by default.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TurtlePlugin;
 
+#[cfg(feature = "lua")]
 impl Plugin for TurtlePlugin {
     fn name(&self) -> &str {
         "turtle"

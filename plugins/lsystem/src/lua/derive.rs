@@ -49,7 +49,8 @@ fn to_json(v: &Value, depth: u32) -> serde_json::Value {
             let n = t.raw_len();
             let mut count = 0;
             let mut map = serde_json::Map::new();
-            for pair in t.pairs::<Value, Value>().flatten() {
+            // Keys in a defined order: serde_json keeps insertion order.
+            for pair in pge_engine::lua::sorted_pairs(t).unwrap_or_default() {
                 count += 1;
                 let key = match &pair.0 {
                     Value::String(s) => s.to_string_lossy(),

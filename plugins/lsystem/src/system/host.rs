@@ -1,17 +1,10 @@
 //! What a derivation needs from outside the rules: randomness, limits, external rules.
 
+use pge_engine::random::uniform;
 use rand_mt::Mt;
 
 use crate::error::LsError;
 use crate::module_string::ModuleString;
-
-/// A uniform draw in `[0, 1)` with 53 random bits (MT19937's `genrand_res53`).
-#[must_use]
-pub fn uniform(mt: &mut Mt) -> f64 {
-    let a = f64::from(mt.next_u32() >> 5);
-    let b = f64::from(mt.next_u32() >> 6);
-    (a * 67_108_864.0 + b) / 9_007_199_254_740_992.0
-}
 
 /// What the derivation needs from its environment: randomness, limits, rules written in
 /// another language (Lua functions) and the interpretation of new modules.
