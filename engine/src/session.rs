@@ -93,6 +93,7 @@ impl Session {
             instruction_limit: limits.instructions,
             ..SessionState::default()
         });
+        lua.set_app_data(crate::lua::state::EngineHandle(engine.clone()));
         lua.set_app_data(CurrentRng(crate::lua::random::mt_from_seed(options.seed)));
         install_hook(&lua).map_err(|e| Error::Plugin {
             plugin: "lua".into(),

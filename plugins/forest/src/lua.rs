@@ -1,0 +1,722 @@
+//! The Lua side: `pge.Forest{...}` with `:terrain`, `:scatter`, `:height`, `:normal`,
+//! `:instances`, `:tiles` and `:selectTile`. A thin adapter: it reads and checks options
+//! (errors at the calling line name the option and what it needs), hands plain values to
+//! [`Forest`], and grows the variants of a species script in parallel, each in a session of
+//! its own created by the same engine (same sandbox and limits).
+
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::sync::Arc;
+
+use mlua::{Function, Lua, Table, UserData, UserDataMethods, Value, WeakLua};
+use pge_engine::algorithm::run;
+use pge_engine::geometry::Model;
+use pge_engine::lua::{
+    AlgorithmHandle, LuaVec3, algorithm_from, caller_location, finite_number, resolve_path,
+    script_error, to_engine_error,
+};
+use pge_engine::{Algorithm, Engine, Error, Location, Plugin, RunContext, SessionOptions, Step};
+use rayon::prelude::*;
+
+use crate::{
+    Density, FbmOptions, Forest, ForestError, Grown, Layer, Layout, Method, Raster, Terrain,
+    Variants, assemble, layout_model, unique_seed, variant_seed,
+};
+
+/// Adds `pge.Forest` to every session.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ForestPlugin;
+
+impl Plugin for ForestPlugin {
+    fn name(&self) -> &str {
+        "forest"
+    }
+
+    fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
+        pge.set("Forest", lua.create_function(new_forest)?)
+    }
+}
+
+/// Where a layer's trees come from.
+#[derive(Clone)]
+enum Species {
+    /// A script run once per variant, each in its own session.
+    Path {
+        /// The path shown in errors and given to the session.
+        shown: String,
+        /// `params` overrides as `--set` strings.
+        params: Vec<(String, String)>,
+    },
+    /// A function `(params, seed)` called in the forest's session.
+    Function { f: Function, params: Table },
+}
+
+struct Spec {
+    forest: Forest,
+    species: Vec<(Species, Location)>,
+    location: Location,
+    selected: Option<(usize, usize)>,
+}
+
+/// A forest being described by a script (`pge.Forest{...}`); returning it runs it.
+#[derive(Clone)]
+pub struct LuaForest(Rc<RefCell<Spec>>);
+
+const FOREST_OPTIONS: &[&str] = &["size", "seed", "tile"];
+const TERRAIN_OPTIONS: &[&str] = &[
+    "height",
+    "scale",
+    "octaves",
+    "lacunarity",
+    "persistence",
+    "image",
+    "resolution",
+];
+const SCATTER_OPTIONS: &[&str] = &[
+    "species",
+    "method",
+    "minDistance",
+    "density",
+    "slope",
+    "altitude",
+    "variants",
+    "scale",
+    "params",
+    "jitter",
+];
+
+fn table(lua: &Lua, what: &str, v: Value) -> mlua::Result<Table> {
+    match v {
+        Value::Table(t) => Ok(t),
+        other => Err(script_error(
+            lua,
+            format!("{what} takes a table of options, got {}", other.type_name()),
+        )),
+    }
+}
+
+fn known_keys(lua: &Lua, what: &str, t: &Table, known: &[&str]) -> mlua::Result<()> {
+    for pair in t.pairs::<Value, Value>() {
+        let (k, _) = pair?;
+        let name = match &k {
+            Value::String(s) => s.to_string_lossy(),
+            other => format!("[{}]", other.type_name()),
+        };
+        if !known.contains(&name.as_str()) {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{what}: '{name}' is not an option (known: {})",
+                    known.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn number(lua: &Lua, what: &str, key: &str, t: &Table) -> mlua::Result<Option<f64>> {
+    match t.get::<Value>(key)? {
+        Value::Nil => Ok(None),
+        v => finite_number(lua, &v, &format!("{what}: {key}")).map(Some),
+    }
+}
+
+fn positive(lua: &Lua, what: &str, key: &str, t: &Table) -> mlua::Result<Option<f64>> {
+    match number(lua, what, key, t)? {
+        Some(x) if x <= 0.0 => Err(script_error(
+            lua,
+            format!("{what}: {key} must be a number > 0, got {x}"),
+        )),
+        other => Ok(other),
+    }
+}
+
+/// `{a, b}` with finite numbers (a range, a size).
+fn pair(lua: &Lua, what: &str, key: &str, t: &Table) -> mlua::Result<Option<[f64; 2]>> {
+    match t.get::<Value>(key)? {
+        Value::Nil => Ok(None),
+        Value::Table(p) => {
+            let a = finite_number(lua, &p.raw_get::<Value>(1)?, &format!("{what}: {key}[1]"))?;
+            let b = finite_number(lua, &p.raw_get::<Value>(2)?, &format!("{what}: {key}[2]"))?;
+            Ok(Some([a, b]))
+        }
+        other => Err(script_error(
+            lua,
+            format!(
+                "{what}: {key} must be a pair {{min, max}}, got {}",
+                other.type_name()
+            ),
+        )),
+    }
+}
+
+fn option_error(lua: &Lua, what: &str, e: ForestError) -> mlua::Error {
+    script_error(lua, format!("{what}: {e}"))
+}
+
+fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
+    let w = "pge.Forest";
+    let t = table(lua, w, v)?;
+    known_keys(lua, w, &t, FOREST_OPTIONS)?;
+    let size = match t.get::<Value>("size")? {
+        Value::Nil => [500.0, 500.0],
+        Value::Integer(_) | Value::Number(_) => {
+            let s = finite_number(lua, &t.get::<Value>("size")?, &format!("{w}: size"))?;
+            [s, s]
+        }
+        _ => pair(lua, w, "size", &t)?.unwrap_or([500.0, 500.0]),
+    };
+    let seed = match t.get::<Value>("seed")? {
+        Value::Nil => pge_engine::lua::run_context(lua).seed,
+        Value::Integer(i) if i >= 0 => i as u64,
+        Value::Number(n) if n >= 0.0 && n.fract() == 0.0 && n < 9.0e15 => n as u64,
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: seed must be an integer >= 0, got {}",
+                    describe(&other)
+                ),
+            ));
+        }
+    };
+    let tile = number(lua, w, "tile", &t)?;
+    let forest = Forest::new(size, seed, tile).map_err(|e| option_error(lua, w, e))?;
+    Ok(LuaForest(Rc::new(RefCell::new(Spec {
+        forest,
+        species: Vec::new(),
+        location: caller_location(lua),
+        selected: None,
+    }))))
+}
+
+fn describe(v: &Value) -> String {
+    match v {
+        Value::Integer(i) => i.to_string(),
+        Value::Number(n) => n.to_string(),
+        Value::String(s) => format!("\"{}\"", s.to_string_lossy()),
+        other => other.type_name().to_string(),
+    }
+}
+
+/// The path a session is given for `canonical`: relative to the working directory when it
+/// lies inside it, so errors read `scripts/species/oak.lua:9:`.
+fn shown_path(canonical: &Path) -> String {
+    let rel = std::env::current_dir()
+        .ok()
+        .and_then(|d| d.canonicalize().ok())
+        .and_then(|d| canonical.strip_prefix(d).ok().map(Path::to_path_buf))
+        .unwrap_or_else(|| canonical.to_path_buf());
+    rel.to_string_lossy().replace('\\', "/")
+}
+
+fn image(lua: &Lua, what: &str, key: &str, relative: &str) -> mlua::Result<Arc<Raster>> {
+    let path: PathBuf = resolve_path(lua, relative)?;
+    Raster::load(&path)
+        .map(Arc::new)
+        .map_err(|e| script_error(lua, format!("{what}: {key}: {e}")))
+}
+
+fn terrain(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
+    let w = "forest:terrain";
+    let t = table(lua, w, v)?;
+    known_keys(lua, w, &t, TERRAIN_OPTIONS)?;
+    let size = spec.forest.size;
+    let resolution = positive(lua, w, "resolution", &t)?.unwrap_or(4.0);
+    let height = number(lua, w, "height", &t)?;
+    let terrain = match t.get::<Value>("image")? {
+        Value::Nil => {
+            let mut o = FbmOptions::default();
+            if let Some(h) = height {
+                o.height = h;
+            }
+            if let Some(s) = positive(lua, w, "scale", &t)? {
+                o.scale = s;
+            }
+            if let Some(n) = number(lua, w, "octaves", &t)? {
+                if !(1.0..=16.0).contains(&n) || n.fract() != 0.0 {
+                    return Err(script_error(
+                        lua,
+                        format!("{w}: octaves must be an integer between 1 and 16, got {n}"),
+                    ));
+                }
+                o.octaves = n as usize;
+            }
+            if let Some(x) = positive(lua, w, "lacunarity", &t)? {
+                o.lacunarity = x;
+            }
+            if let Some(x) = positive(lua, w, "persistence", &t)? {
+                o.persistence = x;
+            }
+            Terrain::fbm(size, o, spec.forest.seed)
+        }
+        Value::String(s) => {
+            let raster = image(lua, w, "image", &s.to_string_lossy())?;
+            Terrain::image(size, raster, height.unwrap_or(40.0))
+        }
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: image must be a path to a greyscale PNG, got {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
+    spec.forest.terrain = terrain.with_resolution(resolution);
+    Ok(())
+}
+
+fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
+    let w = "forest:scatter";
+    let t = table(lua, w, v)?;
+    known_keys(lua, w, &t, SCATTER_OPTIONS)?;
+    let n = spec.forest.layers.len() + 1;
+    let params = match t.get::<Value>("params")? {
+        Value::Nil => lua.create_table()?,
+        Value::Table(p) => p,
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: params must be a table of parameter overrides, got {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
+    let (species, name) = match t.get::<Value>("species")? {
+        Value::String(s) => {
+            let relative = s.to_string_lossy();
+            let canonical = resolve_path(lua, &relative)?;
+            let name = canonical
+                .file_stem()
+                .map_or_else(|| format!("layer{n}"), |s| s.to_string_lossy().to_string());
+            let mut overrides = Vec::new();
+            for pair in params.pairs::<Value, Value>() {
+                let (k, v) = pair?;
+                let key = match k {
+                    Value::String(s) => s.to_string_lossy(),
+                    other => {
+                        return Err(script_error(
+                            lua,
+                            format!("{w}: params keys must be names, got {}", other.type_name()),
+                        ));
+                    }
+                };
+                let value = match v {
+                    Value::Integer(i) => i.to_string(),
+                    Value::Number(x) => x.to_string(),
+                    Value::Boolean(b) => b.to_string(),
+                    Value::String(s) => s.to_string_lossy(),
+                    other => {
+                        return Err(script_error(
+                            lua,
+                            format!(
+                                "{w}: params.{key} must be a number, a boolean or a string, got {}",
+                                other.type_name()
+                            ),
+                        ));
+                    }
+                };
+                overrides.push((key, value));
+            }
+            overrides.sort();
+            (
+                Species::Path {
+                    shown: shown_path(&canonical),
+                    params: overrides,
+                },
+                name,
+            )
+        }
+        Value::Function(f) => (Species::Function { f, params }, format!("layer{n}")),
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: species must be a script path or a function(params, seed), got {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
+    let min_distance = match number(lua, w, "minDistance", &t)? {
+        Some(d) => d,
+        None => {
+            return Err(script_error(
+                lua,
+                format!("{w}: minDistance is required (metres between trunks, > 0)"),
+            ));
+        }
+    };
+    let mut layer = Layer::new(name, min_distance);
+    layer.method = match t.get::<Value>("method")? {
+        Value::Nil => Method::Poisson,
+        Value::String(s) if s.to_string_lossy() == "poisson" => Method::Poisson,
+        Value::String(s) if s.to_string_lossy() == "jittered" => Method::Jittered {
+            jitter: number(lua, w, "jitter", &t)?.unwrap_or(0.2),
+        },
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: method must be \"poisson\" or \"jittered\", got {}",
+                    describe(&other)
+                ),
+            ));
+        }
+    };
+    layer.density = match t.get::<Value>("density")? {
+        Value::Nil => Density::Constant(1.0),
+        v @ (Value::Integer(_) | Value::Number(_)) => {
+            Density::Constant(finite_number(lua, &v, &format!("{w}: density"))?)
+        }
+        Value::String(s) => Density::Map(image(lua, w, "density", &s.to_string_lossy())?),
+        Value::Function(f) => {
+            let weak = lua.weak();
+            let location = caller_location(lua);
+            Density::Function(Rc::new(move |x: f64, z: f64| {
+                f.call::<Value>((x, z))
+                    .and_then(|v| match v {
+                        Value::Integer(i) => Ok(i as f64),
+                        Value::Number(n) => Ok(n),
+                        other => Err(mlua::Error::RuntimeError(format!(
+                            "density function: must return a number in [0, 1], got {}",
+                            other.type_name()
+                        ))),
+                    })
+                    .map_err(|e| lua_error(&weak, &location, e))
+            }))
+        }
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: density must be a number in [0, 1], a function(x, z) or a PNG path, got {}",
+                    other.type_name()
+                ),
+            ));
+        }
+    };
+    if let Some(s) = pair(lua, w, "slope", &t)? {
+        layer.slope = s;
+    }
+    if let Some(a) = pair(lua, w, "altitude", &t)? {
+        layer.altitude = a;
+    }
+    if let Some(s) = pair(lua, w, "scale", &t)? {
+        layer.scale = s;
+    }
+    layer.variants = match t.get::<Value>("variants")? {
+        Value::Nil => Variants::Count(8),
+        Value::String(s) if s.to_string_lossy() == "unique" => Variants::Unique,
+        Value::Integer(i) if (1..=10_000).contains(&i) => Variants::Count(i as u32),
+        Value::Number(x) if x.fract() == 0.0 && (1.0..=10_000.0).contains(&x) => {
+            Variants::Count(x as u32)
+        }
+        other => {
+            return Err(script_error(
+                lua,
+                format!(
+                    "{w}: variants must be an integer between 1 and 10000 or \"unique\", got {}",
+                    describe(&other)
+                ),
+            ));
+        }
+    };
+    layer.check().map_err(|e| option_error(lua, w, e))?;
+    spec.forest.layers.push(layer);
+    spec.species.push((species, caller_location(lua)));
+    Ok(())
+}
+
+fn lua_error(weak: &WeakLua, location: &Location, e: mlua::Error) -> Error {
+    match weak.try_upgrade() {
+        Some(lua) => to_engine_error(&lua, e),
+        None => Error::script(location.clone(), e.to_string()),
+    }
+}
+
+fn forest_error(location: &Location, e: ForestError) -> Error {
+    match e {
+        ForestError::Script(e) => e,
+        other => Error::script(location.clone(), other.to_string()),
+    }
+}
+
+impl UserData for LuaForest {
+    fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        m.add_method("terrain", |lua, me, v: Value| {
+            terrain(lua, &mut me.0.borrow_mut(), v)?;
+            Ok(me.clone())
+        });
+        m.add_method("scatter", |lua, me, v: Value| {
+            scatter(lua, &mut me.0.borrow_mut(), v)?;
+            Ok(me.clone())
+        });
+        m.add_method("height", |lua, me, (x, z): (Value, Value)| {
+            let x = finite_number(lua, &x, "forest:height: x")?;
+            let z = finite_number(lua, &z, "forest:height: z")?;
+            Ok(me.0.borrow().forest.terrain.height(x, z))
+        });
+        m.add_method("normal", |lua, me, (x, z): (Value, Value)| {
+            let x = finite_number(lua, &x, "forest:normal: x")?;
+            let z = finite_number(lua, &z, "forest:normal: z")?;
+            Ok(LuaVec3(me.0.borrow().forest.terrain.normal(x, z)))
+        });
+        m.add_method("selectTile", |lua, me, (i, j): (Value, Value)| {
+            let i = finite_number(lua, &i, "forest:selectTile: i")?;
+            let j = finite_number(lua, &j, "forest:selectTile: j")?;
+            if i < 0.0 || j < 0.0 || i.fract() != 0.0 || j.fract() != 0.0 {
+                return Err(script_error(
+                    lua,
+                    format!("forest:selectTile: i and j must be integers >= 0, got {i}, {j}"),
+                ));
+            }
+            let mut spec = me.0.borrow_mut();
+            let (i, j) = (i as usize, j as usize);
+            spec.forest
+                .tile_rect(i, j)
+                .map_err(|e| mlua::Error::RuntimeError(format!("{}: {e}", spec.location)))?;
+            spec.selected = Some((i, j));
+            Ok(me.clone())
+        });
+        m.add_method("tiles", |lua, me, ()| {
+            let spec = me.0.borrow();
+            let Some(tiles) = spec.forest.tiles() else {
+                return Err(mlua::Error::RuntimeError(format!(
+                    "{}: {}",
+                    spec.location,
+                    ForestError::NotTiled
+                )));
+            };
+            let out = lua.create_table()?;
+            for t in tiles {
+                let e = lua.create_table()?;
+                e.set("i", t.i)?;
+                e.set("j", t.j)?;
+                e.set("min", lua.create_sequence_from(t.rect.min)?)?;
+                e.set("max", lua.create_sequence_from(t.rect.max)?)?;
+                out.push(e)?;
+            }
+            Ok(out)
+        });
+        m.add_method("instances", |lua, me, ()| {
+            let spec = me.0.borrow();
+            let layout = spec.forest.layout(spec.selected).map_err(|e| match e {
+                ForestError::Script(e) => mlua::Error::RuntimeError(e.to_string()),
+                other => script_error(lua, format!("forest:instances: {other}")),
+            })?;
+            let out = lua.create_table_with_capacity(layout.instances.len(), 0)?;
+            for i in &layout.instances {
+                let e = lua.create_table_with_capacity(0, 5)?;
+                e.set(
+                    "species",
+                    spec.forest.layers[i.layer as usize].name.as_str(),
+                )?;
+                e.set("variant", i.variant)?;
+                e.set("position", LuaVec3(glam::Vec3::from_array(i.position)))?;
+                e.set("yaw", f64::from(i.yaw).to_degrees())?;
+                e.set("scale", i.scale)?;
+                out.push(e)?;
+            }
+            Ok(out)
+        });
+        m.add_method("algorithm", |lua, me, ()| {
+            Ok(AlgorithmHandle::new(Box::new(ForestAlgorithm {
+                spec: me.0.clone(),
+                lua: lua.weak(),
+                layout: None,
+                grown: None,
+                model: None,
+            })))
+        });
+    }
+}
+
+/// A forest run step by step: layout, variants, assembly.
+struct ForestAlgorithm {
+    spec: Rc<RefCell<Spec>>,
+    lua: WeakLua,
+    layout: Option<Layout>,
+    grown: Option<Vec<Grown>>,
+    model: Option<Model>,
+}
+
+/// A species script: its shown path and `params` overrides.
+type ScriptSpecies = (String, Vec<(String, String)>);
+
+/// Grows one variant of a species script in a session of its own.
+fn grow_script(
+    engine: &Engine,
+    shown: &str,
+    params: &[(String, String)],
+    seed: u64,
+    ctx: &RunContext,
+) -> pge_engine::Result<Model> {
+    let session = engine.session(SessionOptions {
+        seed,
+        params: params.to_vec(),
+        steps: None,
+        cancel: ctx.cancel.clone(),
+    })?;
+    Ok(session.generate(Path::new(shown), &mut |_, _| {})?.model)
+}
+
+impl ForestAlgorithm {
+    fn grow(&self, layout: &Layout, ctx: &RunContext) -> pge_engine::Result<Vec<Grown>> {
+        let spec = self.spec.borrow();
+        let seed = spec.forest.seed;
+        // (layer, variant, seed) of every tree to grow, in a fixed order.
+        let mut jobs: Vec<Vec<u64>> = Vec::new();
+        for (l, layer) in spec.forest.layers.iter().enumerate() {
+            jobs.push(match layer.variants {
+                Variants::Count(n) => (0..n).map(|v| variant_seed(seed, l, v)).collect(),
+                Variants::Unique => layout
+                    .instances
+                    .iter()
+                    .filter(|i| i.layer as usize == l)
+                    .map(|i| unique_seed(seed, i))
+                    .collect(),
+            });
+        }
+        let mut scripts: Vec<(usize, usize, u64)> = Vec::new();
+        for (l, (species, _)) in spec.species.iter().enumerate() {
+            if matches!(species, Species::Path { .. }) {
+                scripts.extend(jobs[l].iter().enumerate().map(|(v, &s)| (l, v, s)));
+            }
+        }
+        let engine = match self.lua.try_upgrade() {
+            Some(lua) => pge_engine::lua::engine(&lua),
+            None => None,
+        };
+        let mut grown: Vec<Grown> = jobs
+            .iter()
+            .map(|j| Grown {
+                variants: Vec::with_capacity(j.len()),
+            })
+            .collect();
+        if !scripts.is_empty() {
+            let Some(engine) = engine else {
+                return Err(Error::script(
+                    spec.location.clone(),
+                    "pge.Forest: species scripts need a session created by an engine",
+                ));
+            };
+            let paths: Vec<Option<ScriptSpecies>> = spec
+                .species
+                .iter()
+                .map(|(s, _)| match s {
+                    Species::Path { shown, params } => Some((shown.clone(), params.clone())),
+                    Species::Function { .. } => None,
+                })
+                .collect();
+            let ctx_send = ctx.clone();
+            let results: Vec<pge_engine::Result<Model>> = scripts
+                .par_iter()
+                .map(|&(l, _, s)| match &paths[l] {
+                    Some((shown, params)) => grow_script(&engine, shown, params, s, &ctx_send),
+                    None => Err(Error::Export("not a script species".into())),
+                })
+                .collect();
+            for (&(l, _, _), r) in scripts.iter().zip(results) {
+                let model = r.map_err(|e| {
+                    let shown = match &spec.species[l].0 {
+                        Species::Path { shown, .. } => shown.as_str(),
+                        Species::Function { .. } => "",
+                    };
+                    Error::script(
+                        spec.species[l].1.clone(),
+                        format!("forest:scatter: species '{shown}' failed: {e}"),
+                    )
+                })?;
+                grown[l].variants.push(model);
+            }
+        }
+        for (l, (species, location)) in spec.species.iter().enumerate() {
+            let Species::Function { f, params } = species else {
+                continue;
+            };
+            let Some(lua) = self.lua.try_upgrade() else {
+                return Err(Error::script(location.clone(), "the Lua state is gone"));
+            };
+            for &s in &jobs[l] {
+                ctx.check_deadline(location)?;
+                let value: Value = f
+                    .call((params.clone(), s))
+                    .map_err(|e| to_engine_error(&lua, e))?;
+                let mut algorithm = algorithm_from(&lua, value, location)?;
+                let inner = RunContext {
+                    seed: s,
+                    steps: None,
+                    ..ctx.clone()
+                };
+                grown[l]
+                    .variants
+                    .push(run(&mut *algorithm, &inner, &mut |_| {})?);
+            }
+        }
+        Ok(grown)
+    }
+}
+
+impl Algorithm for ForestAlgorithm {
+    fn name(&self) -> &str {
+        "pge.Forest"
+    }
+
+    fn init(&mut self, _: &RunContext) -> pge_engine::Result<()> {
+        self.layout = None;
+        self.grown = None;
+        self.model = None;
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &RunContext) -> pge_engine::Result<Step> {
+        if self.layout.is_none() {
+            let spec = self.spec.borrow();
+            let layout = spec
+                .forest
+                .layout(spec.selected)
+                .map_err(|e| forest_error(&spec.location, e))?;
+            drop(spec);
+            self.layout = Some(layout);
+            return Ok(Step::Continue);
+        }
+        if self.grown.is_none() {
+            let layout = self
+                .layout
+                .as_ref()
+                .map_or_else(Layout::default, Clone::clone);
+            self.grown = Some(self.grow(&layout, ctx)?);
+            return Ok(Step::Continue);
+        }
+        if self.model.is_none() {
+            let spec = self.spec.borrow();
+            if let (Some(layout), Some(grown)) = (&self.layout, &self.grown) {
+                self.model = Some(assemble(&spec.forest, layout, grown, spec.selected));
+            }
+        }
+        Ok(Step::Done)
+    }
+
+    fn finish(&mut self, _: &RunContext) -> pge_engine::Result<Model> {
+        let spec = self.spec.borrow();
+        if let Some(model) = &self.model {
+            return Ok(model.clone());
+        }
+        Ok(match (&self.layout, &self.grown) {
+            (Some(layout), Some(grown)) => assemble(&spec.forest, layout, grown, spec.selected),
+            (Some(layout), None) => layout_model(&spec.forest, layout, spec.selected),
+            _ => layout_model(&spec.forest, &Layout::default(), spec.selected),
+        })
+    }
+
+    fn planned_steps(&self) -> Option<u32> {
+        Some(3)
+    }
+}
