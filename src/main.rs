@@ -8,6 +8,7 @@ mod common;
 mod derive;
 mod preview;
 mod run;
+mod tiles;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other
 /// objects and writes them as glTF 2.0.
@@ -26,6 +27,8 @@ enum Command {
     Derive(derive::DeriveArgs),
     /// Open a window that shows the script's model and regenerates it on every save.
     Preview(preview::PreviewArgs),
+    /// Print the tiles of a forest with `tile = T` as JSON.
+    Tiles(tiles::TilesArgs),
 }
 
 fn main() -> ExitCode {
@@ -33,6 +36,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
         Command::Preview(args) => preview::preview(args),
+        Command::Tiles(args) => tiles::tiles(args),
         Command::Derive(args) => args
             .script
             .engine()

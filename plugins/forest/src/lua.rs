@@ -533,6 +533,7 @@ impl UserData for LuaForest {
                 layout: None,
                 grown: None,
                 model: None,
+                phases: Vec::new(),
             })))
         });
     }
@@ -545,6 +546,8 @@ struct ForestAlgorithm {
     layout: Option<Layout>,
     grown: Option<Vec<Grown>>,
     model: Option<Model>,
+    /// Seconds of each step, reported as phases of the run.
+    phases: Vec<(&'static str, f64)>,
 }
 
 /// A species script: its shown path and `params` overrides.
@@ -677,23 +680,60 @@ impl Algorithm for ForestAlgorithm {
     }
 
     fn step(&mut self, ctx: &RunContext) -> pge_engine::Result<Step> {
+        let t0 = std::time::Instant::now();
+        let (name, step) = self.step_timed(ctx)?;
+        self.phases.push((name, t0.elapsed().as_secs_f64()));
+        Ok(step)
+    }
+
+    fn finish(&mut self, _: &RunContext) -> pge_engine::Result<Model> {
+        let spec = self.spec.borrow();
+        let mut model = match (&self.model, &self.layout, &self.grown) {
+            (Some(model), _, _) => model.clone(),
+            (None, Some(layout), Some(grown)) => {
+                assemble(&spec.forest, layout, grown, spec.selected)
+            }
+            (None, Some(layout), None) => layout_model(&spec.forest, layout, spec.selected),
+            _ => layout_model(&spec.forest, &Layout::default(), spec.selected),
+        };
+        for (name, seconds) in &self.phases {
+            model.stats.add_phase(name, *seconds);
+        }
+        Ok(model)
+    }
+
+    fn planned_steps(&self) -> Option<u32> {
+        Some(3)
+    }
+}
+
+impl ForestAlgorithm {
+    /// One step: layout, then variants, then assembly; returns the step's name.
+    fn step_timed(&mut self, ctx: &RunContext) -> pge_engine::Result<(&'static str, Step)> {
         if self.layout.is_none() {
             let spec = self.spec.borrow();
-            let layout = spec
+            let mut layout = spec
                 .forest
                 .layout(spec.selected)
                 .map_err(|e| forest_error(&spec.location, e))?;
+            // Warnings point at the scatter call of the layer that fits no tree.
+            let empty = layout.counts.iter().enumerate().filter(|(_, c)| **c == 0);
+            let located: Vec<String> = empty
+                .zip(&layout.warnings)
+                .map(|((l, _), w)| format!("{}: warning: forest:scatter: {w}", spec.species[l].1))
+                .collect();
+            layout.warnings = located;
             drop(spec);
             self.layout = Some(layout);
-            return Ok(Step::Continue);
+            return Ok(("layout", Step::Continue));
         }
         if self.grown.is_none() {
-            let layout = self
-                .layout
-                .as_ref()
-                .map_or_else(Layout::default, Clone::clone);
-            self.grown = Some(self.grow(&layout, ctx)?);
-            return Ok(Step::Continue);
+            let grown = match &self.layout {
+                Some(layout) => self.grow(layout, ctx)?,
+                None => self.grow(&Layout::default(), ctx)?,
+            };
+            self.grown = Some(grown);
+            return Ok(("variants", Step::Continue));
         }
         if self.model.is_none() {
             let spec = self.spec.borrow();
@@ -701,22 +741,6 @@ impl Algorithm for ForestAlgorithm {
                 self.model = Some(assemble(&spec.forest, layout, grown, spec.selected));
             }
         }
-        Ok(Step::Done)
-    }
-
-    fn finish(&mut self, _: &RunContext) -> pge_engine::Result<Model> {
-        let spec = self.spec.borrow();
-        if let Some(model) = &self.model {
-            return Ok(model.clone());
-        }
-        Ok(match (&self.layout, &self.grown) {
-            (Some(layout), Some(grown)) => assemble(&spec.forest, layout, grown, spec.selected),
-            (Some(layout), None) => layout_model(&spec.forest, layout, spec.selected),
-            _ => layout_model(&spec.forest, &Layout::default(), spec.selected),
-        })
-    }
-
-    fn planned_steps(&self) -> Option<u32> {
-        Some(3)
+        Ok(("assembly", Step::Done))
     }
 }
