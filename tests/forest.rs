@@ -363,7 +363,7 @@ fn bad_input_is_a_file_line_error_with_no_output() {
     expect_error(
         &scatter("minDistance = 0"),
         &[],
-        &["forest.lua:2:", "minDistance", "positive"],
+        &["forest.lua:2:", "minDistance", "> 0"],
     );
     expect_error(
         "local f = pge.Forest{ size = {0, 10} }\nreturn f\n",
@@ -373,7 +373,7 @@ fn bad_input_is_a_file_line_error_with_no_output() {
     expect_error(
         &scatter("minDistance = 3, density = 1.5"),
         &[],
-        &["forest.lua:2:", "density", "[0, 1]"],
+        &["forest.lua:2:", "density", "between 0 and 1"],
     );
     expect_error(
         &scatter("minDistance = 3, density = 'nothing.png'"),
@@ -383,12 +383,12 @@ fn bad_input_is_a_file_line_error_with_no_output() {
     expect_error(
         &scatter("minDistance = 3, slope = {30, 10}"),
         &[],
-        &["forest.lua:2:", "slope", "empty range"],
+        &["forest.lua:2:", "slope", "min <= max"],
     );
     expect_error(
         &scatter("minDistance = 3, altitude = {5, -5}"),
         &[],
-        &["forest.lua:2:", "altitude", "empty range"],
+        &["forest.lua:2:", "altitude", "min <= max"],
     );
     expect_error(
         &scatter("minDistance = 3"),
@@ -410,7 +410,7 @@ fn bad_input_is_a_file_line_error_with_no_output() {
             "{HEAD}f:scatter{{ species = function() return pge.mesh{{ positions = {{0,0,0}}, indices = {{0,0,0}} }} end, minDistance = 3, density = function(x, z) return 2 end }}\nreturn f\n"
         ),
         &[],
-        &["density", "[0, 1]"],
+        &["density", "between 0 and 1"],
     );
 }
 

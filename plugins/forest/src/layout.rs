@@ -427,7 +427,7 @@ impl Forest {
                     return Err(ForestError::Option {
                         option: "density",
                         message: format!(
-                            "the function returned {d} at ({:.2}, {:.2}); it must return a number in [0, 1]",
+                            "the function returned {d} at ({:.2}, {:.2}); it must return a number between 0 and 1",
                             s.x, s.z
                         ),
                     });

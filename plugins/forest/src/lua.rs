@@ -13,8 +13,8 @@ use mlua::{Function, Lua, Table, UserData, UserDataMethods, Value, WeakLua};
 use pge_engine::algorithm::run;
 use pge_engine::geometry::Model;
 use pge_engine::lua::{
-    AlgorithmHandle, LuaVec3, algorithm_from, caller_location, finite_number, resolve_path,
-    script_error, to_engine_error,
+    AlgorithmHandle, Bounds, LuaVec3, Options, algorithm_from, caller_location, finite_number,
+    resolve_path, script_error, to_engine_error,
 };
 use pge_engine::{Algorithm, Engine, Error, Location, Plugin, RunContext, SessionOptions, Step};
 use rayon::prelude::*;
@@ -63,135 +63,6 @@ struct Spec {
 #[derive(Clone)]
 pub struct LuaForest(Rc<RefCell<Spec>>);
 
-const FOREST_OPTIONS: &[&str] = &["size", "seed", "tile"];
-const TERRAIN_OPTIONS: &[&str] = &[
-    "height",
-    "scale",
-    "octaves",
-    "lacunarity",
-    "persistence",
-    "image",
-    "resolution",
-];
-const SCATTER_OPTIONS: &[&str] = &[
-    "species",
-    "method",
-    "minDistance",
-    "density",
-    "slope",
-    "altitude",
-    "variants",
-    "scale",
-    "params",
-    "jitter",
-];
-
-fn table(lua: &Lua, what: &str, v: Value) -> mlua::Result<Table> {
-    match v {
-        Value::Table(t) => Ok(t),
-        other => Err(script_error(
-            lua,
-            format!("{what} takes a table of options, got {}", other.type_name()),
-        )),
-    }
-}
-
-fn known_keys(lua: &Lua, what: &str, t: &Table, known: &[&str]) -> mlua::Result<()> {
-    for pair in t.pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let name = match &k {
-            Value::String(s) => s.to_string_lossy(),
-            other => format!("[{}]", other.type_name()),
-        };
-        if !known.contains(&name.as_str()) {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{what}: '{name}' is not an option (known: {})",
-                    known.join(", ")
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn number(lua: &Lua, what: &str, key: &str, t: &Table) -> mlua::Result<Option<f64>> {
-    match t.get::<Value>(key)? {
-        Value::Nil => Ok(None),
-        v => finite_number(lua, &v, &format!("{what}: {key}")).map(Some),
-    }
-}
-
-fn positive(lua: &Lua, what: &str, key: &str, t: &Table) -> mlua::Result<Option<f64>> {
-    match number(lua, what, key, t)? {
-        Some(x) if x <= 0.0 => Err(script_error(
-            lua,
-            format!("{what}: {key} must be a number > 0, got {x}"),
-        )),
-        other => Ok(other),
-    }
-}
-
-/// `{a, b}` with finite numbers (a range, a size).
-fn pair(lua: &Lua, what: &str, key: &str, t: &Table) -> mlua::Result<Option<[f64; 2]>> {
-    match t.get::<Value>(key)? {
-        Value::Nil => Ok(None),
-        Value::Table(p) => {
-            let a = finite_number(lua, &p.raw_get::<Value>(1)?, &format!("{what}: {key}[1]"))?;
-            let b = finite_number(lua, &p.raw_get::<Value>(2)?, &format!("{what}: {key}[2]"))?;
-            Ok(Some([a, b]))
-        }
-        other => Err(script_error(
-            lua,
-            format!(
-                "{what}: {key} must be a pair {{min, max}}, got {}",
-                other.type_name()
-            ),
-        )),
-    }
-}
-
-fn option_error(lua: &Lua, what: &str, e: ForestError) -> mlua::Error {
-    script_error(lua, format!("{what}: {e}"))
-}
-
-fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
-    let w = "pge.Forest";
-    let t = table(lua, w, v)?;
-    known_keys(lua, w, &t, FOREST_OPTIONS)?;
-    let size = match t.get::<Value>("size")? {
-        Value::Nil => [500.0, 500.0],
-        Value::Integer(_) | Value::Number(_) => {
-            let s = finite_number(lua, &t.get::<Value>("size")?, &format!("{w}: size"))?;
-            [s, s]
-        }
-        _ => pair(lua, w, "size", &t)?.unwrap_or([500.0, 500.0]),
-    };
-    let seed = match t.get::<Value>("seed")? {
-        Value::Nil => pge_engine::lua::run_context(lua).seed,
-        Value::Integer(i) if i >= 0 => i as u64,
-        Value::Number(n) if n >= 0.0 && n.fract() == 0.0 && n < 9.0e15 => n as u64,
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: seed must be an integer >= 0, got {}",
-                    describe(&other)
-                ),
-            ));
-        }
-    };
-    let tile = number(lua, w, "tile", &t)?;
-    let forest = Forest::new(size, seed, tile).map_err(|e| option_error(lua, w, e))?;
-    Ok(LuaForest(Rc::new(RefCell::new(Spec {
-        forest,
-        species: Vec::new(),
-        location: caller_location(lua),
-        selected: None,
-    }))))
-}
-
 fn describe(v: &Value) -> String {
     match v {
         Value::Integer(i) => i.to_string(),
@@ -199,6 +70,40 @@ fn describe(v: &Value) -> String {
         Value::String(s) => format!("\"{}\"", s.to_string_lossy()),
         other => other.type_name().to_string(),
     }
+}
+
+fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
+    let o = Options::new(lua, v, "pge.Forest")?;
+    let size_need = "a number > 0 or {x, z} of numbers > 0 (metres)";
+    let size = match o.value("size")? {
+        Value::Nil => [500.0, 500.0],
+        Value::Table(t) => {
+            let read = |k: i64| -> mlua::Result<f64> {
+                match t.raw_get::<Value>(k)? {
+                    Value::Integer(i) if i > 0 => Ok(i as f64),
+                    Value::Number(n) if n.is_finite() && n > 0.0 => Ok(n),
+                    other => Err(o.invalid("size", size_need, describe(&other))),
+                }
+            };
+            [read(1)?, read(2)?]
+        }
+        Value::Integer(i) if i > 0 => [i as f64; 2],
+        Value::Number(n) if n.is_finite() && n > 0.0 => [n; 2],
+        other => return Err(o.invalid("size", size_need, describe(&other))),
+    };
+    let seed = match o.integer("seed", 0..=(1i64 << 53))? {
+        Some(s) => s as u64,
+        None => pge_engine::lua::run_context(lua).seed,
+    };
+    let tile = o.number("tile", Bounds::Above(0.0))?;
+    o.finish()?;
+    let forest = Forest::new(size, seed, tile).map_err(|e| o.error(e))?;
+    Ok(LuaForest(Rc::new(RefCell::new(Spec {
+        forest,
+        species: Vec::new(),
+        location: caller_location(lua),
+        selected: None,
+    }))))
 }
 
 /// The path a session is given for `canonical`: relative to the working directory when it
@@ -212,170 +117,117 @@ fn shown_path(canonical: &Path) -> String {
     rel.to_string_lossy().replace('\\', "/")
 }
 
-fn image(lua: &Lua, what: &str, key: &str, relative: &str) -> mlua::Result<Arc<Raster>> {
+fn image(lua: &Lua, o: &Options, key: &str, relative: &str) -> mlua::Result<Arc<Raster>> {
     let path: PathBuf = resolve_path(lua, relative)?;
     Raster::load(&path)
         .map(Arc::new)
-        .map_err(|e| script_error(lua, format!("{what}: {key}: {e}")))
+        .map_err(|e| o.problem(key, format!("cannot be read: {e}")))
 }
 
 fn terrain(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
-    let w = "forest:terrain";
-    let t = table(lua, w, v)?;
-    known_keys(lua, w, &t, TERRAIN_OPTIONS)?;
+    let o = Options::table_required(lua, v, "forest:terrain")?;
     let size = spec.forest.size;
-    let resolution = positive(lua, w, "resolution", &t)?.unwrap_or(4.0);
-    let height = number(lua, w, "height", &t)?;
-    let terrain = match t.get::<Value>("image")? {
-        Value::Nil => {
-            let mut o = FbmOptions::default();
-            if let Some(h) = height {
-                o.height = h;
-            }
-            if let Some(s) = positive(lua, w, "scale", &t)? {
-                o.scale = s;
-            }
-            if let Some(n) = number(lua, w, "octaves", &t)? {
-                if !(1.0..=16.0).contains(&n) || n.fract() != 0.0 {
-                    return Err(script_error(
-                        lua,
-                        format!("{w}: octaves must be an integer between 1 and 16, got {n}"),
-                    ));
-                }
-                o.octaves = n as usize;
-            }
-            if let Some(x) = positive(lua, w, "lacunarity", &t)? {
-                o.lacunarity = x;
-            }
-            if let Some(x) = positive(lua, w, "persistence", &t)? {
-                o.persistence = x;
-            }
-            Terrain::fbm(size, o, spec.forest.seed)
-        }
-        Value::String(s) => {
-            let raster = image(lua, w, "image", &s.to_string_lossy())?;
+    let resolution = o.number("resolution", Bounds::Above(0.0))?.unwrap_or(4.0);
+    let height = o.number("height", Bounds::Finite)?;
+    let mut fbm = FbmOptions::default();
+    if let Some(h) = height {
+        fbm.height = h;
+    }
+    if let Some(s) = o.number("scale", Bounds::Above(0.0))? {
+        fbm.scale = s;
+    }
+    if let Some(n) = o.integer("octaves", 1..=16)? {
+        fbm.octaves = n as usize;
+    }
+    if let Some(x) = o.number("lacunarity", Bounds::Above(0.0))? {
+        fbm.lacunarity = x;
+    }
+    if let Some(x) = o.number("persistence", Bounds::Above(0.0))? {
+        fbm.persistence = x;
+    }
+    let path = o.string("image")?;
+    o.finish()?;
+    let terrain = match path {
+        None => Terrain::fbm(size, fbm, spec.forest.seed),
+        Some(path) => {
+            let raster = image(lua, &o, "image", &path)?;
             Terrain::image(size, raster, height.unwrap_or(40.0))
-        }
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: image must be a path to a greyscale PNG, got {}",
-                    other.type_name()
-                ),
-            ));
         }
     };
     spec.forest.terrain = terrain.with_resolution(resolution);
     Ok(())
 }
 
+fn species_params(o: &Options, params: &Table) -> mlua::Result<Vec<(String, String)>> {
+    let mut overrides = Vec::new();
+    for pair in params.pairs::<Value, Value>() {
+        let (k, v) = pair?;
+        let Value::String(key) = k else {
+            return Err(o.wrong_type("params", "a table of parameter overrides by name", &k));
+        };
+        let key = key.to_string_lossy();
+        let value = match v {
+            Value::Integer(i) => i.to_string(),
+            Value::Number(x) => x.to_string(),
+            Value::Boolean(b) => b.to_string(),
+            Value::String(s) => s.to_string_lossy(),
+            other => {
+                return Err(o.wrong_type(
+                    &format!("params.{key}"),
+                    "a number, a boolean or a string",
+                    &other,
+                ));
+            }
+        };
+        overrides.push((key, value));
+    }
+    overrides.sort();
+    Ok(overrides)
+}
+
 fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
-    let w = "forest:scatter";
-    let t = table(lua, w, v)?;
-    known_keys(lua, w, &t, SCATTER_OPTIONS)?;
+    let o = Options::table_required(lua, v, "forest:scatter")?;
     let n = spec.forest.layers.len() + 1;
-    let params = match t.get::<Value>("params")? {
+    let params = match o.value("params")? {
         Value::Nil => lua.create_table()?,
         Value::Table(p) => p,
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: params must be a table of parameter overrides, got {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        other => return Err(o.wrong_type("params", "a table of parameter overrides", &other)),
     };
-    let (species, name) = match t.get::<Value>("species")? {
+    let species_need = "a script path or a function(params, seed)";
+    let (species, name) = match o.value("species")? {
         Value::String(s) => {
-            let relative = s.to_string_lossy();
-            let canonical = resolve_path(lua, &relative)?;
+            let canonical = resolve_path(lua, &s.to_string_lossy())?;
             let name = canonical
                 .file_stem()
                 .map_or_else(|| format!("layer{n}"), |s| s.to_string_lossy().to_string());
-            let mut overrides = Vec::new();
-            for pair in params.pairs::<Value, Value>() {
-                let (k, v) = pair?;
-                let key = match k {
-                    Value::String(s) => s.to_string_lossy(),
-                    other => {
-                        return Err(script_error(
-                            lua,
-                            format!("{w}: params keys must be names, got {}", other.type_name()),
-                        ));
-                    }
-                };
-                let value = match v {
-                    Value::Integer(i) => i.to_string(),
-                    Value::Number(x) => x.to_string(),
-                    Value::Boolean(b) => b.to_string(),
-                    Value::String(s) => s.to_string_lossy(),
-                    other => {
-                        return Err(script_error(
-                            lua,
-                            format!(
-                                "{w}: params.{key} must be a number, a boolean or a string, got {}",
-                                other.type_name()
-                            ),
-                        ));
-                    }
-                };
-                overrides.push((key, value));
-            }
-            overrides.sort();
-            (
-                Species::Path {
-                    shown: shown_path(&canonical),
-                    params: overrides,
-                },
-                name,
-            )
+            let params = species_params(&o, &params)?;
+            let shown = shown_path(&canonical);
+            (Species::Path { shown, params }, name)
         }
         Value::Function(f) => (Species::Function { f, params }, format!("layer{n}")),
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: species must be a script path or a function(params, seed), got {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        Value::Nil => return Err(o.missing("species", species_need)),
+        other => return Err(o.wrong_type("species", species_need, &other)),
     };
-    let min_distance = match number(lua, w, "minDistance", &t)? {
-        Some(d) => d,
-        None => {
-            return Err(script_error(
-                lua,
-                format!("{w}: minDistance is required (metres between trunks, > 0)"),
-            ));
-        }
+    let Some(min_distance) = o.number("minDistance", Bounds::Above(0.0))? else {
+        return Err(o.missing("minDistance", "metres between trunks, a number > 0"));
     };
     let mut layer = Layer::new(name, min_distance);
-    layer.method = match t.get::<Value>("method")? {
-        Value::Nil => Method::Poisson,
-        Value::String(s) if s.to_string_lossy() == "poisson" => Method::Poisson,
-        Value::String(s) if s.to_string_lossy() == "jittered" => Method::Jittered {
-            jitter: number(lua, w, "jitter", &t)?.unwrap_or(0.2),
+    let jitter = o.number("jitter", Bounds::Between(0.0, 0.49))?;
+    layer.method = match o.choice("method", &["poisson", "jittered"])? {
+        Some("jittered") => Method::Jittered {
+            jitter: jitter.unwrap_or(0.2),
         },
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: method must be \"poisson\" or \"jittered\", got {}",
-                    describe(&other)
-                ),
-            ));
-        }
+        _ => Method::Poisson,
     };
-    layer.density = match t.get::<Value>("density")? {
+    let density_need = "a number between 0 and 1, a function(x, z) or a PNG path";
+    layer.density = match o.value("density")? {
         Value::Nil => Density::Constant(1.0),
+        Value::Integer(i) if (0..=1).contains(&i) => Density::Constant(i as f64),
+        Value::Number(d) if (0.0..=1.0).contains(&d) => Density::Constant(d),
         v @ (Value::Integer(_) | Value::Number(_)) => {
-            Density::Constant(finite_number(lua, &v, &format!("{w}: density"))?)
+            return Err(o.invalid("density", "a number between 0 and 1", describe(&v)));
         }
-        Value::String(s) => Density::Map(image(lua, w, "density", &s.to_string_lossy())?),
+        Value::String(s) => Density::Map(image(lua, &o, "density", &s.to_string_lossy())?),
         Value::Function(f) => {
             let weak = lua.weak();
             let location = caller_location(lua);
@@ -385,50 +237,42 @@ fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
                         Value::Integer(i) => Ok(i as f64),
                         Value::Number(n) => Ok(n),
                         other => Err(mlua::Error::RuntimeError(format!(
-                            "density function: must return a number in [0, 1], got {}",
+                            "density function: must return a number between 0 and 1, got {}",
                             other.type_name()
                         ))),
                     })
                     .map_err(|e| lua_error(&weak, &location, e))
             }))
         }
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: density must be a number in [0, 1], a function(x, z) or a PNG path, got {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        other => return Err(o.wrong_type("density", density_need, &other)),
     };
-    if let Some(s) = pair(lua, w, "slope", &t)? {
-        layer.slope = s;
+    if let Some((a, b)) = o.range("slope", Bounds::Between(0.0, 90.0))? {
+        layer.slope = [a, b];
     }
-    if let Some(a) = pair(lua, w, "altitude", &t)? {
-        layer.altitude = a;
+    if let Some((a, b)) = o.range("altitude", Bounds::Finite)? {
+        layer.altitude = [a, b];
     }
-    if let Some(s) = pair(lua, w, "scale", &t)? {
-        layer.scale = s;
+    if let Some((a, b)) = o.range("scale", Bounds::Above(0.0))? {
+        layer.scale = [a, b];
     }
-    layer.variants = match t.get::<Value>("variants")? {
+    layer.variants = match o.value("variants")? {
         Value::Nil => Variants::Count(8),
         Value::String(s) if s.to_string_lossy() == "unique" => Variants::Unique,
-        Value::Integer(i) if (1..=10_000).contains(&i) => Variants::Count(i as u32),
-        Value::Number(x) if x.fract() == 0.0 && (1.0..=10_000.0).contains(&x) => {
-            Variants::Count(x as u32)
-        }
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "{w}: variants must be an integer between 1 and 10000 or \"unique\", got {}",
-                    describe(&other)
-                ),
-            ));
-        }
+        _ => match o.integer("variants", 1..=10_000) {
+            Ok(Some(v)) => Variants::Count(v as u32),
+            Ok(None) => Variants::Count(8),
+            Err(_) => {
+                let v = o.value("variants")?;
+                return Err(o.invalid(
+                    "variants",
+                    "an integer between 1 and 10000 or \"unique\"",
+                    describe(&v),
+                ));
+            }
+        },
     };
-    layer.check().map_err(|e| option_error(lua, w, e))?;
+    o.finish()?;
+    layer.check().map_err(|e| o.error(e))?;
     spec.forest.layers.push(layer);
     spec.species.push((species, caller_location(lua)));
     Ok(())
