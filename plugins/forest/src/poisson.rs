@@ -3,9 +3,9 @@
 //! The world is cut into square blocks of side `3 r` aligned on its −x, −z corner. Blocks are
 //! processed in four phases by the parity of their coordinates, so two blocks of one phase
 //! never touch and their order within the phase does not matter. A block is sampled with its
-//! own generator (seeded by the seed and its coordinates), starting from the samples of the
-//! neighbouring blocks of earlier phases, and keeps candidates inside itself at least `r`
-//! from every sample. A block's result thus depends only on its neighbours of earlier
+//! own generator (seeded by the seed and its coordinates): darts start Bridson's growth,
+//! which keeps candidates inside the block at least `r` from every sample, those of the
+//! neighbouring blocks of earlier phases included. A block's result thus depends only on its neighbours of earlier
 //! phases, whose results depend on theirs: three blocks around a region are enough to sample
 //! that region exactly as the whole world would (DESIGN.md §3.8).
 
@@ -237,57 +237,45 @@ impl Sampler {
         let mut rng = Rng::new(hash(&[seed, 0xb10c, bx as u64, bz as u64]));
         let start = self.samples.len() as u32;
         let cell = [bx as u32, bz as u32];
-        // Grow from the neighbours of earlier phases near this block, in a fixed order.
+        // Darts thrown into the block start Bridson's growth, which fills the block up to
+        // the samples of the neighbours of earlier phases (they are in the grid); a new
+        // round of darts starts after each growth, until four darts in a row fail.
         self.active.clear();
-        let reach = rect.expand(2.0 * self.r);
-        for dz in -1..=1 {
-            for dx in -1..=1 {
-                let (nx, nz) = (bx + dx, bz + dz);
-                if (dx, dz) == (0, 0)
-                    || nx < self.lo[0]
-                    || nx > self.hi[0]
-                    || nz < self.lo[1]
-                    || nz > self.hi[1]
-                {
-                    continue;
-                }
-                let (a, e) = self.ranges[self.local(nx, nz)];
-                for s in &self.samples[a as usize..e as usize] {
-                    if reach.contains(s.x, s.z) {
-                        self.active.push((s.x, s.z));
-                    }
-                }
-            }
-        }
         let mut index = 0u32;
-        let (x, z) = (
-            rng.range(rect.min[0], rect.max[0]),
-            rng.range(rect.min[1], rect.max[1]),
-        );
-        if rect.contains(x, z) && self.free(x, z) && !blocked(x, z) {
+        let r2 = self.r * self.r;
+        let mut misses = 0;
+        while misses < 4 {
+            let (x, z) = (
+                rng.range(rect.min[0], rect.max[0]),
+                rng.range(rect.min[1], rect.max[1]),
+            );
+            if !(rect.contains(x, z) && self.free(x, z) && !blocked(x, z)) {
+                misses += 1;
+                continue;
+            }
+            misses = 0;
             self.add(x, z, cell, index);
             index += 1;
             self.active.push((x, z));
-        }
-        let r2 = self.r * self.r;
-        while !self.active.is_empty() {
-            let i = rng.below(self.active.len() as u32) as usize;
-            let (px, pz) = self.active[i];
-            let mut found = false;
-            for _ in 0..CANDIDATES {
-                let angle = rng.uniform() * std::f64::consts::TAU;
-                let d = (r2 * (1.0 + 3.0 * rng.uniform())).sqrt();
-                let (x, z) = (px + d * angle.cos(), pz + d * angle.sin());
-                if rect.contains(x, z) && self.free(x, z) && !blocked(x, z) {
-                    self.add(x, z, cell, index);
-                    index += 1;
-                    self.active.push((x, z));
-                    found = true;
-                    break;
+            while !self.active.is_empty() {
+                let i = rng.below(self.active.len() as u32) as usize;
+                let (px, pz) = self.active[i];
+                let mut found = false;
+                for _ in 0..CANDIDATES {
+                    let angle = rng.uniform() * std::f64::consts::TAU;
+                    let d = (r2 * (1.0 + 3.0 * rng.uniform())).sqrt();
+                    let (x, z) = (px + d * angle.cos(), pz + d * angle.sin());
+                    if rect.contains(x, z) && self.free(x, z) && !blocked(x, z) {
+                        self.add(x, z, cell, index);
+                        index += 1;
+                        self.active.push((x, z));
+                        found = true;
+                        break;
+                    }
                 }
-            }
-            if !found {
-                self.active.swap_remove(i);
+                if !found {
+                    self.active.swap_remove(i);
+                }
             }
         }
         let l = self.local(bx, bz);
