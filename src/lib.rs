@@ -64,6 +64,7 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)
+        .plugin(pge_forest::ForestPlugin)
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ mod output;
 #[cfg(feature = "preview")]
 mod preview;
 mod run;
+mod tiles;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other
 /// objects and writes them as glTF 2.0.
@@ -29,6 +30,8 @@ enum Command {
     /// Open a window that shows the script's model and regenerates it on every save.
     #[cfg(feature = "preview")]
     Preview(preview::PreviewArgs),
+    /// Print the tiles of a forest with `tile = T` as JSON.
+    Tiles(tiles::TilesArgs),
 }
 
 fn main() -> ExitCode {
@@ -37,6 +40,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         #[cfg(feature = "preview")]
         Command::Preview(args) => preview::preview(args),
+        Command::Tiles(args) => tiles::tiles(args),
         Command::Derive(args) => args
             .script
             .engine()

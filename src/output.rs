@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
-use pge_engine::export::{ExportMeta, glb_bytes, obj_files};
+use pge_engine::export::{ExportMeta, Instancing, glb_bytes_with, obj_files};
 use pge_engine::geometry::Model;
 
 /// The metadata a `.glb` records: the seed and the parameters' values, in order.
@@ -49,7 +49,12 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
 /// folder (those first, the `.obj` last), anything else as `.glb` with `meta`.
-pub fn write_model(model: &Model, meta: &ExportMeta, output: &Path) -> anyhow::Result<()> {
+pub fn write_model(
+    model: &Model,
+    meta: &ExportMeta,
+    output: &Path,
+    instancing: Instancing,
+) -> anyhow::Result<()> {
     let is_obj = output
         .extension()
         .and_then(|e| e.to_str())
@@ -69,7 +74,7 @@ pub fn write_model(model: &Model, meta: &ExportMeta, output: &Path) -> anyhow::R
         write_atomically(&dir.join(&mtl), files.mtl.as_bytes())?;
         write_atomically(output, files.obj.as_bytes())?;
     } else {
-        write_atomically(output, &glb_bytes(model, meta)?)?;
+        write_atomically(output, &glb_bytes_with(model, meta, instancing)?)?;
     }
     Ok(())
 }

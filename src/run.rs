@@ -1,10 +1,14 @@
 //! `pge run`: run a script and write its model.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use pge_engine::export::Instancing;
+use pge_engine::mlua::{ObjectLike, Value};
+use pge_engine::{Generated, Session};
 
 use crate::common::ScriptArgs;
 use crate::output::{export_meta, write_model};
@@ -26,6 +30,85 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Write only tile I,J of a forest with `tile = T` (I along x, J along z, from 0 at the
+    /// -x, -z corner).
+    #[arg(long, value_name = "I,J", value_parser = parse_tile)]
+    pub tile: Option<(usize, usize)>,
+    /// Worker threads for parallel work (forest variants); default: every core. The output
+    /// is byte-identical for any N.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// How instanced objects (a forest's trees) are written: gpu (EXT_mesh_gpu_instancing)
+    /// or nodes (one node per instance).
+    #[arg(long, value_enum, default_value_t = InstancingArg::Gpu)]
+    pub instancing: InstancingArg,
+}
+
+/// `--instancing`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InstancingArg {
+    /// One node per variant with EXT_mesh_gpu_instancing.
+    Gpu,
+    /// One node per instance.
+    Nodes,
+}
+
+fn parse_tile(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("'{s}' is not I,J (two integers >= 0)");
+    let (i, j) = s.split_once(',').ok_or_else(bad)?;
+    Ok((
+        i.trim().parse().map_err(|_| bad())?,
+        j.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+/// Sets the global rayon pool to `threads` workers (every core when `None`).
+pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
+    if let Some(n) = threads {
+        if n == 0 {
+            anyhow::bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("cannot start the worker threads")?;
+    }
+    Ok(())
+}
+
+/// Like [`Session::generate`], for tile `(i, j)` of the forest the script returns.
+fn generate_tile(
+    session: &Session,
+    path: &Path,
+    (i, j): (usize, usize),
+    progress: &mut dyn FnMut(u32, Option<u32>),
+) -> anyhow::Result<Generated> {
+    let t0 = Instant::now();
+    let value = session.run_script(path)?;
+    let is_forest = match &value {
+        Value::UserData(ud) => matches!(ud.get::<Value>("selectTile"), Ok(Value::Function(_))),
+        _ => false,
+    };
+    if !is_forest {
+        anyhow::bail!(
+            "{}: --tile needs a script that returns a forest (pge.Forest with tile = T)",
+            path.display()
+        );
+    }
+    let selected = match &value {
+        Value::UserData(ud) => ud.call_method::<Value>("selectTile", (i, j)),
+        _ => Ok(Value::Nil),
+    };
+    selected.map_err(|e| pge_engine::lua::to_engine_error(session.lua(), e))?;
+    let mut algorithm = session.algorithm_from(value)?;
+    let ctx = session.context();
+    let planned = ctx.steps.or(algorithm.planned_steps());
+    let model = pge_engine::algorithm::run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
+    Ok(Generated {
+        model,
+        params: session.declared_params(),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 fn progress_bar(quiet: bool) -> ProgressBar {
@@ -43,6 +126,7 @@ fn progress_bar(quiet: bool) -> ProgressBar {
 /// Runs `pge run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
+    set_threads(args.threads)?;
     let engine = args.script.engine()?;
     let session = engine.session(args.script.session_options(args.steps))?;
     let output = match &args.output {
@@ -60,12 +144,18 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     let bar = progress_bar(args.quiet);
     bar.set_message(args.script.script.display().to_string());
-    let generated = session.generate(&args.script.script, &mut |taken, planned| {
+    let mut progress = |taken: u32, planned: Option<u32>| {
         if let Some(n) = planned {
             bar.set_length(n as u64);
         }
         bar.set_position(taken as u64);
-    });
+    };
+    let generated = match args.tile {
+        None => session
+            .generate(&args.script.script, &mut progress)
+            .map_err(anyhow::Error::from),
+        Some(tile) => generate_tile(&session, &args.script.script, tile, &mut progress),
+    };
     bar.finish_and_clear();
     let mut generated = generated?;
     for w in &generated.model.stats.warnings {
@@ -73,7 +163,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     let te = Instant::now();
     let meta = export_meta(args.script.seed, &generated.params);
-    write_model(&generated.model, &meta, &output)?;
+    let instancing = match args.instancing {
+        InstancingArg::Gpu => Instancing::Gpu,
+        InstancingArg::Nodes => Instancing::Nodes,
+    };
+    write_model(&generated.model, &meta, &output, instancing)?;
     generated
         .model
         .stats
@@ -93,7 +187,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             "leaves": m.stats.leaves,
             "modules": m.stats.modules,
             "meshes": m.meshes.len(),
-            "instances": m.instances.len(),
+            "instances": m.extras.get("forest").and_then(|f| f.get("instances")).cloned()
+                .unwrap_or_else(|| m.instances.len().into()),
             "seconds": t0.elapsed().as_secs_f64(),
             "phases": phases,
             "warnings": m.stats.warnings,

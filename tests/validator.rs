@@ -40,7 +40,10 @@ fn library_scripts() -> Vec<PathBuf> {
         entries.sort();
         for p in entries {
             if p.is_dir() {
-                if p.file_name().is_some_and(|n| n != "lib" && n != "data") {
+                // Forests are validated by tests/forest_validator.rs with small settings.
+                if p.file_name()
+                    .is_some_and(|n| n != "lib" && n != "data" && n != "forests")
+                {
                     walk(&p, out);
                 }
             } else if p.extension().is_some_and(|e| e == "lua") {

@@ -97,7 +97,9 @@ impl EngineBuilder {
     }
 }
 
-/// Owns the plugins and limits; creates [`Session`]s. Cheap to share between threads.
+/// Owns the plugins and limits; creates [`Session`]s. Cheap to clone (the plugins are shared)
+/// and to share between threads.
+#[derive(Clone)]
 pub struct Engine {
     plugins: Vec<Arc<dyn Plugin>>,
     limits: Limits,

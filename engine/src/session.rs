@@ -93,6 +93,7 @@ impl Session {
             instruction_limit: limits.instructions,
             ..SessionState::default()
         });
+        lua.set_app_data(crate::lua::state::EngineHandle(engine.clone()));
         lua.set_app_data(CurrentRng(crate::random::mt_from_seed(options.seed)));
         // The registry of session services the plugins fill while they register.
         lua.set_app_data(crate::lua::services::Services::default());

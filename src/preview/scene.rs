@@ -105,14 +105,29 @@ impl Scene {
                 list.push(inst.transform.to_cols_array());
             }
         }
+        // Instance groups (a forest's variants) are drawn instanced too; their skeletons
+        // are not drawn (a forest has millions of branches).
+        let plain: Vec<usize> = per_mesh.iter().map(Vec::len).collect();
+        for group in &model.groups {
+            let matrices: Vec<[f32; 16]> = group
+                .transforms
+                .iter()
+                .map(|t| t.matrix().to_cols_array())
+                .collect();
+            for &m in &group.meshes {
+                if let Some(list) = per_mesh.get_mut(m) {
+                    list.extend_from_slice(&matrices);
+                }
+            }
+        }
         let mut meshes = Vec::new();
         let mut skeleton = Vec::new();
-        for (mesh, instances) in model.meshes.iter().zip(per_mesh) {
+        for ((mesh, instances), plain) in model.meshes.iter().zip(per_mesh).zip(plain) {
             if instances.is_empty() || mesh.positions.is_empty() {
                 continue;
             }
             if let Some(sk) = &mesh.skeleton {
-                for m in &instances {
+                for m in &instances[..plain] {
                     let m = Mat4::from_cols_array(m);
                     for (i, parent) in sk.parents.iter().enumerate() {
                         if let (Some(p), Some(c)) = (parent, sk.positions.get(i))

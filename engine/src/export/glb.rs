@@ -8,7 +8,9 @@ use json::validation::Checked::Valid;
 use json::validation::USize64;
 use serde_json::{Map, Value as JsonValue, json};
 
-use crate::geometry::{AlphaMode, Material, Mesh, Model, Primitive, Skeleton, Texture};
+use crate::geometry::{
+    AlphaMode, InstanceGroup, Material, Mesh, Model, Primitive, Skeleton, Texture,
+};
 use crate::{Error, Result};
 
 /// What the root `extras.pge` records besides the model's own extras.
@@ -19,6 +21,20 @@ pub struct ExportMeta {
     /// Declared parameters and their values, in order.
     pub params: Vec<(String, JsonValue)>,
 }
+
+/// How the placements of an [`InstanceGroup`] (a forest's trees) are written.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Instancing {
+    /// One node per group with `EXT_mesh_gpu_instancing` (TRANSLATION, ROTATION and SCALE
+    /// accessors), declared in `extensionsUsed`.
+    #[default]
+    Gpu,
+    /// One plain node per placement, for tools without the extension.
+    Nodes,
+}
+
+/// The name of the glTF extension used by [`Instancing::Gpu`].
+pub const GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// The generator string written to `asset.generator` and `extras.pge.generator`.
 pub const GENERATOR: &str = concat!("PGE ", env!("CARGO_PKG_VERSION"));
@@ -76,9 +92,9 @@ impl Builder {
         component: json::accessor::ComponentType,
         type_: json::accessor::Type,
         bounds: Option<(JsonValue, JsonValue)>,
-        target: json::buffer::Target,
+        target: Option<json::buffer::Target>,
     ) -> json::Index<json::Accessor> {
-        let view = self.view(bytes, Some(target));
+        let view = self.view(bytes, target);
         let (min, max) = match bounds {
             Some((a, b)) => (Some(a), Some(b)),
             None => (None, None),
@@ -124,7 +140,22 @@ impl Builder {
             json::accessor::ComponentType::F32,
             type_,
             b,
-            json::buffer::Target::ArrayBuffer,
+            Some(json::buffer::Target::ArrayBuffer),
+        )
+    }
+
+    /// A float accessor of per-instance data (no buffer view target: not a vertex attribute).
+    fn instance_floats(&mut self, data: &[f32], per: usize) -> json::Index<json::Accessor> {
+        use json::accessor::Type;
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let type_ = if per == 3 { Type::Vec3 } else { Type::Vec4 };
+        self.accessor(
+            &bytes,
+            data.len() / per,
+            json::accessor::ComponentType::F32,
+            type_,
+            None,
+            None,
         )
     }
 
@@ -209,6 +240,55 @@ impl Builder {
     }
 
     fn mesh(&mut self, mesh: &Mesh) -> Result<json::Index<json::Mesh>> {
+        let (primitive, pge) = self.primitive(mesh)?;
+        let extras = if pge.is_empty() {
+            None
+        } else {
+            raw(&json!({ "pge": pge }))?
+        };
+        Ok(self.root.push(json::Mesh {
+            extensions: None,
+            extras,
+            name: Some(mesh.name.clone()),
+            primitives: vec![primitive],
+            weights: None,
+        }))
+    }
+
+    /// One glTF mesh for a group: a primitive per member mesh; the members' `extras.pge`
+    /// merged (the first member's keys win).
+    fn group_mesh(
+        &mut self,
+        group: &InstanceGroup,
+        meshes: &[std::sync::Arc<Mesh>],
+    ) -> Result<json::Index<json::Mesh>> {
+        let mut primitives = Vec::with_capacity(group.meshes.len());
+        let mut merged = Map::new();
+        for &m in &group.meshes {
+            let (primitive, pge) = self.primitive(&meshes[m])?;
+            primitives.push(primitive);
+            for (k, v) in pge {
+                merged.entry(k).or_insert(v);
+            }
+        }
+        let extras = if merged.is_empty() {
+            None
+        } else {
+            raw(&json!({ "pge": merged }))?
+        };
+        Ok(self.root.push(json::Mesh {
+            extensions: None,
+            extras,
+            name: Some(group.name.clone()),
+            primitives,
+            weights: None,
+        }))
+    }
+
+    fn primitive(
+        &mut self,
+        mesh: &Mesh,
+    ) -> Result<(json::mesh::Primitive, Map<String, JsonValue>)> {
         use json::accessor::{ComponentType, Type};
         use json::mesh::Semantic;
         mesh.validate()?;
@@ -234,7 +314,7 @@ impl Builder {
             ComponentType::U32,
             Type::Scalar,
             None,
-            json::buffer::Target::ElementArrayBuffer,
+            Some(json::buffer::Target::ElementArrayBuffer),
         );
         let material = self.material(&mesh.material);
         let mut pge = Map::new();
@@ -244,30 +324,20 @@ impl Builder {
         for (k, v) in &mesh.extras {
             pge.insert(k.clone(), v.clone());
         }
-        let extras = if pge.is_empty() {
-            None
-        } else {
-            raw(&json!({ "pge": pge }))?
-        };
         let mode = match mesh.primitive {
             Primitive::Triangles => json::mesh::Mode::Triangles,
             Primitive::Lines => json::mesh::Mode::Lines,
         };
-        Ok(self.root.push(json::Mesh {
+        let primitive = json::mesh::Primitive {
+            attributes,
             extensions: None,
-            extras,
-            name: Some(mesh.name.clone()),
-            primitives: vec![json::mesh::Primitive {
-                attributes,
-                extensions: None,
-                extras: None,
-                indices: Some(indices),
-                material: Some(material),
-                mode: Valid(mode),
-                targets: None,
-            }],
-            weights: None,
-        }))
+            extras: None,
+            indices: Some(indices),
+            material: Some(material),
+            mode: Valid(mode),
+            targets: None,
+        };
+        Ok((primitive, pge))
     }
 }
 
@@ -308,8 +378,15 @@ fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
 /// The `.glb` bytes of a model: one buffer, u32 indices, embedded PNG textures, one node per
 /// instance, and the root `extras.pge` with generator, seed, params and stats (and, when the
 /// model has an environment, `environment = {image = <image index>, mapping =
-/// "equirectangular"}`).
+/// "equirectangular"}`). Groups of instances are written with [`Instancing::Gpu`].
 pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
+    glb_bytes_with(model, meta, Instancing::Gpu)
+}
+
+/// [`glb_bytes`], writing the model's [`InstanceGroup`]s as `instancing` says: one glTF mesh
+/// per group (a primitive per member mesh), then one node per group with
+/// `EXT_mesh_gpu_instancing`, or one node per placement.
+pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<Vec<u8>> {
     model.validate()?;
     let mut b = Builder::default();
     b.root.asset = json::Asset {
@@ -320,14 +397,70 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
         min_version: None,
         version: "2.0".into(),
     };
+    // Meshes only groups use are written inside their group's mesh, not on their own.
     let mut meshes = Vec::with_capacity(model.meshes.len());
-    for m in &model.meshes {
-        meshes.push(b.mesh(m)?);
+    for (i, m) in model.meshes.iter().enumerate() {
+        let standalone =
+            model.groups.is_empty() || model.instances.iter().any(|inst| inst.mesh == i);
+        meshes.push(if standalone { Some(b.mesh(m)?) } else { None });
     }
     let mut nodes = Vec::with_capacity(model.instances.len());
     for inst in &model.instances {
-        let n = node(meshes[inst.mesh], &inst.transform);
+        let Some(mesh) = meshes[inst.mesh] else {
+            return Err(Error::Export("an instance's mesh was not written".into()));
+        };
+        let n = node(mesh, &inst.transform);
         nodes.push(b.root.push(n));
+    }
+    // Nodes that need EXT_mesh_gpu_instancing, with their TRANSLATION/ROTATION/SCALE accessors.
+    let mut gpu_nodes = Vec::new();
+    for group in &model.groups {
+        if group.transforms.is_empty() {
+            continue;
+        }
+        let mesh = b.group_mesh(group, &model.meshes)?;
+        match instancing {
+            Instancing::Gpu => {
+                let mut t = Vec::with_capacity(group.transforms.len() * 3);
+                let mut r = Vec::with_capacity(group.transforms.len() * 4);
+                let mut s = Vec::with_capacity(group.transforms.len() * 3);
+                for x in &group.transforms {
+                    t.extend_from_slice(&x.translation);
+                    r.extend_from_slice(&x.rotation);
+                    s.extend_from_slice(&[x.scale; 3]);
+                }
+                let accessors = [
+                    b.instance_floats(&t, 3),
+                    b.instance_floats(&r, 4),
+                    b.instance_floats(&s, 3),
+                ];
+                let index = b.root.push(json::Node {
+                    mesh: Some(mesh),
+                    name: Some(group.name.clone()),
+                    ..Default::default()
+                });
+                gpu_nodes.push((index.value(), accessors.map(|a| a.value())));
+                nodes.push(index);
+            }
+            Instancing::Nodes => {
+                for x in &group.transforms {
+                    let mut n = json::Node {
+                        mesh: Some(mesh),
+                        ..Default::default()
+                    };
+                    if x.translation != [0.0; 3] {
+                        n.translation = Some(x.translation);
+                    }
+                    if x.rotation != [0.0, 0.0, 0.0, 1.0] {
+                        n.rotation = Some(json::scene::UnitQuaternion(x.rotation));
+                    }
+                    if x.scale != 1.0 {
+                        n.scale = Some([x.scale; 3]);
+                    }
+                    nodes.push(b.root.push(n));
+                }
+            }
+        }
     }
     // A scene needs at least one node (and the gltf crate refuses one without), so an empty
     // model is written without a scene: a valid, empty glTF.
@@ -378,7 +511,11 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
             extras: None,
         });
     }
-    let mut text = b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?;
+    let mut text = if gpu_nodes.is_empty() {
+        b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
+    } else {
+        with_gpu_instancing(&b.root, &gpu_nodes)?
+    };
     while text.len() % 4 != 0 {
         text.push(b' ');
     }
@@ -396,6 +533,30 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
         out.extend_from_slice(&b.bin);
     }
     Ok(out)
+}
+
+/// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
+/// ROTATION, SCALE] accessors) and the extension declared in `extensionsUsed` (gltf-json
+/// has no field for it without its `extensions` feature).
+fn with_gpu_instancing(root: &json::Root, nodes: &[(usize, [usize; 3])]) -> Result<Vec<u8>> {
+    let export = |e: serde_json::Error| Error::Export(e.to_string());
+    let mut value = serde_json::to_value(root).map_err(export)?;
+    for &(index, [t, r, s]) in nodes {
+        let node = value
+            .get_mut("nodes")
+            .and_then(|n| n.get_mut(index))
+            .and_then(JsonValue::as_object_mut)
+            .ok_or_else(|| Error::Export("an instancing node is missing".into()))?;
+        node.insert(
+            "extensions".into(),
+            json!({ GPU_INSTANCING: { "attributes": {
+                "TRANSLATION": t, "ROTATION": r, "SCALE": s } } }),
+        );
+    }
+    if let Some(root) = value.as_object_mut() {
+        root.insert("extensionsUsed".into(), json!([GPU_INSTANCING]));
+    }
+    serde_json::to_vec(&value).map_err(export)
 }
 
 #[cfg(test)]

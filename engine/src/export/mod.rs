@@ -3,5 +3,5 @@
 mod glb;
 mod obj;
 
-pub use glb::{ExportMeta, glb_bytes};
+pub use glb::{ExportMeta, GPU_INSTANCING, Instancing, glb_bytes, glb_bytes_with};
 pub use obj::{ObjFiles, obj_files};

@@ -34,7 +34,18 @@ pub fn obj_files(model: &Model, mtl_name: &str, stem: &str) -> Result<ObjFiles> 
     writeln!(out.obj, "# {}\nmtllib {mtl_name}", super::glb::GENERATOR).map_err(e)?;
     let mut materials: Vec<std::sync::Arc<crate::geometry::Material>> = Vec::new();
     let (mut v_base, mut vt_base, mut vn_base) = (1usize, 1usize, 1usize);
-    for (n, inst) in model.instances.iter().enumerate() {
+    // Groups (forests) have no instancing in OBJ: every placement is written out.
+    let grouped = model.groups.iter().flat_map(|g| {
+        g.transforms.iter().flat_map(move |t| {
+            let m = t.matrix();
+            g.meshes
+                .iter()
+                .map(move |&mesh| crate::geometry::Instance { mesh, transform: m })
+        })
+    });
+    let all: Vec<crate::geometry::Instance> =
+        model.instances.iter().cloned().chain(grouped).collect();
+    for (n, inst) in all.iter().enumerate() {
         let mesh = &model.meshes[inst.mesh];
         let mi = match materials.iter().position(|m| **m == *mesh.material) {
             Some(i) => i,

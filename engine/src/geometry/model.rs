@@ -13,6 +13,43 @@ pub struct Instance {
     pub transform: Mat4,
 }
 
+/// One placement in an [`InstanceGroup`]: translation, rotation (a unit quaternion x, y, z,
+/// w) and a uniform scale, 32 bytes, so a forest of millions of trees stays compact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InstanceTransform {
+    /// Where the instance stands.
+    pub translation: [f32; 3],
+    /// Its rotation as a unit quaternion `[x, y, z, w]`.
+    pub rotation: [f32; 4],
+    /// Its uniform scale.
+    pub scale: f32,
+}
+
+impl InstanceTransform {
+    /// The transform as a matrix.
+    #[must_use]
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(
+            Vec3::splat(self.scale),
+            glam::Quat::from_array(self.rotation),
+            Vec3::from_array(self.translation),
+        )
+    }
+}
+
+/// Many placements of one object made of several meshes (a tree's bark and leaves): exported
+/// as one glTF mesh with a primitive per mesh and either one node with
+/// `EXT_mesh_gpu_instancing` or one node per placement.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InstanceGroup {
+    /// Name of the glTF mesh (a forest writes `SPECIES/VARIANT`).
+    pub name: String,
+    /// Indices into [`Model::meshes`]: the primitives of the object, in its own frame.
+    pub meshes: Vec<usize>,
+    /// The placements.
+    pub transforms: Vec<InstanceTransform>,
+}
+
 /// Counts and timings of a generation, reported by `pge run --stats`.
 ///
 /// Vertex and triangle counts are not stored: they are derived from the model.
@@ -60,6 +97,8 @@ pub struct Model {
     pub meshes: Vec<Arc<Mesh>>,
     /// Placements of the meshes; every one becomes a glTF node.
     pub instances: Vec<Instance>,
+    /// Instanced objects (forests): many placements of the same meshes, stored compactly.
+    pub groups: Vec<InstanceGroup>,
     /// Application data written under the root `extras.pge` next to the generator's own.
     pub extras: serde_json::Map<String, serde_json::Value>,
     /// Counts and timings.
@@ -110,6 +149,25 @@ impl Model {
                 transform: transform * inst.transform,
             });
         }
+        for group in &other.groups {
+            let transforms = group
+                .transforms
+                .iter()
+                .map(|t| {
+                    let (s, r, p) = (transform * t.matrix()).to_scale_rotation_translation();
+                    InstanceTransform {
+                        translation: p.to_array(),
+                        rotation: r.to_array(),
+                        scale: s.max_element(),
+                    }
+                })
+                .collect();
+            self.groups.push(InstanceGroup {
+                name: group.name.clone(),
+                meshes: group.meshes.iter().map(|&m| map[m]).collect(),
+                transforms,
+            });
+        }
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
@@ -129,22 +187,57 @@ impl Model {
         }
     }
 
-    /// Vertices drawn, counting every instance.
+    /// Vertices drawn, counting every instance (of groups too).
     #[must_use]
     pub fn vertex_count(&self) -> usize {
+        let grouped: usize = self
+            .groups
+            .iter()
+            .map(|g| {
+                g.transforms.len()
+                    * g.meshes
+                        .iter()
+                        .map(|&m| self.meshes[m].vertex_count())
+                        .sum::<usize>()
+            })
+            .sum();
         self.instances
             .iter()
             .map(|i| self.meshes[i.mesh].vertex_count())
-            .sum()
+            .sum::<usize>()
+            + grouped
     }
 
-    /// Triangles drawn, counting every instance.
+    /// Triangles drawn, counting every instance (of groups too).
     #[must_use]
     pub fn triangle_count(&self) -> usize {
+        let grouped: usize = self
+            .groups
+            .iter()
+            .map(|g| {
+                g.transforms.len()
+                    * g.meshes
+                        .iter()
+                        .map(|&m| self.meshes[m].triangle_count())
+                        .sum::<usize>()
+            })
+            .sum();
         self.instances
             .iter()
             .map(|i| self.meshes[i.mesh].triangle_count())
-            .sum()
+            .sum::<usize>()
+            + grouped
+    }
+
+    /// Placements: plain instances plus every placement of every group.
+    #[must_use]
+    pub fn instance_count(&self) -> usize {
+        self.instances.len()
+            + self
+                .groups
+                .iter()
+                .map(|g| g.transforms.len())
+                .sum::<usize>()
     }
 
     /// Checks every mesh and that instances point at existing meshes with finite transforms.
@@ -167,6 +260,26 @@ impl Model {
                 });
             }
         }
+        for group in &self.groups {
+            if let Some(&m) = group.meshes.iter().find(|&&m| m >= self.meshes.len()) {
+                return Err(GeometryError::IndexOutOfRange {
+                    index: m as u32,
+                    at: 0,
+                    vertices: self.meshes.len(),
+                });
+            }
+            for (at, t) in group.transforms.iter().enumerate() {
+                let finite = t.translation.iter().all(|v| v.is_finite())
+                    && t.rotation.iter().all(|v| v.is_finite())
+                    && t.scale.is_finite();
+                if !finite {
+                    return Err(GeometryError::NotFinite {
+                        attribute: "group instance transform",
+                        at,
+                    });
+                }
+            }
+        }
         Ok(())
     }
 
@@ -174,8 +287,15 @@ impl Model {
     #[must_use]
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut out: Option<(Vec3, Vec3)> = None;
-        for inst in &self.instances {
-            let Some((lo, hi)) = self.meshes[inst.mesh].bounds() else {
+        let grouped = self.groups.iter().flat_map(|g| {
+            g.transforms.iter().flat_map(move |t| {
+                let m = t.matrix();
+                g.meshes.iter().map(move |&mesh| (mesh, m))
+            })
+        });
+        let plain = self.instances.iter().map(|i| (i.mesh, i.transform));
+        for (mesh, transform) in plain.chain(grouped) {
+            let Some((lo, hi)) = self.meshes[mesh].bounds() else {
                 continue;
             };
             for corner in 0..8 {
@@ -184,7 +304,7 @@ impl Model {
                     if corner & 2 == 0 { lo.y } else { hi.y },
                     if corner & 4 == 0 { lo.z } else { hi.z },
                 );
-                let p = inst.transform.transform_point3(c);
+                let p = transform.transform_point3(c);
                 out = Some(match out {
                     None => (p, p),
                     Some((a, b)) => (a.min(p), b.max(p)),

@@ -50,3 +50,7 @@ impl SessionState {
         }
     }
 }
+
+/// The engine that created the session, so that plugins can open sessions of their own
+/// (a forest grows each species variant in a fresh session); read with [`super::engine`].
+pub(crate) struct EngineHandle(pub crate::Engine);

@@ -1,0 +1,211 @@
+//! Assembly: the terrain patch and every variant's meshes, instanced by the layout.
+
+use std::sync::Arc;
+
+use glam::{Mat3, Mat4, Quat, Vec3};
+use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model};
+use serde_json::json;
+
+use crate::layout::{Forest, Layout, Variants};
+
+/// The grown variants of one layer (for `"unique"`, one per instance of the layout, in
+/// order).
+#[derive(Clone, Debug, Default)]
+pub struct Grown {
+    /// One model per variant.
+    pub variants: Vec<Model>,
+}
+
+/// The instance transform of a tree: at its trunk, turned by its yaw, scaled.
+#[must_use]
+pub fn transform(position: [f32; 3], yaw: f32, scale: f32) -> InstanceTransform {
+    InstanceTransform {
+        translation: position,
+        rotation: Quat::from_rotation_y(yaw).to_array(),
+        scale,
+    }
+}
+
+/// A copy of `mesh` moved by `m` (for variants whose parts are not at the origin).
+fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
+    let normal = Mat3::from_mat4(*m).inverse().transpose();
+    let mut out = mesh.clone();
+    for p in &mut out.positions {
+        *p = m.transform_point3(*p);
+    }
+    for n in &mut out.normals {
+        *n = (normal * *n).normalize_or(Vec3::Y);
+    }
+    out
+}
+
+/// The model of a forest (or of tile `tile`): the terrain patch, then one instance group per
+/// variant named `SPECIES/VARIANT`, and `extras.pge.forest`.
+#[must_use]
+pub fn assemble(
+    forest: &Forest,
+    layout: &Layout,
+    grown: &[Grown],
+    tile: Option<(usize, usize)>,
+) -> Model {
+    let mut model = Model::new();
+    let grid = forest.terrain.grid(forest.tile);
+    let (kx, kz) = forest.terrain.patch(&grid, tile);
+    model.add_mesh(forest.terrain.mesh(&grid, kx, kz), Mat4::IDENTITY);
+    let mut first_group = Vec::with_capacity(grown.len());
+    for (l, g) in grown.iter().enumerate() {
+        first_group.push(model.groups.len());
+        let name = forest.layers.get(l).map_or("layer", |x| x.name.as_str());
+        for (v, variant) in g.variants.iter().enumerate() {
+            let mut meshes = Vec::new();
+            for inst in &variant.instances {
+                let mesh = &variant.meshes[inst.mesh];
+                let mesh = if inst.transform == Mat4::IDENTITY {
+                    mesh.clone()
+                } else {
+                    Arc::new(baked(mesh, &inst.transform))
+                };
+                model.meshes.push(mesh);
+                meshes.push(model.meshes.len() - 1);
+            }
+            model.groups.push(InstanceGroup {
+                name: format!("{name}/{v}"),
+                meshes,
+                transforms: Vec::new(),
+            });
+            model
+                .stats
+                .warnings
+                .extend(variant.stats.warnings.iter().cloned());
+        }
+    }
+    for inst in &layout.instances {
+        let l = inst.layer as usize;
+        if let Some(&first) = first_group.get(l)
+            && let Some(group) = model.groups.get_mut(first + inst.variant as usize)
+        {
+            group
+                .transforms
+                .push(transform(inst.position, inst.yaw, inst.scale));
+        }
+    }
+    // Trees grown by instances, for the stats.
+    for (l, g) in grown.iter().enumerate() {
+        for (v, variant) in g.variants.iter().enumerate() {
+            let n = model.groups[first_group[l] + v].transforms.len() as u64;
+            model.stats.nodes += variant.stats.nodes * n;
+            model.stats.leaves += variant.stats.leaves * n;
+        }
+    }
+    model.stats.warnings.extend(layout.warnings.iter().cloned());
+    let species: Vec<_> = forest
+        .layers
+        .iter()
+        .enumerate()
+        .map(|(l, layer)| {
+            let variants = match layer.variants {
+                Variants::Count(n) => u64::from(n),
+                Variants::Unique => layout.counts.get(l).copied().unwrap_or(0) as u64,
+            };
+            json!({
+                "name": layer.name,
+                "variants": variants,
+                "count": layout.counts.get(l).copied().unwrap_or(0),
+            })
+        })
+        .collect();
+    model.extras.insert(
+        "forest".into(),
+        json!({
+            "size": forest.size,
+            "seed": forest.seed,
+            "tile": forest.tile,
+            "tileIndex": tile.map(|(i, j)| [i, j]),
+            "instances": layout.instances.len(),
+            "species": species,
+        }),
+    );
+    model
+}
+
+/// A marker for the layout step: a slim cone 1 m wide and 6 m tall, one group per layer, so
+/// the preview shows where trees will stand before they grow.
+#[must_use]
+pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize)>) -> Model {
+    let sides = 6u32;
+    let mut positions = vec![Vec3::new(0.0, 6.0, 0.0)];
+    for k in 0..sides {
+        let a = k as f32 * std::f32::consts::TAU / sides as f32;
+        positions.push(Vec3::new(0.5 * a.cos(), 0.0, 0.5 * a.sin()));
+    }
+    let mut indices = Vec::new();
+    for k in 0..sides {
+        indices.extend_from_slice(&[0, 1 + (k + 1) % sides, 1 + k]);
+    }
+    let mut grown = Vec::new();
+    for layer in &forest.layers {
+        let cone = match Mesh::from_triangles(positions.clone(), indices.clone()) {
+            Ok(mut m) => {
+                m.name = format!("{}/layout", layer.name);
+                m
+            }
+            Err(_) => Mesh::default(),
+        };
+        let n = match layer.variants {
+            Variants::Count(n) => n as usize,
+            Variants::Unique => 1,
+        };
+        let marker = Model::from_mesh(cone);
+        grown.push(Grown {
+            variants: vec![marker; n],
+        });
+    }
+    let mut unique = layout.clone();
+    for i in &mut unique.instances {
+        if forest.layers[i.layer as usize].variants == Variants::Unique {
+            i.variant = 0;
+        }
+    }
+    assemble(forest, &unique, &grown, tile)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::Layer;
+
+    #[test]
+    fn each_variant_is_a_group_placed_by_the_layout() {
+        let mut f = Forest::new([60.0, 60.0], 5, None).expect("forest");
+        let mut l = Layer::new("oak", 5.0);
+        l.variants = Variants::Count(2);
+        f.layers.push(l);
+        let layout = f.layout(None).expect("layout");
+        let tri =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let mut v1 = Model::new();
+        v1.add_mesh(tri.clone(), Mat4::from_translation(Vec3::Y));
+        let grown = vec![Grown {
+            variants: vec![Model::from_mesh(tri), v1],
+        }];
+        let model = assemble(&f, &layout, &grown, None);
+        assert_eq!(model.groups.len(), 2);
+        assert_eq!(model.groups[0].name, "oak/0");
+        assert_eq!(model.instance_count(), 1 + layout.instances.len());
+        // The second variant's part was moved up by its own transform.
+        let baked = &model.meshes[model.groups[1].meshes[0]];
+        assert_eq!(baked.positions[0], Vec3::Y);
+        let first = layout
+            .instances
+            .iter()
+            .find(|i| i.variant == 0)
+            .expect("one");
+        let t = model.groups[0].transforms[0];
+        assert_eq!(t.translation, first.position);
+        assert_eq!(model.extras["forest"]["instances"], layout.instances.len());
+        model.validate().expect("valid");
+        assert!(
+            std::mem::size_of::<InstanceTransform>() + std::mem::size_of::<crate::Instance>() <= 64
+        );
+    }
+}

@@ -1,0 +1,707 @@
+//! Layers and the layout: where every tree of every layer stands, with its yaw, scale and
+//! variant, for the whole world or for one tile.
+
+use std::rc::Rc;
+use std::sync::Arc;
+
+use crate::ForestError;
+use crate::poisson::{Rect, Sample, block_size, poisson};
+use crate::rng::{Rng, hash};
+use crate::terrain::{Raster, Terrain};
+
+/// The most instances a layout may hold.
+pub const MAX_INSTANCES: usize = 10_000_000;
+
+/// How a layer's trunks are placed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Blue noise: Bridson's Poisson-disk sampling, block by block.
+    Poisson,
+    /// Seed 000's jittered grid: one tree per cell, moved by up to `jitter` of the cell
+    /// (0 ≤ jitter < 0.5); the cell is `minDistance / (1 − 2 jitter)` so trunks keep it.
+    Jittered {
+        /// Fraction of the cell a trunk may move from the cell's centre, per axis.
+        jitter: f64,
+    },
+}
+
+/// The probability that a sampled point grows a tree.
+#[derive(Clone)]
+pub enum Density {
+    /// The same everywhere, in [0, 1].
+    Constant(f64),
+    /// A greyscale map stretched over the world (white = 1; top row at −z).
+    Map(Arc<Raster>),
+    /// A function of `(x, z)` returning a value in [0, 1] (a script's function).
+    Function(Rc<dyn Fn(f64, f64) -> Result<f64, pge_engine::Error>>),
+}
+
+impl std::fmt::Debug for Density {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Density::Constant(d) => write!(f, "Constant({d})"),
+            Density::Map(_) => write!(f, "Map"),
+            Density::Function(_) => write!(f, "Function"),
+        }
+    }
+}
+
+/// How many meshes a layer grows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variants {
+    /// This many variants, each instanced by many trees.
+    Count(u32),
+    /// One tree per instance (seed 000's forests).
+    Unique,
+}
+
+/// One species scattered over the terrain.
+#[derive(Clone, Debug)]
+pub struct Layer {
+    /// The species' name: the script's file stem, or `layerN`.
+    pub name: String,
+    /// Poisson disk or jittered grid.
+    pub method: Method,
+    /// Metres between trunks of this layer, and from trunks of earlier layers.
+    pub min_distance: f64,
+    /// Probability of growing at a sampled point.
+    pub density: Density,
+    /// Allowed slope in degrees `[min, max]`.
+    pub slope: [f64; 2],
+    /// Allowed altitude in metres `[min, max]`.
+    pub altitude: [f64; 2],
+    /// Variant count or one per tree.
+    pub variants: Variants,
+    /// Per-instance scale range `[min, max]`.
+    pub scale: [f64; 2],
+}
+
+impl Layer {
+    /// A Poisson layer with the defaults of `forest:scatter` (density 1, any slope and
+    /// altitude, 8 variants, scale 0.8..1.2).
+    #[must_use]
+    pub fn new(name: impl Into<String>, min_distance: f64) -> Layer {
+        Layer {
+            name: name.into(),
+            method: Method::Poisson,
+            min_distance,
+            density: Density::Constant(1.0),
+            slope: [0.0, 90.0],
+            altitude: [f64::NEG_INFINITY, f64::INFINITY],
+            variants: Variants::Count(8),
+            scale: [0.8, 1.2],
+        }
+    }
+
+    /// Checks the options; the error names the option and what it needs.
+    pub fn check(&self) -> Result<(), ForestError> {
+        let bad = |option: &'static str, message: String| ForestError::Option { option, message };
+        if !(self.min_distance.is_finite() && self.min_distance > 0.0) {
+            return Err(bad(
+                "minDistance",
+                format!(
+                    "must be a positive number of metres, got {}",
+                    self.min_distance
+                ),
+            ));
+        }
+        if let Density::Constant(d) = self.density
+            && !(0.0..=1.0).contains(&d)
+        {
+            return Err(bad("density", format!("must be in [0, 1], got {d}")));
+        }
+        if let Method::Jittered { jitter } = self.method
+            && !(0.0..0.5).contains(&jitter)
+        {
+            return Err(bad("jitter", format!("must be in [0, 0.5), got {jitter}")));
+        }
+        if self.slope[0].partial_cmp(&self.slope[1]) != Some(std::cmp::Ordering::Less)
+            && self.slope[0] != self.slope[1]
+        {
+            return Err(bad(
+                "slope",
+                format!(
+                    "is an empty range: {{{}, {}}} needs min <= max",
+                    self.slope[0], self.slope[1]
+                ),
+            ));
+        }
+        if self.altitude[0].partial_cmp(&self.altitude[1]) != Some(std::cmp::Ordering::Less)
+            && self.altitude[0] != self.altitude[1]
+        {
+            return Err(bad(
+                "altitude",
+                format!(
+                    "is an empty range: {{{}, {}}} needs min <= max",
+                    self.altitude[0], self.altitude[1]
+                ),
+            ));
+        }
+        if !(self.scale[0] > 0.0 && self.scale[0] <= self.scale[1] && self.scale[1].is_finite()) {
+            return Err(bad(
+                "scale",
+                format!(
+                    "needs 0 < min <= max, got {{{}, {}}}",
+                    self.scale[0], self.scale[1]
+                ),
+            ));
+        }
+        if self.variants == Variants::Count(0) {
+            return Err(bad("variants", "must be at least 1 or \"unique\"".into()));
+        }
+        Ok(())
+    }
+
+    /// The spacing of the jittered grid.
+    fn cell(&self, jitter: f64) -> f64 {
+        self.min_distance / (1.0 - 2.0 * jitter)
+    }
+
+    /// Distance beyond a region from which this layer's sampling reads earlier layers.
+    fn reach(&self) -> f64 {
+        match self.method {
+            Method::Poisson => 4.0 * block_size(self.min_distance) + self.min_distance,
+            Method::Jittered { jitter } => self.cell(jitter) + self.min_distance,
+        }
+    }
+
+    fn estimate(&self, area: f64) -> f64 {
+        let dmax = match self.density {
+            Density::Constant(d) => d,
+            _ => 1.0,
+        };
+        let per = match self.method {
+            Method::Poisson => 0.75 / (self.min_distance * self.min_distance),
+            Method::Jittered { jitter } => 1.0 / self.cell(jitter).powi(2),
+        };
+        area * per * dmax
+    }
+}
+
+/// One tree of the layout: 28 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// Trunk base on the terrain.
+    pub position: [f32; 3],
+    /// Rotation about the vertical axis, radians.
+    pub yaw: f32,
+    /// Uniform scale.
+    pub scale: f32,
+    /// Index of the layer.
+    pub layer: u32,
+    /// Variant (0-based); with `"unique"` the instance's rank in its layer.
+    pub variant: u32,
+}
+
+/// The trees of a forest or a tile, layer by layer.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Layout {
+    /// Instances, layer by layer, each layer in cell order.
+    pub instances: Vec<Instance>,
+    /// Instances per layer.
+    pub counts: Vec<usize>,
+    /// Layers that fit no tree.
+    pub warnings: Vec<String>,
+}
+
+/// One tile of a tiled world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tile {
+    /// Index along x.
+    pub i: usize,
+    /// Index along z.
+    pub j: usize,
+    /// Its rectangle of ground.
+    pub rect: Rect,
+}
+
+/// A forest: its world, terrain and layers.
+#[derive(Clone, Debug)]
+pub struct Forest {
+    /// Metres along x and z.
+    pub size: [f64; 2],
+    /// The seed every draw derives from.
+    pub seed: u64,
+    /// Side of a tile in metres, if tiled.
+    pub tile: Option<f64>,
+    /// The ground.
+    pub terrain: Terrain,
+    /// Species layers, in scattering order.
+    pub layers: Vec<Layer>,
+}
+
+impl Forest {
+    /// A flat world without layers; `size` and `tile` must be positive.
+    pub fn new(size: [f64; 2], seed: u64, tile: Option<f64>) -> Result<Forest, ForestError> {
+        if !size.iter().all(|s| s.is_finite() && *s > 0.0) {
+            return Err(ForestError::Option {
+                option: "size",
+                message: format!(
+                    "must be two positive numbers of metres {{x, z}}, got {{{}, {}}}",
+                    size[0], size[1]
+                ),
+            });
+        }
+        if let Some(t) = tile
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(ForestError::Option {
+                option: "tile",
+                message: format!("must be a positive number of metres, got {t}"),
+            });
+        }
+        Ok(Forest {
+            size,
+            seed,
+            tile,
+            terrain: Terrain::flat(size),
+            layers: Vec::new(),
+        })
+    }
+
+    /// The world's rectangle, centred on the origin.
+    #[must_use]
+    pub fn world(&self) -> Rect {
+        Rect::new(
+            [-0.5 * self.size[0], -0.5 * self.size[1]],
+            [0.5 * self.size[0], 0.5 * self.size[1]],
+        )
+    }
+
+    /// Every tile, `i` fastest, or `None` when the forest is not tiled.
+    #[must_use]
+    pub fn tiles(&self) -> Option<Vec<Tile>> {
+        let t = self.tile?;
+        let w = self.world();
+        let n = [
+            (self.size[0] / t - 1e-9).ceil().max(1.0) as usize,
+            (self.size[1] / t - 1e-9).ceil().max(1.0) as usize,
+        ];
+        let mut out = Vec::with_capacity(n[0] * n[1]);
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let min = [w.min[0] + i as f64 * t, w.min[1] + j as f64 * t];
+                let max = [
+                    if i + 1 == n[0] { w.max[0] } else { min[0] + t },
+                    if j + 1 == n[1] { w.max[1] } else { min[1] + t },
+                ];
+                out.push(Tile {
+                    i,
+                    j,
+                    rect: Rect::new(min, max),
+                });
+            }
+        }
+        Some(out)
+    }
+
+    /// Tile `(i, j)`, or an error when the forest has no `tile` or the index is outside.
+    pub fn tile_rect(&self, i: usize, j: usize) -> Result<Rect, ForestError> {
+        let Some(tiles) = self.tiles() else {
+            return Err(ForestError::NotTiled);
+        };
+        let nx = tiles.iter().map(|t| t.i + 1).max().unwrap_or(1);
+        let nz = tiles.len() / nx;
+        tiles
+            .iter()
+            .find(|t| t.i == i && t.j == j)
+            .map(|t| t.rect)
+            .ok_or(ForestError::TileOutOfRange { i, j, nx, nz })
+    }
+
+    /// The layout of the whole forest, or of tile `(i, j)`: a tile holds the instances whose
+    /// trunk is inside it, exactly as the whole forest places them.
+    pub fn layout(&self, tile: Option<(usize, usize)>) -> Result<Layout, ForestError> {
+        for l in &self.layers {
+            l.check()?;
+        }
+        let world = self.world();
+        let estimate: f64 = self.layers.iter().map(|l| l.estimate(world.area())).sum();
+        if estimate > MAX_INSTANCES as f64 {
+            return Err(ForestError::TooMany {
+                estimate: estimate as u64,
+            });
+        }
+        let target = match tile {
+            Some((i, j)) => self.tile_rect(i, j)?,
+            None => world,
+        };
+        // Each layer must be right wherever a later one reads it.
+        let n = self.layers.len();
+        let mut regions = vec![target; n];
+        for l in (0..n.saturating_sub(1)).rev() {
+            regions[l] = regions[l + 1].expand(self.layers[l + 1].reach());
+        }
+        let mut layout = Layout::default();
+        let mut trunks = Trunks::default();
+        for (l, layer) in self.layers.iter().enumerate() {
+            let region = regions[l];
+            let r = layer.min_distance;
+            let index = trunks.index(r);
+            let blocked = |x: f64, z: f64| index.any_within(x, z, r);
+            let seed = hash(&[self.seed, 0x1a7e, l as u64]);
+            let samples = match layer.method {
+                Method::Poisson => poisson(world, region, r, seed, &blocked, MAX_INSTANCES)
+                    .map_err(|_| ForestError::TooMany {
+                        estimate: MAX_INSTANCES as u64 + 1,
+                    })?,
+                Method::Jittered { jitter } => {
+                    jittered(world, region, layer.cell(jitter), jitter, seed, &blocked)
+                }
+            };
+            let mut kept = Vec::new();
+            let mut count = 0usize;
+            for s in samples {
+                let Some(inst) = self.grow_at(l, layer, &s)? else {
+                    continue;
+                };
+                kept.push((s.x, s.z));
+                if target.contains(s.x, s.z) {
+                    let variant = match layer.variants {
+                        Variants::Count(_) => inst.variant,
+                        Variants::Unique => count as u32,
+                    };
+                    layout.instances.push(Instance { variant, ..inst });
+                    count += 1;
+                    if layout.instances.len() > MAX_INSTANCES {
+                        return Err(ForestError::TooMany {
+                            estimate: layout.instances.len() as u64,
+                        });
+                    }
+                }
+            }
+            if count == 0 && tile.is_none() {
+                layout.warnings.push(format!(
+                    "layer {} ({}) fits no tree: its density, slope and altitude limits exclude the whole terrain",
+                    l + 1,
+                    layer.name
+                ));
+            }
+            layout.counts.push(count);
+            trunks.extend(kept);
+        }
+        Ok(layout)
+    }
+
+    /// The instance a sample grows into, or `None` when the limits or the density say no.
+    fn grow_at(
+        &self,
+        l: usize,
+        layer: &Layer,
+        s: &Sample,
+    ) -> Result<Option<Instance>, ForestError> {
+        let mut rng = Rng::new(hash(&[
+            self.seed,
+            0x1257,
+            l as u64,
+            u64::from(s.cell[0]),
+            u64::from(s.cell[1]),
+            u64::from(s.index),
+        ]));
+        let keep = rng.uniform();
+        let yaw = rng.uniform() * std::f64::consts::TAU;
+        let scale = rng.range(layer.scale[0], layer.scale[1]);
+        let variant = match layer.variants {
+            Variants::Count(n) => rng.below(n),
+            Variants::Unique => 0,
+        };
+        let h = self.terrain.height(s.x, s.z);
+        if h < layer.altitude[0] || h > layer.altitude[1] {
+            return Ok(None);
+        }
+        if layer.slope != [0.0, 90.0] {
+            let slope = self.terrain.slope_degrees(s.x, s.z);
+            if slope < layer.slope[0] || slope > layer.slope[1] {
+                return Ok(None);
+            }
+        }
+        let d = match &layer.density {
+            Density::Constant(d) => *d,
+            Density::Map(m) => m.sample(
+                (s.x + 0.5 * self.size[0]) / self.size[0],
+                (s.z + 0.5 * self.size[1]) / self.size[1],
+            ),
+            Density::Function(f) => {
+                let d = f(s.x, s.z).map_err(ForestError::Script)?;
+                if !(0.0..=1.0).contains(&d) {
+                    return Err(ForestError::Option {
+                        option: "density",
+                        message: format!(
+                            "the function returned {d} at ({:.2}, {:.2}); it must return a number between 0 and 1",
+                            s.x, s.z
+                        ),
+                    });
+                }
+                d
+            }
+        };
+        if keep >= d {
+            return Ok(None);
+        }
+        Ok(Some(Instance {
+            position: [s.x as f32, h as f32, s.z as f32],
+            yaw: yaw as f32,
+            scale: scale as f32,
+            layer: l as u32,
+            variant,
+        }))
+    }
+}
+
+/// The seed of variant `v` of layer `l`.
+#[must_use]
+pub fn variant_seed(forest_seed: u64, layer: usize, v: u32) -> u64 {
+    hash(&[forest_seed, 0x5eed, layer as u64, u64::from(v)]) >> 12
+}
+
+/// The seed of a `"unique"` instance's own tree: from its position, which tiles and the
+/// whole forest compute alike.
+#[must_use]
+pub fn unique_seed(forest_seed: u64, inst: &Instance) -> u64 {
+    hash(&[
+        forest_seed,
+        0x0417,
+        u64::from(inst.layer),
+        u64::from(inst.position[0].to_bits()),
+        u64::from(inst.position[2].to_bits()),
+    ]) >> 12
+}
+
+/// Seed 000's jittered grid over the cells of `world` that meet `region`.
+fn jittered(
+    world: Rect,
+    region: Rect,
+    cell: f64,
+    jitter: f64,
+    seed: u64,
+    blocked: &dyn Fn(f64, f64) -> bool,
+) -> Vec<Sample> {
+    let n = [
+        ((world.max[0] - world.min[0]) / cell).ceil() as i64,
+        ((world.max[1] - world.min[1]) / cell).ceil() as i64,
+    ];
+    let range = |axis: usize| {
+        let a = ((region.min[axis] - world.min[axis]) / cell).floor() as i64;
+        let b = ((region.max[axis] - world.min[axis]) / cell).ceil() as i64;
+        (a.clamp(0, n[axis]), b.clamp(0, n[axis]))
+    };
+    let (x0, x1) = range(0);
+    let (z0, z1) = range(1);
+    let mut out = Vec::new();
+    for cz in z0..z1 {
+        for cx in x0..x1 {
+            let mut rng = Rng::new(hash(&[seed, 0x9a1d, cx as u64, cz as u64]));
+            let x = world.min[0] + cell * (cx as f64 + 0.5 + jitter * (2.0 * rng.uniform() - 1.0));
+            let z = world.min[1] + cell * (cz as f64 + 0.5 + jitter * (2.0 * rng.uniform() - 1.0));
+            if world.contains(x, z) && !blocked(x, z) {
+                out.push(Sample {
+                    x,
+                    z,
+                    cell: [cx as u32, cz as u32],
+                    index: 0,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Kept trunks of earlier layers, for the distance test of later ones.
+#[derive(Default)]
+struct Trunks(Vec<(f64, f64)>);
+
+impl Trunks {
+    fn extend(&mut self, more: Vec<(f64, f64)>) {
+        self.0.extend(more);
+    }
+
+    fn index(&self, r: f64) -> TrunkIndex {
+        let mut cells: std::collections::HashMap<(i64, i64), Vec<(f64, f64)>> =
+            std::collections::HashMap::new();
+        for &(x, z) in &self.0 {
+            cells
+                .entry(((x / r).floor() as i64, (z / r).floor() as i64))
+                .or_default()
+                .push((x, z));
+        }
+        TrunkIndex { r, cells }
+    }
+}
+
+struct TrunkIndex {
+    r: f64,
+    cells: std::collections::HashMap<(i64, i64), Vec<(f64, f64)>>,
+}
+
+impl TrunkIndex {
+    fn any_within(&self, x: f64, z: f64, d: f64) -> bool {
+        if self.cells.is_empty() {
+            return false;
+        }
+        let (cx, cz) = ((x / self.r).floor() as i64, (z / self.r).floor() as i64);
+        for gz in cz - 1..=cz + 1 {
+            for gx in cx - 1..=cx + 1 {
+                if let Some(v) = self.cells.get(&(gx, gz))
+                    && v.iter()
+                        .any(|&(px, pz)| (px - x).powi(2) + (pz - z).powi(2) < d * d)
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terrain::FbmOptions;
+
+    fn forest(tile: Option<f64>) -> Forest {
+        let mut f = Forest::new([120.0, 90.0], 11, tile).expect("forest");
+        f.terrain = Terrain::fbm(
+            f.size,
+            FbmOptions {
+                height: 15.0,
+                scale: 60.0,
+                ..FbmOptions::default()
+            },
+            11,
+        );
+        let mut oak = Layer::new("oak", 6.0);
+        oak.altitude = [f64::NEG_INFINITY, 2.0];
+        let mut pine = Layer::new("pine", 3.0);
+        pine.density = Density::Constant(0.7);
+        let mut rows = Layer::new("rows", 2.5);
+        rows.method = Method::Jittered { jitter: 0.2 };
+        rows.variants = Variants::Unique;
+        f.layers = vec![oak, pine, rows];
+        f
+    }
+
+    fn closest_within_layer(insts: &[Instance], layer: u32) -> f64 {
+        let v: Vec<_> = insts.iter().filter(|i| i.layer == layer).collect();
+        let mut best = f64::INFINITY;
+        for (k, a) in v.iter().enumerate() {
+            for b in &v[k + 1..] {
+                let d =
+                    f64::from((a.position[0] - b.position[0]).hypot(a.position[2] - b.position[2]));
+                best = best.min(d);
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn layers_keep_their_distances_limits_and_density() {
+        let f = forest(None);
+        let layout = f.layout(None).expect("layout");
+        assert_eq!(layout.counts.iter().sum::<usize>(), layout.instances.len());
+        assert!(layout.counts.iter().all(|&c| c > 0), "{:?}", layout.counts);
+        assert!(closest_within_layer(&layout.instances, 0) >= 6.0 - 1e-4);
+        assert!(closest_within_layer(&layout.instances, 1) >= 3.0 - 1e-4);
+        assert!(closest_within_layer(&layout.instances, 2) >= 2.5 - 1e-4);
+        for i in &layout.instances {
+            if i.layer == 0 {
+                assert!(i.position[1] <= 2.0);
+            }
+            assert!((0.8..=1.2).contains(&i.scale));
+            // Later layers keep their own distance from earlier trunks.
+            for e in layout.instances.iter().filter(|e| e.layer < i.layer) {
+                let d = (e.position[0] - i.position[0]).hypot(e.position[2] - i.position[2]);
+                let r = f.layers[i.layer as usize].min_distance as f32;
+                assert!(d >= r - 1e-3, "{d} < {r}");
+            }
+        }
+        // Density 0.7 keeps about 70% of what density 1 keeps.
+        let mut full = f.clone();
+        full.layers[1].density = Density::Constant(1.0);
+        let all = full.layout(None).expect("layout").counts[1] as f64;
+        let ratio = layout.counts[1] as f64 / all;
+        assert!((ratio - 0.7).abs() < 0.08, "{ratio}");
+    }
+
+    #[test]
+    fn the_union_of_tiles_is_the_whole_forest() {
+        let f = forest(Some(40.0));
+        let whole = f.layout(None).expect("layout");
+        let tiles = f.tiles().expect("tiled");
+        assert_eq!(tiles.len(), 9);
+        let mut union = Vec::new();
+        for t in &tiles {
+            let part = f.layout(Some((t.i, t.j))).expect("tile");
+            for i in &part.instances {
+                assert!(
+                    t.rect
+                        .contains(f64::from(i.position[0]), f64::from(i.position[2]))
+                );
+            }
+            union.extend(part.instances);
+        }
+        let key = |i: &Instance| (i.layer, i.position[0].to_bits(), i.position[2].to_bits());
+        // Unique variants are ranks, which differ per tile: compare the rest.
+        let strip = |mut v: Vec<Instance>| {
+            for i in &mut v {
+                if i.layer == 2 {
+                    i.variant = 0;
+                }
+            }
+            v.sort_by_key(key);
+            v
+        };
+        assert_eq!(strip(union), strip(whole.instances));
+    }
+
+    #[test]
+    fn bad_options_and_tiles_are_errors() {
+        let mut f = forest(None);
+        f.layers[0].min_distance = 0.0;
+        assert!(matches!(
+            f.layout(None),
+            Err(ForestError::Option {
+                option: "minDistance",
+                ..
+            })
+        ));
+        let mut f = forest(None);
+        f.layers[1].slope = [30.0, 10.0];
+        assert!(matches!(
+            f.layout(None),
+            Err(ForestError::Option {
+                option: "slope",
+                ..
+            })
+        ));
+        let mut f = forest(None);
+        f.layers[1].density = Density::Constant(1.5);
+        assert!(matches!(
+            f.layout(None),
+            Err(ForestError::Option {
+                option: "density",
+                ..
+            })
+        ));
+        let f = forest(None);
+        assert!(matches!(f.layout(Some((0, 0))), Err(ForestError::NotTiled)));
+        let f = forest(Some(40.0));
+        assert!(matches!(
+            f.layout(Some((3, 0))),
+            Err(ForestError::TileOutOfRange { .. })
+        ));
+        let mut f = Forest::new([10_000.0, 10_000.0], 1, None).expect("forest");
+        f.layers.push(Layer::new("grass", 0.5));
+        assert!(matches!(f.layout(None), Err(ForestError::TooMany { .. })));
+        assert!(Forest::new([0.0, 10.0], 1, None).is_err());
+    }
+
+    #[test]
+    fn a_layer_that_fits_nowhere_is_a_warning() {
+        let mut f = forest(None);
+        f.layers[0].altitude = [500.0, 600.0];
+        let layout = f.layout(None).expect("layout");
+        assert_eq!(layout.counts[0], 0);
+        assert_eq!(layout.warnings.len(), 1);
+        assert!(layout.warnings[0].contains("oak"));
+    }
+}

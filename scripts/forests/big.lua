@@ -1,0 +1,16 @@
+-- The benchmark forest: one square kilometre, about 100,000 trees of three species, each
+-- grown in 8 variants (24 trees grown, in parallel on every core) and instanced.
+local p = pge.params{
+  points = {3000, min = 100, max = 20000, doc = "attraction points per tree"},
+  variants = {8, min = 1, max = 64, doc = "meshes grown per species"},
+}
+
+local forest = pge.Forest{ size = {1000, 1000}, seed = 7, tile = 250 }
+forest:terrain{ height = 40, scale = 400, octaves = 5 }
+forest:scatter{ species = "../species/oak.lua", minDistance = 9, altitude = {-100, 0},
+                variants = p.variants, params = { points = p.points } }
+forest:scatter{ species = "../species/conifer.lua", minDistance = 2.7, altitude = {-5, 100},
+                slope = {0, 35}, variants = p.variants, params = { points = p.points } }
+forest:scatter{ species = "../species/bush.lua", minDistance = 2.2, density = 0.8,
+                variants = p.variants, scale = {0.5, 1.0}, params = { points = 400 } }
+return forest
