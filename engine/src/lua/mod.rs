@@ -13,6 +13,7 @@ mod noise;
 pub mod params;
 pub(crate) mod random;
 mod sandbox;
+mod skeleton;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
@@ -22,6 +23,7 @@ pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
 pub use random::{LuaRng, swap_rng, uniform};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub use sandbox::{resolve_path, writable_path};
+pub use skeleton::{LuaSkeleton, skeleton_from_value, skeleton_of_model};
 
 use crate::RunContext;
 
@@ -74,5 +76,6 @@ pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Resu
     noise::register(lua, pge)?;
     model::register(lua, pge)?;
     algorithm::register(lua, pge)?;
+    skeleton::register(lua, pge)?;
     Ok(())
 }
