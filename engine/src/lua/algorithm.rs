@@ -31,7 +31,7 @@ impl UserData for AlgorithmHandle {
             };
             run(&mut *me.0, &ctx, &mut |_| {})
                 .map(LuaModel)
-                .map_err(|e| mlua::Error::RuntimeError(e.to_string()))
+                .map_err(mlua::Error::external)
         });
         m.add_method_mut("skeleton", |lua, me, ()| {
             let ctx = RunContext {
@@ -110,6 +110,7 @@ impl Algorithm for ScriptAlgorithm {
             .call(self.table.clone())
             .map_err(|e| self.lua_error(&self.finish, e))?;
         to_model(&result).map_err(|e| match e {
+            e if super::errors::engine_error_of(&e).is_some() => self.lua_error(&self.finish, e),
             mlua::Error::RuntimeError(m)
                 if m.contains(": ") && super::errors::split_location(&m).is_some() =>
             {

@@ -1,7 +1,8 @@
 //! The Lua side of the engine: the sandbox, the support library (`pge.*`) and the helpers
 //! plugins use to bind their objects.
 //!
-//! Plugins convert vectors with [`LuaVec3`], report mistakes with [`script_error`] (which
+//! Plugins read option tables with [`Options`] (one wording for every mistake), convert
+//! vectors with [`LuaVec3`], report other mistakes with [`script_error`] (a typed error that
 //! points at the script's file and line), hand algorithms back as [`AlgorithmHandle`]s and
 //! resolve files with [`resolve_path`].
 
@@ -10,6 +11,7 @@ mod errors;
 mod math;
 mod model;
 mod noise;
+pub mod options;
 pub mod params;
 pub(crate) mod random;
 mod sandbox;
@@ -17,9 +19,10 @@ mod skeleton;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
-pub use errors::{caller_location, script_error, to_engine_error};
+pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
+pub use options::{Bounds, KeyStyle, Options};
 pub use random::{LuaRng, swap_rng, uniform};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub use sandbox::{resolve_path, writable_path};

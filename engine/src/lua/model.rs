@@ -35,6 +35,8 @@ impl UserData for LuaModel {
             |lua, me, (thing, transform): (Value, Option<LuaMat4>)| {
                 let other = to_model(&thing).map_err(|e| match e {
                     mlua::Error::RuntimeError(_) => e,
+                    // Already located where it happened (a modeller's own :model()).
+                    e if super::errors::engine_error_of(&e).is_some() => e,
                     other => script_error(lua, format!("model:add: {other}")),
                 })?;
                 me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
