@@ -38,12 +38,11 @@ impl UserData for AlgorithmHandle {
                 steps: None,
                 ..super::run_context(lua)
             };
-            let to_lua = |e: Error| mlua::Error::RuntimeError(e.to_string());
-            grow(&mut *me.0, &ctx).map_err(to_lua)?;
+            grow(&mut *me.0, &ctx).map_err(mlua::Error::external)?;
             let skeleton = match me.0.skeleton() {
                 Some(s) => s,
                 None => {
-                    let model = me.0.finish(&ctx).map_err(to_lua)?;
+                    let model = me.0.finish(&ctx).map_err(mlua::Error::external)?;
                     skeleton_of_model(&model).ok_or_else(|| {
                         script_error(
                             lua,
