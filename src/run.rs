@@ -7,7 +7,9 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pge_engine::export::{ExportMeta, glb_bytes, obj_files};
+use pge_engine::export::{ExportMeta, glb_bytes, glb_stages_bytes, obj_files};
+use pge_engine::geometry::Model;
+use pge_engine::{Error, Location, Step};
 
 use crate::common::ScriptArgs;
 
@@ -20,8 +22,12 @@ pub struct RunArgs {
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Run this many steps instead of the algorithm's own count.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", conflicts_with = "stages")]
     pub steps: Option<u32>,
+    /// Write these growth stages (increasing step counts of a step-wise algorithm) as
+    /// scenes named `step A`, `step B`, ... of one .glb; stage k is the model of --steps k.
+    #[arg(long, value_name = "A,B,...", value_delimiter = ',', num_args = 1..)]
+    pub stages: Option<Vec<u32>>,
     /// Print statistics as one JSON object on stdout.
     #[arg(long)]
     pub stats: bool,
@@ -46,23 +52,8 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn progress_bar(quiet: bool) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} step {pos}{len_suffix} [{elapsed}]")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    bar
-}
-
-/// Runs `pge run`.
-pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    let t0 = Instant::now();
-    let engine = args.script.engine()?;
-    let session = engine.session(args.script.session_options(args.steps))?;
+/// The output file: `-o`, or the script's stem with `.glb`; it must end in .glb or .obj.
+fn output_path(args: &RunArgs) -> anyhow::Result<PathBuf> {
     let output = match &args.output {
         Some(o) => o.clone(),
         None => {
@@ -76,6 +67,177 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if !matches!(ext.as_deref(), Some("glb" | "obj")) {
         anyhow::bail!("{}: the output must end in .glb or .obj", output.display());
     }
+    Ok(output)
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} step {pos}{len_suffix} [{elapsed}]")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    bar
+}
+
+/// The most steps a stage may ask for.
+pub const STAGE_CAP: u32 = 100_000;
+
+/// Where an error about the whole run points: the script's last `return` line (the value
+/// that grows), or the script alone.
+fn return_location(script: &Path) -> Location {
+    let file = script.to_string_lossy().replace('\\', "/");
+    let line = std::fs::read_to_string(script).ok().and_then(|text| {
+        text.lines()
+            .enumerate()
+            .filter(|(_, l)| l.trim_start().starts_with("return"))
+            .map(|(i, _)| i as u32 + 1)
+            .last()
+    });
+    Location { file, line }
+}
+
+/// Checks a `--stages` list: increasing, within [`STAGE_CAP`].
+fn check_stages(stages: &[u32]) -> Result<(), String> {
+    if stages.is_empty() {
+        return Err("--stages needs at least one step count".into());
+    }
+    for w in stages.windows(2) {
+        if w[1] <= w[0] {
+            return Err(format!(
+                "--stages must be increasing step counts, got {} after {}",
+                w[1], w[0]
+            ));
+        }
+    }
+    let last = stages[stages.len() - 1];
+    if last > STAGE_CAP {
+        return Err(format!(
+            "--stages must be step counts between 0 and {STAGE_CAP} (the step cap), got {last}"
+        ));
+    }
+    Ok(())
+}
+
+/// Runs the script's algorithm once through every stage, keeping the model of each.
+fn generate_stages(
+    args: &RunArgs,
+    stages: &[u32],
+    bar: &ProgressBar,
+) -> anyhow::Result<(Vec<(String, Model)>, Vec<pge_engine::ParamInfo>)> {
+    let script = &args.script.script;
+    check_stages(stages).map_err(|m| Error::script(return_location(script), m))?;
+    let last = stages[stages.len() - 1];
+    let engine = args.script.engine()?;
+    let session = engine.session(args.script.session_options(Some(last)))?;
+    let value = session.run_script(script)?;
+    let mut algorithm = session.algorithm_from(value)?;
+    if algorithm.planned_steps() == Some(0) {
+        return Err(Error::script(
+            return_location(script),
+            format!(
+                "--stages needs a step-wise algorithm (an L-system, a space colonization, a \
+                 growth, a pge.Algorithm), but the script returned a finished {}",
+                algorithm.name()
+            ),
+        )
+        .into());
+    }
+    let ctx = session.context();
+    bar.set_length(u64::from(last));
+    algorithm.init(&ctx)?;
+    let mut taken = 0u32;
+    let mut done = false;
+    let mut models = Vec::with_capacity(stages.len());
+    for &stage in stages {
+        while !done && taken < stage {
+            done = algorithm.step(&ctx)? == Step::Done;
+            taken += 1;
+            bar.set_position(u64::from(taken));
+        }
+        models.push((format!("step {stage}"), algorithm.finish(&ctx)?));
+    }
+    Ok((models, session.declared_params()))
+}
+
+/// `pge run --stages`: every stage a scene of one .glb.
+fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let bar = progress_bar(args.quiet);
+    bar.set_message(args.script.script.display().to_string());
+    let generated = generate_stages(args, stages, &bar);
+    bar.finish_and_clear();
+    let (models, params) = generated?;
+    let meta = ExportMeta {
+        seed: args.script.seed,
+        params: params
+            .iter()
+            .map(|p| (p.name.clone(), p.value.to_json()))
+            .collect(),
+    };
+    for (_, m) in &models {
+        for w in &m.stats.warnings {
+            eprintln!("{w}");
+        }
+    }
+    write_atomically(output, &glb_stages_bytes(&models, &meta)?)?;
+    if args.stats {
+        let list: Vec<serde_json::Value> = models
+            .iter()
+            .map(|(name, m)| {
+                serde_json::json!({
+                    "name": name,
+                    "vertices": m.vertex_count(),
+                    "triangles": m.triangle_count(),
+                    "nodes": m.stats.nodes,
+                    "leaves": m.stats.leaves,
+                })
+            })
+            .collect();
+        let m = models.last().map(|(_, m)| m);
+        let stats = serde_json::json!({
+            "vertices": m.map_or(0, Model::vertex_count),
+            "triangles": m.map_or(0, Model::triangle_count),
+            "nodes": m.map_or(0, |m| m.stats.nodes),
+            "leaves": m.map_or(0, |m| m.stats.leaves),
+            "modules": m.map_or(0, |m| m.stats.modules),
+            "instances": m.map_or(0, |m| m.instances.len()),
+            "seconds": t0.elapsed().as_secs_f64(),
+            "stages": list,
+            "output": output.display().to_string(),
+        });
+        println!("{stats}");
+    }
+    Ok(())
+}
+
+/// Runs `pge run`.
+pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+    if let Some(stages) = &args.stages {
+        let output = output_path(args)?;
+        if output
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            != Some("glb".into())
+        {
+            anyhow::bail!(
+                "{}: --stages writes one scene per stage, which needs a .glb output",
+                output.display()
+            );
+        }
+        return run_stages(args, stages, &output);
+    }
+    let t0 = Instant::now();
+    let engine = args.script.engine()?;
+    let session = engine.session(args.script.session_options(args.steps))?;
+    let output = output_path(args)?;
+    let ext = output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     let bar = progress_bar(args.quiet);
     bar.set_message(args.script.script.display().to_string());
     let generated = session.generate(&args.script.script, &mut |taken, planned| {

@@ -3,5 +3,5 @@
 mod glb;
 mod obj;
 
-pub use glb::{ExportMeta, glb_bytes};
+pub use glb::{ExportMeta, glb_bytes, glb_stages_bytes};
 pub use obj::{ObjFiles, obj_files};

@@ -33,8 +33,12 @@ pub struct GrowthParams {
     /// Its nodes are kept as they are, first and in order, in the result.
     pub start: Option<Arc<Skeleton>>,
     /// Lengths and radii of the grown branches are multiplied by this (default 1: the
-    /// seed's units).
+    /// seed's units, a tree of about 15 after 60 feedings).
     pub scale: f32,
+    /// Radii are further multiplied by this (default 0.4): the transport model's areas
+    /// give stout, baobab-like limbs, and like the seed's renderer we draw them thinner
+    /// than they grow. 1 draws the model's own radii.
+    pub girth: f32,
     /// The branch cap (default [`DEFAULT_MAX_BRANCHES`]).
     pub max_branches: usize,
     /// Mixed into the run's seed, so one script can grow several different trees.
@@ -53,6 +57,7 @@ impl Default for GrowthParams {
             direction: Vec3::Y,
             start: None,
             scale: 1.0,
+            girth: 0.4,
             max_branches: DEFAULT_MAX_BRANCHES,
             seed: 0,
             tree: TreeOptions {
@@ -84,6 +89,9 @@ impl GrowthParams {
         }
         if !(self.scale.is_finite() && self.scale > 0.0) {
             return Err(format!("scale must be a number > 0, got {}", self.scale));
+        }
+        if !(self.girth.is_finite() && self.girth > 0.0) {
+            return Err(format!("girth must be a number > 0, got {}", self.girth));
         }
         if self.max_branches < 1 {
             return Err("maxBranches must be an integer >= 1".into());
@@ -171,7 +179,7 @@ impl Growth {
     /// The skeleton of the current state: the start skeleton's nodes first (unchanged but
     /// for radii thickened to carry what grew above them), then the base of a root grown
     /// without `start`, then one node at the end of every branch that has length.
-    /// Radii are `sqrt(area / pi)` times `scale`; orders follow the heavier child.
+    /// Radii are `sqrt(area / pi)` times `scale * girth`; orders follow the heavier child.
     #[must_use]
     pub fn skeleton(&self) -> Option<Skeleton> {
         let tree = self.tree.as_ref()?;
@@ -184,6 +192,7 @@ impl Growth {
         let tips = p.start.as_ref().map(|st| st.tips()).unwrap_or_default();
         let ends = tree.ends();
         let scale = f64::from(p.scale);
+        let thick = scale * f64::from(p.girth);
         let mut node = vec![NONE; tree.len()];
         let mut base = vec![NONE; tree.len()];
         let mut origin = vec![DVec3::ZERO; tree.len()];
@@ -191,7 +200,7 @@ impl Growth {
             origin[b as usize] = o;
             base[b as usize] = match tips.get(k) {
                 Some(&tip) => tip,
-                None => s.push(o.as_vec3(), None, (tree.radius(b) * scale) as f32, 0),
+                None => s.push(o.as_vec3(), None, (tree.radius(b) * thick) as f32, 0),
             };
         }
         let heavy_is_a = tree.params().ratio >= 0.5;
@@ -216,7 +225,7 @@ impl Growth {
             node[b] = s.push(
                 end.as_vec3(),
                 Some(anchor),
-                (tree.radius(b as u32) * scale) as f32,
+                (tree.radius(b as u32) * thick) as f32,
                 o,
             );
         }
@@ -349,8 +358,8 @@ mod tests {
         assert_eq!(s.positions[0], Vec3::ZERO);
         assert!(s.len() > 50, "{}", s.len());
         assert_eq!(model.stats.nodes, s.len() as u64);
-        // The trunk's radius is the root branch's sqrt(area / pi).
-        assert!((f64::from(s.radii[1]) - t.radius(0)).abs() < 1e-6);
+        // The trunk's radius is the root branch's sqrt(area / pi), times the girth.
+        assert!((f64::from(s.radii[1]) - 0.4 * t.radius(0)).abs() < 1e-6);
         for i in 1..s.len() {
             assert!(s.parents[i].expect("one root") < i as u32);
         }

@@ -583,6 +583,7 @@ const OPTIONS: &[&str] = &[
     "sides",
     "leaves",
     "mesh",
+    "start",
 ];
 
 fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
@@ -725,6 +726,21 @@ fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
                 format!("{w}: seed must be an integer >= 0, got {shown}"),
             ));
         }
+    }
+    match t.get::<Value>("start")? {
+        Value::Nil => {}
+        v => match pge_engine::lua::skeleton_from_value(&v) {
+            Some(s) => p.start = Some(std::sync::Arc::new(s)),
+            None => {
+                return Err(script_error(
+                    lua,
+                    format!(
+                        "{w}: start must be a skeleton (pge.Skeleton, e.g. from handle:skeleton()), got {}",
+                        v.type_name()
+                    ),
+                ));
+            }
+        },
     }
     p.tree = pge_tree::lua::options_from_lua(lua, w, &t)?;
     let location = caller_location(lua);
