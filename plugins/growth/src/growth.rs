@@ -290,8 +290,8 @@ impl Algorithm for Growth {
             Error::script(
                 self.location.clone(),
                 format!(
-                    "growth: feeding {} would grow the tree to {} branches, past the cap of {} \
-                     (maxBranches): lower feed or steps, or raise splitsize",
+                    "pge.Growth: feeding {} would grow the tree to {} branches, past the cap \
+                     of {} (maxBranches): lower feed or steps, or raise splitsize",
                     tree.steps() + 1,
                     e.would_have,
                     e.cap
@@ -416,7 +416,7 @@ mod tests {
         let mut g = Growth::new(params, Location::new("t.lua", 9)).expect("valid");
         let e = run(&mut g, &RunContext::default(), &mut |_| {}).expect_err("explodes");
         let e = e.to_string();
-        assert!(e.starts_with("t.lua:9: growth: feeding "), "{e}");
+        assert!(e.starts_with("t.lua:9: pge.Growth: feeding "), "{e}");
         assert!(e.contains("past the cap of 5000 (maxBranches)"), "{e}");
     }
 
