@@ -421,7 +421,7 @@ impl Builder {
             pge.insert("stages".into(), stages);
         }
         b.root.extras = raw(&json!({ "pge": pge }))?;
-        while b.bin.len() % 4 != 0 {
+        while !b.bin.len().is_multiple_of(4) {
             b.bin.push(0);
         }
         if !b.bin.is_empty() {
@@ -434,7 +434,7 @@ impl Builder {
             });
         }
         let mut text = b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?;
-        while text.len() % 4 != 0 {
+        while !text.len().is_multiple_of(4) {
             text.push(b' ');
         }
         let total = 12 + 8 + text.len() + if b.bin.is_empty() { 0 } else { 8 + b.bin.len() };

@@ -297,7 +297,6 @@ impl TransportTree {
     /// caller stops).
     pub fn feed(&mut self, cap: usize) -> Result<Feeding, CapExceeded> {
         let p = self.params;
-        let before = self.volume();
         let mut report = Feeding::default();
         self.stack.clear();
         self.splits.clear();
@@ -308,11 +307,13 @@ impl TransportTree {
         while let Some((b, feed)) = self.stack.pop() {
             let i = b as usize;
             let [a, c] = self.children[i];
+            let before = self.area[i] * self.length[i];
             if a == NONE {
                 let grow = feed.cbrt();
                 self.length[i] += grow;
                 let rest = feed - grow * self.area[i];
                 self.area[i] += rest / self.length[i];
+                report.grown += self.area[i] * self.length[i] - before;
                 let limit = p.splitsize * (-p.splitdecay * f64::from(self.depth[i])).exp();
                 if self.length[i] > limit {
                     self.splits.push(b);
@@ -322,6 +323,7 @@ impl TransportTree {
             let children = self.area[a as usize] + self.area[c as usize];
             let pass = children / (children + self.area[i]);
             self.area[i] += pass * feed / self.length[i];
+            report.grown += self.area[i] * self.length[i] - before;
             let feed = feed * (1.0 - pass);
             if feed < MIN_FEED {
                 report.dropped += feed;
@@ -331,7 +333,6 @@ impl TransportTree {
             self.stack.push((c, feed * (1.0 - p.ratio)));
             self.stack.push((a, feed * p.ratio));
         }
-        report.grown = self.volume() - before;
         let would_have = self.len() + 2 * self.splits.len();
         if would_have > cap {
             return Err(CapExceeded { cap, would_have });
