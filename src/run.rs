@@ -121,12 +121,11 @@ fn check_stages(stages: &[u32]) -> Result<(), String> {
     Ok(())
 }
 
+/// The named model of every stage, and the script's declared parameters.
+type Stages = (Vec<(String, Model)>, Vec<pge_engine::ParamInfo>);
+
 /// Runs the script's algorithm once through every stage, keeping the model of each.
-fn generate_stages(
-    args: &RunArgs,
-    stages: &[u32],
-    bar: &ProgressBar,
-) -> anyhow::Result<(Vec<(String, Model)>, Vec<pge_engine::ParamInfo>)> {
+fn generate_stages(args: &RunArgs, stages: &[u32], bar: &ProgressBar) -> anyhow::Result<Stages> {
     let script = &args.script.script;
     check_stages(stages).map_err(|m| Error::script(return_location(script), m))?;
     let last = stages[stages.len() - 1];
