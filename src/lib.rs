@@ -61,6 +61,8 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
         .plugin(pge_lsystem::LSystemPlugin)
         .plugin(pge_turtle::TurtlePlugin)
         .plugin(pge_spacecol::SpaceColonizationPlugin)
+        .plugin(pge_growth::GrowthPlugin)
+        .plugin(pge_tree::TreePlugin)
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)

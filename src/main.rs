@@ -10,6 +10,7 @@ mod output;
 #[cfg(feature = "preview")]
 mod preview;
 mod run;
+mod stages;
 mod tiles;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other

@@ -22,8 +22,12 @@ pub struct RunArgs {
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Run this many steps instead of the algorithm's own count.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", conflicts_with = "stages")]
     pub steps: Option<u32>,
+    /// Write these growth stages (increasing step counts of a step-wise algorithm) as
+    /// scenes named `step A`, `step B`, ... of one .glb; stage k is the model of --steps k.
+    #[arg(long, value_name = "A,B,...", value_delimiter = ',', num_args = 1.., conflicts_with = "tile")]
+    pub stages: Option<Vec<u32>>,
     /// Print statistics as one JSON object on stdout.
     #[arg(long)]
     pub stats: bool,
@@ -111,7 +115,7 @@ fn generate_tile(
     })
 }
 
-fn progress_bar(quiet: bool) -> ProgressBar {
+pub(crate) fn progress_bar(quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
@@ -127,8 +131,6 @@ fn progress_bar(quiet: bool) -> ProgressBar {
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     set_threads(args.threads)?;
-    let engine = args.script.engine()?;
-    let session = engine.session(args.script.session_options(args.steps))?;
     let output = match &args.output {
         Some(o) => o.clone(),
         None => {
@@ -142,6 +144,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if !matches!(ext.as_deref(), Some("glb" | "obj")) {
         anyhow::bail!("{}: the output must end in .glb or .obj", output.display());
     }
+    if let Some(stages) = &args.stages {
+        if ext.as_deref() != Some("glb") {
+            anyhow::bail!(
+                "{}: --stages writes one scene per stage, which needs a .glb output",
+                output.display()
+            );
+        }
+        return crate::stages::run_stages(args, stages, &output);
+    }
+    let engine = args.script.engine()?;
+    let session = engine.session(args.script.session_options(args.steps))?;
     let bar = progress_bar(args.quiet);
     bar.set_message(args.script.script.display().to_string());
     let mut progress = |taken: u32, planned: Option<u32>| {

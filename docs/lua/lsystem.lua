@@ -196,6 +196,9 @@ function Turtle:width() end
 ---Skeleton nodes drawn so far.
 ---@return integer
 function Turtle:nodes() end
+---What the turtle drew, every colour's branches in one skeleton.
+---@return pge.Skeleton
+function Turtle:skeleton() end
 ---Back to the start, forgetting what was drawn.
 function Turtle:reset() end
 ---The bark (and leaf) meshes of what was drawn.

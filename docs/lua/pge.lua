@@ -213,6 +213,10 @@ local AlgorithmHandle = {}
 ---Grows the algorithm to the end and returns its model.
 ---@return pge.Model
 function AlgorithmHandle:model() end
+---Grows the algorithm to the end and returns its branch skeleton (space colonization,
+---growth, an L-system's turtle).
+---@return pge.Skeleton
+function AlgorithmHandle:skeleton() end
 ---@return string
 function AlgorithmHandle:name() end
 

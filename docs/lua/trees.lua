@@ -128,9 +128,83 @@ function pge.shape.predicate(f, bounds) end
 ---@field trunk? number length of a straight vertical trunk grown first, >= 0 (0)
 ---@field maxIterations? integer iteration cap, 1..1000000 (1000); reaching it adds a warning
 ---@field seed? integer mixed into the run's seed, >= 0 (0: the run's seed alone)
+---@field start? pge.Skeleton grow on from this skeleton's tips; its nodes come first, unchanged
 
 ---Space colonization (Runions et al. 2007): one step of the returned algorithm is one
 ---growth iteration.
 ---@param o pge.SpaceColonizationOptions
 ---@return pge.AlgorithmHandle
 function pge.SpaceColonization(o) end
+
+---Options of pge.Growth (nutrient transport, seed 001); any other key is an error.
+---@class pge.GrowthOptions: pge.TreeOptions
+---@field ratio? number share of the passed feed for child A, in (0, 1) (0.6)
+---@field spread? number weight of the perpendicular direction at a split, >= 0 (0.45)
+---@field splitsize? number length at which a trunk branch splits, > 0 (2.5)
+---@field splitdecay? number the split length shrinks by exp(-splitdecay * depth), >= 0 (0.01)
+---@field directedness? number turn from dense foliage (1) or at random (0), 0..1 (0.5)
+---@field localdepth? integer ancestors climbed by the leaf-density query, 0..1000 (2)
+---@field feed? number nutrient fed at each step, > 0 (1)
+---@field steps? integer feedings, 0..100000 (60); --steps overrides
+---@field root? pge.Vector where the trunk starts ({0, 0, 0})
+---@field direction? pge.Vector the trunk's first direction ({0, 1, 0})
+---@field start? pge.Skeleton grow on from this skeleton's tips; its nodes come first, unchanged
+---@field scale? number lengths and radii multiplier, > 0 (1)
+---@field girth? number further radius multiplier, > 0 (0.4)
+---@field maxBranches? integer the branch cap, 1..50000000 (1000000)
+---@field seed? integer mixed into the run's seed, >= 0 (0)
+
+---Growth by nutrient transport: one step of the returned algorithm is one feeding.
+---@param o pge.GrowthOptions
+---@return pge.AlgorithmHandle
+function pge.Growth(o) end
+
+---The branch graph every tree generator produces. Nodes are 1-based; a root's parent is 0.
+---@class pge.Skeleton
+local Skeleton = {}
+---@return integer
+function Skeleton:count() end
+---@param i integer
+---@return pge.Vec3
+function Skeleton:position(i) end
+---@param i integer
+---@return integer parent 0 for a root
+function Skeleton:parent(i) end
+---@param i integer
+---@return number
+function Skeleton:radius(i) end
+---@param i integer
+---@return integer order 0 along the trunk, +1 per lateral branch
+function Skeleton:order(i) end
+---@param i integer
+---@return integer forks between the root and the node
+function Skeleton:depth(i) end
+---@return integer[]
+function Skeleton:tips() end
+---@param i integer
+---@return integer[]
+function Skeleton:children(i) end
+---Adds a node (parent 0: a new root) and returns its index.
+---@param parent integer
+---@param position pge.Vector
+---@param radius? number
+---@return integer
+function Skeleton:add(parent, position, radius) end
+---@return pge.Skeleton
+function Skeleton:copy() end
+---@return integer
+function Skeleton:leafCount() end
+
+---An empty skeleton (also `pge.Skeleton.new()`).
+---@type table|fun(): pge.Skeleton
+pge.Skeleton = {}
+
+---Options of pge.tree.
+---@class pge.TreeCallOptions: pge.TreeOptions
+---@field skeleton pge.Skeleton the skeleton to mesh (required)
+---@field seed? integer mixed into the run's seed for the leaves, >= 0 (0)
+
+---Meshes any skeleton with the common bark and leaf options.
+---@param o pge.TreeCallOptions
+---@return pge.Model
+function pge.tree(o) end

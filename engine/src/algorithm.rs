@@ -4,7 +4,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use crate::geometry::Model;
+use crate::geometry::{Model, Skeleton};
 use crate::{Error, Location, Result};
 
 /// What a step reports.
@@ -97,6 +97,13 @@ pub trait Algorithm {
     fn planned_steps(&self) -> Option<u32> {
         None
     }
+
+    /// The branch skeleton of the current state, for generators that grow one (space
+    /// colonization, growth); `None` for the others, whose skeleton (if any) is then read
+    /// from the bark meshes of [`finish`](Algorithm::finish)'s model.
+    fn skeleton(&self) -> Option<Skeleton> {
+        None
+    }
 }
 
 /// An algorithm that is already done: it returns a fixed model.
@@ -139,6 +146,21 @@ pub fn run(
         }
     }
     algorithm.finish(ctx)
+}
+
+/// Grows an algorithm without building its model: `init`, then steps until done or until
+/// `ctx.steps` steps were taken; returns the number of steps taken.
+pub fn grow(algorithm: &mut dyn Algorithm, ctx: &RunContext) -> Result<u32> {
+    algorithm.init(ctx)?;
+    let mut taken = 0u32;
+    while ctx.steps.is_none_or(|n| taken < n) {
+        let step = algorithm.step(ctx)?;
+        taken += 1;
+        if step == Step::Done {
+            break;
+        }
+    }
+    Ok(taken)
 }
 
 /// Runs several algorithms interleaved, one step of each in turn, until all are done (or

@@ -47,6 +47,11 @@ struct Builder {
     textures: Vec<(Arc<Texture>, json::Index<json::Texture>)>,
     images: Vec<(Arc<Texture>, json::Index<json::Image>)>,
     sampler: Option<json::Index<json::texture::Sampler>>,
+    /// How instance groups are written.
+    instancing: Instancing,
+    /// Nodes that need `EXT_mesh_gpu_instancing`, with their TRANSLATION/ROTATION/SCALE
+    /// accessors.
+    gpu_nodes: Vec<(usize, [usize; 3])>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -388,151 +393,208 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
 /// `EXT_mesh_gpu_instancing`, or one node per placement.
 pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<Vec<u8>> {
     model.validate()?;
-    let mut b = Builder::default();
-    b.root.asset = json::Asset {
-        copyright: None,
-        extensions: None,
-        extras: None,
-        generator: Some(GENERATOR.into()),
-        min_version: None,
-        version: "2.0".into(),
-    };
-    // Meshes only groups use are written inside their group's mesh, not on their own.
-    let mut meshes = Vec::with_capacity(model.meshes.len());
-    for (i, m) in model.meshes.iter().enumerate() {
-        let standalone =
-            model.groups.is_empty() || model.instances.iter().any(|inst| inst.mesh == i);
-        meshes.push(if standalone { Some(b.mesh(m)?) } else { None });
-    }
-    let mut nodes = Vec::with_capacity(model.instances.len());
-    for inst in &model.instances {
-        let Some(mesh) = meshes[inst.mesh] else {
-            return Err(Error::Export("an instance's mesh was not written".into()));
-        };
-        let n = node(mesh, &inst.transform);
-        nodes.push(b.root.push(n));
-    }
-    // Nodes that need EXT_mesh_gpu_instancing, with their TRANSLATION/ROTATION/SCALE accessors.
-    let mut gpu_nodes = Vec::new();
-    for group in &model.groups {
-        if group.transforms.is_empty() {
-            continue;
-        }
-        let mesh = b.group_mesh(group, &model.meshes)?;
-        match instancing {
-            Instancing::Gpu => {
-                let mut t = Vec::with_capacity(group.transforms.len() * 3);
-                let mut r = Vec::with_capacity(group.transforms.len() * 4);
-                let mut s = Vec::with_capacity(group.transforms.len() * 3);
-                for x in &group.transforms {
-                    t.extend_from_slice(&x.translation);
-                    r.extend_from_slice(&x.rotation);
-                    s.extend_from_slice(&[x.scale; 3]);
-                }
-                let accessors = [
-                    b.instance_floats(&t, 3),
-                    b.instance_floats(&r, 4),
-                    b.instance_floats(&s, 3),
-                ];
-                let index = b.root.push(json::Node {
-                    mesh: Some(mesh),
-                    name: Some(group.name.clone()),
-                    ..Default::default()
-                });
-                gpu_nodes.push((index.value(), accessors.map(|a| a.value())));
-                nodes.push(index);
-            }
-            Instancing::Nodes => {
-                for x in &group.transforms {
-                    let mut n = json::Node {
-                        mesh: Some(mesh),
-                        ..Default::default()
-                    };
-                    if x.translation != [0.0; 3] {
-                        n.translation = Some(x.translation);
-                    }
-                    if x.rotation != [0.0, 0.0, 0.0, 1.0] {
-                        n.rotation = Some(json::scene::UnitQuaternion(x.rotation));
-                    }
-                    if x.scale != 1.0 {
-                        n.scale = Some([x.scale; 3]);
-                    }
-                    nodes.push(b.root.push(n));
-                }
-            }
-        }
-    }
+    let mut b = Builder::new();
+    b.instancing = instancing;
     // A scene needs at least one node (and the gltf crate refuses one without), so an empty
     // model is written without a scene: a valid, empty glTF.
-    if !nodes.is_empty() {
-        let scene = b.root.push(json::Scene {
-            extensions: None,
-            extras: None,
-            name: Some("pge".into()),
-            nodes,
-        });
+    if let Some(scene) = b.scene(model, "pge")? {
         b.root.scene = Some(scene);
     }
-    let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
-    let mut pge = Map::new();
-    pge.insert("generator".into(), GENERATOR.into());
-    pge.insert("seed".into(), meta.seed.into());
-    pge.insert("params".into(), JsonValue::Object(params));
-    pge.insert(
-        "stats".into(),
-        json!({
+    b.finish(model, meta, None)
+}
+
+/// The `.glb` bytes of several stages of one growth (`pge run --stages`): one scene per
+/// stage, named as given (`step 10`), each with its own meshes (materials and textures
+/// shared); the default scene is the last stage. The root `extras.pge` describes the last
+/// stage as [`glb_bytes`] does, and adds `stages = [{name, vertices, triangles, nodes,
+/// leaves}, ...]`.
+pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result<Vec<u8>> {
+    let Some((_, last)) = stages.last() else {
+        return Err(Error::Export("no stage to write".into()));
+    };
+    let mut b = Builder::new();
+    let mut summary = Vec::with_capacity(stages.len());
+    for (name, model) in stages {
+        model.validate()?;
+        if let Some(scene) = b.scene(model, name)? {
+            b.root.scene = Some(scene);
+        }
+        summary.push(json!({
+            "name": name,
             "vertices": model.vertex_count(),
             "triangles": model.triangle_count(),
             "nodes": model.stats.nodes,
             "leaves": model.stats.leaves,
-            "modules": model.stats.modules,
-        }),
-    );
-    if let Some(env) = &model.environment {
-        let image = b.image(env).value();
-        pge.insert(
-            "environment".into(),
-            json!({ "image": image, "mapping": "equirectangular" }),
-        );
+        }));
     }
-    for (k, v) in &model.extras {
-        pge.entry(k.clone()).or_insert_with(|| v.clone());
-    }
-    b.root.extras = raw(&json!({ "pge": pge }))?;
-    while b.bin.len() % 4 != 0 {
-        b.bin.push(0);
-    }
-    if !b.bin.is_empty() {
-        b.root.push(json::Buffer {
-            byte_length: USize64(b.bin.len() as u64),
-            name: None,
-            uri: None,
+    b.finish(last, meta, Some(JsonValue::Array(summary)))
+}
+
+impl Builder {
+    fn new() -> Builder {
+        let mut b = Builder::default();
+        b.root.asset = json::Asset {
+            copyright: None,
             extensions: None,
             extras: None,
-        });
+            generator: Some(GENERATOR.into()),
+            min_version: None,
+            version: "2.0".into(),
+        };
+        b
     }
-    let mut text = if gpu_nodes.is_empty() {
-        b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
-    } else {
-        with_gpu_instancing(&b.root, &gpu_nodes)?
-    };
-    while text.len() % 4 != 0 {
-        text.push(b' ');
+
+    /// Writes the model's meshes, one node per instance and its instance groups (as
+    /// `self.instancing` says), gathered in a scene named `name`; `None` (and nothing written
+    /// but the meshes) when the model places nothing.
+    fn scene(&mut self, model: &Model, name: &str) -> Result<Option<json::Index<json::Scene>>> {
+        // Meshes only groups use are written inside their group's mesh, not on their own.
+        let mut meshes = Vec::with_capacity(model.meshes.len());
+        for (i, m) in model.meshes.iter().enumerate() {
+            let standalone =
+                model.groups.is_empty() || model.instances.iter().any(|inst| inst.mesh == i);
+            meshes.push(if standalone { Some(self.mesh(m)?) } else { None });
+        }
+        let mut nodes = Vec::with_capacity(model.instances.len());
+        for inst in &model.instances {
+            let Some(mesh) = meshes[inst.mesh] else {
+                return Err(Error::Export("an instance's mesh was not written".into()));
+            };
+            let n = node(mesh, &inst.transform);
+            nodes.push(self.root.push(n));
+        }
+        for group in &model.groups {
+            if group.transforms.is_empty() {
+                continue;
+            }
+            let mesh = self.group_mesh(group, &model.meshes)?;
+            match self.instancing {
+                Instancing::Gpu => {
+                    let mut t = Vec::with_capacity(group.transforms.len() * 3);
+                    let mut r = Vec::with_capacity(group.transforms.len() * 4);
+                    let mut s = Vec::with_capacity(group.transforms.len() * 3);
+                    for x in &group.transforms {
+                        t.extend_from_slice(&x.translation);
+                        r.extend_from_slice(&x.rotation);
+                        s.extend_from_slice(&[x.scale; 3]);
+                    }
+                    let accessors = [
+                        self.instance_floats(&t, 3),
+                        self.instance_floats(&r, 4),
+                        self.instance_floats(&s, 3),
+                    ];
+                    let index = self.root.push(json::Node {
+                        mesh: Some(mesh),
+                        name: Some(group.name.clone()),
+                        ..Default::default()
+                    });
+                    self.gpu_nodes
+                        .push((index.value(), accessors.map(|a| a.value())));
+                    nodes.push(index);
+                }
+                Instancing::Nodes => {
+                    for x in &group.transforms {
+                        let mut n = json::Node {
+                            mesh: Some(mesh),
+                            ..Default::default()
+                        };
+                        if x.translation != [0.0; 3] {
+                            n.translation = Some(x.translation);
+                        }
+                        if x.rotation != [0.0, 0.0, 0.0, 1.0] {
+                            n.rotation = Some(json::scene::UnitQuaternion(x.rotation));
+                        }
+                        if x.scale != 1.0 {
+                            n.scale = Some([x.scale; 3]);
+                        }
+                        nodes.push(self.root.push(n));
+                    }
+                }
+            }
+        }
+        if nodes.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(self.root.push(json::Scene {
+            extensions: None,
+            extras: None,
+            name: Some(name.into()),
+            nodes,
+        })))
     }
-    let total = 12 + 8 + text.len() + if b.bin.is_empty() { 0 } else { 8 + b.bin.len() };
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&text);
-    if !b.bin.is_empty() {
-        out.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&b.bin);
+
+    /// The root extras (describing `model`), the buffer and the GLB container.
+    fn finish(
+        self,
+        model: &Model,
+        meta: &ExportMeta,
+        stages: Option<JsonValue>,
+    ) -> Result<Vec<u8>> {
+        let mut b = self;
+        let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
+        let mut pge = Map::new();
+        pge.insert("generator".into(), GENERATOR.into());
+        pge.insert("seed".into(), meta.seed.into());
+        pge.insert("params".into(), JsonValue::Object(params));
+        pge.insert(
+            "stats".into(),
+            json!({
+                "vertices": model.vertex_count(),
+                "triangles": model.triangle_count(),
+                "nodes": model.stats.nodes,
+                "leaves": model.stats.leaves,
+                "modules": model.stats.modules,
+            }),
+        );
+        if let Some(env) = &model.environment {
+            let image = b.image(env).value();
+            pge.insert(
+                "environment".into(),
+                json!({ "image": image, "mapping": "equirectangular" }),
+            );
+        }
+        for (k, v) in &model.extras {
+            pge.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+        if let Some(stages) = stages {
+            pge.insert("stages".into(), stages);
+        }
+        b.root.extras = raw(&json!({ "pge": pge }))?;
+        while !b.bin.len().is_multiple_of(4) {
+            b.bin.push(0);
+        }
+        if !b.bin.is_empty() {
+            b.root.push(json::Buffer {
+                byte_length: USize64(b.bin.len() as u64),
+                name: None,
+                uri: None,
+                extensions: None,
+                extras: None,
+            });
+        }
+        let mut text = if b.gpu_nodes.is_empty() {
+            b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
+        } else {
+            with_gpu_instancing(&b.root, &b.gpu_nodes)?
+        };
+        while !text.len().is_multiple_of(4) {
+            text.push(b' ');
+        }
+        let total = 12 + 8 + text.len() + if b.bin.is_empty() { 0 } else { 8 + b.bin.len() };
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&text);
+        if !b.bin.is_empty() {
+            out.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
+            out.extend_from_slice(b"BIN\0");
+            out.extend_from_slice(&b.bin);
+        }
+        Ok(out)
     }
-    Ok(out)
 }
 
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
@@ -565,7 +627,7 @@ mod tests {
     use crate::geometry::{Material, Mesh};
     use glam::{Quat, Vec2};
 
-    fn textured_model() -> Model {
+    pub(super) fn textured_model() -> Model {
         let mut mesh =
             Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
         mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
@@ -726,6 +788,37 @@ mod environment_tests {
 #[cfg(test)]
 mod empty_tests {
     use super::*;
+
+    #[test]
+    fn stages_are_named_scenes_sharing_their_textures() {
+        let one = super::tests::textured_model();
+        let mut two = super::tests::textured_model();
+        two.add_model(
+            &super::tests::textured_model(),
+            Mat4::from_translation(Vec3::X),
+        );
+        let stages = vec![("step 1".to_string(), one), ("step 2".to_string(), two)];
+        let bytes = glb_stages_bytes(&stages, &ExportMeta::default()).expect("glb");
+        let (doc, _, _) = gltf::import_slice(&bytes).expect("parses");
+        let names: Vec<_> = doc.scenes().map(|s| s.name().map(str::to_string)).collect();
+        assert_eq!(names, [Some("step 1".into()), Some("step 2".into())]);
+        assert_eq!(doc.default_scene().map(|s| s.index()), Some(1));
+        let nodes: Vec<usize> = doc.scenes().map(|s| s.nodes().count()).collect();
+        assert_eq!(nodes[1], 2 * nodes[0]);
+        assert_eq!(doc.images().count(), 1, "one texture for every stage");
+        let extras = doc
+            .as_json()
+            .extras
+            .as_ref()
+            .expect("extras")
+            .get()
+            .to_string();
+        assert!(
+            extras.contains("\"stages\":[{\"name\":\"step 1\""),
+            "{extras}"
+        );
+        assert!(glb_stages_bytes(&[], &ExportMeta::default()).is_err());
+    }
 
     #[test]
     fn an_empty_model_is_a_valid_glb() {

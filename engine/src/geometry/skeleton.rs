@@ -104,6 +104,51 @@ impl Skeleton {
         }
         d
     }
+
+    /// Appends every node and leaf point of `other` (its roots stay roots), moved by
+    /// `transform`; returns the index of its first node here.
+    pub fn append(&mut self, other: &Skeleton, transform: &glam::Mat4) -> u32 {
+        let offset = self.len() as u32;
+        let scale = transform.to_scale_rotation_translation().0;
+        let radius_scale = (scale.x.abs() * scale.y.abs() * scale.z.abs()).cbrt();
+        for i in 0..other.len() {
+            self.positions
+                .push(transform.transform_point3(other.positions[i]));
+            self.parents.push(other.parents[i].map(|p| p + offset));
+            self.radii.push(other.radii[i] * radius_scale);
+            self.orders.push(other.orders[i]);
+        }
+        for leaf in &other.leaves {
+            self.leaves.push(LeafPoint {
+                node: leaf.node + offset,
+                position: transform.transform_point3(leaf.position),
+                direction: transform
+                    .transform_vector3(leaf.direction)
+                    .normalize_or_zero(),
+                side: transform.transform_vector3(leaf.side).normalize_or_zero(),
+                size: leaf.size * radius_scale,
+            });
+        }
+        offset
+    }
+
+    /// The number of forks (nodes with two children or more) on the path from each node's
+    /// root to the node, the node itself excluded: 0 along the trunk below its first fork.
+    #[must_use]
+    pub fn fork_depths(&self) -> Vec<u32> {
+        let mut count = vec![0u32; self.len()];
+        for p in self.parents.iter().flatten() {
+            count[*p as usize] += 1;
+        }
+        let mut depth = vec![0u32; self.len()];
+        for i in 0..self.len() {
+            if let Some(p) = self.parents[i] {
+                let p = p as usize;
+                depth[i] = depth[p] + u32::from(count[p] >= 2);
+            }
+        }
+        depth
+    }
 }
 
 #[cfg(test)]
@@ -120,5 +165,13 @@ mod tests {
         assert_eq!(s.children()[a as usize], vec![b, c]);
         assert_eq!(s.tips(), vec![b, c]);
         assert_eq!(s.path_lengths(), vec![0.0, 1.0, 2.0, 3.0]);
+        assert_eq!(s.fork_depths(), vec![0, 0, 1, 1]);
+        let mut two = s.clone();
+        let first = two.append(&s, &glam::Mat4::from_translation(Vec3::X));
+        assert_eq!(first, 4);
+        assert_eq!(two.parents[4], None);
+        assert_eq!(two.parents[7], Some(5));
+        assert_eq!(two.positions[7], Vec3::new(1.0, 3.0, 0.0));
+        assert_eq!(two.radii[7], 0.2);
     }
 }

@@ -4,7 +4,8 @@ use mlua::{Function, Lua, ObjectLike, Table, UserData, UserDataMethods, Value};
 
 use super::errors::{caller_location, script_error, to_engine_error};
 use super::model::{LuaModel, to_model, to_model_in};
-use crate::algorithm::{Finished, run};
+use super::skeleton::{LuaSkeleton, skeleton_of_model};
+use crate::algorithm::{Finished, grow, run};
 use crate::geometry::Model;
 use crate::{Algorithm, Error, Location, RunContext, Step};
 
@@ -31,6 +32,26 @@ impl UserData for AlgorithmHandle {
             run(&mut *me.0, &ctx, &mut |_| {})
                 .map(LuaModel)
                 .map_err(mlua::Error::external)
+        });
+        m.add_method_mut("skeleton", |lua, me, ()| {
+            let ctx = RunContext {
+                steps: None,
+                ..super::run_context(lua)
+            };
+            grow(&mut *me.0, &ctx).map_err(mlua::Error::external)?;
+            let skeleton = match me.0.skeleton() {
+                Some(s) => s,
+                None => {
+                    let model = me.0.finish(&ctx).map_err(mlua::Error::external)?;
+                    skeleton_of_model(&model).ok_or_else(|| {
+                        script_error(
+                            lua,
+                            format!("{}:skeleton(): it grew no skeleton", me.0.name()),
+                        )
+                    })?
+                }
+            };
+            Ok(LuaSkeleton::new(skeleton))
         });
         m.add_method("name", |_, me, ()| Ok(me.0.name().to_string()));
     }

@@ -18,6 +18,7 @@ pub mod params;
 pub(crate) mod random;
 mod sandbox;
 pub mod services;
+mod skeleton;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
@@ -35,6 +36,7 @@ pub use services::{
     default_instance, interpreters, read_only_phase, register_interpreter, register_model_maker,
     set_default_instance,
 };
+pub use skeleton::{LuaSkeleton, skeleton_from_value, skeleton_of_model};
 
 use crate::RunContext;
 
@@ -78,5 +80,6 @@ pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Resu
     noise::register(lua, pge)?;
     model::register(lua, pge)?;
     algorithm::register(lua, pge)?;
+    skeleton::register(lua, pge)?;
     Ok(())
 }

@@ -66,6 +66,11 @@ pub struct Params {
     pub seed: u64,
     /// Bark and leaf options.
     pub tree: TreeOptions,
+    /// A skeleton grown by another method to grow on from (`start = skeleton`): its nodes
+    /// come first, unchanged, in the result; its tips grow toward the points, its other
+    /// nodes only take the points within the kill distance. `roots` and `trunk` are then
+    /// unused.
+    pub start: Option<std::sync::Arc<Skeleton>>,
 }
 
 impl Params {
@@ -93,6 +98,7 @@ impl Params {
             max_iterations: 1000,
             seed: 0,
             tree: TreeOptions::default(),
+            start: None,
         }
     }
 
@@ -135,6 +141,12 @@ impl Params {
         }
         if self.max_iterations == 0 {
             return Err("maxIterations must be an integer >= 1, got 0".into());
+        }
+        if let Some(start) = &self.start {
+            pge_tree::check_skeleton(start).map_err(|e| format!("start: {e}"))?;
+            if start.is_empty() {
+                return Err("start must be a skeleton with nodes, got an empty one".into());
+            }
         }
         Ok(())
     }
@@ -212,13 +224,20 @@ impl SpaceColonization {
         &self.warnings
     }
 
-    /// The branch skeleton grown so far (radii and orders unset), or `None` before `init`.
+    /// The branch skeleton grown so far (radii and orders unset, but for a start
+    /// skeleton's nodes, which keep theirs and its leaf points), or `None` before `init`.
     #[must_use]
     pub fn skeleton(&self) -> Option<Skeleton> {
         let st = self.state.as_ref()?;
         let mut s = Skeleton::new();
         for (p, parent) in st.nodes.iter().zip(&st.parents) {
             s.push(*p, *parent, 0.0, 0);
+        }
+        if let Some(start) = &self.params.start {
+            let n = start.len().min(s.len());
+            s.radii[..n].copy_from_slice(&start.radii[..n]);
+            s.orders[..n].copy_from_slice(&start.orders[..n]);
+            s.leaves.clone_from(&start.leaves);
         }
         Some(s)
     }
@@ -302,6 +321,50 @@ impl State {
             found |= d2 >= k2 && self.alive[i as usize];
         });
         found
+    }
+
+    /// Seeds the nodes from a start skeleton (`start = skeleton`): every node in order;
+    /// the tips attract points as grown nodes do, the other nodes only remove the points
+    /// within the kill distance (they are wood already, not buds).
+    fn seed_from(&mut self, start: &Skeleton, p: &Params) {
+        let mut is_tip = vec![true; start.len()];
+        for q in start.parents.iter().flatten() {
+            is_tip[*q as usize] = false;
+        }
+        let k2 = p.kill * p.kill;
+        for (i, &tip) in is_tip.iter().enumerate() {
+            let position = start.positions[i];
+            if tip {
+                self.add_node(position, start.parents[i], p);
+                continue;
+            }
+            let index = self.nodes.len() as u32;
+            self.nodes.push(position);
+            self.parents.push(start.parents[i]);
+            self.refused.push(NONE);
+            self.sum.push(Vec3::ZERO);
+            self.count.push(0);
+            self.closest.push((f32::INFINITY, NONE));
+            self.node_cells
+                .entry(cell_of(position, p.step))
+                .or_default()
+                .push(index);
+            let State {
+                grid,
+                alive,
+                alive_count,
+                dead_since_grid,
+                ..
+            } = self;
+            grid.for_each_near(position, p.kill, |j, _, d2| {
+                let j = j as usize;
+                if alive[j] && d2 < k2 {
+                    alive[j] = false;
+                    *alive_count -= 1;
+                    *dead_since_grid += 1;
+                }
+            });
+        }
     }
 
     /// Whether a node stands within `eps` of `q`.
@@ -415,10 +478,14 @@ impl Algorithm for SpaceColonization {
             closest: Vec::new(),
             touched: Vec::new(),
         };
-        for root in &p.roots {
-            let r = st.add_node(*root, None, p);
-            if p.trunk > 0.0 || !st.in_range(*root, p) {
-                st.trunk_tips.push((r, p.trunk));
+        if let Some(start) = &p.start {
+            st.seed_from(start, p);
+        } else {
+            for root in &p.roots {
+                let r = st.add_node(*root, None, p);
+                if p.trunk > 0.0 || !st.in_range(*root, p) {
+                    st.trunk_tips.push((r, p.trunk));
+                }
             }
         }
         self.state = Some(st);
@@ -600,8 +667,17 @@ impl Algorithm for SpaceColonization {
         Ok(Step::Continue)
     }
 
+    /// The skeleton with pipe-model radii and orders, as `finish` meshes it.
+    fn skeleton(&self) -> Option<Skeleton> {
+        let mut skeleton = SpaceColonization::skeleton(self)?;
+        let mesh = &self.params.tree.mesh;
+        pge_tree::pipe_radii(&mut skeleton, mesh.tip_radius, mesh.exponent);
+        pge_tree::assign_orders(&mut skeleton);
+        Some(skeleton)
+    }
+
     fn finish(&mut self, ctx: &RunContext) -> Result<Model> {
-        let mut skeleton = self.skeleton().ok_or_else(|| {
+        let mut skeleton = SpaceColonization::skeleton(self).ok_or_else(|| {
             Error::script(
                 self.location.clone(),
                 "space colonization finished before init",
@@ -766,6 +842,29 @@ mod tests {
         let (sc, _) = grow(p, 1);
         assert!(sc.warnings().is_empty(), "it finished on its own");
         assert!(sc.iterations() < 30);
+    }
+
+    #[test]
+    fn a_start_skeleton_keeps_its_nodes_and_grows_from_its_tips() {
+        let mut start = Skeleton::new();
+        let r = start.push(Vec3::ZERO, None, 0.3, 0);
+        let a = start.push(Vec3::new(0.0, 2.0, 0.0), Some(r), 0.25, 0);
+        start.push(Vec3::new(-1.0, 4.0, 0.0), Some(a), 0.1, 1);
+        start.push(Vec3::new(1.0, 4.0, 0.0), Some(a), 0.1, 1);
+        let mut p = crown(1500);
+        p.start = Some(std::sync::Arc::new(start.clone()));
+        let (sc, model) = grow(p, 1);
+        model.validate().expect("valid");
+        let s = sc.skeleton().expect("skeleton");
+        assert_eq!(&s.positions[..4], &start.positions[..]);
+        assert_eq!(&s.parents[..4], &start.parents[..]);
+        assert_eq!(&s.radii[..4], &start.radii[..]);
+        assert!(s.len() > 100, "{}", s.len());
+        // Growth hangs on the two tips (or on what grew from them), never on the trunk.
+        for i in 4..s.len() {
+            let parent = s.parents[i].expect("no new root");
+            assert!(parent >= 2, "node {i} grew from the trunk node {parent}");
+        }
     }
 
     #[test]

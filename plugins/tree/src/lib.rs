@@ -38,6 +38,7 @@ mod options;
 mod radii;
 mod smooth;
 mod textures;
+mod tree_lua;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -54,6 +55,7 @@ pub use options::{LeafOptions, MeshOptions, RadiiMode, TextureSource, TreeOption
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{bark_texture, leaf_texture, load_png};
+pub use tree_lua::TreePlugin;
 
 /// Why a tree could not be built.
 #[derive(Debug, thiserror::Error)]

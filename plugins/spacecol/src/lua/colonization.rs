@@ -76,6 +76,19 @@ pub(super) fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHan
     if let Some(seed) = o.integer("seed", 0..=i64::MAX)? {
         p.seed = seed as u64;
     }
+    match o.value("start")? {
+        Value::Nil => {}
+        v => match pge_engine::lua::skeleton_from_value(&v) {
+            Some(s) => p.start = Some(std::sync::Arc::new(s)),
+            None => {
+                return Err(o.wrong_type(
+                    "start",
+                    "a skeleton (pge.Skeleton, e.g. from handle:skeleton())",
+                    &v,
+                ));
+            }
+        },
+    }
     p.tree = pge_tree::lua::tree_options(&o)?;
     o.finish()?;
     let location = caller_location(lua);
