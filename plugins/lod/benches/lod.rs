@@ -23,7 +23,7 @@ fn crown(n: usize) -> Vec<Leaf> {
             let normal = (dir + Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5)).normalize();
             let corners = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)].map(|(x, y)| {
                 let (e1, e2) = normal.any_orthonormal_pair();
-                center + (e1 * x + e2 * y) * 0.1
+                center + (e1 * x + e2 * y) * 0.3
             });
             Leaf::from_quad(corners, Some(normal)).expect("leaf")
         })

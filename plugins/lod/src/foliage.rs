@@ -26,6 +26,9 @@ pub struct LodOptions {
     pub atlas: bool,
     /// The collapse distance's weights and bounds, and the tree's axis.
     pub selection: Selection,
+    /// Where the option was given (`FILE:LINE`, set by a Lua adapter) so that warnings point
+    /// at it; empty when unknown.
+    pub source: String,
 }
 
 impl Default for LodOptions {
@@ -34,6 +37,7 @@ impl Default for LodOptions {
             sectors: 1,
             atlas: false,
             selection: Selection::default(),
+            source: String::new(),
         }
     }
 }

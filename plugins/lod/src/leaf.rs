@@ -43,7 +43,7 @@ impl Leaf {
     /// Half the rectangle's diagonal: the radius of the sphere around it.
     #[must_use]
     pub fn radius(&self) -> f32 {
-        self.half_length.hypot(self.half_width)
+        (self.half_length * self.half_length + self.half_width * self.half_width).sqrt()
     }
 
     /// The four corners in the order of texture coordinates (0,0), (1,0), (1,1), (0,1):
@@ -103,9 +103,11 @@ impl Leaf {
     ///    through the projected centres is the main axis, the secondary axis is perpendicular
     ///    to it through the new centre, and the rectangle on these axes that contains both
     ///    projections is the bounding quad;
-    /// 4. the new area is the mean of the summed areas and the bounding quad's area: the
-    ///    bounding quad is scaled about the centre to that area, so the area always lies
-    ///    between `a.area() + b.area()` and the bounding area.
+    /// 4. the new area is the mean of the summed areas and the bounding quad's area, so it
+    ///    always lies between `a.area() + b.area()` and the bounding area: a bounding quad
+    ///    larger than that shrinks about the centre; a smaller one (overlapping leaves) grows
+    ///    its narrower side first, up to a square, so that leaves seen edge-on do not become
+    ///    needles.
     #[must_use]
     pub fn collapse(a: &Leaf, b: &Leaf) -> Leaf {
         let (wa, wb) = (a.count as f32, b.count as f32);
@@ -134,14 +136,30 @@ impl Leaf {
         }
         let bounding = 4.0 * half_length * half_width;
         let target = 0.5 * (a.area() + b.area() + bounding);
-        if bounding > 0.0 {
+        if bounding >= target {
+            // Shrink about the centre, keeping the shape.
             let s = (target / bounding).sqrt();
             half_length *= s;
             half_width *= s;
         } else {
-            // Both leaves project onto a segment: keep the summed area as a square.
-            half_length = 0.5 * target.sqrt();
-            half_width = half_length;
+            // Grow the narrower side first (two leaves seen edge-on project to a sliver,
+            // which a uniform scale would stretch into a needle), up to a square.
+            let (long, short) = if half_length >= half_width {
+                (&mut half_length, &mut half_width)
+            } else {
+                (&mut half_width, &mut half_length)
+            };
+            *short = (target / (4.0 * *long)).min(*long);
+            let grown = 4.0 * *long * *short;
+            if grown <= 0.0 {
+                // Both leaves project onto a point: a square of the target area.
+                *long = 0.5 * target.sqrt();
+                *short = *long;
+            } else if grown < target {
+                let s = (target / grown).sqrt();
+                *long *= s;
+                *short *= s;
+            }
         }
         Leaf {
             center,

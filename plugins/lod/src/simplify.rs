@@ -4,7 +4,7 @@
 //! allowed. The result is the collapse forest ([`Chain`]).
 //!
 //! The thesis evaluates every pair at every step (cubic in the number of leaves). Here the
-//! candidates of a leaf are the living leaves in the 27 cells of a uniform grid around it
+//! candidates of a leaf are the living leaves in the 8 cells of a uniform grid nearest it
 //! (the grid is rebuilt coarser as leaves merge), each leaf keeps its best candidate in a
 //! priority queue, and stale entries are refreshed lazily when popped: a pair whose partner
 //! has gone makes the survivor look for a new best, and a new leaf looks for its own. Costs
@@ -58,13 +58,23 @@ pub struct Bounds {
     /// Largest angle between the two leaves' planes, in degrees (0..=90; leaves are
     /// double-sided, so a normal and its opposite are the same plane).
     pub max_angle: f32,
+    /// Largest area of the new leaf over the pair's summed areas: the thesis sets the new
+    /// area halfway between the summed and the bounding area "to avoid a large increase";
+    /// this refuses the pairs whose bounding quad is mostly empty (a large leaf swallowing a
+    /// small one across its diagonal would otherwise grow without end).
+    pub max_growth: f32,
+    /// Smallest density (represented leaf area over the new leaf's area) of a new leaf:
+    /// coarse leaves may thin out, but not into empty quads.
+    pub min_density: f32,
 }
 
 impl Default for Bounds {
     fn default() -> Self {
         Bounds {
-            max_distance: 2.0,
+            max_distance: 1.5,
             max_angle: 75.0,
+            max_growth: 1.3,
+            min_density: 0.1,
         }
     }
 }
@@ -175,6 +185,8 @@ struct Simplifier {
     weights: Weights,
     max_distance: f32,
     min_cos: f32,
+    max_growth: f32,
+    min_density: f32,
     axis: Axis,
     inv_crown: f32,
 }
@@ -206,6 +218,8 @@ impl Simplifier {
             heap: BinaryHeap::with_capacity(leaves.len() * 2),
             weights: selection.weights,
             max_distance: selection.bounds.max_distance.max(0.0),
+            max_growth: selection.bounds.max_growth,
+            min_density: selection.bounds.min_density,
             min_cos: selection
                 .bounds
                 .max_angle
@@ -246,14 +260,15 @@ impl Simplifier {
             if self.alive_count * 2 <= self.built_with {
                 self.rebuild_grid();
             } else {
-                self.grid.insert(label, leaf.center);
+                self.grid.insert(label, &leaf);
             }
             self.push_best(label);
         }
     }
 
-    /// A grid whose cells hold a few living leaves each, sized so that the 27 cells around a
-    /// leaf reach its allowed partners of similar size.
+    /// A grid whose cells hold a few living leaves each, twice as wide as the distance
+    /// bound between leaves of the mean size, so that the eight cells nearest a leaf reach
+    /// its allowed partners of similar size.
     fn rebuild_grid(&mut self) {
         let living: Vec<u32> = (0..self.leaves.len() as u32)
             .filter(|&i| self.alive[i as usize])
@@ -263,7 +278,7 @@ impl Simplifier {
             .map(|&i| f64::from(self.leaves[i as usize].radius()))
             .sum::<f64>()
             / living.len().max(1) as f64;
-        let reach = (self.max_distance as f64 * 2.0 * mean_radius) as f32;
+        let reach = (self.max_distance as f64 * 4.0 * mean_radius) as f32;
         let cell = if reach > 0.0 && reach.is_finite() {
             reach
         } else {
@@ -271,7 +286,7 @@ impl Simplifier {
         };
         let mut grid = Grid::new(cell);
         for &i in &living {
-            grid.insert(i, self.leaves[i as usize].center);
+            grid.insert(i, &self.leaves[i as usize]);
         }
         self.grid = grid;
         self.built_with = living.len();
@@ -283,38 +298,62 @@ impl Simplifier {
         }
     }
 
-    /// The allowed partner of `a` with the least cost among the living leaves in the 27
-    /// cells around it (ties: the lower label).
+    /// The allowed partner of `a` with the least cost among the living leaves in the 8
+    /// cells nearest it (ties: the lower label).
     fn best(&self, a: u32) -> Option<(f32, u32)> {
         let la = &self.leaves[a as usize];
-        let mut best: Option<(f32, u32)> = None;
+        let me = Slot {
+            center: la.center,
+            radius: la.radius(),
+            normal: la.normal,
+            area: la.area(),
+            count: la.count,
+            label: a,
+        };
+        let mut candidates: Vec<(f32, u32)> = Vec::new();
         for cell in self.grid.around(la.center) {
-            for &b in cell {
-                if b == a {
+            for slot in cell {
+                // The distance bound first: it needs no square root.
+                let reach = self.max_distance * (me.radius + slot.radius);
+                if slot.label == a || me.center.distance_squared(slot.center) > reach * reach {
                     continue;
                 }
-                let Some(cost) = self.cost(la, &self.leaves[b as usize]) else {
-                    continue;
-                };
-                if best.is_none_or(|(c, l)| cost < c || (cost == c && b < l)) {
-                    best = Some((cost, b));
+                if let Some(cost) = self.cost(&me, slot) {
+                    candidates.push((cost, slot.label));
                 }
             }
         }
-        best
+        // The area bounds need the new leaf: check the cheapest candidates first (usually
+        // the first passes, so no sort).
+        while !candidates.is_empty() {
+            let (k, &(cost, b)) = candidates
+                .iter()
+                .enumerate()
+                .min_by(|x, y| x.1.0.total_cmp(&y.1.0).then(x.1.1.cmp(&y.1.1)))?;
+            let lb = &self.leaves[b as usize];
+            let new = Leaf::collapse(la, lb);
+            let area = new.area();
+            if area <= self.max_growth * (la.area() + lb.area())
+                && new.leaf_area >= self.min_density * area
+            {
+                return Some((cost, b));
+            }
+            candidates.swap_remove(k);
+        }
+        None
     }
 
-    /// The weighted distance of seed 003 §2.4.1, or `None` when the bounds forbid the pair.
-    fn cost(&self, a: &Leaf, b: &Leaf) -> Option<f32> {
-        let radii = a.radius() + b.radius();
-        let d = a.center.distance(b.center) / radii;
+    /// The weighted distance of seed 003 §2.4.1 between two leaves within the distance
+    /// bound, or `None` when the angle bound forbids the pair.
+    fn cost(&self, a: &Slot, b: &Slot) -> Option<f32> {
         let cos = a.normal.dot(b.normal).abs();
-        if d.is_nan() || d > self.max_distance || cos < self.min_cos {
+        if cos < self.min_cos {
             return None;
         }
+        let d = a.center.distance(b.center) / (a.radius + b.radius);
         let w = &self.weights;
         let (na, nb) = (a.count as f32, b.count as f32);
-        let (aa, ab) = (a.area(), b.area());
+        let (aa, ab) = (a.area, b.area);
         let mid = (a.center + b.center) * 0.5;
         let cost = w.distance * d
             + w.coplanarity * (1.0 - cos.min(1.0))
@@ -325,10 +364,22 @@ impl Simplifier {
     }
 }
 
-/// A uniform grid of leaf labels by cell.
+/// A grid cell's copy of what the first test of a candidate needs, so the scan reads
+/// contiguous memory.
+#[derive(Clone, Copy)]
+struct Slot {
+    center: Vec3,
+    radius: f32,
+    normal: Vec3,
+    area: f32,
+    count: u32,
+    label: u32,
+}
+
+/// A uniform grid of living leaves by cell.
 struct Grid {
     inv_cell: f32,
-    cells: HashMap<[i32; 3], Vec<u32>, BuildHasherDefault<CellHasher>>,
+    cells: HashMap<[i32; 3], Vec<Slot>, BuildHasherDefault<CellHasher>>,
 }
 
 impl Grid {
@@ -344,28 +395,41 @@ impl Grid {
         [k.x as i32, k.y as i32, k.z as i32]
     }
 
-    fn insert(&mut self, label: u32, p: Vec3) {
-        let key = self.key(p);
-        self.cells.entry(key).or_default().push(label);
+    fn insert(&mut self, label: u32, leaf: &Leaf) {
+        let key = self.key(leaf.center);
+        self.cells.entry(key).or_default().push(Slot {
+            center: leaf.center,
+            radius: leaf.radius(),
+            normal: leaf.normal,
+            area: leaf.area(),
+            count: leaf.count,
+            label,
+        });
     }
 
     fn remove(&mut self, label: u32, p: Vec3) {
         let key = self.key(p);
         if let Some(cell) = self.cells.get_mut(&key)
-            && let Some(i) = cell.iter().position(|&l| l == label)
+            && let Some(i) = cell.iter().position(|s| s.label == label)
         {
             cell.swap_remove(i);
         }
     }
 
-    /// The cells around `p` (itself and its 26 neighbours) that hold leaves.
-    fn around(&self, p: Vec3) -> impl Iterator<Item = &Vec<u32>> {
-        let [x, y, z] = self.key(p);
-        (0..27).filter_map(move |n| {
+    /// The eight cells nearest `p` (its own and the neighbours on the sides it is nearer
+    /// to) that hold leaves: with cells twice the search radius, they hold every leaf
+    /// within that radius.
+    fn around(&self, p: Vec3) -> impl Iterator<Item = &Vec<Slot>> {
+        let q = p * self.inv_cell;
+        let k = q.floor();
+        let step = |f: f32| if f < 0.5 { -1 } else { 1 };
+        let base = [k.x as i32, k.y as i32, k.z as i32];
+        let off = [step(q.x - k.x), step(q.y - k.y), step(q.z - k.z)];
+        (0..8).filter_map(move |n| {
             let key = [
-                x.saturating_add(n % 3 - 1),
-                y.saturating_add(n / 3 % 3 - 1),
-                z.saturating_add(n / 9 - 1),
+                base[0].saturating_add(if n & 1 == 0 { 0 } else { off[0] }),
+                base[1].saturating_add(if n & 2 == 0 { 0 } else { off[1] }),
+                base[2].saturating_add(if n & 4 == 0 { 0 } else { off[2] }),
             ];
             self.cells.get(&key)
         })
@@ -378,21 +442,23 @@ struct CellHasher(u64);
 
 impl Hasher for CellHasher {
     fn finish(&self) -> u64 {
-        self.0
+        // The splitmix64 finaliser, so that every bit of the key reaches the low bits.
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
     }
 
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
         }
     }
 
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(u64::from(i as u32));
-    }
-
     fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+        self.0 = (self.0.rotate_left(23) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
     }
 }
 

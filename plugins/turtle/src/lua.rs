@@ -193,6 +193,7 @@ impl LuaTurtle {
             let options = TreeOptions {
                 mesh,
                 leaves: self.leaves.clone(),
+                lod: None,
             };
             let part = build_tree(skeleton, &options, seed.wrapping_add(u64::from(*color)))?;
             model.add_model(&part, Mat4::IDENTITY);
