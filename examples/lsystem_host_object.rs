@@ -2,7 +2,7 @@
 //! wrappers do: the host's `Scaffold` (a builder of beams, with a cursor it moves and turns)
 //! becomes the L-system's instance (`createInstance` returns `pge.scaffold()`), the script's
 //! interpretation rules (IRules) drive it, and the rewriting rules (RRules) may only read it:
-//! its mutating methods call [`pge_lsystem::check_mutable`], so a rule that tried to build
+//! its mutating methods call [`pge_engine::lua::check_mutable`], so a rule that tried to build
 //! during derivation would fail with an error naming the rule.
 //!
 //! ```text
@@ -80,27 +80,27 @@ impl Scaffold {
 impl UserData for Scaffold {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method_mut("beam", |lua, s, (length, thickness): (f32, Option<f32>)| {
-            pge_lsystem::check_mutable(lua, "scaffold:beam")?;
+            pge_engine::lua::check_mutable(lua, "scaffold:beam")?;
             s.beam(length, thickness.unwrap_or(0.1));
             Ok(())
         });
         m.add_method_mut("turn", |lua, s, degrees: f32| {
-            pge_lsystem::check_mutable(lua, "scaffold:turn")?;
+            pge_engine::lua::check_mutable(lua, "scaffold:turn")?;
             s.frame *= Mat3::from_rotation_z(degrees.to_radians());
             Ok(())
         });
         m.add_method_mut("spin", |lua, s, degrees: f32| {
-            pge_lsystem::check_mutable(lua, "scaffold:spin")?;
+            pge_engine::lua::check_mutable(lua, "scaffold:spin")?;
             s.frame *= Mat3::from_rotation_y(degrees.to_radians());
             Ok(())
         });
         m.add_method_mut("save", |lua, s, ()| {
-            pge_lsystem::check_mutable(lua, "scaffold:save")?;
+            pge_engine::lua::check_mutable(lua, "scaffold:save")?;
             s.stack.push((s.position, s.frame));
             Ok(())
         });
         m.add_method_mut("restore", |lua, s, ()| {
-            pge_lsystem::check_mutable(lua, "scaffold:restore")?;
+            pge_engine::lua::check_mutable(lua, "scaffold:restore")?;
             let (p, f) = s
                 .stack
                 .pop()
@@ -110,7 +110,7 @@ impl UserData for Scaffold {
             Ok(())
         });
         m.add_method_mut("reset", |lua, s, ()| {
-            pge_lsystem::check_mutable(lua, "scaffold:reset")?;
+            pge_engine::lua::check_mutable(lua, "scaffold:reset")?;
             *s = Scaffold::new();
             Ok(())
         });

@@ -53,13 +53,14 @@ impl RunContext {
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
         {
-            return Err(Error::script(location.clone(), "cancelled"));
+            return Err(Error::Cancelled {
+                location: location.clone(),
+            });
         }
         match self.deadline {
-            Some(d) if Instant::now() >= d => Err(Error::script(
-                location.clone(),
-                "time limit exceeded (see --time-limit)",
-            )),
+            Some(d) if Instant::now() >= d => Err(Error::TimeLimit {
+                location: location.clone(),
+            }),
             _ => Ok(()),
         }
     }
@@ -221,6 +222,7 @@ mod tests {
         let err = ctx
             .check_deadline(&Location::new("a.lua", 3))
             .expect_err("expired");
+        assert!(matches!(err, Error::TimeLimit { .. }), "{err:?}");
         assert_eq!(
             err.to_string(),
             "a.lua:3: time limit exceeded (see --time-limit)"

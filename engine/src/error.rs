@@ -36,12 +36,15 @@ impl fmt::Display for Location {
 
 /// Everything that can go wrong while generating.
 ///
-/// Every error that a script can cause is an [`Error::Script`] with the file and line to fix;
-/// it prints as `FILE:LINE: message` on one line.
+/// Every error that a script can cause carries the file and line to fix and prints as
+/// `FILE:LINE: message` on one line: an [`Error::Script`] for a mistake, or one of the limits
+/// ([`Error::TimeLimit`], [`Error::MemoryLimit`], [`Error::InstructionLimit`],
+/// [`Error::ModuleLimit`], [`Error::Cancelled`]) that a host can match on. Errors stay typed
+/// while they cross Lua (see [`crate::lua::script_error`] and [`crate::lua::to_engine_error`]).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// A script failed: syntax, runtime, a bad argument to a `pge` function, a limit.
+    /// A script failed: syntax, runtime, a bad argument or option to a `pge` function.
     #[error("{location}: {message}")]
     Script {
         /// Where it failed.
@@ -50,6 +53,52 @@ pub enum Error {
         message: String,
         /// The Lua traceback, when there is one.
         traceback: Option<String>,
+    },
+    /// The run went past its wall-clock limit (`--time-limit`, [`crate::Limits::time`]).
+    #[error("{location}: time limit exceeded (see --time-limit)")]
+    TimeLimit {
+        /// Where the script (or the algorithm it started) was when the time ran out.
+        location: Location,
+    },
+    /// The Lua state went past its memory limit (`--memory-limit`, [`crate::Limits::memory`]).
+    #[error("{location}: memory limit of {} MiB exceeded (see --memory-limit)", limit >> 20)]
+    MemoryLimit {
+        /// Where the script was when the allocation failed.
+        location: Location,
+        /// The limit in bytes.
+        limit: usize,
+    },
+    /// The Lua code executed more instructions than [`crate::Limits::instructions`] allows.
+    #[error("{location}: instruction limit of {limit} exceeded")]
+    InstructionLimit {
+        /// Where the script was when the budget ran out.
+        location: Location,
+        /// The budget.
+        limit: u64,
+    },
+    /// A rewriting system's string grew past its module cap (`maxModules`,
+    /// [`crate::Limits::max_modules`]).
+    #[error(
+        "{location}: L-system '{system}': step {step}: the string reached {count} modules, \
+         more than maxModules ({max})"
+    )]
+    ModuleLimit {
+        /// Where the L-system was created.
+        location: Location,
+        /// The L-system's name.
+        system: String,
+        /// The derivation step (0 for the axiom).
+        step: u32,
+        /// How many modules the string had when it stopped.
+        count: u64,
+        /// The cap.
+        max: usize,
+    },
+    /// The run was cancelled from another thread ([`crate::SessionOptions::cancel`]).
+    #[error("{location}: cancelled")]
+    Cancelled {
+        /// Where the script (or algorithm) was when it noticed.
+        location: Location,
     },
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
@@ -88,12 +137,130 @@ impl Error {
         }
     }
 
-    /// The script location, for script errors.
+    /// The script location, for script errors and limits.
     #[must_use]
     pub fn location(&self) -> Option<&Location> {
         match self {
-            Error::Script { location, .. } => Some(location),
+            Error::Script { location, .. }
+            | Error::TimeLimit { location }
+            | Error::MemoryLimit { location, .. }
+            | Error::InstructionLimit { location, .. }
+            | Error::ModuleLimit { location, .. }
+            | Error::Cancelled { location } => Some(location),
             _ => None,
+        }
+    }
+
+    /// What went wrong without the location: the message of a script error, the phrase of a
+    /// limit (`time limit exceeded (see --time-limit)`), the whole text of other errors.
+    #[must_use]
+    pub fn message(&self) -> String {
+        match self {
+            Error::Script { message, .. } => message.clone(),
+            Error::TimeLimit { .. } => "time limit exceeded (see --time-limit)".into(),
+            Error::MemoryLimit { limit, .. } => format!(
+                "memory limit of {} MiB exceeded (see --memory-limit)",
+                limit >> 20
+            ),
+            Error::InstructionLimit { limit, .. } => {
+                format!("instruction limit of {limit} exceeded")
+            }
+            Error::ModuleLimit {
+                system,
+                step,
+                count,
+                max,
+                ..
+            } => format!(
+                "L-system '{system}': step {step}: the string reached {count} modules, more \
+                 than maxModules ({max})"
+            ),
+            Error::Cancelled { .. } => "cancelled".into(),
+            other => other.to_string(),
+        }
+    }
+
+    /// The same error placed at `location` (script errors and limits; others unchanged).
+    #[must_use]
+    pub fn at(mut self, at: Location) -> Error {
+        match &mut self {
+            Error::Script { location, .. }
+            | Error::TimeLimit { location }
+            | Error::MemoryLimit { location, .. }
+            | Error::InstructionLimit { location, .. }
+            | Error::ModuleLimit { location, .. }
+            | Error::Cancelled { location } => *location = at,
+            _ => {}
+        }
+        self
+    }
+
+    /// Whether this is one of the limits a session runs under (time, memory, instructions,
+    /// modules) or a cancellation, rather than a mistake in the script.
+    #[must_use]
+    pub fn is_limit(&self) -> bool {
+        matches!(
+            self,
+            Error::TimeLimit { .. }
+                | Error::MemoryLimit { .. }
+                | Error::InstructionLimit { .. }
+                | Error::ModuleLimit { .. }
+                | Error::Cancelled { .. }
+        )
+    }
+
+    /// A copy of the error (an I/O error keeps its kind and message), for errors that crossed
+    /// Lua behind a shared pointer.
+    #[must_use]
+    pub fn duplicate(&self) -> Error {
+        match self {
+            Error::Script {
+                location,
+                message,
+                traceback,
+            } => Error::Script {
+                location: location.clone(),
+                message: message.clone(),
+                traceback: traceback.clone(),
+            },
+            Error::TimeLimit { location } => Error::TimeLimit {
+                location: location.clone(),
+            },
+            Error::MemoryLimit { location, limit } => Error::MemoryLimit {
+                location: location.clone(),
+                limit: *limit,
+            },
+            Error::InstructionLimit { location, limit } => Error::InstructionLimit {
+                location: location.clone(),
+                limit: *limit,
+            },
+            Error::ModuleLimit {
+                location,
+                system,
+                step,
+                count,
+                max,
+            } => Error::ModuleLimit {
+                location: location.clone(),
+                system: system.clone(),
+                step: *step,
+                count: *count,
+                max: *max,
+            },
+            Error::Cancelled { location } => Error::Cancelled {
+                location: location.clone(),
+            },
+            Error::Io { path, source } => Error::Io {
+                path: path.clone(),
+                source: std::io::Error::new(source.kind(), source.to_string()),
+            },
+            Error::Geometry(g) => Error::Geometry(g.clone()),
+            Error::Export(m) => Error::Export(m.clone()),
+            Error::DuplicatePlugin(p) => Error::DuplicatePlugin(p.clone()),
+            Error::Plugin { plugin, message } => Error::Plugin {
+                plugin: plugin.clone(),
+                message: message.clone(),
+            },
         }
     }
 }
@@ -117,5 +284,49 @@ mod tests {
             "gone",
         );
         assert_eq!(e.to_string(), "x.lua: gone");
+    }
+
+    #[test]
+    fn limits_print_their_location_then_their_message() {
+        let at = Location::new("a.lua", 3);
+        let limits = [
+            Error::TimeLimit {
+                location: at.clone(),
+            },
+            Error::MemoryLimit {
+                location: at.clone(),
+                limit: 16 << 20,
+            },
+            Error::InstructionLimit {
+                location: at.clone(),
+                limit: 100,
+            },
+            Error::ModuleLimit {
+                location: at.clone(),
+                system: "big".into(),
+                step: 7,
+                count: 128,
+                max: 100,
+            },
+            Error::Cancelled {
+                location: at.clone(),
+            },
+        ];
+        for e in &limits {
+            assert!(e.is_limit());
+            assert_eq!(e.to_string(), format!("a.lua:3: {}", e.message()));
+            assert_eq!(e.duplicate().to_string(), e.to_string());
+            let moved = e.duplicate().at(Location::new("b.lua", 9));
+            assert_eq!(moved.location(), Some(&Location::new("b.lua", 9)));
+        }
+        assert_eq!(
+            limits[1].message(),
+            "memory limit of 16 MiB exceeded (see --memory-limit)"
+        );
+        assert_eq!(
+            limits[3].message(),
+            "L-system 'big': step 7: the string reached 128 modules, more than maxModules (100)"
+        );
+        assert!(!Error::script(at, "x").is_limit());
     }
 }

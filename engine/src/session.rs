@@ -94,6 +94,8 @@ impl Session {
             ..SessionState::default()
         });
         lua.set_app_data(CurrentRng(crate::lua::random::mt_from_seed(options.seed)));
+        // The registry of session services the plugins fill while they register.
+        lua.set_app_data(crate::lua::services::Services::default());
         install_hook(&lua).map_err(|e| Error::Plugin {
             plugin: "lua".into(),
             message: e.to_string(),
@@ -268,7 +270,10 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
         {
             let source = debug.source();
             let name = source.source.as_deref().unwrap_or("?");
-            let file = name.strip_prefix('@').unwrap_or(name);
+            let file = name
+                .strip_prefix('@')
+                .or_else(|| name.strip_prefix('='))
+                .unwrap_or(name);
             match &mut st.last_location {
                 Some(loc) if loc.file == file => loc.line = line,
                 other => {
@@ -279,28 +284,27 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
                 }
             }
         }
-        let problem = if st
+        let here = || st.last_location.clone().unwrap_or_default();
+        let limit = if st
             .ctx
             .cancel
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
         {
-            Some("cancelled".to_string())
+            Some(Error::Cancelled { location: here() })
         } else if st.ctx.deadline.is_some_and(|d| Instant::now() >= d) {
-            Some("time limit exceeded (see --time-limit)".to_string())
-        } else if st.instruction_limit.is_some_and(|n| st.instructions > n) {
-            Some(format!(
-                "instruction limit of {} exceeded",
-                st.instruction_limit.unwrap_or(0)
-            ))
+            Some(Error::TimeLimit { location: here() })
         } else {
-            None
-        };
-        match problem {
-            Some(message) => {
-                let here = st.last_location.clone().unwrap_or_default();
-                Err(mlua::Error::RuntimeError(format!("{here}: {message}")))
+            match st.instruction_limit {
+                Some(limit) if st.instructions > limit => Some(Error::InstructionLimit {
+                    location: here(),
+                    limit,
+                }),
+                _ => None,
             }
+        };
+        match limit {
+            Some(e) => Err(mlua::Error::external(e)),
             None => Ok(VmState::Continue),
         }
     })?;

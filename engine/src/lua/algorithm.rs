@@ -3,7 +3,7 @@
 use mlua::{Function, Lua, ObjectLike, Table, UserData, UserDataMethods, Value};
 
 use super::errors::{caller_location, script_error, to_engine_error};
-use super::model::{LuaModel, to_model};
+use super::model::{LuaModel, to_model, to_model_in};
 use crate::algorithm::{Finished, run};
 use crate::geometry::Model;
 use crate::{Algorithm, Error, Location, RunContext, Step};
@@ -30,7 +30,7 @@ impl UserData for AlgorithmHandle {
             };
             run(&mut *me.0, &ctx, &mut |_| {})
                 .map(LuaModel)
-                .map_err(|e| mlua::Error::RuntimeError(e.to_string()))
+                .map_err(mlua::Error::external)
         });
         m.add_method("name", |_, me, ()| Ok(me.0.name().to_string()));
     }
@@ -82,12 +82,17 @@ impl Algorithm for ScriptAlgorithm {
         })
     }
 
-    fn finish(&mut self, _: &RunContext) -> crate::Result<Model> {
+    fn finish(&mut self, ctx: &RunContext) -> crate::Result<Model> {
         let result: Value = self
             .finish
             .call(self.table.clone())
             .map_err(|e| self.lua_error(&self.finish, e))?;
-        to_model(&result).map_err(|e| match e {
+        let made = match self.finish.weak_lua().try_upgrade() {
+            Some(lua) => to_model_in(&lua, &result, ctx),
+            None => to_model(&result),
+        };
+        made.map_err(|e| match e {
+            e if super::errors::engine_error_of(&e).is_some() => self.lua_error(&self.finish, e),
             mlua::Error::RuntimeError(m)
                 if m.contains(": ") && super::errors::split_location(&m).is_some() =>
             {
@@ -184,7 +189,7 @@ pub fn algorithm_from(
         ));
     }
     // Something that makes a model: its own failure is the error to show.
-    match to_model(&value) {
+    match to_model_in(lua, &value, &super::run_context(lua)) {
         Ok(model) => Ok(Box::new(Finished(model))),
         Err(e) => {
             let e = to_engine_error(lua, e);

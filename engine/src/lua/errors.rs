@@ -40,8 +40,10 @@ pub fn caller_location(lua: &Lua) -> Location {
         })
 }
 
-/// A runtime error `FILE:LINE: message` located at the calling Lua code: what a plugin
-/// returns when a script passes something wrong.
+/// A script error located at the calling Lua code: what a plugin returns when a script
+/// passes something wrong. It crosses Lua typed (an [`Error::Script`] behind
+/// [`mlua::Error::ExternalError`]) and [`to_engine_error`] gets it back as it was; it prints
+/// as `FILE:LINE: message`.
 #[must_use]
 pub fn script_error(lua: &Lua, message: impl std::fmt::Display) -> mlua::Error {
     let location = caller_location(lua);
@@ -49,33 +51,76 @@ pub fn script_error(lua: &Lua, message: impl std::fmt::Display) -> mlua::Error {
         // No Lua code is running (a plugin called from Rust): the caller adds the place.
         return mlua::Error::RuntimeError(message.to_string());
     }
-    mlua::Error::RuntimeError(format!("{location}: {message}"))
+    mlua::Error::external(Error::script(location, message.to_string()))
 }
 
-/// Converts an mlua error into an engine error with the script's file and line.
+/// The engine error inside an mlua error, if one crossed Lua (see [`script_error`]).
+#[must_use]
+pub fn engine_error_of(err: &mlua::Error) -> Option<&Error> {
+    match err {
+        mlua::Error::ExternalError(e) => e.downcast_ref::<Error>(),
+        mlua::Error::CallbackError { cause, .. } => engine_error_of(cause),
+        _ => None,
+    }
+}
+
+/// The one-line message of an error without its location: the message of an engine error
+/// that crossed Lua, or the first line of any other error with the calling code's
+/// `FILE:LINE: ` (which Lua puts in front of `error("...")`) left out. For adapters that
+/// put a failure from a nested call into their own message.
+#[must_use]
+pub fn error_message(lua: &Lua, err: &mlua::Error) -> String {
+    if let Some(e) = engine_error_of(err) {
+        return e.message();
+    }
+    let message = match err {
+        mlua::Error::RuntimeError(m) => m.clone(),
+        mlua::Error::CallbackError { cause, .. } => return error_message(lua, cause),
+        other => other.to_string(),
+    };
+    let line = message.lines().next().unwrap_or("").to_string();
+    let prefix = format!("{}: ", caller_location(lua));
+    line.strip_prefix(&prefix)
+        .map(str::to_string)
+        .unwrap_or(line)
+}
+
+/// Converts an mlua error into an engine error with the script's file and line. Engine
+/// errors that crossed Lua come back as they were (a host can match
+/// [`Error::TimeLimit`]); Lua's own errors (`error("...")`, syntax) become
+/// [`Error::Script`] with the place Lua names.
 #[must_use]
 pub fn to_engine_error(lua: &Lua, err: mlua::Error) -> Error {
     let traceback = traceback_of(&err);
-    let (message, location) = describe(lua, &err);
-    let location = location
-        .or_else(|| {
-            traceback
-                .as_deref()
-                .and_then(|t| location_in_traceback(lua, t))
-        })
-        .or_else(|| {
-            lua.app_data_ref::<SessionState>()
-                .and_then(|s| s.last_location.clone())
-        })
-        .unwrap_or_else(|| Location {
-            file: "?".into(),
-            line: None,
-        });
-    Error::Script {
-        location,
-        message,
-        traceback,
+    let fallback = || {
+        traceback
+            .as_deref()
+            .and_then(|t| location_in_traceback(lua, t))
+            .or_else(|| {
+                lua.app_data_ref::<SessionState>()
+                    .and_then(|s| s.last_location.clone())
+            })
+            .unwrap_or_else(|| Location {
+                file: "?".into(),
+                line: None,
+            })
+    };
+    match describe(lua, &err) {
+        Described::Message(message, location) => Error::Script {
+            location: location.unwrap_or_else(fallback),
+            message,
+            traceback,
+        },
+        Described::Typed(e) if e.location().is_some_and(|l| l.file == "?") => e.at(fallback()),
+        Described::Typed(e) => e,
     }
+}
+
+/// What an mlua error stands for: a message (and the place it names), or an engine error
+/// other than a script error that crossed Lua (a limit).
+enum Described {
+    Message(String, Option<Location>),
+    Typed(Error),
 }
 
 fn traceback_of(err: &mlua::Error) -> Option<String> {
@@ -88,58 +133,68 @@ fn traceback_of(err: &mlua::Error) -> Option<String> {
     }
 }
 
-/// The one-line message of an error and the location it names, if any.
-fn describe(lua: &Lua, err: &mlua::Error) -> (String, Option<Location>) {
+/// The one-line message of an error and the location it names, if any; limits as they are.
+fn describe(lua: &Lua, err: &mlua::Error) -> Described {
+    use Described::{Message, Typed};
     use mlua::Error as E;
     match err {
-        E::SyntaxError { message, .. } | E::RuntimeError(message) => parse_message(lua, message),
+        E::SyntaxError { message, .. } | E::RuntimeError(message) => {
+            let (m, l) = parse_message(lua, message);
+            Message(m, l)
+        }
         E::MemoryError(_) => {
             let limit = lua
                 .app_data_ref::<SessionState>()
                 .map(|s| s.memory_limit)
                 .unwrap_or(0);
-            (
-                format!(
-                    "memory limit of {} MiB exceeded (see --memory-limit)",
-                    limit >> 20
-                ),
-                None,
-            )
+            Typed(Error::MemoryLimit {
+                location: Location {
+                    file: "?".into(),
+                    line: None,
+                },
+                limit,
+            })
         }
         E::CallbackError { cause, .. } => describe(lua, cause),
-        E::WithContext { context, cause } => {
-            let (m, l) = describe(lua, cause);
-            (format!("{context}: {m}"), l)
-        }
+        E::WithContext { context, cause } => match describe(lua, cause) {
+            Message(m, l) => Message(format!("{context}: {m}"), l),
+            typed => typed,
+        },
         E::BadArgument {
             to,
             pos,
             name,
             cause,
         } => {
-            let (m, l) = describe(lua, cause);
             let what = match (to, name) {
                 (Some(to), Some(name)) => format!("bad argument #{pos} ({name}) to '{to}'"),
                 (Some(to), None) => format!("bad argument #{pos} to '{to}'"),
                 (None, Some(name)) => format!("bad argument #{pos} ({name})"),
                 (None, None) => format!("bad argument #{pos}"),
             };
-            (format!("{what}: {m}"), l)
+            match describe(lua, cause) {
+                Message(m, l) => Message(format!("{what}: {m}"), l),
+                typed => typed,
+            }
         }
         E::FromLuaConversionError { from, to, message } => {
             let extra = message
                 .as_deref()
                 .map(|m| format!(" ({m})"))
                 .unwrap_or_default();
-            (format!("expected {to}, got {from}{extra}"), None)
+            Message(format!("expected {to}, got {from}{extra}"), None)
         }
         E::ExternalError(e) => match e.downcast_ref::<Error>() {
             Some(Error::Script {
                 location, message, ..
-            }) => (message.clone(), Some(location.clone())),
-            _ => (one_line(&e.to_string()), None),
+            }) => Message(message.clone(), Some(location.clone())),
+            Some(other) if other.location().is_some() => Typed(other.duplicate()),
+            _ => Message(one_line(&e.to_string()), None),
         },
-        other => parse_message(lua, &other.to_string()),
+        other => {
+            let (m, l) = parse_message(lua, &other.to_string());
+            Message(m, l)
+        }
     }
 }
 

@@ -1,32 +1,45 @@
 //! The Lua side of the engine: the sandbox, the support library (`pge.*`) and the helpers
 //! plugins use to bind their objects.
 //!
-//! Plugins convert vectors with [`LuaVec3`], report mistakes with [`script_error`] (which
+//! Plugins read option tables with [`Options`] (one wording for every mistake), convert
+//! vectors with [`LuaVec3`], report other mistakes with [`script_error`] (a typed error that
 //! points at the script's file and line), hand algorithms back as [`AlgorithmHandle`]s and
 //! resolve files with [`resolve_path`].
 
 mod algorithm;
+mod args;
 mod errors;
 mod math;
 mod model;
 mod noise;
+pub mod options;
 pub mod params;
 pub(crate) mod random;
 mod sandbox;
+pub mod services;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
-pub use errors::{caller_location, script_error, to_engine_error};
+pub use args::{conversion_message, finite_f32, finite_number, vec3_arg};
+pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
-pub use model::{LuaMesh, LuaModel, material_from_table, to_model};
-pub use random::{LuaRng, swap_rng, uniform};
+pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};
+pub use options::{Bounds, KeyStyle, Options};
+pub use random::{LuaRng, current_uniform, swap_rng, uniform};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub use sandbox::{resolve_path, writable_path};
+pub use services::{
+    DefaultInterpreter, InstanceFactory, ModelMaker, ReadOnlyPhase, check_mutable,
+    default_instance, interpreters, read_only_phase, register_interpreter, register_model_maker,
+    set_default_instance,
+};
 
 use crate::RunContext;
 
 /// The run context of the session this Lua state belongs to (seed, `--steps`, deadline,
-/// module cap, cancel flag).
+/// module cap, cancel flag): what a method called from a script (`turtle:model()`,
+/// `algorithm:model()`) runs with. Code that is handed a [`RunContext`] (an algorithm's
+/// `init`, `step`, `finish`) uses that one instead.
 #[must_use]
 pub fn run_context(lua: &mlua::Lua) -> RunContext {
     lua.app_data_ref::<state::SessionState>()
@@ -40,29 +53,6 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
 pub fn memory_limit(lua: &mlua::Lua) -> usize {
     lua.app_data_ref::<state::SessionState>()
         .map_or(crate::Limits::default().memory, |s| s.memory_limit)
-}
-
-/// A finite number from a script value, or a `FILE:LINE:` error that names `what` (the
-/// method and argument) and says what was wrong.
-pub fn finite_number(lua: &mlua::Lua, v: &mlua::Value, what: &str) -> mlua::Result<f64> {
-    let x = match v {
-        mlua::Value::Integer(i) => *i as f64,
-        mlua::Value::Number(n) => *n,
-        other => {
-            return Err(script_error(
-                lua,
-                format!("{what}: expected a number, got {}", other.type_name()),
-            ));
-        }
-    };
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(script_error(
-            lua,
-            format!("{what}: the number is NaN or infinite"),
-        ))
-    }
 }
 
 /// Registers the support library into the `pge` table.

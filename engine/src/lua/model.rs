@@ -8,6 +8,7 @@ use mlua::{AnyUserData, FromLua, Lua, ObjectLike, Table, UserData, UserDataMetho
 use super::errors::script_error;
 use super::math::LuaMat4;
 use super::sandbox::resolve_path;
+use crate::RunContext;
 use crate::geometry::{AlphaMode, Material, Mesh, Model, Primitive, Texture};
 
 /// A mesh made by `pge.mesh` (or a plugin), shared by the models it is added to.
@@ -35,6 +36,8 @@ impl UserData for LuaModel {
             |lua, me, (thing, transform): (Value, Option<LuaMat4>)| {
                 let other = to_model(&thing).map_err(|e| match e {
                     mlua::Error::RuntimeError(_) => e,
+                    // Already located where it happened (a modeller's own :model()).
+                    e if super::errors::engine_error_of(&e).is_some() => e,
                     other => script_error(lua, format!("model:add: {other}")),
                 })?;
                 me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
@@ -60,10 +63,22 @@ impl UserData for LuaModel {
 /// The model of a script value: a [`LuaModel`], a [`LuaMesh`], or anything with a `:model()`
 /// method (a modeller, a turtle) whose result is one of those.
 pub fn to_model(value: &Value) -> mlua::Result<Model> {
-    to_model_depth(value, 0)
+    to_model_depth(value, None, 0)
 }
 
-fn to_model_depth(value: &Value, depth: usize) -> mlua::Result<Model> {
+/// The model of a script value as [`to_model`] makes it, for code that runs with a
+/// [`RunContext`] (an algorithm's `finish`): a host object whose type registered a model
+/// maker ([`register_model_maker`](super::services::register_model_maker)) is modelled with
+/// `ctx` (its seed, its deadline) rather than through its Lua `:model()` method.
+pub fn to_model_in(lua: &Lua, value: &Value, ctx: &RunContext) -> mlua::Result<Model> {
+    to_model_depth(value, Some((lua, ctx)), 0)
+}
+
+fn to_model_depth(
+    value: &Value,
+    ctx: Option<(&Lua, &RunContext)>,
+    depth: usize,
+) -> mlua::Result<Model> {
     let not_a_model = || {
         mlua::Error::RuntimeError(format!(
             "expected a model, a mesh or an object with a :model() method, got {}",
@@ -81,6 +96,11 @@ fn to_model_depth(value: &Value, depth: usize) -> mlua::Result<Model> {
             if let Ok(m) = ud.borrow::<LuaMesh>() {
                 return Ok(Model::from_mesh(m.0.clone()));
             }
+            if let Some((lua, ctx)) = ctx
+                && let Some(model) = super::services::make_model(lua, ud, ctx)?
+            {
+                return Ok(model);
+            }
             match ud.get::<Value>("model") {
                 Ok(Value::Function(_)) => ud.call_method("model", ())?,
                 _ => return Err(not_a_model()),
@@ -92,7 +112,7 @@ fn to_model_depth(value: &Value, depth: usize) -> mlua::Result<Model> {
         },
         _ => return Err(not_a_model()),
     };
-    to_model_depth(&produced, depth + 1)
+    to_model_depth(&produced, ctx, depth + 1)
 }
 
 fn floats(lua: &Lua, t: &Table, key: &str, per: usize) -> mlua::Result<Option<Vec<f32>>> {

@@ -47,6 +47,14 @@ pub fn swap_rng(lua: &Lua, rng: Mt) -> Mt {
     }
 }
 
+/// A uniform number in [0, 1) from the generator `pge.random()` draws from (inside an
+/// L-system's rules: that instance's generator). Scripts cannot replace it: redefining
+/// `pge.random` changes only what the script itself calls.
+#[inline]
+pub fn current_uniform(lua: &Lua) -> f64 {
+    draw(lua, uniform)
+}
+
 fn draw<R>(lua: &Lua, f: impl FnOnce(&mut Mt) -> R) -> R {
     match lua.app_data_mut::<CurrentRng>() {
         Some(mut cur) => f(&mut cur.0),

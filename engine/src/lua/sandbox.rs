@@ -8,6 +8,7 @@ use mlua::{Lua, Table, Value};
 use super::errors::{caller_location, script_error};
 use super::params;
 use super::state::{Chunk, SessionState};
+use crate::{Error, Location};
 
 const LOADED_KEY: &str = "pge.loaded";
 
@@ -59,8 +60,15 @@ fn display_value(v: &Value) -> String {
 
 /// Runs a script file as a chunk named after its shown path; records it for reload.
 pub(crate) fn exec_file(lua: &Lua, display: String, path: PathBuf) -> mlua::Result<Value> {
-    let source = std::fs::read_to_string(&path)
-        .map_err(|e| mlua::Error::RuntimeError(format!("{display}: cannot read script: {e}")))?;
+    let source = std::fs::read_to_string(&path).map_err(|e| {
+        mlua::Error::external(Error::script(
+            Location {
+                file: display.clone(),
+                line: None,
+            },
+            format!("cannot read script: {e}"),
+        ))
+    })?;
     // Like `lua script.lua`, a first line starting with '#' (a shebang) is skipped.
     let source = if source.starts_with('#') {
         source
@@ -273,8 +281,9 @@ fn load_script(lua: &Lua, path: &str, overrides: Option<Table>) -> mlua::Result<
     let unused = params::pop_scope(lua);
     let value = result?;
     if let Err(message) = unused {
-        return Err(mlua::Error::RuntimeError(format!(
-            "{location}: pge.load('{path}'): {message}"
+        return Err(mlua::Error::external(Error::script(
+            location,
+            format!("pge.load('{path}'): {message}"),
         )));
     }
     Ok(value)

@@ -4,34 +4,15 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use glam::{Vec3, Vec4};
-use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
+use glam::Vec4;
+use mlua::{Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
-    LuaMesh, LuaModel, LuaVec3, resolve_path, script_error, to_model, writable_path,
+    LuaMesh, LuaModel, Options, finite_number, resolve_path, script_error, to_model, vec3_arg,
+    writable_path,
 };
 
 use crate::{Image, Lines};
-
-/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
-fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f64> {
-    pge_engine::lua::finite_number(lua, v, what)
-}
-
-fn short(e: &mlua::Error) -> String {
-    match e {
-        mlua::Error::FromLuaConversionError {
-            message: Some(m), ..
-        } => m.clone(),
-        other => other.to_string(),
-    }
-}
-
-fn vec3(lua: &Lua, v: Value, what: &str) -> mlua::Result<Vec3> {
-    LuaVec3::from_lua(v, lua)
-        .map(|v| v.0)
-        .map_err(|e| script_error(lua, format!("{what}: {}", short(&e))))
-}
 
 /// An sRGB colour as bytes: `"#rrggbb"`, `"#rrggbbaa"`, or `{r, g, b [, a]}` in [0, 1].
 fn rgba_bytes(lua: &Lua, v: &Value, what: &str) -> mlua::Result<[u8; 4]> {
@@ -68,7 +49,7 @@ fn rgba_bytes(lua: &Lua, v: &Value, what: &str) -> mlua::Result<[u8; 4]> {
             }
             let mut out = [255u8; 4];
             for (i, slot) in out.iter_mut().enumerate().take(n) {
-                let x = number(lua, &t.raw_get::<Value>(i + 1)?, what)?;
+                let x = finite_number(lua, &t.raw_get::<Value>(i + 1)?, what)?;
                 if !(0.0..=1.0).contains(&x) {
                     return Err(bad(format!("colour component {x} is outside [0, 1]")));
                 }
@@ -109,9 +90,9 @@ pub struct LuaLines(pub Rc<RefCell<Lines>>);
 impl UserData for LuaLines {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("add", |lua, me, (a, b, c): (Value, Value, Value)| {
-            pge_lsystem::check_mutable(lua, "lines:add")?;
-            let a = vec3(lua, a, "add(a, b [, colour])")?;
-            let b = vec3(lua, b, "add(a, b [, colour])")?;
+            pge_engine::lua::check_mutable(lua, "lines:add")?;
+            let a = vec3_arg(lua, a, "add(a, b [, colour])")?;
+            let b = vec3_arg(lua, b, "add(a, b [, colour])")?;
             let c = match c {
                 Value::Nil => None,
                 c => Some(linear(lua, &c, "add: colour")?),
@@ -122,7 +103,7 @@ impl UserData for LuaLines {
         });
         m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
         m.add_method("clear", |lua, me, ()| {
-            pge_lsystem::check_mutable(lua, "lines:clear")?;
+            pge_engine::lua::check_mutable(lua, "lines:clear")?;
             me.0.borrow_mut().clear();
             Ok(())
         });
@@ -159,7 +140,7 @@ impl UserData for LuaTexture {
 
 /// A pixel coordinate: a whole number (range is checked by the image).
 fn coord(lua: &Lua, v: &Value, what: &str) -> mlua::Result<i64> {
-    let x = number(lua, v, what)?;
+    let x = finite_number(lua, v, what)?;
     if x.fract() != 0.0 {
         return Err(script_error(
             lua,
@@ -175,8 +156,8 @@ impl UserData for LuaImage {
         m.add_method("height", |_, me, ()| Ok(me.0.borrow().height()));
         m.add_method("inside", |lua, me, (x, y): (Value, Value)| {
             let (x, y) = (
-                number(lua, &x, "inside(x, y)")?,
-                number(lua, &y, "inside(x, y)")?,
+                finite_number(lua, &x, "inside(x, y)")?,
+                finite_number(lua, &y, "inside(x, y)")?,
             );
             Ok(x.fract() == 0.0 && y.fract() == 0.0 && me.0.borrow().contains(x as i64, y as i64))
         });
@@ -205,7 +186,7 @@ impl UserData for LuaImage {
             })
         });
         m.add_method("set", |lua, me, args: MultiValue| {
-            pge_lsystem::check_mutable(lua, "image:set")?;
+            pge_engine::lua::check_mutable(lua, "image:set")?;
             let args: Vec<Value> = args.into_iter().collect();
             if args.len() < 3 {
                 return Err(script_error(
@@ -229,7 +210,7 @@ impl UserData for LuaImage {
                 .map_err(|e| script_error(lua, format!("set: {e}")))
         });
         m.add_method("fill", |lua, me, c: Value| {
-            pge_lsystem::check_mutable(lua, "image:fill")?;
+            pge_engine::lua::check_mutable(lua, "image:fill")?;
             let px = rgba_bytes(lua, &c, "fill(colour)")?;
             me.0.borrow_mut().fill(px);
             Ok(())
@@ -301,7 +282,7 @@ impl UserData for LuaImage {
 }
 
 fn size(lua: &Lua, v: &Value, what: &str) -> mlua::Result<u32> {
-    let x = number(lua, v, what)?;
+    let x = finite_number(lua, v, what)?;
     if x.fract() != 0.0 || x < 1.0 || x > f64::from(u32::MAX) {
         return Err(script_error(
             lua,
@@ -338,29 +319,16 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
         "Lines",
         lua.create_function(|lua, t: Value| {
-            let color = match &t {
+            let o = Options::new(lua, t, "pge.Lines")?;
+            let color = match o.value("color")? {
                 Value::Nil => Vec4::ONE,
-                Value::Table(t) => {
-                    for pair in t.pairs::<Value, Value>() {
-                        let (k, _) = pair?;
-                        if !matches!(&k, Value::String(s) if s.to_str().is_ok_and(|s| &*s == "color")) {
-                            return Err(script_error(lua, "pge.Lines: unknown option (options: color)"));
-                        }
-                    }
-                    match t.raw_get::<Value>("color")? {
-                        Value::Nil => Vec4::ONE,
-                        c => linear(lua, &c, "pge.Lines: color")?,
-                    }
-                }
-                other => {
-                    return Err(script_error(
-                        lua,
-                        format!("pge.Lines: expected an options table or nothing, got {}", other.type_name()),
-                    ));
-                }
+                c => linear(lua, &c, "pge.Lines: color")?,
             };
+            o.finish()?;
             let max = memory_budget(lua) / Lines::BYTES_PER_SEGMENT;
-            Ok(LuaLines(Rc::new(RefCell::new(Lines::with_max_segments(color, max)))))
+            Ok(LuaLines(Rc::new(RefCell::new(Lines::with_max_segments(
+                color, max,
+            )))))
         })?,
     )?;
     let image = lua.create_table()?;

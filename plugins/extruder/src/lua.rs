@@ -7,14 +7,12 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Material, Model};
-use pge_engine::lua::{LuaMat4, LuaMesh, LuaModel, LuaVec3, material_from_table, script_error};
+use pge_engine::lua::{
+    LuaMat4, LuaMesh, LuaModel, LuaVec3, Options, conversion_message, finite_f32,
+    material_from_table, script_error,
+};
 
 use crate::{Extruder, ExtruderOptions, MatrixManipulator};
-
-/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
-fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
-    pge_engine::lua::finite_number(lua, v, what).map(|x| x as f32)
-}
 
 /// A vector given as a `pge.vec3`, a table, or three numbers.
 fn vector(lua: &Lua, args: &[Value], what: &str) -> mlua::Result<Vec3> {
@@ -27,28 +25,18 @@ fn vector(lua: &Lua, args: &[Value], what: &str) -> mlua::Result<Vec3> {
                 ));
             }
             Ok(Vec3::new(
-                number(lua, &args[0], what)?,
-                number(lua, &args[1], what)?,
-                number(lua, &args[2], what)?,
+                finite_f32(lua, &args[0], what)?,
+                finite_f32(lua, &args[1], what)?,
+                finite_f32(lua, &args[2], what)?,
             ))
         }
         [v, ..] => LuaVec3::from_lua(v.clone(), lua)
             .map(|v| v.0)
-            .map_err(|e| script_error(lua, format!("{what}: {}", short(&e)))),
+            .map_err(|e| script_error(lua, format!("{what}: {}", conversion_message(&e)))),
         [] => Err(script_error(
             lua,
             format!("{what}: expected x, y, z or a vector"),
         )),
-    }
-}
-
-/// The message of a conversion error without mlua's framing.
-fn short(e: &mlua::Error) -> String {
-    match e {
-        mlua::Error::FromLuaConversionError {
-            message: Some(m), ..
-        } => m.clone(),
-        other => other.to_string(),
     }
 }
 
@@ -95,7 +83,7 @@ impl LuaMatrixManipulator {
 
 /// Refuses a change while an L-system's rewriting rule runs (`this` is read-only there).
 fn guard(lua: &Lua, what: &str) -> mlua::Result<()> {
-    pge_lsystem::check_mutable(lua, what)
+    pge_engine::lua::check_mutable(lua, what)
 }
 
 fn matrix_op(
@@ -128,7 +116,7 @@ impl UserData for LuaMatrixManipulator {
         });
         m.add_method("rotate", |lua, me, args: MultiValue| {
             let args: Vec<Value> = args.into_iter().collect();
-            let deg = number(
+            let deg = finite_f32(
                 lua,
                 args.first().unwrap_or(&Value::Nil),
                 "rotate(degrees, axis)",
@@ -142,7 +130,7 @@ impl UserData for LuaMatrixManipulator {
             ("rotateZ", Vec3::Z),
         ] {
             m.add_method(name, move |lua, me, deg: Value| {
-                let deg = number(lua, &deg, name)?;
+                let deg = finite_f32(lua, &deg, name)?;
                 matrix_op(lua, me, name, |m| m.rotate(axis, deg))
             });
         }
@@ -150,7 +138,7 @@ impl UserData for LuaMatrixManipulator {
             let args: Vec<Value> = args.into_iter().collect();
             let factors = match args.as_slice() {
                 [v @ (Value::Integer(_) | Value::Number(_))] => {
-                    Vec3::splat(number(lua, v, "scale")?)
+                    Vec3::splat(finite_f32(lua, v, "scale")?)
                 }
                 rest => vector(lua, rest, "scale(s) or scale(x, y, z)")?,
             };
@@ -158,7 +146,7 @@ impl UserData for LuaMatrixManipulator {
         });
         for (name, axis) in [("scaleX", 0usize), ("scaleY", 1), ("scaleZ", 2)] {
             m.add_method(name, move |lua, me, f: Value| {
-                let f = number(lua, &f, name)?;
+                let f = finite_f32(lua, &f, name)?;
                 let mut v = Vec3::ONE;
                 v[axis] = f;
                 matrix_op(lua, me, name, |m| m.scale(v))
@@ -170,7 +158,7 @@ impl UserData for LuaMatrixManipulator {
             matrix_op(lua, me, "translate", |m| m.translate(v))
         });
         m.add_method("advance", |lua, me, d: Value| {
-            let d = number(lua, &d, "advance")?;
+            let d = finite_f32(lua, &d, "advance")?;
             matrix_op(lua, me, "advance", |m| m.advance(d))
         });
         m.add_method("getMatrix", |_, me, ()| {
@@ -178,7 +166,7 @@ impl UserData for LuaMatrixManipulator {
         });
         m.add_method("setMatrix", |lua, me, mat: Value| {
             let mat = LuaMat4::from_lua(mat, lua)
-                .map_err(|e| script_error(lua, format!("setMatrix: {}", short(&e))))?;
+                .map_err(|e| script_error(lua, format!("setMatrix: {}", conversion_message(&e))))?;
             matrix_op(lua, me, "setMatrix", |m| m.set_matrix(mat.0))
         });
         m.add_method("transformPoint", |lua, me, args: MultiValue| {
@@ -218,14 +206,14 @@ impl UserData for LuaExtruder {
             let args: Vec<Value> = args.into_iter().collect();
             let p = match args.as_slice() {
                 [x @ (Value::Integer(_) | Value::Number(_)), z, ..] => Vec2::new(
-                    number(lua, x, "addPoint2(x, z)")?,
-                    number(lua, z, "addPoint2(x, z)")?,
+                    finite_f32(lua, x, "addPoint2(x, z)")?,
+                    finite_f32(lua, z, "addPoint2(x, z)")?,
                 ),
                 [Value::Table(t)] => {
                     let (x, z): (Value, Value) = (t.raw_get(1)?, t.raw_get(2)?);
                     Vec2::new(
-                        number(lua, &x, "addPoint2{x, z}")?,
-                        number(lua, &z, "addPoint2{x, z}")?,
+                        finite_f32(lua, &x, "addPoint2{x, z}")?,
+                        finite_f32(lua, &z, "addPoint2{x, z}")?,
                     )
                 }
                 _ => return Err(script_error(lua, "addPoint2: expected x, z (two numbers)")),
@@ -238,21 +226,21 @@ impl UserData for LuaExtruder {
             extruder_op(lua, me, "addPoint3", |e| e.add_point3(p))
         });
         m.add_method("polygon", |lua, me, (n, r): (Value, Value)| {
-            let sides = number(lua, &n, "polygon(sides, radius)")?;
+            let sides = finite_f32(lua, &n, "polygon(sides, radius)")?;
             if sides.fract() != 0.0 || sides < 0.0 {
                 return Err(script_error(
                     lua,
                     format!("polygon: sides must be a whole number, got {sides}"),
                 ));
             }
-            let radius = number(lua, &r, "polygon(sides, radius)")?;
+            let radius = finite_f32(lua, &r, "polygon(sides, radius)")?;
             extruder_op(lua, me, "polygon", |e| {
                 e.set_polygon(sides as usize, radius)
             })
         });
         m.add_method("pointCount", |_, me, ()| Ok(me.0.borrow().shape().len()));
         m.add_method("extrude", |lua, me, d: Value| {
-            let d = number(lua, &d, "extrude(distance)")?;
+            let d = finite_f32(lua, &d, "extrude(distance)")?;
             extruder_op(lua, me, "extrude", |e| e.extrude(d))
         });
         m.add_method("start", |lua, me, ()| {
@@ -304,62 +292,29 @@ fn model_of(e: &Extruder) -> Model {
     }
 }
 
-fn options(lua: &Lua, t: Option<Table>) -> mlua::Result<ExtruderOptions> {
-    let mut o = ExtruderOptions::default();
-    let Some(t) = t else { return Ok(o) };
-    for pair in t.pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let known = matches!(&k, Value::String(s) if matches!(s.to_str().as_deref(), Ok("smooth" | "caps" | "material" | "color")));
-        if !known {
-            let name = match &k {
-                Value::String(s) => s.to_string_lossy(),
-                other => format!("{other:?}"),
-            };
-            return Err(script_error(
-                lua,
-                format!(
-                    "pge.Extruder: unknown option '{name}' (options: smooth, caps, color, material)"
-                ),
-            ));
-        }
+/// `pge.Extruder{ smooth =, caps =, material =, color = }`.
+fn options(o: &Options) -> mlua::Result<ExtruderOptions> {
+    let mut options = ExtruderOptions::default();
+    if let Some(smooth) = o.boolean("smooth")? {
+        options.smooth = smooth;
     }
-    let flag = |key: &str, default: bool| -> mlua::Result<bool> {
-        match t.raw_get::<Value>(key)? {
-            Value::Nil => Ok(default),
-            Value::Boolean(b) => Ok(b),
-            other => Err(script_error(
-                lua,
-                format!(
-                    "pge.Extruder: {key} must be true or false, got {}",
-                    other.type_name()
-                ),
-            )),
-        }
-    };
-    o.smooth = flag("smooth", o.smooth)?;
-    o.caps = flag("caps", o.caps)?;
-    let mut material = match t.raw_get::<Value>("material")? {
+    if let Some(caps) = o.boolean("caps")? {
+        options.caps = caps;
+    }
+    let mut material = match o.value("material")? {
         Value::Nil => Material {
             name: "extrusion".into(),
             ..Material::default()
         },
-        Value::Table(mt) => material_from_table(lua, &mt)?,
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "pge.Extruder: material must be a table, got {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        Value::Table(mt) => material_from_table(o.lua(), &mt)?,
+        other => return Err(o.wrong_type("material", "a table", &other)),
     };
-    match t.raw_get::<Value>("color")? {
-        Value::Nil => {}
-        c => material.base_color = colour(lua, &c, "pge.Extruder: color")?.to_array(),
+    if let Some(c) = o.color("color")? {
+        material.base_color = c;
     }
-    o.material = Arc::new(material);
-    Ok(o)
+    o.finish()?;
+    options.material = Arc::new(material);
+    Ok(options)
 }
 
 /// The session's memory limit: what one object's Rust-side buffers may take at most.
@@ -372,20 +327,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
         "Extruder",
         lua.create_function(|lua, t: Value| {
-            let t = match t {
-                Value::Nil => None,
-                Value::Table(t) => Some(t),
-                other => {
-                    return Err(script_error(
-                        lua,
-                        format!(
-                            "pge.Extruder: expected an options table or nothing, got {}",
-                            other.type_name()
-                        ),
-                    ));
-                }
-            };
-            let mut options = options(lua, t)?;
+            let mut options = options(&Options::new(lua, t, "pge.Extruder")?)?;
             options.max_points = memory_budget(lua) / Extruder::MESH_BYTES_PER_POINT;
             Ok(LuaExtruder(Rc::new(RefCell::new(Extruder::new(options)))))
         })?,
@@ -455,40 +397,25 @@ mod tests {
 
     #[test]
     fn rewriting_rules_may_not_change_the_extruder() {
-        let engine = Engine::builder()
-            .plugin(crate::ExtruderPlugin)
-            .plugin(pge_lsystem::LSystemPlugin)
-            .build()
-            .expect("engine");
-        let s = engine.session(Default::default()).expect("session");
-        let value = s
-            .eval_value(
-                "local obj = pge.LSystem('x')
-                 obj:axiom{ A{} }
-                 obj:iterations(1)
-                 obj:createInstance(function()
-                   local e = pge.Extruder()
-                   e:polygon(4, 1)
-                   return { e = e, model = function(self) return self.e:model() end }
-                 end)
-                 obj:RRule('A', function()
-                   local m = pge.MatrixManipulator()   -- a free matrix is fine
-                   m:advance(1)
-                   this.e:extrude(1)
-                   return { A{} }
-                 end)
-                 return obj",
-            )
+        // The L-system enters the engine's read-only phase around its rewriting rules (the
+        // workspace's `tests/plugins.rs` runs one); a free matrix stays writable.
+        let (_e, s) = session();
+        s.eval::<()>("e = pge.Extruder()\ne:polygon(4, 1)")
             .expect("runs");
-        let mut algorithm = s.algorithm_from(value).expect("an algorithm");
-        let err = pge_engine::algorithm::run(&mut *algorithm, &s.context(), &mut |_| {})
+        let phase = pge_engine::lua::read_only_phase(s.lua());
+        phase.enter("A".into());
+        s.eval::<()>("local m = pge.MatrixManipulator()\nm:advance(1)")
+            .expect("a free matrix is fine");
+        let err = s
+            .eval::<()>("\ne:extrude(1)")
             .expect_err("extrude in an RRule")
             .to_string();
+        phase.leave();
         assert!(
-            err.contains("RRule 'A': extruder:extrude is not allowed"),
+            err.starts_with("eval:2: RRule 'A': extruder:extrude is not allowed"),
             "{err}"
         );
-        assert!(err.starts_with("eval:12:"), "{err}");
+        s.eval::<()>("e:extrude(1)").expect("writable again");
     }
 
     #[test]

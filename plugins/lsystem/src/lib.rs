@@ -34,10 +34,7 @@ mod symbol;
 mod system;
 
 pub use error::LsError;
-pub use lua::{
-    DefaultInterpreter, Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, check_mutable,
-    derive_value, register_interpreter,
-};
+pub use lua::{Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, derive_value};
 pub use module_string::ModuleString;
 pub use symbol::{Sym, SymbolTable};
 pub use system::{Host, NativeHost, StepOptions, System, uniform};

@@ -31,6 +31,7 @@ impl pge_engine::Plugin for MetaballsPlugin {
     }
 
     fn register(&self, lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
+        pge_engine::lua::register_model_maker(lua, lua::model_of);
         lua::register(lua, pge)
     }
 }

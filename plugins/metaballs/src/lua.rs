@@ -4,53 +4,15 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use glam::Vec3;
-use mlua::{AnyUserData, FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
+use mlua::{AnyUserData, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
+use pge_engine::RunContext;
 use pge_engine::geometry::{Material, Mesh, Model};
-use pge_engine::lua::{LuaMesh, LuaModel, LuaVec3, material_from_table, run_context, script_error};
+use pge_engine::lua::{
+    Bounds, LuaMesh, LuaModel, LuaVec3, Options, finite_f32, material_from_table, run_context,
+    script_error, vec3_arg,
+};
 
 use crate::{MarchError, MarchOptions, MarchingCubes, Metaballs};
-
-/// A finite number argument, or a `FILE:LINE:` error naming the method and the argument.
-fn number(lua: &Lua, v: &Value, what: &str) -> mlua::Result<f32> {
-    pge_engine::lua::finite_number(lua, v, what).map(|x| x as f32)
-}
-
-fn short(e: &mlua::Error) -> String {
-    match e {
-        mlua::Error::FromLuaConversionError {
-            message: Some(m), ..
-        } => m.clone(),
-        other => other.to_string(),
-    }
-}
-
-fn vec3(lua: &Lua, v: Value, what: &str) -> mlua::Result<Vec3> {
-    LuaVec3::from_lua(v, lua)
-        .map(|v| v.0)
-        .map_err(|e| script_error(lua, format!("{what}: {}", short(&e))))
-}
-
-fn check_keys(lua: &Lua, t: &Table, ctor: &str, known: &[&str]) -> mlua::Result<()> {
-    for pair in t.pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let ok = matches!(&k, Value::String(s) if s.to_str().is_ok_and(|s| known.contains(&&*s)));
-        if !ok {
-            let name = match &k {
-                Value::String(s) => s.to_string_lossy(),
-                other => format!("{other:?}"),
-            };
-            return Err(script_error(
-                lua,
-                format!(
-                    "{ctor}: unknown option '{name}' (options: {})",
-                    known.join(", ")
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
 
 /// `pge.Metaballs{ radius = 1 }`: a field of charged particles.
 #[derive(Clone)]
@@ -61,15 +23,15 @@ impl UserData for LuaMetaballs {
         m.add_method(
             "addParticle",
             |lua, me, (pos, charge, radius): (Value, Value, Value)| {
-                pge_lsystem::check_mutable(lua, "metaballs:addParticle")?;
-                let p = vec3(lua, pos, "addParticle(position, charge [, radius])")?;
+                pge_engine::lua::check_mutable(lua, "metaballs:addParticle")?;
+                let p = vec3_arg(lua, pos, "addParticle(position, charge [, radius])")?;
                 let q = match charge {
                     Value::Nil => 1.0,
-                    c => number(lua, &c, "addParticle: charge")?,
+                    c => finite_f32(lua, &c, "addParticle: charge")?,
                 };
                 let r = match radius {
                     Value::Nil => None,
-                    r => Some(number(lua, &r, "addParticle: radius")?),
+                    r => Some(finite_f32(lua, &r, "addParticle: radius")?),
                 };
                 let index =
                     me.0.borrow_mut()
@@ -79,16 +41,16 @@ impl UserData for LuaMetaballs {
             },
         );
         m.add_method("calc", |lua, me, p: Value| {
-            let p = vec3(lua, p, "calc(position)")?;
+            let p = vec3_arg(lua, p, "calc(position)")?;
             Ok(me.0.borrow().value(p))
         });
         m.add_method("gradient", |lua, me, p: Value| {
-            let p = vec3(lua, p, "gradient(position)")?;
+            let p = vec3_arg(lua, p, "gradient(position)")?;
             Ok(LuaVec3(me.0.borrow().gradient(p)))
         });
         m.add_method("getParticle", |lua, me, i: Value| {
             let n = me.0.borrow().len();
-            let i = number(lua, &i, "getParticle(i)")?;
+            let i = finite_f32(lua, &i, "getParticle(i)")?;
             if i.fract() != 0.0 || i < 1.0 || i as usize > n {
                 return Err(script_error(
                     lua,
@@ -104,7 +66,7 @@ impl UserData for LuaMetaballs {
         });
         m.add_method("count", |_, me, ()| Ok(me.0.borrow().len()));
         m.add_method("update", |lua, me, ()| {
-            pge_lsystem::check_mutable(lua, "metaballs:update")?;
+            pge_engine::lua::check_mutable(lua, "metaballs:update")?;
             me.0.borrow_mut().update();
             Ok(())
         });
@@ -124,30 +86,59 @@ pub struct LuaMarchingCubes {
 }
 
 impl LuaMarchingCubes {
-    fn mesh(&self, lua: &Lua) -> mlua::Result<Arc<Mesh>> {
+    /// The surface of the field now, polygonized within `ctx`'s deadline (a limit comes back
+    /// as the engine's typed error).
+    fn mesh(&self, lua: &Lua, ctx: &RunContext) -> mlua::Result<Arc<Mesh>> {
         let version = self.field.borrow().version();
         if let Some((v, mesh)) = &*self.cache.borrow()
             && *v == version
         {
             return Ok(mesh.clone());
         }
-        let ctx = run_context(lua);
         let here = pge_engine::lua::caller_location(lua);
-        let mut interrupt = || ctx.check_deadline(&here).is_err();
+        let mut limit = None;
+        let mut interrupt = || match ctx.check_deadline(&here) {
+            Ok(()) => false,
+            Err(e) => {
+                limit = Some(e);
+                true
+            }
+        };
         let mut mc = self.mc.clone();
         mc.set_max_bytes(memory_budget(lua));
         let (mesh, _) = mc
             .polygonize(&self.field.borrow(), &mut interrupt)
-            .map_err(|e| match e {
-                MarchError::Interrupted => script_error(
-                    lua,
-                    "marching cubes: time limit exceeded (see --time-limit)",
-                ),
-                e => script_error(lua, format!("marching cubes: {e}")),
+            .map_err(|e| match (e, limit.take()) {
+                (MarchError::Interrupted, Some(limit)) => mlua::Error::external(limit),
+                (e, _) => script_error(lua, format!("marching cubes: {e}")),
             })?;
         let mesh = Arc::new(mesh);
         *self.cache.borrow_mut() = Some((version, mesh.clone()));
         Ok(mesh)
+    }
+}
+
+impl LuaMarchingCubes {
+    fn model(&self, lua: &Lua, ctx: &RunContext) -> mlua::Result<Model> {
+        let mesh = self.mesh(lua, ctx)?;
+        Ok(if mesh.positions.is_empty() {
+            Model::new()
+        } else {
+            Model::from_mesh(mesh)
+        })
+    }
+}
+
+/// The model of a marching-cubes object grown by an algorithm, within the algorithm's run
+/// context (the engine's model maker for `pge.MarchingCubes`).
+pub(crate) fn model_of(
+    lua: &Lua,
+    ud: &AnyUserData,
+    ctx: &RunContext,
+) -> mlua::Result<Option<Model>> {
+    match ud.borrow::<LuaMarchingCubes>() {
+        Ok(mc) => mc.model(lua, ctx).map(Some),
+        Err(_) => Ok(None),
     }
 }
 
@@ -158,113 +149,69 @@ fn memory_budget(lua: &Lua) -> usize {
 
 impl UserData for LuaMarchingCubes {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
-        m.add_method("mesh", |lua, me, ()| Ok(LuaMesh(me.mesh(lua)?)));
+        m.add_method("mesh", |lua, me, ()| {
+            Ok(LuaMesh(me.mesh(lua, &run_context(lua))?))
+        });
         m.add_method("model", |lua, me, ()| {
-            let mesh = me.mesh(lua)?;
-            Ok(LuaModel(if mesh.positions.is_empty() {
-                Model::new()
-            } else {
-                Model::from_mesh(mesh)
-            }))
+            Ok(LuaModel(me.model(lua, &run_context(lua))?))
         });
     }
 }
 
-fn march_options(lua: &Lua, t: Option<Table>) -> mlua::Result<MarchOptions> {
-    let mut o = MarchOptions::default();
-    let Some(t) = t else { return Ok(o) };
-    check_keys(
-        lua,
-        &t,
-        "pge.MarchingCubes",
-        &[
-            "resolution",
-            "iso",
-            "bounds",
-            "material",
-            "color",
-            "maxCells",
-        ],
-    )?;
-    match t.raw_get::<Value>("resolution")? {
+/// `pge.MarchingCubes(meta, { resolution =, iso =, bounds =, material =, color =, maxCells = })`.
+fn march_options(o: &Options) -> mlua::Result<MarchOptions> {
+    let mut options = MarchOptions::default();
+    match o.value("resolution")? {
         Value::Nil => {}
         v => {
-            let r = number(lua, &v, "pge.MarchingCubes: resolution")?;
-            if r.fract() != 0.0 || r < 1.0 || r > crate::MAX_RESOLUTION as f32 {
-                return Err(script_error(
-                    lua,
-                    format!(
-                        "pge.MarchingCubes: resolution must be a whole number of cells between 1 and {}, got {r}",
-                        crate::MAX_RESOLUTION
-                    ),
-                ));
+            let need = format!(
+                "a whole number of cells between 1 and {}",
+                crate::MAX_RESOLUTION
+            );
+            let r = match v {
+                Value::Integer(i) => i as f64,
+                Value::Number(n) => n,
+                other => return Err(o.wrong_type("resolution", need, &other)),
+            };
+            if !(r.fract() == 0.0 && r >= 1.0 && r <= f64::from(crate::MAX_RESOLUTION)) {
+                return Err(o.invalid("resolution", need, r));
             }
-            o.resolution = r as u32;
+            options.resolution = r as u32;
         }
     }
-    match t.raw_get::<Value>("iso")? {
+    if let Some(iso) = o.number_f32("iso", Bounds::Finite)? {
+        options.iso = iso;
+    }
+    if let Some(cells) = o.number("maxCells", Bounds::AtLeast(1.0))? {
+        options.max_cells = cells as u64;
+    }
+    match o.value("bounds")? {
         Value::Nil => {}
-        v => o.iso = number(lua, &v, "pge.MarchingCubes: iso")?,
-    }
-    match t.raw_get::<Value>("maxCells")? {
-        Value::Nil => {}
-        v => {
-            let c = number(lua, &v, "pge.MarchingCubes: maxCells")?;
-            if c < 1.0 {
-                return Err(script_error(
-                    lua,
-                    "pge.MarchingCubes: maxCells must be at least 1",
-                ));
-            }
-            o.max_cells = c as u64;
+        Value::Table(t) => {
+            let b = o.child("bounds", t).positional(&["min", "max"]);
+            let corner = |key: &str| {
+                b.vec3(key)?
+                    .ok_or_else(|| b.missing(key, "a vector {x, y, z}"))
+            };
+            options.bounds = Some((corner("min")?, corner("max")?));
+            b.finish()?;
         }
+        other => return Err(o.wrong_type("bounds", "{min, max}", &other)),
     }
-    match t.raw_get::<Value>("bounds")? {
-        Value::Nil => {}
-        Value::Table(b) => {
-            let (lo, hi): (Value, Value) =
-                match (b.raw_get::<Value>("min")?, b.raw_get::<Value>("max")?) {
-                    (Value::Nil, Value::Nil) => (b.raw_get(1)?, b.raw_get(2)?),
-                    pair => pair,
-                };
-            o.bounds = Some((
-                vec3(lua, lo, "pge.MarchingCubes: bounds = {min, max}")?,
-                vec3(lua, hi, "pge.MarchingCubes: bounds = {min, max}")?,
-            ));
-        }
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "pge.MarchingCubes: bounds must be {{min, max}}, got {}",
-                    other.type_name()
-                ),
-            ));
-        }
-    }
-    let mut material = match t.raw_get::<Value>("material")? {
+    let mut material = match o.value("material")? {
         Value::Nil => Material {
             name: "metaballs".into(),
             ..Material::default()
         },
-        Value::Table(mt) => material_from_table(lua, &mt)?,
-        other => {
-            return Err(script_error(
-                lua,
-                format!(
-                    "pge.MarchingCubes: material must be a table, got {}",
-                    other.type_name()
-                ),
-            ));
-        }
+        Value::Table(mt) => material_from_table(o.lua(), &mt)?,
+        other => return Err(o.wrong_type("material", "a table", &other)),
     };
-    if let Some(c) = t.raw_get::<Option<String>>("color")? {
-        material.base_color = Material::from_hex("", &c)
-            .map_err(|e| script_error(lua, format!("pge.MarchingCubes: color: {e}")))?
-            .base_color;
+    if let Some(c) = o.color("color")? {
+        material.base_color = c;
     }
-    o.material = Arc::new(material);
-    Ok(o)
+    o.finish()?;
+    options.material = Arc::new(material);
+    Ok(options)
 }
 
 /// Adds `pge.Metaballs` and `pge.MarchingCubes`.
@@ -272,31 +219,9 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     pge.set(
         "Metaballs",
         lua.create_function(|lua, t: Value| {
-            let radius = match t {
-                Value::Nil => 1.0,
-                Value::Table(t) => {
-                    check_keys(lua, &t, "pge.Metaballs", &["radius"])?;
-                    match t.raw_get::<Value>("radius")? {
-                        Value::Nil => 1.0,
-                        v => number(lua, &v, "pge.Metaballs: radius")?,
-                    }
-                }
-                other => {
-                    return Err(script_error(
-                        lua,
-                        format!(
-                            "pge.Metaballs: expected an options table or nothing, got {}",
-                            other.type_name()
-                        ),
-                    ));
-                }
-            };
-            if radius <= 0.0 {
-                return Err(script_error(
-                    lua,
-                    format!("pge.Metaballs: radius must be positive, got {radius}"),
-                ));
-            }
+            let o = Options::new(lua, t, "pge.Metaballs")?;
+            let radius = o.positive("radius")?.unwrap_or(1.0);
+            o.finish()?;
             Ok(LuaMetaballs(Rc::new(RefCell::new(Metaballs::new(radius)))))
         })?,
     )?;
@@ -316,17 +241,11 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                     ));
                 }
             };
-            let t = match args.next() {
-                None | Some(Value::Nil) => None,
-                Some(Value::Table(t)) => Some(t),
-                Some(other) => {
-                    return Err(script_error(
-                        lua,
-                        format!("pge.MarchingCubes: options must be a table, got {}", other.type_name()),
-                    ));
-                }
-            };
-            let options = march_options(lua, t)?;
+            let options = march_options(&Options::new(
+                lua,
+                args.next().unwrap_or(Value::Nil),
+                "pge.MarchingCubes",
+            )?)?;
             let mc = MarchingCubes::new(options).map_err(|e| script_error(lua, format!("pge.MarchingCubes: {e}")))?;
             Ok(LuaMarchingCubes { field, mc, cache: RefCell::new(None) })
         })?,

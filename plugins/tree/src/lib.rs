@@ -9,7 +9,7 @@
 //! On the way the skeleton gets pipe-model radii (`r^n = r1^n + r2^n` from a tip radius, or
 //! the generator's own radii), optional smoothing and merging of straight chains. Textures
 //! are procedural (noise, a leaf silhouette) unless a PNG is given. All of it is plain Rust;
-//! the options can be read from a Lua table with [`TreeOptions::from_lua`].
+//! the options are read from a script's table by the Lua adapter ([`lua::tree_options`]).
 //!
 //! ```
 //! use glam::Vec3;
@@ -49,7 +49,9 @@ use rand_mt::Mt64;
 pub use cylinders::{append_bark, bark_mesh};
 pub use leaves::{append_leaf_quads, tip_leaves};
 pub use merge::merge_straight;
-pub use options::{LeafOptions, MeshOptions, OptionError, RadiiMode, TextureSource, TreeOptions};
+pub use options::{LeafOptions, MeshOptions, RadiiMode, TextureSource, TreeOptions};
+/// Foliage levels of detail options (`lod = {...}`), from `pge_lod`.
+pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{bark_texture, leaf_texture, load_png};

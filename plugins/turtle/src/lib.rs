@@ -37,25 +37,17 @@ impl Plugin for TurtlePlugin {
     }
 
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
-        pge_lsystem::register_interpreter(lua, lua::interpret);
+        // Engine services: turtles interpret L-system modules, are the default instance of
+        // an L-system, and are modelled with the run context of the algorithm that grew them.
+        pge_engine::lua::register_interpreter(lua, lua::interpret);
+        pge_engine::lua::set_default_instance(lua, |lua| {
+            lua.create_userdata(LuaTurtle::new(lua, Value::Nil)?)
+                .map(Value::UserData)
+        });
+        pge_engine::lua::register_model_maker(lua, lua::model_of);
         pge.set(
             "turtle",
-            lua.create_function(|lua, options: Value| {
-                let table = match options {
-                    Value::Nil => None,
-                    Value::Table(t) => Some(t),
-                    other => {
-                        return Err(pge_engine::lua::script_error(
-                            lua,
-                            format!(
-                                "pge.turtle: expected a table of options, got {}",
-                                other.type_name()
-                            ),
-                        ));
-                    }
-                };
-                LuaTurtle::from_lua(lua, table)
-            })?,
+            lua.create_function(|lua, options: Value| LuaTurtle::new(lua, options))?,
         )
     }
 }

@@ -1,10 +1,12 @@
 //! `pge.turtle{...}`: the turtle as a Lua object and as the L-systems' default interpretation.
 
 use glam::Mat4;
-use mlua::{AnyUserData, Lua, Table, UserData, UserDataMethods, Value};
+use mlua::{AnyUserData, Lua, UserData, UserDataMethods, Value};
+use pge_engine::RunContext;
 use pge_engine::geometry::{Material, Model};
-use pge_engine::lua::{LuaModel, LuaVec3, run_context, script_error};
-use pge_lsystem::check_mutable;
+use pge_engine::lua::{
+    Bounds, KeyStyle, LuaModel, LuaVec3, Options, check_mutable, run_context, script_error,
+};
 use pge_tree::{LeafOptions, MeshOptions, RadiiMode, TreeOptions, build_tree};
 
 use crate::turtle::{Turtle, TurtleError, TurtleOptions};
@@ -15,169 +17,95 @@ pub struct LuaTurtle {
     pub turtle: Turtle,
     mesh: MeshOptions,
     leaves: Option<LeafOptions>,
+    lod: Option<pge_tree::LodOptions>,
     palette: Vec<[f32; 4]>,
 }
 
-const KEYS: &[&str] = &[
-    "angle",
-    "step",
-    "width",
-    "widthFactor",
-    "tropism",
-    "elasticity",
-    "sides",
-    "leaves",
-    "leafSize",
-    "mesh",
-    "colors",
-];
-
-fn number(lua: &Lua, t: &Table, key: &str, min: f64) -> mlua::Result<Option<f32>> {
-    match t.get::<Value>(key)? {
-        Value::Nil => Ok(None),
-        Value::Integer(i) if i as f64 >= min => Ok(Some(i as f32)),
-        Value::Number(n) if n.is_finite() && n >= min => Ok(Some(n as f32)),
-        other => Err(script_error(
-            lua,
-            format!(
-                "pge.turtle: '{key}' must be a finite number{}, got {}",
-                if min > f64::MIN {
-                    format!(" of at least {min}")
-                } else {
-                    String::new()
-                },
-                match other {
-                    Value::Integer(i) => i.to_string(),
-                    Value::Number(n) => n.to_string(),
-                    o => o.type_name().to_string(),
-                }
-            ),
-        )),
-    }
-}
-
-fn options_error(lua: &Lua, e: impl std::fmt::Display) -> mlua::Error {
-    script_error(lua, format!("pge.turtle: {e}"))
-}
-
 impl LuaTurtle {
+    /// `pge.turtle{...}`: reads the options (nil for the defaults).
+    pub fn new(lua: &Lua, options: Value) -> mlua::Result<LuaTurtle> {
+        let o = Options::new(lua, options, "pge.turtle")?.style(KeyStyle::Quoted);
+        LuaTurtle::from_options(&o)
+    }
+
     /// Reads `pge.turtle{...}` options.
-    pub fn from_lua(lua: &Lua, t: Option<Table>) -> mlua::Result<LuaTurtle> {
-        let mut o = TurtleOptions::default();
+    pub fn from_options(o: &Options) -> mlua::Result<LuaTurtle> {
+        let mut t = TurtleOptions::default();
         let mut mesh = MeshOptions {
             radii: RadiiMode::Keep,
             ..MeshOptions::default()
         };
-        let mut leaves = None;
-        let mut palette = Vec::new();
-        if let Some(t) = t {
-            for pair in t.pairs::<Value, Value>() {
-                let (k, _) = pair?;
-                let key = k.to_string().unwrap_or_default();
-                if !KEYS.contains(&key.as_str()) {
-                    return Err(options_error(
-                        lua,
-                        format!("unknown option '{key}' (known: {})", KEYS.join(", ")),
-                    ));
-                }
-            }
-            if let Some(v) = number(lua, &t, "angle", f64::MIN)? {
-                o.angle = v;
-            }
-            if let Some(v) = number(lua, &t, "step", 0.0)? {
-                o.step = v;
-            }
-            if let Some(v) = number(lua, &t, "width", 0.0)? {
-                o.width = v;
-            }
-            if let Some(v) = number(lua, &t, "widthFactor", 0.0)? {
-                o.width_factor = v;
-            }
-            if let Some(v) = number(lua, &t, "elasticity", f64::MIN)? {
-                o.elasticity = v;
-            }
-            if let Some(v) = number(lua, &t, "leafSize", 0.0)? {
-                o.leaf_size = v;
-            }
-            match t.get::<Value>("tropism")? {
-                Value::Nil => {}
-                v => {
-                    let LuaVec3(v) = mlua::FromLua::from_lua(v, lua)
-                        .map_err(|e| options_error(lua, format!("'tropism': {e}")))?;
-                    o.tropism = Some(v);
-                }
-            }
-            if let Value::Table(m) = t.get::<Value>("mesh")? {
-                let has_radii = !m.get::<Value>("radii")?.is_nil();
-                mesh = MeshOptions::from_lua(&m).map_err(|e| options_error(lua, e))?;
-                pge_tree::lua::load_texture(
-                    lua,
-                    "pge.turtle",
-                    "mesh.texture",
-                    "bark",
-                    &mut mesh.texture,
-                )?;
-                if !has_radii {
-                    mesh.radii = RadiiMode::Keep;
-                }
-            }
-            if let Some(s) = number(lua, &t, "sides", 3.0)? {
-                if s > 64.0 {
-                    return Err(options_error(
-                        lua,
-                        format!("'sides' must be 3..64, got {s}"),
-                    ));
-                }
-                mesh.sides = s as u32;
-            }
-            match t.get::<Value>("leaves")? {
-                Value::Nil => {}
-                Value::Table(l) => {
-                    let mut l = LeafOptions::from_lua(&l).map_err(|e| options_error(lua, e))?;
-                    pge_tree::lua::load_texture(
-                        lua,
-                        "pge.turtle",
-                        "leaves.texture",
-                        "leaf",
-                        &mut l.texture,
-                    )?;
-                    leaves = Some(l);
-                }
-                other => {
-                    return Err(options_error(
-                        lua,
-                        format!(
-                            "'leaves' must be a table of leaf options, got {}",
-                            other.type_name()
-                        ),
-                    ));
-                }
-            }
-            match t.get::<Value>("colors")? {
-                Value::Nil => {}
-                Value::Table(c) => {
-                    for v in c.sequence_values::<String>() {
-                        let hex = v.map_err(|e| options_error(lua, format!("'colors': {e}")))?;
-                        let m = Material::from_hex("", &hex)
-                            .map_err(|e| options_error(lua, format!("'colors': {e}")))?;
-                        palette.push(m.base_color);
-                    }
-                }
-                other => {
-                    return Err(options_error(
-                        lua,
-                        format!(
-                            "'colors' must be an array of \"#rrggbb\", got {}",
-                            other.type_name()
-                        ),
-                    ));
-                }
+        let any = Bounds::Finite;
+        let at_least_0 = Bounds::AtLeast(0.0);
+        if let Some(v) = o.number_f32("angle", any)? {
+            t.angle = v;
+        }
+        if let Some(v) = o.number_f32("step", at_least_0)? {
+            t.step = v;
+        }
+        if let Some(v) = o.number_f32("width", at_least_0)? {
+            t.width = v;
+        }
+        if let Some(v) = o.number_f32("widthFactor", at_least_0)? {
+            t.width_factor = v;
+        }
+        if let Some(v) = o.vec3("tropism")? {
+            t.tropism = Some(v);
+        }
+        if let Some(v) = o.number_f32("elasticity", any)? {
+            t.elasticity = v;
+        }
+        if let Some(m) = o.table_options("mesh")? {
+            let has_radii = !m.value("radii")?.is_nil();
+            pge_tree::lua::read_mesh(&m, &mut mesh)?;
+            pge_tree::lua::load_texture(o, "mesh.texture", "bark", &mut mesh.texture)?;
+            if !has_radii {
+                mesh.radii = RadiiMode::Keep;
             }
         }
+        if let Some(sides) = o.integer("sides", 3..=64)? {
+            mesh.sides = sides as u32;
+        }
+        let leaves = match o.table_options("leaves")? {
+            Some(l) => {
+                let mut l = pge_tree::lua::leaf_options(&l)?;
+                pge_tree::lua::load_texture(o, "leaves.texture", "leaf", &mut l.texture)?;
+                Some(l)
+            }
+            None => None,
+        };
+        let lod = pge_tree::lua::lod_options(o)?;
+        if let Some(v) = o.number_f32("leafSize", at_least_0)? {
+            t.leaf_size = v;
+        }
+        let mut palette = Vec::new();
+        match o.value("colors")? {
+            Value::Nil => {}
+            Value::Table(c) => {
+                for (k, v) in c.sequence_values::<Value>().enumerate() {
+                    let key = format!("colors[{}]", k + 1);
+                    let color = match v? {
+                        Value::String(s) => {
+                            let hex = s.to_string_lossy();
+                            Material::from_hex("", &hex)
+                                .map_err(|_| {
+                                    o.invalid(&key, "a colour \"#rrggbb\"", format!("\"{hex}\""))
+                                })?
+                                .base_color
+                        }
+                        other => return Err(o.wrong_type(&key, "a colour \"#rrggbb\"", &other)),
+                    };
+                    palette.push(color);
+                }
+            }
+            other => return Err(o.wrong_type("colors", "an array of \"#rrggbb\"", &other)),
+        }
+        o.finish()?;
         Ok(LuaTurtle {
-            turtle: Turtle::new(o),
+            turtle: Turtle::new(t),
             mesh,
             leaves,
+            lod,
             palette,
         })
     }
@@ -193,7 +121,7 @@ impl LuaTurtle {
             let options = TreeOptions {
                 mesh,
                 leaves: self.leaves.clone(),
-                lod: None,
+                lod: self.lod.clone(),
             };
             let part = build_tree(skeleton, &options, seed.wrapping_add(u64::from(*color)))?;
             model.add_model(&part, Mat4::IDENTITY);
@@ -274,6 +202,21 @@ impl UserData for LuaTurtle {
     }
 }
 
+/// The model of a turtle grown by an algorithm, with the algorithm's run context (the
+/// engine's model maker for turtles).
+pub(crate) fn model_of(
+    lua: &Lua,
+    ud: &AnyUserData,
+    ctx: &RunContext,
+) -> mlua::Result<Option<Model>> {
+    let Ok(t) = ud.borrow::<LuaTurtle>() else {
+        return Ok(None);
+    };
+    t.model(ctx.seed)
+        .map(Some)
+        .map_err(|e| script_error(lua, format!("turtle:model: {e}")))
+}
+
 /// The default interpretation of L-system modules by a turtle instance.
 pub(crate) fn interpret(
     lua: &Lua,
@@ -291,61 +234,21 @@ pub(crate) fn interpret(
 
 #[cfg(test)]
 mod tests {
+    use pge_engine::lua::{interpreters, read_only_phase};
     use pge_engine::{Engine, Session, SessionOptions};
 
+    // Turtles inside L-systems are tested with both plugins in the workspace's
+    // `tests/plugins.rs`; here the turtle alone and the engine services it fills.
     fn session() -> Session {
         let engine = Engine::builder()
-            .plugin(pge_lsystem::LSystemPlugin)
             .plugin(crate::TurtlePlugin)
             .build()
             .expect("engine");
         engine.session(SessionOptions::default()).expect("session")
     }
 
-    fn model_of(s: &Session, code: &str) -> pge_engine::Result<pge_engine::geometry::Model> {
-        let v = s.eval_value(code)?;
-        let mut a = s.algorithm_from(v)?;
-        pge_engine::algorithm::run(&mut *a, &s.context(), &mut |_| {})
-    }
-
-    const PLANT: &str = r#"
-        local l = pge.LSystem("plant")
-        l:createInstance(function() return pge.turtle{ angle = 25.7, width = 0.2, sides = 5 } end)
-        l:axiom("F")
-        l:rule("F -> F[+F]F[-F]F")
-        l:iterations(2)
-        return l"#;
-
     #[test]
-    fn an_lsystem_draws_with_its_turtle_and_the_mesh_is_sound() {
-        let s = session();
-        let m = model_of(&s, PLANT).expect("grows");
-        m.validate().expect("valid");
-        assert_eq!(m.stats.modules, 61);
-        // 25 segments plus the root.
-        assert_eq!(m.stats.nodes, 26);
-        let mesh = &m.meshes[0];
-        let n = mesh.positions.len() as u32;
-        assert!(mesh.indices.iter().all(|i| *i < n));
-        assert!(mesh.normals.iter().all(|v| (v.length() - 1.0).abs() < 1e-3));
-        assert!(mesh.positions.iter().all(|p| p.is_finite()));
-        let (lo, hi) = m.bounds().expect("not empty");
-        assert!(hi.y - lo.y > 4.0, "the plant grows up: {lo} {hi}");
-    }
-
-    #[test]
-    fn the_same_seed_gives_the_same_bytes() {
-        let a = model_of(&session(), PLANT).expect("grows");
-        let b = model_of(&session(), PLANT).expect("grows");
-        let meta = Default::default();
-        assert_eq!(
-            pge_engine::export::glb_bytes(&a, &meta).expect("glb"),
-            pge_engine::export::glb_bytes(&b, &meta).expect("glb")
-        );
-    }
-
-    #[test]
-    fn turtle_methods_and_open_lsystems() {
+    fn turtle_methods() {
         let s = session();
         let y: f64 = s
             .eval(
@@ -354,49 +257,57 @@ mod tests {
             )
             .expect("runs");
         assert!((y - 2.0).abs() < 1e-6);
-        // An open L-system: the bud reads the turtle's height and stops above 3.
-        let m = model_of(
-            &s,
-            r#"local l = pge.LSystem("open")
-            l:axiom{ A{} }
-            l:RRule("A", function()
-                if this:position().y < 3 then return { F{}, A{} } end
-                return {}
-            end)
-            l:iterations(10)
-            return l"#,
-        )
-        .expect("grows");
-        assert_eq!(m.stats.modules, 3);
-        assert_eq!(m.stats.nodes, 4);
     }
 
     #[test]
-    fn a_turtle_is_read_only_during_rrules() {
-        let s = session();
-        let e = model_of(
-            &s,
-            "local l = pge.LSystem('t')\nl:axiom('A')\nl:RRule('A', function()\n  this:forward(1)\n  return 'B'\nend)\nl:iterations(1)\nreturn l",
-        )
-        .expect_err("read-only");
-        let e = e.to_string();
-        assert!(
-            e.starts_with("eval:4: RRule 'A': turtle:forward is not allowed"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn bad_options_and_commands_are_errors() {
+    fn bad_options_are_located_errors() {
         let s = session();
         let e = s
             .eval_value("return pge.turtle{ angel = 3 }")
             .expect_err("typo")
             .to_string();
         assert!(e.contains("unknown option 'angel'"), "{e}");
-        let e = model_of(&s, "local l = pge.LSystem('t')\nl:axiom('F]')\nreturn l")
-            .expect_err("pop")
+        let e = s
+            .eval_value("\nreturn pge.turtle{ angle = 0/0 }")
+            .expect_err("nan")
             .to_string();
-        assert!(e.contains("']' (pop) without a matching '['"), "{e}");
+        assert_eq!(
+            e,
+            "eval:2: pge.turtle: 'angle' must be a finite number, got NaN"
+        );
+        let e = s
+            .eval_value("return pge.turtle{ sides = 100 }")
+            .expect_err("range")
+            .to_string();
+        assert_eq!(
+            e,
+            "eval:1: pge.turtle: 'sides' must be an integer between 3 and 64, got 100"
+        );
+    }
+
+    #[test]
+    fn the_turtle_fills_the_engine_registry() {
+        let s = session();
+        let lua = s.lua();
+        let Some(mlua::Value::UserData(ud)) = pge_engine::lua::default_instance(lua).expect("made")
+        else {
+            panic!("a turtle");
+        };
+        for f in interpreters(lua) {
+            assert!(f(lua, &ud, "F", &[2.0]).expect("interprets"));
+        }
+        let t = ud.borrow::<crate::LuaTurtle>().expect("a turtle");
+        assert_eq!(t.turtle.state().position.y, 2.0);
+        drop(t);
+        // Changing a turtle during a rewriting rule is refused.
+        s.lua().globals().set("t", ud).expect("global");
+        read_only_phase(lua).enter("A".into());
+        let e = s.eval::<()>("t:forward(1)").expect_err("read-only");
+        read_only_phase(lua).leave();
+        assert!(
+            e.to_string()
+                .starts_with("eval:1: RRule 'A': turtle:forward is not allowed"),
+            "{e}"
+        );
     }
 }

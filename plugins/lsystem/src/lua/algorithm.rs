@@ -1,41 +1,25 @@
 //! The L-system as an [`Algorithm`]: one step is one derivation step, with the rule
-//! functions called through the [`Host`] trait and interpretation streamed after each module.
+//! functions called through the host ([`super::host`]) and interpretation
+//! ([`super::interpret`]) streamed after each module.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::rc::Rc;
 
-use mlua::{AnyUserData, Function, Lua, MultiValue, ObjectLike, Table, Value, WeakLua};
+use mlua::{Function, Lua, ObjectLike, Value, WeakLua};
 use pge_engine::geometry::Model;
-use pge_engine::lua::{script_error, swap_rng, to_engine_error, to_model};
-use pge_engine::{Algorithm, Error, Location, RunContext, Step};
+use pge_engine::lua::{
+    DefaultInterpreter, check_mutable, default_instance, interpreters, read_only_phase,
+    script_error, swap_rng, to_engine_error, to_model_in,
+};
+use pge_engine::{Algorithm, Error, RunContext, Step};
 use rand_mt::Mt;
 
-use super::object::{Axiom, Config, LuaIRule, LuaRule};
-use super::symbols::{SymbolTags, tags};
-use super::{DefaultInterpreter, deriving_cell, interpreters, session_symbols};
-use crate::system::uniform;
-use crate::{Host, LsError, ModuleString, StepOptions, Sym, SymbolTable, System};
-
-/// Why a step stopped: a Lua error, an engine error, or a rewriting error.
-#[derive(Debug)]
-pub(crate) enum HostError {
-    Lua(mlua::Error),
-    Engine(Error),
-    Ls(LsError),
-}
-
-impl From<LsError> for HostError {
-    fn from(e: LsError) -> Self {
-        HostError::Ls(e)
-    }
-}
-
-impl From<mlua::Error> for HostError {
-    fn from(e: mlua::Error) -> Self {
-        HostError::Lua(e)
-    }
-}
+use super::config::{Axiom, Config};
+use super::host::{HostError, LuaHost};
+use super::session_symbols;
+use super::symbols::tags;
+use crate::{Host, LsError, ModuleString, StepOptions, SymbolTable, System};
 
 /// A derivation in progress: the string, the instance (`this`), the generator.
 pub struct LSystemAlgorithm {
@@ -56,7 +40,6 @@ pub struct LSystemAlgorithm {
     skip_interpretation: bool,
     irules_by_sym: Vec<Vec<u32>>,
     parse_cache: HashMap<String, ModuleString>,
-    random_fn: Option<Function>,
     lua_involved: bool,
     max_modules: usize,
     interpreters: Vec<DefaultInterpreter>,
@@ -66,384 +49,6 @@ pub struct LSystemAlgorithm {
 /// `genrand` key of an instance: the run's seed and the object's index.
 fn instance_rng(seed: u64, index: u32) -> Mt {
     Mt::new_with_key([seed as u32, (seed >> 32) as u32, index, 0x4c53_5953])
-}
-
-/// A parameter as Lua sees it: integral values as integers (as the script wrote them).
-fn lua_number(v: f64) -> Value {
-    if v.fract() == 0.0 && v.abs() < 9_007_199_254_740_992.0 {
-        Value::Integer(v as i64)
-    } else {
-        Value::Number(v)
-    }
-}
-
-fn truthy(v: &Value) -> bool {
-    !matches!(v, Value::Nil | Value::Boolean(false))
-}
-
-/// Reads the numbers of a parameter table that is a plain array of numbers.
-fn numeric_params(t: &Table, out: &mut Vec<f64>) -> mlua::Result<bool> {
-    out.clear();
-    let n = t.raw_len();
-    if n == 0 {
-        return Ok(t.is_empty());
-    }
-    for i in 1..=n {
-        match t.raw_get::<Value>(i)? {
-            Value::Integer(x) => out.push(x as f64),
-            Value::Number(x) => out.push(x),
-            _ => return Ok(false),
-        }
-    }
-    let mut count = 0usize;
-    for pair in t.pairs::<Value, Value>() {
-        pair?;
-        count += 1;
-        if count > n {
-            return Ok(false);
-        }
-    }
-    Ok(true)
-}
-
-/// The positional numbers of a parameter table (for the default interpretation).
-fn positional_numbers(v: &Value, out: &mut Vec<f64>) -> mlua::Result<()> {
-    out.clear();
-    if let Value::Table(t) = v {
-        for i in 1..=t.raw_len() {
-            match t.raw_get::<Value>(i)? {
-                Value::Integer(x) => out.push(x as f64),
-                Value::Number(x) => out.push(x),
-                _ => break,
-            }
-        }
-    }
-    Ok(())
-}
-
-struct LuaHost<'a> {
-    lua: &'a Lua,
-    ctx: &'a RunContext,
-    cfg: &'a Config,
-    system: &'a System,
-    symbols: &'a RefCell<SymbolTable>,
-    side: &'a mut Vec<Value>,
-    parse_cache: &'a mut HashMap<String, ModuleString>,
-    rng: &'a mut Mt,
-    rng_in_lua: bool,
-    random_fn: Option<&'a Function>,
-    this_rw: &'a Value,
-    this_ro: &'a Value,
-    this_is_ro: Option<bool>,
-    irules_by_sym: &'a [Vec<u32>],
-    interpreters: &'a [DefaultInterpreter],
-    instance_ud: Option<AnyUserData>,
-    interpret: bool,
-    numbers: Vec<f64>,
-    tags: Rc<RefCell<SymbolTags>>,
-    deriving: Rc<RefCell<Option<Rc<str>>>>,
-    /// `function(f, ...) return f({...}) end` for 0 to 3 numeric parameters.
-    callers: &'a [Function],
-    /// Bracket pairs of the string interpreted so far (for IRules with a left context).
-    imatches: Vec<u32>,
-    istack: Vec<u32>,
-    track_brackets: bool,
-    imatched: Vec<usize>,
-    name: String,
-}
-
-impl LuaHost<'_> {
-    fn set_this(&mut self, read_only: bool) -> mlua::Result<()> {
-        if self.this_is_ro != Some(read_only) {
-            let v = if read_only {
-                self.this_ro
-            } else {
-                self.this_rw
-            };
-            self.lua.globals().raw_set("this", v.clone())?;
-            self.this_is_ro = Some(read_only);
-        }
-        Ok(())
-    }
-
-    fn param_value(&self, s: &ModuleString, i: usize) -> mlua::Result<Value> {
-        match s.external(i) {
-            Some(slot) => Ok(self.side[slot as usize].clone()),
-            None => {
-                let params = s.params(i);
-                let t = self.lua.create_table_with_capacity(params.len(), 0)?;
-                for (k, p) in params.iter().enumerate() {
-                    t.raw_set(k + 1, lua_number(*p))?;
-                }
-                Ok(Value::Table(t))
-            }
-        }
-    }
-
-    fn rule_error(&self, origin: u32, message: String) -> HostError {
-        let location = self
-            .cfg
-            .locations
-            .get(origin as usize)
-            .cloned()
-            .unwrap_or_default();
-        HostError::Engine(Error::script(location, message))
-    }
-
-    fn push_symbol(&mut self, sym: Sym, t: &Table, out: &mut ModuleString) -> mlua::Result<()> {
-        if sym == Sym::PUSH || sym == Sym::POP {
-            out.push(sym, &[]);
-        } else if numeric_params(t, &mut self.numbers)? {
-            out.push(sym, &self.numbers);
-        } else {
-            let slot = self.side.len() as u32;
-            self.side.push(Value::Table(t.clone()));
-            out.push_external(sym, slot);
-        }
-        Ok(())
-    }
-
-    /// Appends a successor: a symbol, a classic string, or an array (nested arrays are
-    /// branches).
-    fn push_value(
-        &mut self,
-        v: &Value,
-        out: &mut ModuleString,
-        origin: u32,
-        what: &dyn std::fmt::Display,
-        depth: u32,
-    ) -> Result<(), HostError> {
-        if depth > 100 {
-            return Err(self.rule_error(origin, format!("{what} nests arrays too deeply")));
-        }
-        match v {
-            Value::Table(t) => {
-                let sym = self.tags.borrow().symbol_of(t);
-                match sym {
-                    Some(sym) => self.push_symbol(sym, t, out)?,
-                    None => {
-                        // An array: its items; nested arrays are branches.
-                        if depth > 0 {
-                            out.push(Sym::PUSH, &[]);
-                        }
-                        for k in 1..=t.raw_len() {
-                            let item: Value = t.raw_get(k)?;
-                            self.push_value(&item, out, origin, what, depth + 1)?;
-                        }
-                        if depth > 0 {
-                            out.push(Sym::POP, &[]);
-                        }
-                    }
-                }
-            }
-            Value::String(s) => {
-                let text = s.to_str()?.to_string();
-                if let Some(ms) = self.parse_cache.get(&text) {
-                    out.append(ms);
-                } else {
-                    let system = self.system;
-                    let symbols = self.symbols;
-                    let parsed = {
-                        let mut table = symbols.borrow_mut();
-                        let mut rand = || self.random();
-                        system.parse_string_constness(&text, &mut table, &mut rand)
-                    };
-                    let (ms, constant) =
-                        parsed.map_err(|e| self.rule_error(origin, format!("{what}: {e}")))?;
-                    out.append(&ms);
-                    // Only strings that evaluate the same every time may be reused.
-                    if constant && self.parse_cache.len() < 4096 {
-                        self.parse_cache.insert(text, ms);
-                    }
-                }
-            }
-            other => {
-                return Err(self.rule_error(
-                    origin,
-                    format!(
-                        "{what} is {}; a successor is a symbol, a string in classic notation \
-                         or an array of them (nil: the rule does not apply, {{}}: delete)",
-                        type_name(other)
-                    ),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    fn interpret_module(&mut self, s: &ModuleString, i: usize) -> Result<(), HostError> {
-        let sym = s.sym(i);
-        if self.track_brackets {
-            if self.imatches.len() <= i {
-                self.imatches.resize(i + 1, u32::MAX);
-            }
-            if sym == Sym::PUSH {
-                self.istack.push(i as u32);
-            } else if sym == Sym::POP
-                && let Some(open) = self.istack.pop()
-            {
-                self.imatches[i] = open;
-                self.imatches[open as usize] = i as u32;
-            }
-        }
-        if let Some(list) = self.irules_by_sym.get(sym.index())
-            && !list.is_empty()
-        {
-            let arg = self.param_value(s, i)?;
-            self.set_this(false)?;
-            for &k in list {
-                let rule: &LuaIRule = &self.cfg.irules[k as usize];
-                let v: Value = if rule.left.is_empty() {
-                    rule.func.call(arg.clone())?
-                } else {
-                    let mut matched = std::mem::take(&mut self.imatched);
-                    matched.clear();
-                    let found = self.system.match_left_context(
-                        &rule.left,
-                        s,
-                        &self.imatches,
-                        i,
-                        &mut matched,
-                    );
-                    let mut args = Vec::with_capacity(matched.len() + 1);
-                    if found {
-                        for &m in &matched {
-                            args.push(self.param_value(s, m)?);
-                        }
-                        args.push(arg.clone());
-                    }
-                    self.imatched = matched;
-                    if !found {
-                        continue;
-                    }
-                    rule.func.call(MultiValue::from_vec(args))?
-                };
-                if truthy(&v) {
-                    return Ok(());
-                }
-            }
-        }
-        if let Some(ud) = &self.instance_ud {
-            let params: &[f64] = match s.external(i) {
-                Some(slot) => {
-                    positional_numbers(&self.side[slot as usize], &mut self.numbers)?;
-                    &self.numbers
-                }
-                None => s.params(i),
-            };
-            // The name is copied so an interpreter may run Lua code that makes symbols.
-            self.name.clear();
-            self.name.push_str(self.symbols.borrow().name(sym));
-            for f in self.interpreters {
-                if f(self.lua, ud, &self.name, params)? {
-                    break;
-                }
-            }
-        }
-        Ok(())
-    }
-
-    fn interpret_all(&mut self, s: &ModuleString, location: &Location) -> Result<(), HostError> {
-        for i in 0..s.len() {
-            if i & 0xFFFF == 0 {
-                self.ctx
-                    .check_deadline(location)
-                    .map_err(HostError::Engine)?;
-            }
-            self.interpret_module(s, i)?;
-        }
-        Ok(())
-    }
-}
-
-/// Names a rule's successor in error messages (formatted only when one is raised).
-struct SuccessorOf<'a>(&'a str);
-
-impl std::fmt::Display for SuccessorOf<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "the successor returned by RRule '{}'", self.0)
-    }
-}
-
-fn type_name(v: &Value) -> String {
-    match v {
-        Value::UserData(ud) => match ud.type_name() {
-            Ok(n) => n.to_string_lossy(),
-            Err(_) => "userdata".to_string(),
-        },
-        other => other.type_name().to_string(),
-    }
-}
-
-impl Host for LuaHost<'_> {
-    type Error = HostError;
-
-    fn random(&mut self) -> f64 {
-        match (self.rng_in_lua, self.random_fn) {
-            (true, Some(f)) => f.call::<f64>(()).unwrap_or_default(),
-            _ => uniform(self.rng),
-        }
-    }
-
-    fn check(&mut self) -> Result<(), HostError> {
-        self.ctx
-            .check_deadline(&self.cfg.location)
-            .map_err(HostError::Engine)
-    }
-
-    fn apply(
-        &mut self,
-        rule: u32,
-        matched: &[usize],
-        src: &ModuleString,
-        out: &mut ModuleString,
-    ) -> Result<bool, HostError> {
-        let r: &LuaRule = &self.cfg.rrules[rule as usize];
-        self.set_this(true)?;
-        *self.deriving.borrow_mut() = Some(r.text.clone());
-        let m = matched[0];
-        let result = if matched.len() == 1 && src.external(m).is_none() && src.params(m).len() <= 3
-        {
-            // The parameter table is built in Lua (cheaper than from Rust).
-            let p = src.params(m);
-            let f = &self.callers[p.len()];
-            match *p {
-                [] => f.call::<Value>(&r.func),
-                [a] => f.call::<Value>((&r.func, lua_number(a))),
-                [a, b] => f.call::<Value>((&r.func, lua_number(a), lua_number(b))),
-                [a, b, c] => {
-                    f.call::<Value>((&r.func, lua_number(a), lua_number(b), lua_number(c)))
-                }
-                _ => unreachable!("at most three parameters here"),
-            }
-        } else if matched.len() == 1 {
-            let arg = self.param_value(src, m)?;
-            r.func.call::<Value>(arg)
-        } else {
-            let mut args = Vec::with_capacity(matched.len());
-            for &m in matched {
-                args.push(self.param_value(src, m)?);
-            }
-            r.func.call::<Value>(MultiValue::from_vec(args))
-        };
-        *self.deriving.borrow_mut() = None;
-        let v = result?;
-        if v.is_nil() {
-            return Ok(false);
-        }
-        self.push_value(&v, out, r.origin, &SuccessorOf(&r.text), 0)?;
-        Ok(true)
-    }
-
-    fn interpret(&mut self, out: &ModuleString, from: usize) -> Result<(), HostError> {
-        if !self.interpret {
-            return Ok(());
-        }
-        for i in from..out.len() {
-            self.interpret_module(out, i)?;
-        }
-        Ok(())
-    }
 }
 
 impl LSystemAlgorithm {
@@ -465,7 +70,6 @@ impl LSystemAlgorithm {
             skip_interpretation,
             irules_by_sym: Vec::new(),
             parse_cache: HashMap::new(),
-            random_fn: None,
             lua_involved: false,
             max_modules: 10_000_000,
             interpreters: Vec::new(),
@@ -533,6 +137,13 @@ impl LSystemAlgorithm {
                     .unwrap_or_default(),
                 e.to_string(),
             ),
+            HostError::Ls(LsError::TooManyModules { step, count, max }) => Error::ModuleLimit {
+                location: self.cfg.location.clone(),
+                system: self.cfg.name.clone(),
+                step,
+                count,
+                max,
+            },
             HostError::Ls(e) => Error::script(
                 self.cfg.location.clone(),
                 format!("L-system '{}': {e}", self.cfg.name),
@@ -568,7 +179,6 @@ impl LSystemAlgorithm {
             parse_cache: &mut self.parse_cache,
             rng: &mut self.rng,
             rng_in_lua,
-            random_fn: self.random_fn.as_ref(),
             this_rw: &self.this_rw,
             this_ro: &self.this_ro,
             this_is_ro: None,
@@ -578,7 +188,7 @@ impl LSystemAlgorithm {
             interpret,
             numbers: Vec::new(),
             tags: tags(lua),
-            deriving: deriving_cell(lua),
+            read_only: read_only_phase(lua),
             callers: &self.callers,
             imatches: Vec::new(),
             istack: Vec::new(),
@@ -620,7 +230,7 @@ impl LSystemAlgorithm {
                 let fail =
                     lua.create_function(|lua, (_, k): (Value, Value)| -> mlua::Result<()> {
                         let key = k.to_string().unwrap_or_else(|_| "?".into());
-                        super::check_mutable(lua, &format!("writing this.{key}"))?;
+                        check_mutable(lua, &format!("writing this.{key}"))?;
                         Err(script_error(lua, format!("this.{key} is read-only here")))
                     })?;
                 let meta = lua.create_table()?;
@@ -678,11 +288,6 @@ impl LSystemAlgorithm {
         self.cfg.system.prepare(&self.symbols.borrow())?;
         self.max_modules = self.cfg.max_modules.unwrap_or(ctx.max_modules);
         self.rng = instance_rng(ctx.seed, self.cfg.index);
-        self.random_fn = lua
-            .globals()
-            .get::<Table>("pge")
-            .and_then(|p| p.get::<Function>("random"))
-            .ok();
         self.lua_involved = !self.cfg.rrules.is_empty()
             || !self.cfg.irules.is_empty()
             || self.cfg.before.is_some()
@@ -701,9 +306,10 @@ impl LSystemAlgorithm {
         let instance = self.with_rng(lua, |_| -> mlua::Result<Value> {
             match &create {
                 Some(f) => f.call::<Value>(()),
-                None => match lua.globals().get::<Table>("pge")?.get::<Value>("turtle")? {
-                    Value::Function(t) => t.call::<Value>(lua.create_table()?),
-                    _ => Ok(Value::Table(lua.create_table()?)),
+                // The default instance a plugin registered with the engine (the turtle).
+                None => match default_instance(lua)? {
+                    Some(instance) => Ok(instance),
+                    None => Ok(Value::Table(lua.create_table()?)),
                 },
             }
         })?;
@@ -875,7 +481,7 @@ impl LSystemAlgorithm {
             _ => false,
         };
         let mut model = if has_model {
-            to_model(&self.this_rw)?
+            to_model_in(lua, &self.this_rw, ctx)?
         } else {
             Model::new()
         };
@@ -894,7 +500,7 @@ impl LSystemAlgorithm {
         let outer_this: Value = lua.globals().raw_get("this").unwrap_or(Value::Nil);
         let result = f(self, &lua, ctx);
         let _ = lua.globals().raw_set("this", outer_this);
-        *deriving_cell(&lua).borrow_mut() = None;
+        read_only_phase(&lua).leave();
         result.map_err(|e| self.engine_error(&lua, e))
     }
 }

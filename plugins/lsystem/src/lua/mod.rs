@@ -1,17 +1,20 @@
-//! The Lua layer: `pge.LSystem`, symbol constructors, and the hooks other plugins use (the
-//! turtle's default interpretation, read-only checks during rewriting rules).
+//! The Lua layer: `pge.LSystem` and symbol constructors. The services other plugins use
+//! (default interpretation, read-only checks during rewriting rules) are the engine's
+//! ([`pge_engine::lua::services`]).
 
 mod algorithm;
+mod config;
 mod derive;
+mod host;
+mod interpret;
 mod object;
 mod symbols;
 
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use mlua::{AnyUserData, Lua, Table};
+use mlua::{Lua, Table};
 use pge_engine::Plugin;
-use pge_engine::lua::script_error;
 
 use crate::SymbolTable;
 
@@ -19,17 +22,12 @@ pub use algorithm::LSystemAlgorithm;
 pub use derive::{Derivation, derive_value};
 pub use object::LuaLSystem;
 
-/// Interprets one module for an instance it knows (a turtle): returns `Ok(false)` when the
-/// instance is not of its type or the module is not one of its commands.
-pub type DefaultInterpreter = fn(&Lua, &AnyUserData, &str, &[f64]) -> mlua::Result<bool>;
-
-/// What the L-systems of one session share: the symbol names, the default interpreters,
-/// the rewriting rule running now (if any), and the count of L-system objects.
+/// What the L-systems of one session share: the symbol names and the count of L-system
+/// objects. (The read-only phase and the default interpreters are engine services:
+/// [`pge_engine::lua::services`].)
 #[derive(Default)]
 pub(crate) struct Shared {
     pub symbols: Rc<RefCell<SymbolTable>>,
-    pub interpreters: Vec<DefaultInterpreter>,
-    pub deriving: Rc<RefCell<Option<Rc<str>>>>,
     pub instances: u32,
     pub tags: Rc<RefCell<symbols::SymbolTags>>,
 }
@@ -47,42 +45,6 @@ pub(crate) fn with_shared<R>(lua: &Lua, f: impl FnOnce(&mut Shared) -> R) -> R {
 /// The symbol table shared by every L-system of the session.
 pub(crate) fn session_symbols(lua: &Lua) -> Rc<RefCell<SymbolTable>> {
     with_shared(lua, |s| s.symbols.clone())
-}
-
-/// Adds a default interpretation (a plugin's instance type, such as the turtle, calls this
-/// from its `register`). Interpreters are tried in the order they were added.
-pub fn register_interpreter(lua: &Lua, interpreter: DefaultInterpreter) {
-    with_shared(lua, |s| {
-        if !s.interpreters.contains(&interpreter) {
-            s.interpreters.push(interpreter);
-        }
-    });
-}
-
-pub(crate) fn interpreters(lua: &Lua) -> Vec<DefaultInterpreter> {
-    with_shared(lua, |s| s.interpreters.clone())
-}
-
-/// The cell holding the rewriting rule running now (read by [`check_mutable`]).
-pub(crate) fn deriving_cell(lua: &Lua) -> Rc<RefCell<Option<Rc<str>>>> {
-    with_shared(lua, |s| s.deriving.clone())
-}
-
-/// The error a host object's mutating method raises while a rewriting rule (RRule) runs:
-/// during derivation `this` and the global table are read-only. `what` names the method
-/// (`"turtle:forward"`). Call it at the start of every method that changes the object.
-pub fn check_mutable(lua: &Lua, what: &str) -> mlua::Result<()> {
-    let rule = with_shared(lua, |s| s.deriving.borrow().clone());
-    match rule {
-        Some(rule) => Err(script_error(
-            lua,
-            format!(
-                "RRule '{rule}': {what} is not allowed: `this` and the global table are \
-                 read-only during rewriting rules (change them in an IRule)"
-            ),
-        )),
-        None => Ok(()),
-    }
 }
 
 /// The `pge.LSystem` plugin: L-system objects, `pge.sym`, and symbol constructors for every
@@ -300,6 +262,23 @@ mod tests {
             e,
             "eval:1: L-system 'big': step 24: the string reached 16777216 modules, more than \
              maxModules (10000000)"
+        );
+        let typed = derive_in(
+            &session(1),
+            "local l = pge.LSystem('big')\nl:axiom('F')\nl:rule('F -> FF')\nl:iterations(40)\nreturn l",
+            None,
+        )
+        .expect_err("too many");
+        assert!(
+            matches!(
+                typed,
+                pge_engine::Error::ModuleLimit {
+                    step: 24,
+                    max: 10_000_000,
+                    ..
+                }
+            ),
+            "{typed:?}"
         );
         let e = error(
             "local l = pge.LSystem('big')\nl:axiom('F')\nl:rule('F -> FF')\nl:maxModules(100)\nl:iterations(40)\nreturn l",

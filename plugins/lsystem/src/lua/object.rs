@@ -1,62 +1,14 @@
 //! `pge.LSystem(name)`: the object scripts configure with methods.
 
-use mlua::{Function, Lua, Table, UserData, UserDataMethods, Value};
-use pge_engine::Location;
+use mlua::{Function, Lua, UserData, UserDataMethods, Value};
 use pge_engine::lua::{AlgorithmHandle, caller_location, script_error};
 
 use super::algorithm::LSystemAlgorithm;
-use super::{check_mutable, session_symbols, with_shared};
+use super::config::{Axiom, Config, LuaIRule, LuaRule};
+use super::{session_symbols, with_shared};
 use crate::classic;
 use crate::{LsError, Sym, System};
-
-/// Where an axiom comes from.
-#[derive(Clone, Debug)]
-pub(crate) enum Axiom {
-    /// Classic notation.
-    Text(String),
-    /// An array of symbols (nested arrays are branches).
-    Lua(Table),
-}
-
-/// A rule function (RRule) with its left side.
-#[derive(Clone, Debug)]
-pub(crate) struct LuaRule {
-    pub func: Function,
-    pub text: std::rc::Rc<str>,
-    /// Index into [`Config::locations`].
-    pub origin: u32,
-}
-
-/// An interpretation rule (IRule).
-#[derive(Clone, Debug)]
-pub(crate) struct LuaIRule {
-    pub sym: Sym,
-    /// Left context, leftmost first (matched in the string interpreted so far).
-    pub left: Vec<Sym>,
-    pub func: Function,
-}
-
-/// Everything an L-system object holds; the algorithm gets a copy.
-#[derive(Clone, Debug)]
-pub(crate) struct Config {
-    pub name: String,
-    pub location: Location,
-    pub axiom: Option<(Axiom, Location)>,
-    pub iterations: u32,
-    pub create: Option<Function>,
-    pub before: Option<Function>,
-    pub after: Option<Function>,
-    pub globals: Table,
-    pub system: System,
-    pub rrules: Vec<LuaRule>,
-    pub irules: Vec<LuaIRule>,
-    /// Where each rule was defined (the `origin` of rule errors).
-    pub locations: Vec<Location>,
-    pub max_modules: Option<usize>,
-    pub every_step: bool,
-    /// The object's index in the session, seeding its generator.
-    pub index: u32,
-}
+use pge_engine::lua::check_mutable;
 
 /// A `pge.LSystem` object.
 pub struct LuaLSystem(pub(crate) Config);
@@ -240,7 +192,7 @@ impl UserData for LuaLSystem {
             };
             pge_engine::algorithm::run(&mut algorithm, &ctx, &mut |_| {})
                 .map(pge_engine::lua::LuaModel)
-                .map_err(|e| mlua::Error::RuntimeError(e.to_string()))
+                .map_err(mlua::Error::external)
         });
     }
 }

@@ -3,7 +3,7 @@
 //! window:
 //!
 //! ```text
-//! cargo run -p pge-canvas --example modeller -- scripts/modellers/tower.lua /tmp/tower [--set k=v] [--steps n]
+//! cargo run --example modeller -- scripts/modellers/tower.lua /tmp/tower [--set k=v] [--steps n]
 //! ```
 
 use std::collections::HashMap;

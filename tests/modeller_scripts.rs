@@ -1,7 +1,6 @@
 //! Every script of `scripts/modellers/` runs with the modeller plugins (and the L-system
 //! plugin) in an engine of their own, gives a valid, non-empty model and exports the same
-//! glb bytes twice. (The `pge` command's end-to-end tests are in the workspace's
-//! `tests/modellers.rs`.)
+//! glb bytes twice. (The `pge` command's end-to-end tests are in `tests/modellers.rs`.)
 
 use std::path::PathBuf;
 
@@ -10,7 +9,7 @@ use pge_engine::{Engine, SessionOptions};
 
 fn script(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scripts/modellers")
+        .join("scripts/modellers")
         .join(name)
 }
 
