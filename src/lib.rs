@@ -39,4 +39,5 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)
+        .plugin(pge_lod::LodPlugin)
 }

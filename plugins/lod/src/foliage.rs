@@ -313,6 +313,8 @@ mod tests {
                 half_width: 0.2,
                 count: 1,
                 leaf_area: 0.16,
+                lo: Vec3::splat(-1.0),
+                hi: Vec3::splat(1.0),
             };
             mesh.positions.extend_from_slice(&leaf.corners());
             mesh.normals.extend_from_slice(&[normal; 4]);

@@ -25,6 +25,10 @@ pub struct Leaf {
     /// Summed area of the original leaves represented (the foliage the rectangle stands for;
     /// divided by [`Leaf::area`] it is the density that chooses an atlas cell).
     pub leaf_area: f32,
+    /// Lower corner of the box around the original leaves represented.
+    pub lo: Vec3,
+    /// Upper corner of that box.
+    pub hi: Vec3,
 }
 
 impl Leaf {
@@ -87,6 +91,8 @@ impl Leaf {
             half_width,
             count: 1,
             leaf_area: 0.0,
+            lo: p[0].min(p[1]).min(p[2]).min(p[3]),
+            hi: p[0].max(p[1]).max(p[2]).max(p[3]),
         };
         let area = leaf.area();
         (area > 0.0 && area.is_finite()).then_some(Leaf {
@@ -99,15 +105,18 @@ impl Leaf {
     /// 1. its centre is the mean of both centres weighted by the leaves each represents;
     /// 2. its normal the weighted mean of both normals (leaves are double-sided, so `b`'s
     ///    normal is flipped first when it faces away from `a`'s);
-    /// 3. both leaves' corners are projected orthographically on the new plane; the line
-    ///    through the projected centres is the main axis, the secondary axis is perpendicular
-    ///    to it through the new centre, and the rectangle on these axes that contains both
-    ///    projections is the bounding quad;
-    /// 4. the new area is the mean of the summed areas and the bounding quad's area, so it
-    ///    always lies between `a.area() + b.area()` and the bounding area: a bounding quad
-    ///    larger than that shrinks about the centre; a smaller one (overlapping leaves) grows
-    ///    its narrower side first, up to a square, so that leaves seen edge-on do not become
-    ///    needles.
+    /// 3. both leaves' corners are projected orthographically on the plane through that
+    ///    centre; the line through the projected centres is the main axis, the secondary
+    ///    axis is perpendicular to it, and the rectangle on these axes that contains both
+    ///    projections is the bounding quad. The new leaf is centred on that rectangle (the
+    ///    weighted centre lies on its main axis): a rectangle symmetric about the weighted
+    ///    centre would reach past the leaves on the lighter side, and over many levels the
+    ///    coarse leaves would outgrow the crown;
+    /// 4. its area lies between the summed areas and the bounding area: the mean of the two
+    ///    (the thesis' rule) when the bounding quad is the larger, so sparse pairs shrink;
+    ///    the bounding area when the leaves overlap so much that their summed area is the
+    ///    larger, so the quad never reaches past the leaves it replaces. The bounding quad is
+    ///    scaled about its centre to that area.
     #[must_use]
     pub fn collapse(a: &Leaf, b: &Leaf) -> Leaf {
         let (wa, wb) = (a.count as f32, b.count as f32);
@@ -128,38 +137,27 @@ impl Leaf {
             .or_else(|| in_plane(bigger.side()))
             .unwrap_or_else(|| normal.any_orthonormal_vector());
         let side = axis.cross(normal);
-        let (mut half_length, mut half_width) = (0.0f32, 0.0f32);
+        let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
         for p in a.corners().into_iter().chain(b.corners()) {
             let d = project(p) - center;
-            half_length = half_length.max(d.dot(axis).abs());
-            half_width = half_width.max(d.dot(side).abs());
+            let q = glam::Vec2::new(d.dot(axis), d.dot(side));
+            lo = lo.min(q);
+            hi = hi.max(q);
         }
+        let mid = (lo + hi) * 0.5;
+        let center = center + axis * mid.x + side * mid.y;
+        let (mut half_length, mut half_width) = (0.5 * (hi.x - lo.x), 0.5 * (hi.y - lo.y));
         let bounding = 4.0 * half_length * half_width;
-        let target = 0.5 * (a.area() + b.area() + bounding);
-        if bounding >= target {
-            // Shrink about the centre, keeping the shape.
+        let summed = a.area() + b.area();
+        let target = (0.5 * (summed + bounding)).min(bounding);
+        if bounding > 0.0 {
             let s = (target / bounding).sqrt();
             half_length *= s;
             half_width *= s;
         } else {
-            // Grow the narrower side first (two leaves seen edge-on project to a sliver,
-            // which a uniform scale would stretch into a needle), up to a square.
-            let (long, short) = if half_length >= half_width {
-                (&mut half_length, &mut half_width)
-            } else {
-                (&mut half_width, &mut half_length)
-            };
-            *short = (target / (4.0 * *long)).min(*long);
-            let grown = 4.0 * *long * *short;
-            if grown <= 0.0 {
-                // Both leaves project onto a point: a square of the target area.
-                *long = 0.5 * target.sqrt();
-                *short = *long;
-            } else if grown < target {
-                let s = (target / grown).sqrt();
-                *long *= s;
-                *short *= s;
-            }
+            // Both leaves project onto a segment or a point: a square of the summed area.
+            half_length = 0.5 * summed.sqrt();
+            half_width = half_length;
         }
         Leaf {
             center,
@@ -169,6 +167,8 @@ impl Leaf {
             half_width,
             count: a.count + b.count,
             leaf_area: a.leaf_area + b.leaf_area,
+            lo: a.lo.min(b.lo),
+            hi: a.hi.max(b.hi),
         }
     }
 }
@@ -186,6 +186,8 @@ mod tests {
             half_width: half,
             count: 1,
             leaf_area: 4.0 * half * half,
+            lo: center - Vec3::splat(half),
+            hi: center + Vec3::splat(half),
         }
     }
 
@@ -230,9 +232,9 @@ mod tests {
         let a = square(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.5);
         let b = square(Vec3::new(2.0, 0.0, 0.0), Vec3::Z, Vec3::Y, 0.5);
         assert!(close(Leaf::collapse(&a, &b).area(), 0.5 * (2.0 + 3.0)));
-        // Overlapping exactly: bounding area 1, summed 2.
+        // Overlapping exactly: bounding area 1, summed 2: the bounding area.
         let c = Leaf::collapse(&a, &a);
-        assert!(close(c.area(), 1.5), "{}", c.area());
+        assert!(close(c.area(), 1.0), "{}", c.area());
     }
 
     #[test]
@@ -241,7 +243,9 @@ mod tests {
         a.count = 3;
         let b = square(Vec3::new(4.0, 0.0, 0.0), Vec3::X, Vec3::Y, 0.5);
         let c = Leaf::collapse(&a, &b);
-        assert!(c.center.abs_diff_eq(Vec3::new(1.0, 0.0, 0.0), 1e-6));
+        // The weighted centre (1, 0, 0) lies on the new leaf's main axis.
+        let off = c.center - Vec3::new(1.0, 0.0, 0.0);
+        assert!((off - c.axis * off.dot(c.axis)).length() < 1e-5);
         let expected = (Vec3::Z * 3.0 + Vec3::X).normalize();
         assert!(c.normal.abs_diff_eq(expected, 1e-6));
         // A leaf facing the other way is the same double-sided leaf.

@@ -66,6 +66,10 @@ pub struct Bounds {
     /// Smallest density (represented leaf area over the new leaf's area) of a new leaf:
     /// coarse leaves may thin out, but not into empty quads.
     pub min_density: f32,
+    /// How far a new leaf's corners may reach past the box around the original leaves it
+    /// represents, as a fraction of that box's size per axis: coarse leaves stay within the
+    /// crown instead of compounding the bounding quads' slack level after level.
+    pub max_overhang: f32,
 }
 
 impl Default for Bounds {
@@ -75,6 +79,7 @@ impl Default for Bounds {
             max_angle: 75.0,
             max_growth: 1.3,
             min_density: 0.1,
+            max_overhang: 0.1,
         }
     }
 }
@@ -187,6 +192,7 @@ struct Simplifier {
     min_cos: f32,
     max_growth: f32,
     min_density: f32,
+    max_overhang: f32,
     axis: Axis,
     inv_crown: f32,
 }
@@ -220,6 +226,7 @@ impl Simplifier {
             max_distance: selection.bounds.max_distance.max(0.0),
             max_growth: selection.bounds.max_growth,
             min_density: selection.bounds.min_density,
+            max_overhang: selection.bounds.max_overhang,
             min_cos: selection
                 .bounds
                 .max_angle
@@ -333,8 +340,15 @@ impl Simplifier {
             let lb = &self.leaves[b as usize];
             let new = Leaf::collapse(la, lb);
             let area = new.area();
+            let slack = (new.hi - new.lo) * self.max_overhang;
+            let (lo, hi) = (new.lo - slack, new.hi + slack);
+            let inside = new
+                .corners()
+                .iter()
+                .all(|c| c.cmpge(lo).all() && c.cmple(hi).all());
             if area <= self.max_growth * (la.area() + lb.area())
                 && new.leaf_area >= self.min_density * area
+                && inside
             {
                 return Some((cost, b));
             }
@@ -475,6 +489,8 @@ mod tests {
             half_width: 0.5,
             count: 1,
             leaf_area: 1.0,
+            lo: center - Vec3::splat(0.75),
+            hi: center + Vec3::splat(0.75),
         }
     }
 

@@ -185,6 +185,8 @@ mod tests {
             half_width: 0.5,
             count: 1,
             leaf_area: 1.0,
+            lo: Vec3::splat(-1.0),
+            hi: Vec3::splat(1.0),
         };
         let children: Vec<[u32; 2]> = vec![
             [0, 1],   // 16
