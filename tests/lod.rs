@@ -4,6 +4,9 @@
 //! level equal to the plain tree's leaves, every level a cut of the collapse forest, leaf
 //! areas, the coarse crown's extent), sectors, the budget from Lua, and bad input.
 
+// Coordinates are compared axis by axis across several arrays.
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use common::pge;
