@@ -67,6 +67,7 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)
         .plugin(pge_forest::ForestPlugin)
+        .plugin(pge_lod::LodPlugin)
 }
 
 #[cfg(test)]

@@ -134,4 +134,3 @@ pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Resu
     }
     Ok(())
 }
-

@@ -787,7 +787,8 @@ fn new_seed(old: u64) -> u64 {
 /// exactly as `pge run` does.
 fn export(g: &Generation, path: &Path) -> Result<String, String> {
     let meta = export_meta(g.settings.seed, &g.params);
-    write_model(&g.model, &meta, path, pge_engine::export::Instancing::Gpu).map_err(|e| format!("{e:#}"))?;
+    write_model(&g.model, &meta, path, pge_engine::export::Instancing::Gpu)
+        .map_err(|e| format!("{e:#}"))?;
     Ok(format!("wrote {}", path.display()))
 }
 

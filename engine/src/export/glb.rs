@@ -453,7 +453,11 @@ impl Builder {
         for (i, m) in model.meshes.iter().enumerate() {
             let standalone =
                 model.groups.is_empty() || model.instances.iter().any(|inst| inst.mesh == i);
-            meshes.push(if standalone { Some(self.mesh(m)?) } else { None });
+            meshes.push(if standalone {
+                Some(self.mesh(m)?)
+            } else {
+                None
+            });
         }
         let mut nodes = Vec::with_capacity(model.instances.len());
         for inst in &model.instances {

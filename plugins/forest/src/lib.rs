@@ -21,6 +21,7 @@
 
 mod assemble;
 mod layout;
+#[cfg(feature = "lua")]
 pub mod lua;
 mod poisson;
 mod rng;
@@ -31,6 +32,7 @@ pub use layout::{
     Density, Forest, Instance, Layer, Layout, MAX_INSTANCES, Method, Tile, Variants, unique_seed,
     variant_seed,
 };
+#[cfg(feature = "lua")]
 pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
 pub use rng::{Rng, hash};

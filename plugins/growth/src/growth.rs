@@ -66,6 +66,7 @@ impl Default for GrowthParams {
                     ..pge_tree::MeshOptions::default()
                 },
                 leaves: None,
+                lod: None,
             },
         }
     }

@@ -19,10 +19,12 @@
 //! ```
 
 mod growth;
+#[cfg(feature = "lua")]
 mod lua;
 mod transport;
 
 pub use growth::{DEFAULT_MAX_BRANCHES, Growth, GrowthParams, MAX_STEPS};
+#[cfg(feature = "lua")]
 pub use lua::GrowthPlugin;
 pub use transport::{
     CapExceeded, Feeding, INITIAL_AREA, MIN_FEED, NONE, TransportParams, TransportTree,

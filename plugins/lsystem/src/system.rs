@@ -18,7 +18,6 @@ use crate::symbol::{Sym, SymbolTable};
 
 pub use self::derive::StepOptions;
 pub use self::host::{Host, NativeHost};
-pub(crate) use pge_engine::random::uniform;
 
 ///
 /// ```
@@ -339,6 +338,7 @@ impl System {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::random::uniform;
     use rand_mt::Mt;
     use std::collections::HashMap;
 

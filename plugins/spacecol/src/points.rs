@@ -578,7 +578,13 @@ mod tests {
     fn updates_visit_exactly_the_points_within_reach_in_cell_order() {
         let mut rng = Mt64::new(3);
         let pts: Vec<Vec3> = (0..20_000)
-            .map(|_| Vec3::new(uniform24(&mut rng), uniform24(&mut rng), uniform24(&mut rng)) * 2.0)
+            .map(|_| {
+                Vec3::new(
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                ) * 2.0
+            })
             .collect();
         let keep: Vec<bool> = (0..pts.len()).map(|i| i % 7 != 0).collect();
         let mut g = PointGrid::new(&pts, &keep, 0.3);
@@ -589,7 +595,12 @@ mod tests {
         let r = 0.5;
         let mut visited_total = 0;
         for round in 0..300 {
-            let q = Vec3::new(uniform24(&mut rng), uniform24(&mut rng), uniform24(&mut rng)) * 2.2 - 0.1;
+            let q = Vec3::new(
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+            ) * 2.2
+                - 0.1;
             let mut want: Vec<(usize, u32)> = (0..pts.len() as u32)
                 .filter(|&i| {
                     let d2 = pts[i as usize].distance_squared(q);

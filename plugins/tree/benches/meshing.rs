@@ -72,6 +72,7 @@ fn bench_tree(c: &mut Criterion) {
             per_tip: (4, 6),
             ..LeafOptions::default()
         }),
+        lod: None,
     };
     let model = build_tree(&s, &options, 1).expect("builds");
     let name = format!("build_tree {} triangles", model.triangle_count());

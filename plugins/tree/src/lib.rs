@@ -38,6 +38,7 @@ mod options;
 mod radii;
 mod smooth;
 mod textures;
+#[cfg(feature = "lua")]
 mod tree_lua;
 
 use std::path::PathBuf;
@@ -52,9 +53,12 @@ pub use cylinders::{append_bark, bark_mesh};
 pub use leaves::{append_leaf_quads, tip_leaves};
 pub use merge::merge_straight;
 pub use options::{LeafOptions, MeshOptions, RadiiMode, TextureSource, TreeOptions};
+/// Foliage levels of detail options (`lod = {...}`), from `pge_lod`.
+pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{bark_texture, leaf_texture, load_png};
+#[cfg(feature = "lua")]
 pub use tree_lua::TreePlugin;
 
 /// Why a tree could not be built.
@@ -75,6 +79,9 @@ pub enum TreeError {
     /// A mesh or texture broke an invariant.
     #[error(transparent)]
     Geometry(#[from] GeometryError),
+    /// The leaf mesh could not be given levels of detail.
+    #[error("lod: {0}")]
+    Lod(#[from] pge_lod::LodError),
 }
 
 /// Checks that a skeleton is usable: equal array lengths, parents before children, finite
@@ -174,7 +181,10 @@ pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> 
 ///
 /// Leaves are the skeleton's own leaf points plus, when `options.leaves` is set, tip leaves
 /// ([`tip_leaves`]) drawn from an MT19937-64 seeded with `seed`: the same skeleton, options
-/// and seed give the same model. The bark mesh's skeleton holds every leaf point. Stats:
+/// and seed give the same model. With `options.lod`, the leaf mesh is simplified and
+/// written in the order of the vector V with its LOD table (see [`pge_lod::lod_mesh`]); a
+/// tree without leaves then gets a warning instead. The bark mesh's skeleton holds every
+/// leaf point. Stats:
 /// `nodes` (after merging), `leaves`, and the phases `radii`, `meshing` and `leaves`.
 pub fn build_tree(
     skeleton: &Skeleton,
@@ -218,7 +228,19 @@ pub fn build_tree(
         };
         append_leaf_quads(&prepared.leaves, style, &mut rng, &mut mesh);
         mesh.material = leaf_material(style)?;
+        if let Some(lod) = &options.lod {
+            mesh = lod_leaves(&mesh, lod, &prepared)?;
+        }
         model.add_mesh(mesh, Mat4::IDENTITY);
+    } else if let Some(lod) = &options.lod {
+        let at = if lod.source.is_empty() {
+            String::new()
+        } else {
+            format!("{}: ", lod.source)
+        };
+        model.stats.warnings.push(format!(
+            "{at}warning: lod: the tree has no leaves, so it has no LOD table (give it leaves = {{...}})"
+        ));
     }
     model
         .stats
@@ -226,6 +248,24 @@ pub fn build_tree(
     model.stats.nodes = prepared.len() as u64;
     model.stats.leaves = prepared.leaves.len() as u64;
     Ok(model)
+}
+
+/// The leaf mesh with levels of detail ([`pge_lod::lod_mesh`]): simplified around the
+/// vertical through the skeleton's first root unless the options name another axis, written
+/// in the order of the vector V, with `extras.pge.lod`.
+fn lod_leaves(
+    mesh: &Mesh,
+    options: &pge_lod::LodOptions,
+    skeleton: &Skeleton,
+) -> Result<Mesh, TreeError> {
+    let mut options = options.clone();
+    if options.selection.axis.is_none() {
+        options.selection.axis = skeleton.positions.first().map(|&origin| pge_lod::Axis {
+            origin,
+            direction: Vec3::Y,
+        });
+    }
+    Ok(pge_lod::lod_mesh(mesh, &options)?.0)
 }
 
 /// The centre of a skeleton's bounding box, or the origin when empty (handy for envelopes
@@ -319,11 +359,66 @@ mod tests {
                 ..MeshOptions::default()
             },
             leaves: None,
+            lod: None,
         };
         let e = build_tree(&y_tree(), &options, 1).expect_err("missing file");
         assert!(
             e.to_string().starts_with("texture /no/such/bark.png:"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn lod_writes_the_leaves_in_the_order_of_v_with_the_table() {
+        let options = TreeOptions {
+            leaves: Some(LeafOptions {
+                per_tip: (40, 40),
+                ..LeafOptions::default()
+            }),
+            lod: Some(pge_lod::LodOptions::default()),
+            ..TreeOptions::default()
+        };
+        let plain = TreeOptions {
+            lod: None,
+            ..options.clone()
+        };
+        let m = build_tree(&y_tree(), &options, 3).expect("builds");
+        m.validate().expect("valid");
+        let without = build_tree(&y_tree(), &plain, 3).expect("builds");
+        assert_eq!(m.stats.leaves, without.stats.leaves);
+        let leaves = &m.meshes[1];
+        let lod = &leaves.extras["lod"];
+        let originals = lod["leaves"].as_u64().expect("leaves");
+        let roots = lod["roots"].as_u64().expect("roots");
+        assert_eq!(originals, m.stats.leaves);
+        assert!(roots < originals, "{roots} roots of {originals}");
+        // |M| = |O| + collapses = 2|O| - |R| quads, six indices each.
+        assert_eq!(leaves.positions.len() as u64, 4 * (2 * originals - roots));
+        assert_eq!(leaves.indices.len() as u64, 6 * (2 * originals - roots));
+        let rows = lod["table"].as_array().expect("table");
+        assert_eq!(rows.len() as u64, originals - roots + 1);
+        assert_eq!(rows.last().expect("finest")[0], originals);
+        // Deterministic, bytes included.
+        let again = build_tree(&y_tree(), &options, 3).expect("builds");
+        assert_eq!(again.meshes[1].positions, leaves.positions);
+    }
+
+    #[test]
+    fn lod_on_a_tree_without_leaves_is_a_warning() {
+        let options = TreeOptions {
+            lod: Some(pge_lod::LodOptions {
+                source: "oak.lua:3".into(),
+                ..pge_lod::LodOptions::default()
+            }),
+            ..TreeOptions::default()
+        };
+        let m = build_tree(&y_tree(), &options, 1).expect("builds");
+        assert_eq!(m.meshes.len(), 1);
+        assert_eq!(m.stats.warnings.len(), 1);
+        assert!(
+            m.stats.warnings[0].starts_with("oak.lua:3: warning: lod: the tree has no leaves"),
+            "{:?}",
+            m.stats.warnings
         );
     }
 

@@ -11,6 +11,7 @@
 //!            smoothing = 0, radii = "pipe", color = "#6b5444", texture = "bark.png" },
 //!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
 //!              texture = "leaf.png" },
+//!   lod = { sectors = 1, atlas = false },      -- foliage levels of detail (pge_lod)
 //! }
 //! ```
 //! Keys inside `mesh` take precedence over the shorthands. Unknown keys inside `mesh`,
@@ -24,6 +25,8 @@ use pge_engine::lua::{Bounds, Options, error_message, resolve_path, script_error
 
 use crate::options::{LeafOptions, MeshOptions, RadiiMode, TextureSource, TreeOptions};
 use crate::textures::load_png;
+
+pub use pge_lod::lua::lod_options;
 
 /// Reads [`TreeOptions`] from a generator's options (the keys in the module docs), then
 /// resolves texture paths next to the calling script (recorded for live reload) and loads
@@ -70,7 +73,8 @@ pub fn tree_options(o: &Options) -> mlua::Result<TreeOptions> {
             return Err(o.wrong_type("leaves", "a table of leaf options or false", &other));
         }
     };
-    let mut options = TreeOptions { mesh, leaves };
+    let lod = pge_lod::lua::lod_options(o)?;
+    let mut options = TreeOptions { mesh, leaves, lod };
     load_texture(o, "mesh.texture", "bark", &mut options.mesh.texture)?;
     if let Some(leaves) = &mut options.leaves {
         load_texture(o, "leaves.texture", "leaf", &mut leaves.texture)?;

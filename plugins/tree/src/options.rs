@@ -114,6 +114,9 @@ pub struct TreeOptions {
     /// Tip leaves; `None` for none. Leaf points already in the skeleton (a turtle's `~`) are
     /// meshed either way, styled by these options or their defaults.
     pub leaves: Option<LeafOptions>,
+    /// Foliage levels of detail (API.md §6-7): the leaf mesh is simplified and written in
+    /// the order of the vector V with its LOD table in the extras; `None` for none.
+    pub lod: Option<pge_lod::LodOptions>,
 }
 
 const DEFAULT_BARK: &str = "#6b5444";

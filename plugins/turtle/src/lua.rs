@@ -17,6 +17,7 @@ pub struct LuaTurtle {
     pub turtle: Turtle,
     mesh: MeshOptions,
     leaves: Option<LeafOptions>,
+    lod: Option<pge_tree::LodOptions>,
     palette: Vec<[f32; 4]>,
 }
 
@@ -73,6 +74,7 @@ impl LuaTurtle {
             }
             None => None,
         };
+        let lod = pge_tree::lua::lod_options(o)?;
         if let Some(v) = o.number_f32("leafSize", at_least_0)? {
             t.leaf_size = v;
         }
@@ -103,6 +105,7 @@ impl LuaTurtle {
             turtle: Turtle::new(t),
             mesh,
             leaves,
+            lod,
             palette,
         })
     }
@@ -118,6 +121,7 @@ impl LuaTurtle {
             let options = TreeOptions {
                 mesh,
                 leaves: self.leaves.clone(),
+                lod: self.lod.clone(),
             };
             let part = build_tree(skeleton, &options, seed.wrapping_add(u64::from(*color)))?;
             model.add_model(&part, Mat4::IDENTITY);

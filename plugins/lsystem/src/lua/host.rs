@@ -12,8 +12,8 @@ use rand_mt::Mt;
 
 use super::config::{Config, LuaRule};
 use super::symbols::SymbolTags;
-use crate::system::uniform;
 use crate::{Host, LsError, ModuleString, Sym, SymbolTable, System};
+use pge_engine::random::uniform;
 
 /// Why a step stopped: a Lua error, an engine error, or a rewriting error.
 #[derive(Debug)]

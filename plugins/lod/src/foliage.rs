@@ -1,0 +1,436 @@
+//! A leaf mesh with levels of detail: its quads simplified (per sector), laid out in the
+//! order of V, with the LOD table in the mesh's extras (API.md §7).
+
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec4};
+use pge_engine::geometry::{GeometryError, Material, Mesh, Primitive};
+use serde_json::{Value, json};
+
+use crate::atlas::Atlas;
+use crate::leaf::Leaf;
+use crate::simplify::{Axis, Chain, Selection, simplify};
+use crate::vector::LodTable;
+
+/// The most sectors a tree can be cut into.
+pub const MAX_SECTORS: u32 = 64;
+
+/// How a leaf mesh gets its levels of detail (Lua: `lod = { sectors = n, atlas = bool }`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodOptions {
+    /// Angular sectors around the tree's axis, each simplified on its own so a renderer can
+    /// draw visible sectors finer (the thesis' ERA, seed 003 §2.5.2); 1..=64, default 1.
+    pub sectors: u32,
+    /// Texture collapsed leaves from a procedural atlas of leaf clusters embedded in the leaf
+    /// material (default false: they stretch the single leaf texture, as the FSA did).
+    pub atlas: bool,
+    /// The collapse distance's weights and bounds, and the tree's axis.
+    pub selection: Selection,
+    /// Where the option was given (`FILE:LINE`, set by a Lua adapter) so that warnings point
+    /// at it; empty when unknown.
+    pub source: String,
+}
+
+impl Default for LodOptions {
+    fn default() -> Self {
+        LodOptions {
+            sectors: 1,
+            atlas: false,
+            selection: Selection::default(),
+            source: String::new(),
+        }
+    }
+}
+
+/// Why a leaf mesh could not be given levels of detail.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LodError {
+    /// The mesh is not made of quads (four vertices per leaf, triangles).
+    #[error("a leaf mesh must be triangles with four vertices per leaf, got {vertices} vertices")]
+    NotQuads {
+        /// Its vertex count.
+        vertices: usize,
+    },
+    /// A leaf is degenerate (no area) or not finite.
+    #[error("leaf {index} is degenerate or not finite")]
+    Leaf {
+        /// The leaf's index (0-based).
+        index: usize,
+    },
+    /// `sectors` is outside 1..=64.
+    #[error("sectors must be an integer between 1 and {MAX_SECTORS}, got {0}")]
+    Sectors(u32),
+    /// The atlas needs the leaf material's texture.
+    #[error("atlas: the leaf material has no texture to draw clusters with")]
+    NoTexture,
+    /// The atlas texture could not be made.
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+}
+
+/// One sector's part of V: its leaves are `offset..offset + table.order.len()` of the mesh,
+/// and its table's ranges are relative to `offset`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sector {
+    /// First leaf of the sector in the mesh (in leaves; six indices each).
+    pub offset: u32,
+    /// The sector's V and LOD table (labels are the sector's own).
+    pub table: LodTable,
+}
+
+/// The leaves of a quad mesh as [`Leaf`]s (four vertices per leaf, in the order of
+/// [`Leaf::corners`]), with the first vertex's normal when the mesh has normals.
+pub fn leaves_of(mesh: &Mesh) -> Result<Vec<Leaf>, LodError> {
+    let n = mesh.positions.len();
+    if mesh.primitive != Primitive::Triangles || !n.is_multiple_of(4) {
+        return Err(LodError::NotQuads { vertices: n });
+    }
+    (0..n / 4)
+        .map(|k| {
+            let p = [0, 1, 2, 3].map(|j| mesh.positions[4 * k + j]);
+            Leaf::from_quad(p, mesh.normals.get(4 * k).copied()).ok_or(LodError::Leaf { index: k })
+        })
+        .collect()
+}
+
+/// The sector of a point: its angle around the axis, in `n` equal sectors.
+fn sector_of(axis: &Axis, basis: (Vec3, Vec3), p: Vec3, n: u32) -> usize {
+    let d = p - axis.origin;
+    let angle = d.dot(basis.1).atan2(d.dot(basis.0)); // -pi..=pi
+    let t = (angle + std::f32::consts::PI) / std::f32::consts::TAU;
+    ((t * n as f32) as u32).min(n - 1) as usize
+}
+
+/// The default axis: vertical through the centre of the leaves' bounding box, from its
+/// bottom.
+fn default_axis(leaves: &[Leaf]) -> Axis {
+    let (lo, hi) = leaves.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), l| (lo.min(l.center), hi.max(l.center)),
+    );
+    let mid = (lo + hi) * 0.5;
+    Axis {
+        origin: Vec3::new(mid.x, lo.y, mid.z),
+        direction: Vec3::Y,
+    }
+}
+
+/// Simplifies `leaves` per sector: the sectors' collapse chains (labels local to each
+/// sector) and, for each, the indices of its original leaves in `leaves`.
+#[must_use]
+pub fn simplify_sectors(leaves: &[Leaf], options: &LodOptions) -> Vec<(Chain, Vec<u32>)> {
+    let n = options.sectors.clamp(1, MAX_SECTORS);
+    let axis = options
+        .selection
+        .axis
+        .unwrap_or_else(|| default_axis(leaves));
+    let basis = axis.direction.any_orthonormal_pair();
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); n as usize];
+    for (i, leaf) in leaves.iter().enumerate() {
+        members[sector_of(&axis, basis, leaf.center, n)].push(i as u32);
+    }
+    let selection = Selection {
+        axis: Some(axis),
+        ..options.selection
+    };
+    members
+        .into_iter()
+        .map(|ids| {
+            let own: Vec<Leaf> = ids.iter().map(|&i| leaves[i as usize]).collect();
+            (simplify(&own, &selection), ids)
+        })
+        .collect()
+}
+
+/// Gives a leaf mesh levels of detail: its quads ([`leaves_of`]) are simplified per sector
+/// ([`simplify_sectors`]), each sector laid out as V with its table ([`LodTable`]), and the
+/// mesh rebuilt with four vertices per leaf of V in V's order (sectors one after another)
+/// and six indices per leaf in the same order, so the index buffer is V. Original leaves
+/// keep their vertices; a collapsed leaf gets its rectangle, its normal, the mean colour of
+/// the leaves it stands for, and texture coordinates covering the whole leaf texture or,
+/// with `options.atlas`, the atlas cell chosen by its count and density (the material then
+/// carries the atlas and original leaves map into its single-leaf cell).
+///
+/// The mesh's `extras.pge.lod` is `{leaves = |O|, roots = |R|, table = [[a, b, c], ...]}`
+/// (one sector) or `{leaves, roots, sectors = [{offset, leaves, roots, table}, ...]}` with
+/// each sector's table relative to its offset (in leaves).
+pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>), LodError> {
+    if !(1..=MAX_SECTORS).contains(&options.sectors) {
+        return Err(LodError::Sectors(options.sectors));
+    }
+    let leaves = leaves_of(mesh)?;
+    let atlas = if options.atlas {
+        let texture = mesh.material.texture.as_ref().ok_or(LodError::NoTexture)?;
+        Some(Atlas::new(texture)?)
+    } else {
+        None
+    };
+    let sectors = simplify_sectors(&leaves, options);
+    let total: usize = sectors.iter().map(|(c, _)| c.leaves.len()).sum();
+    let mut out = Mesh {
+        name: mesh.name.clone(),
+        material: match &atlas {
+            Some(a) => Arc::new(Material {
+                texture: Some(a.texture.clone()),
+                ..(*mesh.material).clone()
+            }),
+            None => mesh.material.clone(),
+        },
+        skeleton: mesh.skeleton.clone(),
+        extras: mesh.extras.clone(),
+        ..Mesh::default()
+    };
+    let (has_n, has_uv, has_c) = (
+        !mesh.normals.is_empty(),
+        !mesh.uvs.is_empty(),
+        !mesh.colors.is_empty(),
+    );
+    out.positions.reserve(total * 4);
+    out.indices.reserve(total * 6);
+    let mut result = Vec::with_capacity(sectors.len());
+    let mut offset = 0u32;
+    for (chain, ids) in &sectors {
+        let table = LodTable::new(chain);
+        let colors = has_c.then(|| chain_colors(chain, ids, &mesh.colors));
+        for &label in &table.order {
+            let base = out.positions.len() as u32;
+            let l = label as usize;
+            if l < chain.originals {
+                let v = 4 * ids[l] as usize;
+                out.positions.extend_from_slice(&mesh.positions[v..v + 4]);
+                if has_n {
+                    out.normals.extend_from_slice(&mesh.normals[v..v + 4]);
+                }
+                if has_uv {
+                    let uvs = &mesh.uvs[v..v + 4];
+                    match &atlas {
+                        Some(a) => out.uvs.extend(uvs.iter().map(|&uv| a.cells[0].map(uv))),
+                        None => out.uvs.extend_from_slice(uvs),
+                    }
+                }
+                if has_c {
+                    out.colors.extend_from_slice(&mesh.colors[v..v + 4]);
+                }
+            } else {
+                let leaf = &chain.leaves[l];
+                out.positions.extend_from_slice(&leaf.corners());
+                if has_n {
+                    out.normals.extend_from_slice(&[leaf.normal; 4]);
+                }
+                if has_uv {
+                    let (min, max) = match &atlas {
+                        Some(a) => {
+                            let cell = a.cell_for(leaf.count, leaf.leaf_area / leaf.area());
+                            (cell.min, cell.max)
+                        }
+                        None => (Vec2::ZERO, Vec2::ONE),
+                    };
+                    out.uvs.extend_from_slice(&[
+                        min,
+                        Vec2::new(max.x, min.y),
+                        max,
+                        Vec2::new(min.x, max.y),
+                    ]);
+                }
+                if let Some(c) = &colors {
+                    out.colors.extend_from_slice(&[c[l]; 4]);
+                }
+            }
+            out.indices
+                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+        let len = table.order.len() as u32;
+        result.push(Sector { offset, table });
+        offset += len;
+    }
+    let lod = lod_extras(&result);
+    out.extras.insert("lod".into(), lod);
+    Ok((out, result))
+}
+
+/// Every leaf's colour: an original leaf's mean vertex colour, a new leaf's the mean of its
+/// children's weighted by the leaves they stand for.
+fn chain_colors(chain: &Chain, ids: &[u32], colors: &[Vec4]) -> Vec<Vec4> {
+    let mut out = Vec::with_capacity(chain.leaves.len());
+    for &i in ids {
+        let v = 4 * i as usize;
+        out.push(colors[v..v + 4].iter().copied().sum::<Vec4>() * 0.25);
+    }
+    for [a, b] in &chain.children {
+        let (wa, wb) = (
+            chain.leaves[*a as usize].count as f32,
+            chain.leaves[*b as usize].count as f32,
+        );
+        out.push((out[*a as usize] * wa + out[*b as usize] * wb) / (wa + wb));
+    }
+    out
+}
+
+fn table_json(table: &LodTable) -> Value {
+    Value::Array(table.rows.iter().map(|r| json!([r.a, r.b, r.c])).collect())
+}
+
+/// The `extras.pge.lod` object of API.md §7 (see [`lod_mesh`]).
+#[must_use]
+pub fn lod_extras(sectors: &[Sector]) -> Value {
+    let leaves: u32 = sectors.iter().map(|s| s.table.originals).sum();
+    let roots: u32 = sectors.iter().map(|s| s.table.roots).sum();
+    if let [one] = sectors {
+        json!({ "leaves": leaves, "roots": roots, "table": table_json(&one.table) })
+    } else {
+        let list: Vec<Value> = sectors
+            .iter()
+            .map(|s| {
+                json!({
+                    "offset": s.offset,
+                    "leaves": s.table.originals,
+                    "roots": s.table.roots,
+                    "table": table_json(&s.table),
+                })
+            })
+            .collect();
+        json!({ "leaves": leaves, "roots": roots, "sectors": list })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A ring of `n` small square leaves around the Y axis, facing outwards, coloured by
+    /// index.
+    fn ring(n: usize) -> Mesh {
+        let mut mesh = Mesh::default();
+        for i in 0..n {
+            let t = i as f32 / n as f32 * std::f32::consts::TAU;
+            let normal = Vec3::new(t.cos(), 0.0, t.sin());
+            let leaf = Leaf {
+                center: normal * 3.0 + Vec3::Y * (2.0 + (i % 3) as f32 * 0.1),
+                normal,
+                axis: Vec3::Y,
+                half_length: 0.2,
+                half_width: 0.2,
+                count: 1,
+                leaf_area: 0.16,
+                lo: Vec3::splat(-1.0),
+                hi: Vec3::splat(1.0),
+            };
+            mesh.positions.extend_from_slice(&leaf.corners());
+            mesh.normals.extend_from_slice(&[normal; 4]);
+            mesh.uvs
+                .extend_from_slice(&[Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
+            mesh.colors
+                .extend_from_slice(&[Vec4::new(i as f32 / n as f32, 0.5, 0.0, 1.0); 4]);
+            let b = 4 * i as u32;
+            mesh.indices
+                .extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
+        }
+        mesh
+    }
+
+    #[test]
+    fn the_mesh_is_written_in_the_order_of_v() {
+        let mesh = ring(120);
+        let (out, sectors) = lod_mesh(&mesh, &LodOptions::default()).expect("lod");
+        out.validate().expect("valid");
+        let table = &sectors[0].table;
+        assert_eq!(out.positions.len(), 4 * table.order.len());
+        assert!(table.roots < 60, "{} roots", table.roots);
+        // The finest level draws the original quads, unchanged.
+        let [first, second] = table.ranges(table.levels() - 1);
+        assert_eq!((first.clone(), second.len()), (0..120, 0));
+        let mut originals: Vec<[u32; 3]> = first
+            .map(|k| {
+                let p = out.positions[4 * k];
+                [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
+            })
+            .collect();
+        let mut expected: Vec<[u32; 3]> = (0..120)
+            .map(|k| {
+                let p = mesh.positions[4 * k];
+                [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
+            })
+            .collect();
+        originals.sort_unstable();
+        expected.sort_unstable();
+        assert_eq!(originals, expected);
+        let lod = &out.extras["lod"];
+        assert_eq!(lod["leaves"], 120);
+        assert_eq!(lod["roots"], table.roots);
+        assert_eq!(
+            lod["table"][0],
+            json!([table.rows[0].a, table.rows[0].b, table.rows[0].c])
+        );
+        // Indices are sequential quads: the index buffer is V.
+        assert_eq!(&out.indices[6..12], &[4, 5, 6, 4, 6, 7]);
+    }
+
+    #[test]
+    fn sectors_keep_their_leaves_apart() {
+        let mesh = ring(96);
+        let options = LodOptions {
+            sectors: 4,
+            ..LodOptions::default()
+        };
+        let (out, sectors) = lod_mesh(&mesh, &options).expect("lod");
+        assert_eq!(sectors.len(), 4);
+        let mut offset = 0;
+        for s in &sectors {
+            assert_eq!(s.offset, offset);
+            offset += s.table.order.len() as u32;
+            // Every leaf of a sector lies in its quarter of the ring.
+            let dirs: Vec<Vec3> = (s.offset as usize..offset as usize)
+                .map(|k| {
+                    let c = (0..4).map(|j| out.positions[4 * k + j]).sum::<Vec3>();
+                    Vec3::new(c.x, 0.0, c.z).normalize()
+                })
+                .collect();
+            let mean = dirs.iter().sum::<Vec3>().normalize();
+            for d in &dirs {
+                assert!(d.dot(mean) > (std::f32::consts::FRAC_PI_4 + 0.1).cos());
+            }
+        }
+        assert_eq!(
+            offset,
+            2 * 96 - sectors.iter().map(|s| s.table.roots).sum::<u32>()
+        );
+        assert_eq!(
+            out.extras["lod"]["sectors"].as_array().map(Vec::len),
+            Some(4)
+        );
+        assert_eq!(out.extras["lod"]["leaves"], 96);
+    }
+
+    #[test]
+    fn bad_meshes_and_options_are_errors() {
+        let mut mesh = ring(3);
+        let e = lod_mesh(
+            &mesh,
+            &LodOptions {
+                sectors: 65,
+                ..LodOptions::default()
+            },
+        )
+        .expect_err("sectors");
+        assert_eq!(
+            e.to_string(),
+            "sectors must be an integer between 1 and 64, got 65"
+        );
+        let atlas = LodOptions {
+            atlas: true,
+            ..LodOptions::default()
+        };
+        assert!(matches!(lod_mesh(&mesh, &atlas), Err(LodError::NoTexture)));
+        mesh.positions.pop();
+        assert!(matches!(
+            leaves_of(&mesh),
+            Err(LodError::NotQuads { vertices: 11 })
+        ));
+        let mut flat = ring(2);
+        for p in &mut flat.positions[4..8] {
+            *p = Vec3::ONE;
+        }
+        assert!(matches!(leaves_of(&flat), Err(LodError::Leaf { index: 1 })));
+    }
+}

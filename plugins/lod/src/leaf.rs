@@ -1,0 +1,256 @@
+//! A leaf as the simplification sees it (a textured rectangle), and the new leaf that
+//! replaces two collapsed ones (seed 003, §2.4.2 "Generación de las hojas nuevas").
+
+use glam::Vec3;
+
+/// One leaf of the collapse forest: an original leaf of the model or one made by a collapse.
+///
+/// The rectangle is centred on `center`, spans `2 * half_length` along `axis` (the texture's
+/// `v`, from the stalk at `v = 0` to the tip) and `2 * half_width` along [`Leaf::side`] (the
+/// texture's `u`); `normal` is its front face (`side × axis`, as pge-tree winds its quads).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Leaf {
+    /// Centre of the rectangle.
+    pub center: Vec3,
+    /// Unit normal of the front face.
+    pub normal: Vec3,
+    /// Unit main axis, in the leaf's plane.
+    pub axis: Vec3,
+    /// Half the extent along `axis`.
+    pub half_length: f32,
+    /// Half the extent along [`Leaf::side`].
+    pub half_width: f32,
+    /// Original leaves represented (1 for an original leaf).
+    pub count: u32,
+    /// Summed area of the original leaves represented (the foliage the rectangle stands for;
+    /// divided by [`Leaf::area`] it is the density that chooses an atlas cell).
+    pub leaf_area: f32,
+    /// Lower corner of the box around the original leaves represented.
+    pub lo: Vec3,
+    /// Upper corner of that box.
+    pub hi: Vec3,
+}
+
+impl Leaf {
+    /// The unit secondary axis `axis × normal` (the texture's `u`).
+    #[must_use]
+    pub fn side(&self) -> Vec3 {
+        self.axis.cross(self.normal)
+    }
+
+    /// Area of the rectangle.
+    #[must_use]
+    pub fn area(&self) -> f32 {
+        4.0 * self.half_length * self.half_width
+    }
+
+    /// Half the rectangle's diagonal: the radius of the sphere around it.
+    #[must_use]
+    pub fn radius(&self) -> f32 {
+        (self.half_length * self.half_length + self.half_width * self.half_width).sqrt()
+    }
+
+    /// The four corners in the order of texture coordinates (0,0), (1,0), (1,1), (0,1):
+    /// counter-clockwise seen from the front.
+    #[must_use]
+    pub fn corners(&self) -> [Vec3; 4] {
+        let a = self.axis * self.half_length;
+        let s = self.side() * self.half_width;
+        let c = self.center;
+        [c - s - a, c + s - a, c + s + a, c - s + a]
+    }
+
+    /// An original leaf from a quad's corners in the order of [`Leaf::corners`] (`p0 p1` the
+    /// stalk edge, `p3 p2` the tip edge) and its normal (from the corners when `None`): the
+    /// rectangle with the quad's centre and axes that bounds it. `None` for a degenerate or
+    /// non-finite quad.
+    #[must_use]
+    pub fn from_quad(p: [Vec3; 4], normal: Option<Vec3>) -> Option<Leaf> {
+        if p.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let center = (p[0] + p[1] + p[2] + p[3]) * 0.25;
+        let from_corners = (p[1] - p[0]).cross(p[3] - p[0]).try_normalize();
+        let normal = normal.and_then(Vec3::try_normalize).or(from_corners)?;
+        let along = (p[2] + p[3]) - (p[0] + p[1]);
+        let axis = (along - normal * along.dot(normal)).try_normalize()?;
+        let side = axis.cross(normal);
+        let half_length = p
+            .iter()
+            .map(|v| (*v - center).dot(axis).abs())
+            .fold(0.0, f32::max);
+        let half_width = p
+            .iter()
+            .map(|v| (*v - center).dot(side).abs())
+            .fold(0.0, f32::max);
+        let leaf = Leaf {
+            center,
+            normal,
+            axis,
+            half_length,
+            half_width,
+            count: 1,
+            leaf_area: 0.0,
+            lo: p[0].min(p[1]).min(p[2]).min(p[3]),
+            hi: p[0].max(p[1]).max(p[2]).max(p[3]),
+        };
+        let area = leaf.area();
+        (area > 0.0 && area.is_finite()).then_some(Leaf {
+            leaf_area: area,
+            ..leaf
+        })
+    }
+
+    /// The leaf that replaces `a` and `b` (seed 003 §2.4.2, steps 1-4):
+    /// 1. its centre is the mean of both centres weighted by the leaves each represents;
+    /// 2. its normal the weighted mean of both normals (leaves are double-sided, so `b`'s
+    ///    normal is flipped first when it faces away from `a`'s);
+    /// 3. both leaves' corners are projected orthographically on the plane through that
+    ///    centre; the line through the projected centres is the main axis, the secondary
+    ///    axis is perpendicular to it, and the rectangle on these axes that contains both
+    ///    projections is the bounding quad. The new leaf is centred on that rectangle (the
+    ///    weighted centre lies on its main axis): a rectangle symmetric about the weighted
+    ///    centre would reach past the leaves on the lighter side, and over many levels the
+    ///    coarse leaves would outgrow the crown;
+    /// 4. its area lies between the summed areas and the bounding area: the mean of the two
+    ///    (the thesis' rule) when the bounding quad is the larger, so sparse pairs shrink;
+    ///    the bounding area when the leaves overlap so much that their summed area is the
+    ///    larger, so the quad never reaches past the leaves it replaces. The bounding quad is
+    ///    scaled about its centre to that area.
+    #[must_use]
+    pub fn collapse(a: &Leaf, b: &Leaf) -> Leaf {
+        let (wa, wb) = (a.count as f32, b.count as f32);
+        let center = (a.center * wa + b.center * wb) / (wa + wb);
+        let nb = if a.normal.dot(b.normal) < 0.0 {
+            -b.normal
+        } else {
+            b.normal
+        };
+        let normal = (a.normal * wa + nb * wb)
+            .try_normalize()
+            .unwrap_or(a.normal);
+        let project = |p: Vec3| p - normal * (p - center).dot(normal);
+        let in_plane = |v: Vec3| (v - normal * v.dot(normal)).try_normalize();
+        let bigger = if b.area() > a.area() { b } else { a };
+        let axis = in_plane(project(b.center) - project(a.center))
+            .or_else(|| in_plane(bigger.axis))
+            .or_else(|| in_plane(bigger.side()))
+            .unwrap_or_else(|| normal.any_orthonormal_vector());
+        let side = axis.cross(normal);
+        let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+        for p in a.corners().into_iter().chain(b.corners()) {
+            let d = project(p) - center;
+            let q = glam::Vec2::new(d.dot(axis), d.dot(side));
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+        let mid = (lo + hi) * 0.5;
+        let center = center + axis * mid.x + side * mid.y;
+        let (mut half_length, mut half_width) = (0.5 * (hi.x - lo.x), 0.5 * (hi.y - lo.y));
+        let bounding = 4.0 * half_length * half_width;
+        let summed = a.area() + b.area();
+        let target = (0.5 * (summed + bounding)).min(bounding);
+        if bounding > 0.0 {
+            let s = (target / bounding).sqrt();
+            half_length *= s;
+            half_width *= s;
+        } else {
+            // Both leaves project onto a segment or a point: a square of the summed area.
+            half_length = 0.5 * summed.sqrt();
+            half_width = half_length;
+        }
+        Leaf {
+            center,
+            normal,
+            axis,
+            half_length,
+            half_width,
+            count: a.count + b.count,
+            leaf_area: a.leaf_area + b.leaf_area,
+            lo: a.lo.min(b.lo),
+            hi: a.hi.max(b.hi),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(center: Vec3, normal: Vec3, axis: Vec3, half: f32) -> Leaf {
+        Leaf {
+            center,
+            normal,
+            axis,
+            half_length: half,
+            half_width: half,
+            count: 1,
+            leaf_area: 4.0 * half * half,
+            lo: center - Vec3::splat(half),
+            hi: center + Vec3::splat(half),
+        }
+    }
+
+    fn close(a: f32, b: f32) -> bool {
+        (a - b).abs() <= 1e-5 * (1.0 + a.abs().max(b.abs()))
+    }
+
+    #[test]
+    fn a_quad_round_trips_through_its_corners() {
+        let leaf = square(Vec3::new(1.0, 2.0, 3.0), Vec3::Z, Vec3::Y, 0.5);
+        let back = Leaf::from_quad(leaf.corners(), Some(Vec3::Z)).expect("quad");
+        assert!(back.center.abs_diff_eq(leaf.center, 1e-6));
+        assert!(back.axis.abs_diff_eq(Vec3::Y, 1e-6));
+        assert!(close(back.area(), 1.0));
+        // Winding: counter-clockwise around the normal, and the normal found from corners.
+        let guessed = Leaf::from_quad(leaf.corners(), None).expect("quad");
+        assert!(guessed.normal.abs_diff_eq(Vec3::Z, 1e-6));
+        assert!(Leaf::from_quad([Vec3::ZERO; 4], None).is_none());
+        let mut bad = leaf.corners();
+        bad[2].x = f32::NAN;
+        assert!(Leaf::from_quad(bad, None).is_none());
+    }
+
+    #[test]
+    fn two_side_by_side_leaves_become_one_containing_both() {
+        let a = square(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.5);
+        let b = square(Vec3::new(1.0, 0.0, 0.0), Vec3::Z, Vec3::Y, 0.5);
+        let c = Leaf::collapse(&a, &b);
+        assert!(c.center.abs_diff_eq(Vec3::new(0.5, 0.0, 0.0), 1e-6));
+        assert!(c.normal.abs_diff_eq(Vec3::Z, 1e-6));
+        // Main axis through the two centres.
+        assert!(c.axis.abs_diff_eq(Vec3::X, 1e-6) || c.axis.abs_diff_eq(-Vec3::X, 1e-6));
+        // They tile a 2 x 1 rectangle exactly: summed area = bounding area = 2.
+        assert!(close(c.area(), 2.0), "{}", c.area());
+        assert_eq!(c.count, 2);
+        assert!(close(c.leaf_area, 2.0));
+    }
+
+    #[test]
+    fn the_new_area_is_the_mean_of_summed_and_bounding_areas() {
+        // Far apart: the bounding quad (3 x 1) is larger than the sum (2).
+        let a = square(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.5);
+        let b = square(Vec3::new(2.0, 0.0, 0.0), Vec3::Z, Vec3::Y, 0.5);
+        assert!(close(Leaf::collapse(&a, &b).area(), 0.5 * (2.0 + 3.0)));
+        // Overlapping exactly: bounding area 1, summed 2: the bounding area.
+        let c = Leaf::collapse(&a, &a);
+        assert!(close(c.area(), 1.0), "{}", c.area());
+    }
+
+    #[test]
+    fn centre_and_normal_are_weighted_by_represented_leaves() {
+        let mut a = square(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.5);
+        a.count = 3;
+        let b = square(Vec3::new(4.0, 0.0, 0.0), Vec3::X, Vec3::Y, 0.5);
+        let c = Leaf::collapse(&a, &b);
+        // The weighted centre (1, 0, 0) lies on the new leaf's main axis.
+        let off = c.center - Vec3::new(1.0, 0.0, 0.0);
+        assert!((off - c.axis * off.dot(c.axis)).length() < 1e-5);
+        let expected = (Vec3::Z * 3.0 + Vec3::X).normalize();
+        assert!(c.normal.abs_diff_eq(expected, 1e-6));
+        // A leaf facing the other way is the same double-sided leaf.
+        let flipped = square(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z, Vec3::Y, 0.5);
+        let d = Leaf::collapse(&a, &flipped);
+        assert!(d.normal.abs_diff_eq(Vec3::Z, 1e-6));
+    }
+}
