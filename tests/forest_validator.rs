@@ -8,26 +8,7 @@ mod common;
 use std::path::PathBuf;
 use std::process::Command;
 
-use common::{pge, root};
-
-const VALIDATOR_VERSION: &str = "2.0.0-dev.3.10";
-
-fn validator_dir() -> PathBuf {
-    let dir = root().join("target").join("gltf-validator");
-    if dir.join("node_modules").join("gltf-validator").exists() {
-        return dir;
-    }
-    std::fs::create_dir_all(&dir).expect("create target/gltf-validator");
-    let status = Command::new("npm")
-        .args(["install", "--prefix"])
-        .arg(&dir)
-        .arg(format!("gltf-validator@{VALIDATOR_VERSION}"))
-        .args(["--no-audit", "--no-fund", "--silent"])
-        .status()
-        .expect("npm is needed to install the glTF validator (apt-get install nodejs npm)");
-    assert!(status.success(), "npm install gltf-validator failed");
-    dir
-}
+use common::{pge, root, validator_dir};
 
 #[test]
 fn every_forest_script_writes_a_valid_glb_in_both_instancing_forms() {

@@ -5,29 +5,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const VALIDATOR_VERSION: &str = "2.0.0-dev.3.10";
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// The folder holding `node_modules/gltf-validator`, installing it if needed.
-fn validator_dir() -> PathBuf {
-    let dir = root().join("target").join("gltf-validator");
-    if dir.join("node_modules").join("gltf-validator").exists() {
-        return dir;
-    }
-    std::fs::create_dir_all(&dir).expect("create target/gltf-validator");
-    let status = Command::new("npm")
-        .args(["install", "--prefix"])
-        .arg(&dir)
-        .arg(format!("gltf-validator@{VALIDATOR_VERSION}"))
-        .args(["--no-audit", "--no-fund", "--silent"])
-        .status()
-        .expect("npm is needed to install the glTF validator (apt-get install nodejs npm)");
-    assert!(status.success(), "npm install gltf-validator failed");
-    dir
-}
+use common::{root, validator_dir};
 
 /// The scripts `pge run` must turn into valid glb files: every `.lua` under `scripts/`
 /// except library modules (`lib/`) and scripts meant to be loaded by others.

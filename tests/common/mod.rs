@@ -23,3 +23,25 @@ pub fn pge_in(args: &[&str], cwd: &Path) -> Output {
         .output()
         .expect("the pge binary runs")
 }
+
+/// The version of the Khronos glTF validator (npm `gltf-validator`) the tests run.
+pub const VALIDATOR_VERSION: &str = "2.0.0-dev.3.10";
+
+/// The folder holding `node_modules/gltf-validator`, installing it into `target/` if needed
+/// (Node.js and npm are needed).
+pub fn validator_dir() -> PathBuf {
+    let dir = root().join("target").join("gltf-validator");
+    if dir.join("node_modules").join("gltf-validator").exists() {
+        return dir;
+    }
+    std::fs::create_dir_all(&dir).expect("create target/gltf-validator");
+    let status = Command::new("npm")
+        .args(["install", "--prefix"])
+        .arg(&dir)
+        .arg(format!("gltf-validator@{VALIDATOR_VERSION}"))
+        .args(["--no-audit", "--no-fund", "--silent"])
+        .status()
+        .expect("npm is needed to install the glTF validator (apt-get install nodejs npm)");
+    assert!(status.success(), "npm install gltf-validator failed");
+    dir
+}

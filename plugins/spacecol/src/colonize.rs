@@ -262,11 +262,8 @@ impl SpaceColonization {
 }
 
 impl State {
-    /// Adds a node and updates the points it changes: those within the kill distance die,
-    /// those within the influence radius that are closer to it than to their nearest node
-    /// take it as their nearest. The grid skips every other point without reading it (a
-    /// point's reach is its squared distance to its nearest node).
-    fn add_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
+    /// Appends a node (its per-node scratch and its cell) without touching the points.
+    fn push_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
         let index = self.nodes.len() as u32;
         self.nodes.push(position);
         self.parents.push(parent);
@@ -278,6 +275,15 @@ impl State {
             .entry(cell_of(position, p.step))
             .or_default()
             .push(index);
+        index
+    }
+
+    /// Adds a node and updates the points it changes: those within the kill distance die,
+    /// those within the influence radius that are closer to it than to their nearest node
+    /// take it as their nearest. The grid skips every other point without reading it (a
+    /// point's reach is its squared distance to its nearest node).
+    fn add_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
+        let index = self.push_node(position, parent, p);
         let k2 = p.kill * p.kill;
         let State {
             grid,
@@ -338,17 +344,7 @@ impl State {
                 self.add_node(position, start.parents[i], p);
                 continue;
             }
-            let index = self.nodes.len() as u32;
-            self.nodes.push(position);
-            self.parents.push(start.parents[i]);
-            self.refused.push(NONE);
-            self.sum.push(Vec3::ZERO);
-            self.count.push(0);
-            self.closest.push((f32::INFINITY, NONE));
-            self.node_cells
-                .entry(cell_of(position, p.step))
-                .or_default()
-                .push(index);
+            self.push_node(position, start.parents[i], p);
             let State {
                 grid,
                 alive,
