@@ -6,9 +6,8 @@
 mod common;
 
 use std::path::PathBuf;
-use std::process::Command;
 
-use common::{pge, root, validator_dir};
+use common::{pge, root, run_validator};
 
 #[test]
 fn every_forest_script_writes_a_valid_glb_in_both_instancing_forms() {
@@ -56,19 +55,9 @@ fn every_forest_script_writes_a_valid_glb_in_both_instancing_forms() {
             outputs.push(out);
         }
     }
-    let validator = validator_dir();
-    let o = Command::new("node")
-        .arg(root().join("tests/support/validate.js"))
-        .args(&outputs)
-        .env("NODE_PATH", validator.join("node_modules"))
-        .output()
-        .expect("node runs the validator");
-    let report = String::from_utf8_lossy(&o.stdout).to_string();
+    let (passed, report) = run_validator(&outputs);
     println!("{report}");
-    assert!(
-        o.status.success(),
-        "the glTF validator found errors:\n{report}"
-    );
+    assert!(passed, "the glTF validator found errors:\n{report}");
     assert_eq!(
         report.lines().filter(|l| l.contains(": 0 errors")).count(),
         outputs.len(),

@@ -7,7 +7,7 @@ use std::process::Command;
 
 mod common;
 
-use common::{root, validator_dir};
+use common::{root, run_validator};
 
 /// The scripts `pge run` must turn into valid glb files: every `.lua` under `scripts/`
 /// except library modules (`lib/`) and scripts meant to be loaded by others.
@@ -61,14 +61,7 @@ fn every_library_script_writes_a_valid_glb() {
         );
         outputs.push(out);
     }
-    let validator = validator_dir();
-    let o = Command::new("node")
-        .arg(root().join("tests/support/validate.js"))
-        .args(&outputs)
-        .env("NODE_PATH", validator.join("node_modules"))
-        .output()
-        .expect("node runs the validator");
-    let report = String::from_utf8_lossy(&o.stdout);
+    let (passed, report) = run_validator(&outputs);
     let report = outputs
         .iter()
         .zip(&scripts)
@@ -76,11 +69,7 @@ fn every_library_script_writes_a_valid_glb() {
             r.replace(&out.display().to_string(), &s.display().to_string())
         });
     println!("{report}");
-    assert!(
-        o.status.success(),
-        "the glTF validator found errors:\n{report}\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(passed, "the glTF validator found errors:\n{report}");
     assert_eq!(
         report.lines().filter(|l| l.contains(": 0 errors")).count(),
         scripts.len(),

@@ -45,3 +45,19 @@ pub fn validator_dir() -> PathBuf {
     assert!(status.success(), "npm install gltf-validator failed");
     dir
 }
+
+/// Runs the Khronos glTF validator on `files`: whether it passed, and its report (one line
+/// per file, `FILE: N errors, ...`; the validator's stderr follows when it failed).
+pub fn run_validator(files: &[PathBuf]) -> (bool, String) {
+    let o = Command::new("node")
+        .arg(root().join("tests/support/validate.js"))
+        .args(files)
+        .env("NODE_PATH", validator_dir().join("node_modules"))
+        .output()
+        .expect("node runs the validator");
+    let mut report = String::from_utf8_lossy(&o.stdout).to_string();
+    if !o.status.success() {
+        report.push_str(&String::from_utf8_lossy(&o.stderr));
+    }
+    (o.status.success(), report)
+}
