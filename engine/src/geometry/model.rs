@@ -190,27 +190,17 @@ impl Model {
     /// Vertices drawn, counting every instance (of groups too).
     #[must_use]
     pub fn vertex_count(&self) -> usize {
-        let grouped: usize = self
-            .groups
-            .iter()
-            .map(|g| {
-                g.transforms.len()
-                    * g.meshes
-                        .iter()
-                        .map(|&m| self.meshes[m].vertex_count())
-                        .sum::<usize>()
-            })
-            .sum();
-        self.instances
-            .iter()
-            .map(|i| self.meshes[i.mesh].vertex_count())
-            .sum::<usize>()
-            + grouped
+        self.drawn(Mesh::vertex_count)
     }
 
     /// Triangles drawn, counting every instance (of groups too).
     #[must_use]
     pub fn triangle_count(&self) -> usize {
+        self.drawn(Mesh::triangle_count)
+    }
+
+    /// The sum of `per_mesh` over every placement of a mesh, instances and groups alike.
+    fn drawn(&self, per_mesh: impl Fn(&Mesh) -> usize) -> usize {
         let grouped: usize = self
             .groups
             .iter()
@@ -218,13 +208,13 @@ impl Model {
                 g.transforms.len()
                     * g.meshes
                         .iter()
-                        .map(|&m| self.meshes[m].triangle_count())
+                        .map(|&m| per_mesh(&self.meshes[m]))
                         .sum::<usize>()
             })
             .sum();
         self.instances
             .iter()
-            .map(|i| self.meshes[i.mesh].triangle_count())
+            .map(|i| per_mesh(&self.meshes[i.mesh]))
             .sum::<usize>()
             + grouped
     }

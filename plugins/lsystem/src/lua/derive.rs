@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::io::{self, Write};
 
 use mlua::{Lua, Value};
-use pge_engine::{Algorithm, Error, Location, RunContext, Step};
+use pge_engine::{Error, Location, RunContext};
 
 use super::algorithm::LSystemAlgorithm;
 use super::object::LuaLSystem;
@@ -189,15 +189,7 @@ pub fn derive_value(
     };
     let skip = cfg.irules.is_empty() && cfg.rrules.is_empty();
     let mut algorithm = LSystemAlgorithm::new(lua, cfg, skip);
-    algorithm.init(ctx)?;
-    let mut taken = 0u32;
-    while ctx.steps.is_none_or(|n| taken < n) {
-        let step = algorithm.step(ctx)?;
-        taken += 1;
-        if step == Step::Done {
-            break;
-        }
-    }
+    pge_engine::algorithm::grow(&mut algorithm, ctx)?;
     let string = algorithm.string().clone();
     let mut externals = Vec::new();
     let mut slotted = string.clone();
