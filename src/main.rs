@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 
 mod common;
 mod derive;
+mod merge;
 mod output;
 #[cfg(feature = "preview")]
 mod preview;
@@ -33,6 +34,8 @@ enum Command {
     Preview(preview::PreviewArgs),
     /// Print the tiles of a forest with `tile = T` as JSON.
     Tiles(tiles::TilesArgs),
+    /// Join the tiles of a world directory (written by pge-world) into one .glb.
+    Merge(merge::MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +45,7 @@ fn main() -> ExitCode {
         #[cfg(feature = "preview")]
         Command::Preview(args) => preview::preview(args),
         Command::Tiles(args) => tiles::tiles(args),
+        Command::Merge(args) => merge::merge(args),
         Command::Derive(args) => args
             .script
             .engine()
