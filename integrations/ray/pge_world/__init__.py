@@ -1,0 +1,7 @@
+"""pge-world: grow a PGE forest world tile by tile, one Ray task per tile.
+
+The command line is :func:`pge_world.cli.main`; the manifest format is in
+:mod:`pge_world.manifest`.
+"""
+
+__version__ = "0.1.0"

@@ -1,0 +1,83 @@
+"""One tile on a worker: ``pge run SCRIPT --tile I,J``, its bytes and instance count.
+
+This module imports nothing from Ray, so the same function runs in a Ray task, in a test, or
+by hand.
+"""
+
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+
+
+class TileFailed(Exception):
+    """A tile that fails for good (a script error, no ``pge`` on the worker): retrying it
+    would fail again, so the run stops with this message."""
+
+
+def _die_with_parent():
+    """In the child: be killed when the worker that started us dies (Linux), so a killed
+    worker leaves no ``pge`` running on."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except OSError:
+            pass
+
+
+def last_line(text):
+    """The last non-empty line of ``text`` (pge prints its error as one line)."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1] if lines else ""
+
+
+def pge_args(script, seed, overrides, time_limit=None):
+    """The arguments every ``pge`` call of a world shares: script, seed, --set values."""
+    args = [script, "--seed", str(seed)]
+    for name, value in overrides:
+        args += ["--set", f"{name}={value}"]
+    if time_limit is not None:
+        args += ["--time-limit", str(time_limit)]
+    return args
+
+
+def grow_tile(program, script, seed, overrides, i, j, threads=1, time_limit=None):
+    """Runs ``pge run SCRIPT --tile I,J`` with ``program`` (a name looked up on this
+    machine's PATH, or a path) and returns ``{"glb": bytes, "instances": n, "node": host}``.
+
+    Raises :class:`TileFailed` when ``program`` is missing or ``pge`` exits with an error.
+    """
+    exe = shutil.which(program)
+    host = socket.gethostname()
+    if exe is None:
+        raise TileFailed(
+            f"no `{program}` program on the PATH of the worker on {host}: "
+            "install pge there, or pass --pge with its path on the workers"
+        )
+    with tempfile.TemporaryDirectory(prefix="pge-tile-") as folder:
+        out = os.path.join(folder, f"{i}_{j}.glb")
+        cmd = [exe, "run"] + pge_args(script, seed, overrides, time_limit)
+        cmd += ["--tile", f"{i},{j}", "-o", out, "-q", "--stats", "--threads", str(threads)]
+        proc = subprocess.run(
+            cmd,
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+            preexec_fn=_die_with_parent,
+        )
+        if proc.returncode != 0:
+            message = last_line(proc.stderr) or f"pge exited with status {proc.returncode}"
+            raise TileFailed(message)
+        try:
+            stats = json.loads(last_line(proc.stdout))
+            with open(out, "rb") as f:
+                glb = f.read()
+        except (OSError, ValueError) as e:
+            raise TileFailed(f"pge wrote no tile on {host}: {e}") from e
+    return {"glb": glb, "instances": int(stats.get("instances", 0)), "node": host}

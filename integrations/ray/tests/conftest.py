@@ -1,0 +1,91 @@
+"""A real local Ray cluster for the tests: a head and one extra worker node, on 127.0.0.1
+only, one CPU each, a small object store, no dashboard, session files in a temporary
+folder; stopped at the end of the session even when a test fails."""
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+FOREST = os.path.join(HERE, "forest.lua")
+OBJECT_STORE = str(80 * 1024 * 1024)
+
+
+def free_port():
+    """A TCP port nothing listens on at the moment."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def ray_bin():
+    """The `ray` program of this Python environment."""
+    path = os.path.join(os.path.dirname(sys.executable), "ray")
+    return path if os.path.exists(path) else shutil.which("ray")
+
+
+def node_ports():
+    """Every port a Ray node opens, chosen free, so two nodes on one machine never clash."""
+    return [
+        f"--node-manager-port={free_port()}",
+        f"--object-manager-port={free_port()}",
+        f"--metrics-export-port={free_port()}",
+        f"--dashboard-agent-listen-port={free_port()}",
+        f"--dashboard-agent-grpc-port={free_port()}",
+        f"--runtime-env-agent-port={free_port()}",
+    ]
+
+
+class Cluster:
+    """The running cluster: its address and the extra node's node-manager port."""
+
+    def __init__(self, address, worker_port, env):
+        self.address = address
+        self.worker_port = worker_port
+        self.env = env
+
+
+@pytest.fixture(scope="session")
+def pge_bin():
+    """The pge program under test: $PGE_BIN, else `pge` on the PATH."""
+    path = os.environ.get("PGE_BIN") or shutil.which("pge")
+    if not path:
+        pytest.fail("no pge on the PATH: build it (cargo build --release) and add target/release")
+    return os.path.abspath(path)
+
+
+@pytest.fixture(scope="session")
+def cluster(pge_bin):
+    """Starts the head and one worker node; `ray stop` at the end, whatever happened."""
+    temp = tempfile.mkdtemp(prefix="pgeray", dir="/tmp")
+    env = dict(os.environ)
+    env["PATH"] = os.path.dirname(pge_bin) + os.pathsep + env.get("PATH", "")
+    env["RAY_USAGE_STATS_ENABLED"] = "0"
+    env["RAY_TMPDIR"] = temp
+    ray = ray_bin()
+    port = free_port()
+    head = [
+        ray, "start", "--head", "--node-ip-address=127.0.0.1", f"--port={port}",
+        "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}", "--include-dashboard=false",
+        "--disable-usage-stats",
+    ] + node_ports()
+    worker_ports = node_ports()
+    worker = [
+        ray, "start", f"--address=127.0.0.1:{port}", "--node-ip-address=127.0.0.1",
+        "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}",
+    ] + worker_ports
+    try:
+        subprocess.run(head, env=env, check=True, capture_output=True, timeout=180)
+        subprocess.run(worker, env=env, check=True, capture_output=True, timeout=180)
+        manager = int(worker_ports[0].split("=")[1])
+        yield Cluster(f"127.0.0.1:{port}", manager, env)
+    except subprocess.CalledProcessError as e:
+        pytest.fail(f"ray start failed: {e.stderr.decode(errors='replace')[-2000:]}")
+    finally:
+        subprocess.run([ray, "stop", "--force"], env=env, capture_output=True, timeout=120)
+        shutil.rmtree(temp, ignore_errors=True)
