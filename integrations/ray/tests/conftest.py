@@ -16,11 +16,22 @@ FOREST = os.path.join(HERE, "forest.lua")
 OBJECT_STORE = str(80 * 1024 * 1024)
 
 
+def free_ports(n):
+    """``n`` distinct TCP ports nothing listens on at the moment (all bound at once, so the
+    kernel cannot hand out one twice)."""
+    sockets = [socket.socket() for _ in range(n)]
+    try:
+        for s in sockets:
+            s.bind(("127.0.0.1", 0))
+        return [s.getsockname()[1] for s in sockets]
+    finally:
+        for s in sockets:
+            s.close()
+
+
 def free_port():
     """A TCP port nothing listens on at the moment."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    return free_ports(1)[0]
 
 
 def ray_bin():
@@ -29,16 +40,20 @@ def ray_bin():
     return path if os.path.exists(path) else shutil.which("ray")
 
 
-def node_ports():
-    """Every port a Ray node opens, chosen free, so two nodes on one machine never clash."""
-    return [
-        f"--node-manager-port={free_port()}",
-        f"--object-manager-port={free_port()}",
-        f"--metrics-export-port={free_port()}",
-        f"--dashboard-agent-listen-port={free_port()}",
-        f"--dashboard-agent-grpc-port={free_port()}",
-        f"--runtime-env-agent-port={free_port()}",
-    ]
+NODE_PORTS = [
+    "--node-manager-port",
+    "--object-manager-port",
+    "--metrics-export-port",
+    "--dashboard-agent-listen-port",
+    "--dashboard-agent-grpc-port",
+    "--runtime-env-agent-port",
+]
+
+
+def node_ports(ports):
+    """Every port a Ray node opens, from ``ports`` (distinct, free), so two nodes on one
+    machine never clash."""
+    return [f"{flag}={port}" for flag, port in zip(NODE_PORTS, ports)]
 
 
 class Cluster:
@@ -68,13 +83,15 @@ def cluster(pge_bin):
     env["RAY_USAGE_STATS_ENABLED"] = "0"
     env["RAY_TMPDIR"] = temp
     ray = ray_bin()
-    port = free_port()
+    ports = free_ports(1 + 2 * len(NODE_PORTS))
+    port = ports[0]
+    head_ports = node_ports(ports[1 : 1 + len(NODE_PORTS)])
+    worker_ports = node_ports(ports[1 + len(NODE_PORTS) :])
     head = [
         ray, "start", "--head", "--node-ip-address=127.0.0.1", f"--port={port}",
         "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}", "--include-dashboard=false",
         "--disable-usage-stats",
-    ] + node_ports()
-    worker_ports = node_ports()
+    ] + head_ports
     worker = [
         ray, "start", f"--address=127.0.0.1:{port}", "--node-ip-address=127.0.0.1",
         "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}",
