@@ -395,6 +395,10 @@ def main(argv=None):
     except WorldError as e:
         sys.stderr.write(f"pge-world: {e}\n")
         return 1
+    except OSError as e:  # writing the world: a full disk, a file where DIR should be
+        where = f"{e.filename}: " if e.filename else ""
+        sys.stderr.write(f"pge-world: {where}{e.strerror or e}\n")
+        return 1
     except KeyboardInterrupt:
         sys.stderr.write("pge-world: interrupted; run again on the same --out to resume\n")
         return 130

@@ -19,16 +19,26 @@ class TileFailed(Exception):
     would fail again, so the run stops with this message."""
 
 
-def _die_with_parent():
-    """In the child: be killed when the worker that started us dies (Linux), so a killed
-    worker leaves no ``pge`` running on."""
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
+def _prctl():
+    """libc's prctl, resolved here in the parent: the child between fork and exec should do
+    as little as it can."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        import ctypes
 
-            ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-        except OSError:
-            pass
+        return ctypes.CDLL("libc.so.6", use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+
+
+def _die_with_parent():
+    """For ``preexec_fn``: the child is killed when the worker that started it dies (Linux),
+    so a killed worker leaves no ``pge`` running on; None where that cannot be done."""
+    prctl = _prctl()
+    if prctl is None:
+        return None
+    return lambda: prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
 
 
 def last_line(text):
@@ -69,7 +79,7 @@ def grow_tile(program, script, seed, overrides, i, j, threads=1, time_limit=None
             stdin=subprocess.DEVNULL,
             capture_output=True,
             text=True,
-            preexec_fn=_die_with_parent,
+            preexec_fn=_die_with_parent(),
         )
         if proc.returncode != 0:
             message = last_line(proc.stderr) or f"pge exited with status {proc.returncode}"

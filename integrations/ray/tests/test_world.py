@@ -16,9 +16,13 @@ from conftest import FOREST
 from pge_world import manifest as mf
 
 
+# The console script the package installs, beside this Python.
+CLI = [os.path.join(os.path.dirname(sys.executable), "pge-world")]
+
+
 def pge_world(cluster, *args, **kw):
     """Runs the console script against the cluster; returns the finished process."""
-    cmd = [sys.executable, "-m", "pge_world.cli", FOREST, "--address", cluster.address]
+    cmd = CLI + [FOREST, "--address", cluster.address]
     return subprocess.run(
         cmd + list(args), env=cluster.env, capture_output=True, text=True, timeout=600, **kw
     )
@@ -143,7 +147,7 @@ def test_killing_a_worker_in_the_middle_changes_nothing(cluster, pge_bin, tmp_pa
     (tmp_path / "local").mkdir()
     reference = local_tiles(pge_bin, str(tmp_path / "local"), spin)
     out = str(tmp_path / "world")
-    cmd = [sys.executable, "-m", "pge_world.cli", FOREST, "--address", cluster.address,
+    cmd = CLI + [FOREST, "--address", cluster.address,
            "--out", out, "--set", spin]
     run = subprocess.Popen(cmd, env=cluster.env, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
@@ -183,7 +187,7 @@ def test_no_cluster_is_one_line(cluster, tmp_path):
 
     out = tmp_path / "world"
     p = subprocess.run(
-        [sys.executable, "-m", "pge_world.cli", FOREST, "--out", str(out),
+        CLI + [FOREST, "--out", str(out),
          "--address", f"127.0.0.1:{free_port()}"],
         env=cluster.env, capture_output=True, text=True, timeout=300,
     )
@@ -213,7 +217,7 @@ def test_a_script_without_tile_is_one_line(cluster, tmp_path):
     )
     out = tmp_path / "world"
     p = subprocess.run(
-        [sys.executable, "-m", "pge_world.cli", str(script), "--out", str(out),
+        CLI + [str(script), "--out", str(out),
          "--address", cluster.address],
         env=cluster.env, capture_output=True, text=True, timeout=300,
     )
@@ -231,7 +235,7 @@ def test_pge_missing_on_the_workers_is_one_line(cluster, pge_bin, tmp_path):
     env["PATH"] = str(local) + os.pathsep + env["PATH"]
     out = tmp_path / "world"
     p = subprocess.run(
-        [sys.executable, "-m", "pge_world.cli", FOREST, "--out", str(out),
+        CLI + [FOREST, "--out", str(out),
          "--address", cluster.address, "--pge", "pge-only-here"],
         env=env, capture_output=True, text=True, timeout=300,
     )
@@ -263,3 +267,13 @@ def test_tiles_written_by_a_job_array_are_adopted(cluster, pge_bin, reference, t
     assert p.returncode == 1
     assert "0_0.glb: written with another seed" in p.stderr, p.stderr
     assert not (other / "world.json").exists()
+
+
+def test_an_output_that_is_a_file_is_one_line(cluster, tmp_path):
+    out = tmp_path / "taken"
+    out.write_text("not a folder")
+    p = pge_world(cluster, "--out", str(out))
+    assert p.returncode == 1
+    assert p.stderr.startswith("pge-world: ") and p.stderr.count("\n") == 1, p.stderr
+    assert str(out) in p.stderr, p.stderr
+    assert out.read_text() == "not a folder"
