@@ -247,6 +247,7 @@ impl World {
     fn add_tile(&mut self, bytes: &[u8], index: (u64, u64)) -> anyhow::Result<()> {
         let gltf = Gltf::from_slice(bytes).context("not a readable .glb")?;
         let blob = gltf.blob.as_deref();
+        check_bounds(&gltf.document, blob)?;
         let buffer = |b: gltf::Buffer| if b.index() == 0 { blob } else { None };
         let json: Value = serde_json::from_slice(&gltf::binary::Glb::from_slice(bytes)?.json)?;
         let scene = gltf
@@ -355,6 +356,44 @@ impl World {
         }
         self.model
     }
+}
+
+/// Checks that every accessor lies inside its buffer view, every view inside its buffer and
+/// the buffer inside the binary chunk, so that reading them cannot go out of bounds (the
+/// gltf crate's validation does not compare them with the bytes actually present).
+fn check_bounds(doc: &gltf::Document, blob: Option<&[u8]>) -> anyhow::Result<()> {
+    let present = blob.map_or(0, <[u8]>::len);
+    for buffer in doc.buffers() {
+        if buffer.index() > 0 || buffer.length() > present {
+            bail!("buffer {} is not in the binary chunk", buffer.index());
+        }
+    }
+    for view in doc.views() {
+        if view.offset().saturating_add(view.length()) > view.buffer().length() {
+            bail!("buffer view {} goes past its buffer", view.index());
+        }
+    }
+    for a in doc.accessors() {
+        if a.sparse().is_some() {
+            bail!("accessor {} is sparse, which PGE never writes", a.index());
+        }
+        let Some(view) = a.view() else {
+            bail!("accessor {} has no buffer view", a.index());
+        };
+        let stride = view.stride().unwrap_or(a.size());
+        let end = match a.count() {
+            0 => a.offset(),
+            n => (n - 1)
+                .checked_mul(stride)
+                .and_then(|x| x.checked_add(a.offset()))
+                .and_then(|x| x.checked_add(a.size()))
+                .unwrap_or(usize::MAX),
+        };
+        if end > view.length() {
+            bail!("accessor {} goes past its buffer view", a.index());
+        }
+    }
+    Ok(())
 }
 
 /// The placements of an `EXT_mesh_gpu_instancing` node.
@@ -532,6 +571,59 @@ mod tests {
             sha256_hex(long),
             "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1"
         );
+    }
+
+    /// A glb of `json` and `bin`, chunks padded as the format asks.
+    fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+        let mut text = serde_json::to_vec(json).expect("json");
+        while !text.len().is_multiple_of(4) {
+            text.push(b' ');
+        }
+        let total = 12 + 8 + text.len() + 8 + bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&text);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+        out
+    }
+
+    #[test]
+    fn a_tile_whose_accessors_overrun_their_data_is_an_error_not_a_panic() {
+        let mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let bytes = pge_engine::export::glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default())
+            .expect("glb");
+        let mut world = World::default();
+        world.add_tile(&bytes, (0, 0)).expect("a valid tile reads");
+        assert_eq!(world.model.meshes.len(), 1);
+
+        let file = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+        let json: Value = serde_json::from_slice(&file.json).expect("json");
+        let bin = file.bin.expect("bin").to_vec();
+        let mut more = json.clone();
+        more["accessors"][0]["count"] = 1000.into();
+        let mut shorter = json.clone();
+        shorter["buffers"][0]["byteLength"] = (bin.len() as u64 + 64).into();
+        let mut sparse = json;
+        sparse["accessors"][0]["sparse"] = serde_json::json!({"count": 1,
+            "indices": {"bufferView": 0, "componentType": 5125},
+            "values": {"bufferView": 0}});
+        for (bad, needle) in [
+            (glb(&more, &bin), "goes past"),
+            (glb(&shorter, &bin), "not in the binary chunk"),
+            (glb(&sparse, &bin), "sparse"),
+        ] {
+            let err = World::default()
+                .add_tile(&bad, (0, 0))
+                .expect_err("refused");
+            assert!(format!("{err:#}").contains(needle), "{err:#}");
+        }
     }
 
     #[test]
