@@ -308,53 +308,66 @@ impl TransportTree {
     pub fn feed(&mut self, cap: usize) -> Result<Feeding, CapExceeded> {
         let p = self.params;
         let mut report = Feeding::default();
-        self.stack.clear();
-        self.splits.clear();
+        // Scratch and arrays as locals, so the loop keeps them in registers.
+        let mut stack = std::mem::take(&mut self.stack);
+        let mut splits = std::mem::take(&mut self.splits);
+        stack.clear();
+        splits.clear();
         for &(b, _, share) in self.roots.iter().rev() {
-            self.stack.push((b, p.feed * share));
+            stack.push((b, p.feed * share));
             report.fed += p.feed * share;
         }
-        while let Some((b, feed)) = self.stack.pop() {
+        let children = &self.children[..];
+        let depth = &self.depth[..];
+        let split_length = &self.split_length[..];
+        let area = &mut self.area[..];
+        let length = &mut self.length[..];
+        while let Some((b, feed)) = stack.pop() {
             let i = b as usize;
-            let [a, c] = self.children[i];
-            let before = self.area[i] * self.length[i];
+            let [a, c] = children[i];
+            let (old_area, old_length) = (area[i], length[i]);
+            let before = old_area * old_length;
             if a == NONE {
                 let grow = cbrt(feed);
-                self.length[i] += grow;
-                let rest = feed - grow * self.area[i];
-                self.area[i] += rest / self.length[i];
-                report.grown += self.area[i] * self.length[i] - before;
-                if self.length[i] > self.split_length[self.depth[i] as usize] {
-                    self.splits.push(b);
+                let l = old_length + grow;
+                let rest = feed - grow * old_area;
+                let r = old_area + rest / l;
+                length[i] = l;
+                area[i] = r;
+                report.grown += r * l - before;
+                if l > split_length[depth[i] as usize] {
+                    splits.push(b);
                 }
                 continue;
             }
-            let children = self.area[a as usize] + self.area[c as usize];
-            let pass = children / (children + self.area[i]);
-            self.area[i] += pass * feed / self.length[i];
-            report.grown += self.area[i] * self.length[i] - before;
+            let sum = area[a as usize] + area[c as usize];
+            let pass = sum / (sum + old_area);
+            let r = old_area + pass * feed / old_length;
+            area[i] = r;
+            report.grown += r * old_length - before;
             let feed = feed * (1.0 - pass);
             if feed < MIN_FEED {
                 report.dropped += feed;
                 continue;
             }
             // B below A on the stack: A's whole subtree is fed first, as the recursion does.
-            self.stack.push((c, feed * (1.0 - p.ratio)));
-            self.stack.push((a, feed * p.ratio));
+            stack.push((c, feed * (1.0 - p.ratio)));
+            stack.push((a, feed * p.ratio));
         }
-        let would_have = self.len() + 2 * self.splits.len();
+        self.stack = stack;
+        let would_have = self.len() + 2 * splits.len();
         if would_have > cap {
+            self.splits = splits;
             return Err(CapExceeded { cap, would_have });
         }
-        if !self.splits.is_empty() {
+        if !splits.is_empty() {
             self.leaf_averages();
-            let splits = std::mem::take(&mut self.splits);
             for &b in &splits {
                 self.split(b);
             }
             report.splits = splits.len() as u32;
-            self.splits = splits;
         }
+        self.splits = splits;
         self.steps += 1;
         Ok(report)
     }
