@@ -174,6 +174,45 @@ return pge.tree{ skeleton = crown, leaves = true }
 }
 
 #[test]
+fn cross_sections_at_forks_follow_the_feedback_rule() {
+    // A fork keeps (A + B) / (A + B + P) of its feed for girth, so the parent's cross-section
+    // tracks the sum of its children's. It does not settle at exactly 1: area grows by
+    // feed / length and the parent is the longer branch, so it settles near 1.6 (the seed
+    // says as much). The bound, read from the skeleton a 150-feeding tree exports: at every
+    // fork carrying 15 nodes or more, parent area / (A + B) lies within [0.5, 2] and the
+    // median within [1.2, 1.8]. Radii are sqrt(area / pi) times one factor, so the area
+    // ratio is the ratio of squared radii.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = dir.path().join("tree.lua");
+    std::fs::write(&script, "return pge.Growth{ steps = 150 }\n").expect("write");
+    let s = script.to_string_lossy().to_string();
+    let skeleton = skeleton_extras(&run_ok(&s, dir.path(), "t.glb", &[]));
+    let parents: Vec<i64> = serde_json::from_value(skeleton["parents"].clone()).expect("parents");
+    let radii: Vec<f64> = serde_json::from_value(skeleton["radii"].clone()).expect("radii");
+    assert_eq!(parents.len(), radii.len());
+    let mut children = vec![Vec::new(); parents.len()];
+    let mut size = vec![1usize; parents.len()];
+    for i in (0..parents.len()).rev() {
+        if parents[i] >= 0 {
+            let p = parents[i] as usize;
+            assert!(p < i, "parents come first");
+            children[p].push(i);
+            size[p] += size[i];
+        }
+    }
+    let area = |i: usize| radii[i] * radii[i];
+    let mut q: Vec<f64> = (0..parents.len())
+        .filter(|&i| children[i].len() == 2 && size[i] >= 15)
+        .map(|i| area(i) / (area(children[i][0]) + area(children[i][1])))
+        .collect();
+    q.sort_by(f64::total_cmp);
+    assert!(q.len() >= 20, "{} forks", q.len());
+    let (lo, hi, median) = (q[0], q[q.len() - 1], q[q.len() / 2]);
+    assert!(lo >= 0.5 && hi <= 2.0, "{lo} .. {hi}");
+    assert!((1.2..=1.8).contains(&median), "median {median}");
+}
+
+#[test]
 fn bad_options_and_stage_lists_are_located_errors() {
     let dir = tempfile::tempdir().expect("tempdir");
     let cases = [
@@ -184,6 +223,14 @@ fn bad_options_and_stage_lists_are_located_errors() {
         (
             "return pge.Growth{ ratio = 0/0 }",
             "bad.lua:1: pge.Growth: ratio must be a finite number, got",
+        ),
+        (
+            "return pge.Growth{ spread = 0/0 }",
+            "bad.lua:1: pge.Growth: spread must be",
+        ),
+        (
+            "return pge.Growth{ root = {0, 0/0, 0} }",
+            "bad.lua:1: pge.Growth: root",
         ),
         (
             "return pge.Growth{ splitsize = 0 }",

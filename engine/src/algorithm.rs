@@ -104,6 +104,18 @@ pub trait Algorithm {
     fn skeleton(&self) -> Option<Skeleton> {
         None
     }
+
+    /// A copy of the current state that steps and finishes on its own, without the session
+    /// that made it (so nothing of a Lua state in it), for callers that go back to an earlier
+    /// step: the preview's scrubber keeps copies every few steps and re-runs from the
+    /// nearest one instead of re-running the script. A copy taken after a step that returned
+    /// [`Step::Continue`], or [`Step::Done`] on reaching `ctx.steps`, must go on exactly as
+    /// the original would under any larger `ctx.steps` (a step may read `ctx.steps` only to
+    /// decide when it is done, and a state stopped there is not finished). `None`, the
+    /// default, when the state cannot be copied.
+    fn snapshot(&self) -> Option<Box<dyn Algorithm>> {
+        None
+    }
 }
 
 /// An algorithm that is already done: it returns a fixed model.

@@ -1,7 +1,8 @@
 //! Growth by nutrient transport: the cost of growing a tree to N branches (1,000 to
 //! 100,000; the feed is raised with N so the number of feedings stays near 60 and the cost
 //! per branch is comparable), and a full stage sequence (10 stages, each meshed) against
-//! the final stage alone.
+//! the final stage alone. Besides criterion's wall-clock times, each size prints its mean
+//! CPU time (on Linux). Figures: `benches/README.md`.
 
 use std::hint::black_box;
 
@@ -46,13 +47,37 @@ fn feed_for(branches: usize) -> f64 {
     feed
 }
 
+/// Nanoseconds this thread has run on a CPU (Linux's schedstat), `None` elsewhere: on a
+/// machine busy with other work, wall-clock time counts the waits for a core too.
+fn cpu_nanos() -> Option<u64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    stat.split_whitespace().next()?.parse().ok()
+}
+
+/// Mean CPU milliseconds of growing to `branches` (over enough repetitions to average out
+/// the scheduler's tick).
+fn cpu_millis(branches: usize, feed: f64) -> Option<f64> {
+    let reps = (2_000_000 / branches).clamp(4, 200);
+    let start = cpu_nanos()?;
+    for _ in 0..reps {
+        black_box(grow_to(branches, feed));
+    }
+    Some((cpu_nanos()? - start) as f64 / 1e6 / reps as f64)
+}
+
 fn bench_transport(c: &mut Criterion) {
     let mut group = c.benchmark_group("transport");
     group.sample_size(10);
     for branches in [1_000usize, 3_000, 10_000, 20_000, 30_000, 100_000] {
         let feed = feed_for(branches);
         let (steps, n) = grow_to(branches, feed);
-        eprintln!("{branches} branches: feed {feed}, {steps} feedings, {n} branches");
+        let cpu = cpu_millis(branches, feed).map_or(String::new(), |ms| {
+            format!(
+                ", {ms:.2} ms of CPU time, {:.2} us per branch",
+                ms * 1e3 / n as f64
+            )
+        });
+        eprintln!("{branches} branches: feed {feed}, {steps} feedings, {n} branches{cpu}");
         group.throughput(Throughput::Elements(n as u64));
         group.bench_with_input(BenchmarkId::from_parameter(branches), &branches, |b, &n| {
             b.iter(|| grow_to(black_box(n), feed))

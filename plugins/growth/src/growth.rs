@@ -108,6 +108,7 @@ impl GrowthParams {
 }
 
 /// Growth by nutrient transport as an [`Algorithm`].
+#[derive(Clone)]
 pub struct Growth {
     params: GrowthParams,
     location: Location,
@@ -271,9 +272,8 @@ impl Algorithm for Growth {
     }
 
     fn step(&mut self, ctx: &RunContext) -> Result<Step> {
-        if self.done {
-            return Ok(Step::Done);
-        }
+        // No latch on `done`: a state that stopped at `ctx.steps` goes on under a larger one
+        // (the scrubber keeps copies of it).
         ctx.check_deadline(&self.location)?;
         let t = Instant::now();
         let limit = ctx.steps.unwrap_or(self.params.steps);
@@ -329,6 +329,10 @@ impl Algorithm for Growth {
 
     fn skeleton(&self) -> Option<Skeleton> {
         Growth::skeleton(self)
+    }
+
+    fn snapshot(&self) -> Option<Box<dyn Algorithm>> {
+        Some(Box::new(self.clone()))
     }
 }
 
