@@ -148,8 +148,7 @@ impl LSystemAlgorithm {
             let location = me.cfg.location.clone();
             let mut host = StreamHost {
                 rng: &mut me.rng,
-                ctx,
-                location: &location,
+                limits: Some((ctx, &location)),
             };
             let len = me.cfg.system.step_count(&me.string, &mut host, &opts)?;
             me.done += 1;
@@ -157,8 +156,6 @@ impl LSystemAlgorithm {
                 system: me.cfg.system.clone(),
                 rng,
                 opts,
-                ctx: ctx.clone(),
-                location,
                 len,
             }))
         })

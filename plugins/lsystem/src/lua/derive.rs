@@ -23,20 +23,17 @@ pub(crate) struct LastStep {
     pub(crate) rng: Mt,
     /// The step's number and module cap.
     pub(crate) opts: StepOptions,
-    /// The run's limits (time, cancellation), checked while streaming.
-    pub(crate) ctx: RunContext,
-    /// Where errors point.
-    pub(crate) location: Location,
     /// The number of modules the step makes (counted once, checking every limit).
     pub(crate) len: u64,
 }
 
-/// The host of a streamed last step: the instance's generator and the run's deadline; no
-/// Lua takes part (such steps are never streamed).
+/// The host of a streamed last step: the instance's generator and, while the step is
+/// counted, the run's deadline (its errors point at the location). No Lua takes part in such
+/// a step. Writing derives the step again without checking the deadline: the count took as
+/// long, within the limit, and a write stopped halfway would leave half an output.
 pub(crate) struct StreamHost<'a> {
     pub(crate) rng: &'a mut Mt,
-    pub(crate) ctx: &'a RunContext,
-    pub(crate) location: &'a Location,
+    pub(crate) limits: Option<(&'a RunContext, &'a Location)>,
 }
 
 impl Host for StreamHost<'_> {
@@ -47,9 +44,10 @@ impl Host for StreamHost<'_> {
     }
 
     fn check(&mut self) -> Result<(), HostError> {
-        self.ctx
-            .check_deadline(self.location)
-            .map_err(HostError::Engine)
+        match self.limits {
+            Some((ctx, location)) => ctx.check_deadline(location).map_err(HostError::Engine),
+            None => Ok(()),
+        }
     }
 
     fn apply(
@@ -179,8 +177,7 @@ impl Derivation {
         let mut rng = last.rng.clone();
         let mut host = StreamHost {
             rng: &mut rng,
-            ctx: &last.ctx,
-            location: &last.location,
+            limits: None,
         };
         let mut buf = ModuleString::new();
         let mut failed = None;
