@@ -103,10 +103,17 @@ impl ModuleString {
         Some(self.params[self.starts[i] as usize] as u32)
     }
 
+    #[inline]
     fn make_starts(&mut self) {
         if self.starts.is_empty() {
-            self.starts = vec![0; self.syms.len() + 1];
+            self.first_starts();
         }
+    }
+
+    /// The offsets of a string whose modules had no parameters so far.
+    #[cold]
+    fn first_starts(&mut self) {
+        self.starts = vec![0; self.syms.len() + 1];
     }
 
     /// Appends a module with numeric parameters.
