@@ -1,16 +1,17 @@
-//! Derivation speed: the performance targets of the L-system engine.
+//! Derivation speed against peers measured in the same run (see `benches/README.md`).
 //!
-//! Each benchmark reports modules produced per second (criterion's "elements").
+//! Each group runs PGE and its peer on the same input, so their ratio holds on a loaded
+//! machine where absolute times do not:
+//! - `classic_1_24d`: ABOP fig. 1.24d (`X -> F[+X]F[-X]+X`, `F -> FF`) against the
+//!   `lindenmayer` crate (its `string` and its streaming `builder`);
+//! - `parametric_2_6`: ABOP fig. 2.6 (Honda's tree) against a hand-written `Vec<Module>`
+//!   loop, the limit of parametric rewriting;
+//! - `context_signal`: signal propagation on 100 000 modules against a hand-written
+//!   bracket-aware loop;
+//! - `lua_rules`: rule functions (a rule returning three modules, a rule returning one
+//!   module with a parameter); the target is 4 M modules/s.
 //!
-//! Measured on the 2-core development machine while other builds ran (load average 2.7-5),
-//! so these are lower bounds (targets of the L-system issue in brackets):
-//! - `classic_plain` (`X -> F[+X]F[-X]+X`, `F -> FF`, 12 steps): 590-890 M modules/s (100 M)
-//! - `classic_parametric` (ABOP fig. 2.6, 16 steps): 63-89 M modules/s (30 M)
-//! - `context` (signal propagation on 100 000 modules with branches): 44-89 M modules/s (10 M)
-//! - `lua_rules` (`RRule("A", ...)` returning three symbols, 100 000 calls, including the
-//!   set-up of the instance and the axiom): 2.6-3.1 M modules/s (3 M); about a tenth of it is
-//!   the session's instruction-count hook
-//! - memory: 10^6 modules with two parameters take 24 MiB, 48 MiB during a step (64 MiB)
+//! Criterion reports modules produced per second ("elements").
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
@@ -62,20 +63,110 @@ fn derive(s: &Setup, steps: u32, a: &mut ModuleString, b: &mut ModuleString) -> 
 }
 
 fn bench_classic(c: &mut Criterion) {
+    let depth = 12;
     let s = setup("X", &["X -> F[+X]F[-X]+X", "F -> FF"], &[], "");
     let (mut a, mut b) = (ModuleString::new(), ModuleString::new());
-    let produced = derive(&s, 12, &mut a, &mut b);
-    eprintln!(
-        "classic: {} modules after 12 steps, {produced} produced",
-        a.len()
-    );
-    let mut g = c.benchmark_group("classic_plain");
-    g.throughput(Throughput::Elements(produced));
-    g.sample_size(20);
-    g.bench_function("X->F[+X]F[-X]+X,F->FF x12", |bench| {
-        bench.iter(|| derive(&s, 12, &mut a, &mut b));
+    derive(&s, depth, &mut a, &mut b);
+    let modules = a.len();
+    let peer = lindenmayer::LSystem::new(String::from("X"), &[('X', "F[+X]F[-X]+X"), ('F', "FF")]);
+    assert_eq!(peer.string(depth as usize).len(), modules);
+    let mut g = c.benchmark_group("classic_1_24d");
+    g.throughput(Throughput::Elements(modules as u64));
+    g.sample_size(10);
+    g.bench_function("pge", |bench| {
+        bench.iter(|| derive(&s, depth, &mut a, &mut b));
+    });
+    g.bench_function("pge streamed last step", |bench| {
+        bench.iter(|| {
+            derive(&s, depth - 1, &mut a, &mut b);
+            let opts = StepOptions {
+                step: depth,
+                max_modules: 100_000_000,
+                stream: false,
+            };
+            let mut rng = Mt::new(1);
+            let mut n = 0;
+            s.system
+                .step_chunks(
+                    &a,
+                    &mut b,
+                    &mut NativeHost { rng: &mut rng },
+                    &opts,
+                    1 << 14,
+                    &mut |piece| {
+                        n += piece.len();
+                        Ok(())
+                    },
+                )
+                .expect("derives");
+            n
+        });
+    });
+    g.bench_function("lindenmayer string", |bench| {
+        bench.iter(|| peer.string(depth as usize).len());
+    });
+    g.bench_function("lindenmayer builder", |bench| {
+        bench.iter(|| peer.builder(depth as usize).count());
     });
     g.finish();
+}
+
+/// A module of the hand-written parametric loop.
+#[derive(Clone, Copy)]
+struct Module {
+    sym: u8,
+    a: f64,
+    b: f64,
+}
+
+impl Module {
+    fn new(sym: u8, a: f64, b: f64) -> Module {
+        Module { sym, a, b }
+    }
+}
+
+/// One step of ABOP fig. 2.6 written by hand: the limit of parametric rewriting.
+fn honda_step(src: &[Module], out: &mut Vec<Module>) {
+    let (r1, r2, a0, a2, d, wr) = (0.9, 0.7, 45.0, 45.0, 137.5, 0.707);
+    out.clear();
+    for m in src {
+        let (l, w) = (m.a, m.b);
+        let m0 = |sym| Module::new(sym, 0.0, 0.0);
+        let m1 = |sym, a| Module::new(sym, a, 0.0);
+        match m.sym {
+            b'A' => out.extend_from_slice(&[
+                m1(b'!', w),
+                m1(b'F', l),
+                m0(b'['),
+                m1(b'&', a0),
+                Module::new(b'B', l * r2, w * wr),
+                m0(b']'),
+                m1(b'/', d),
+                Module::new(b'A', l * r1, w * wr),
+            ]),
+            b'B' => out.extend_from_slice(&[
+                m1(b'!', w),
+                m1(b'F', l),
+                m0(b'['),
+                m1(b'-', a2),
+                m0(b'$'),
+                Module::new(b'C', l * r2, w * wr),
+                m0(b']'),
+                Module::new(b'C', l * r1, w * wr),
+            ]),
+            b'C' => out.extend_from_slice(&[
+                m1(b'!', w),
+                m1(b'F', l),
+                m0(b'['),
+                m1(b'+', a2),
+                m0(b'$'),
+                Module::new(b'B', l * r2, w * wr),
+                m0(b']'),
+                Module::new(b'B', l * r1, w * wr),
+            ]),
+            _ => out.push(*m),
+        }
+    }
 }
 
 fn bench_parametric(c: &mut Criterion) {
@@ -96,18 +187,108 @@ fn bench_parametric(c: &mut Criterion) {
     let (mut a, mut b) = (ModuleString::new(), ModuleString::new());
     let steps = 16;
     let produced = derive(&s, steps, &mut a, &mut b);
+    let hand = |x: &mut Vec<Module>, y: &mut Vec<Module>| {
+        x.clear();
+        x.push(Module::new(b'A', 1.0, 10.0));
+        let mut produced = 0;
+        for _ in 0..steps {
+            honda_step(x, y);
+            produced += y.len() as u64;
+            std::mem::swap(x, y);
+        }
+        produced
+    };
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    assert_eq!(hand(&mut x, &mut y), produced);
+    let sum: f64 = (0..a.len()).flat_map(|i| a.params(i).iter()).sum();
+    let hand_sum: f64 = x
+        .iter()
+        .map(|m| match m.sym {
+            b'[' | b']' | b'$' => 0.0,
+            b'A' | b'B' | b'C' => m.a + m.b,
+            _ => m.a,
+        })
+        .sum();
+    assert!(
+        (sum - hand_sum).abs() < 1e-6 * sum.abs(),
+        "{sum} {hand_sum}"
+    );
     eprintln!(
         "parametric: {} modules after {steps} steps, {produced} produced, string {} bytes",
         a.len(),
         a.memory_bytes()
     );
-    let mut g = c.benchmark_group("classic_parametric");
+    let mut g = c.benchmark_group("parametric_2_6");
     g.throughput(Throughput::Elements(produced));
     g.sample_size(10);
-    g.bench_function("ABOP fig 2.6 x16", |bench| {
+    g.bench_function("pge", |bench| {
         bench.iter(|| derive(&s, steps, &mut a, &mut b));
     });
+    g.bench_function("hand-written Vec<Module>", |bench| {
+        bench.iter(|| hand(&mut x, &mut y));
+    });
     g.finish();
+}
+
+/// Whether the left context of module `i` (skipping branches, climbing out of enclosing
+/// ones) is `want`.
+fn left_is(src: &[u8], matches: &[u32], i: usize, want: u8) -> bool {
+    let mut j = i;
+    loop {
+        if j == 0 {
+            return false;
+        }
+        j -= 1;
+        match src[j] {
+            b']' => match matches[j] {
+                u32::MAX => return false,
+                open => j = open as usize,
+            },
+            b'[' => {}
+            s => return s == want,
+        }
+    }
+}
+
+/// Whether the right context of module `i` (along the axis, skipping branches) is `want`.
+fn right_is(src: &[u8], matches: &[u32], i: usize, want: u8) -> bool {
+    let mut j = i + 1;
+    while j < src.len() {
+        match src[j] {
+            b'[' => match matches[j] {
+                u32::MAX => return false,
+                close => j = close as usize + 1,
+            },
+            s => return s == want,
+        }
+    }
+    false
+}
+
+/// One step of the signal system (`b < a -> b`, `b -> a`, `a > b -> c`) written by hand.
+fn signal_step(src: &[u8], matches: &mut Vec<u32>, stack: &mut Vec<u32>, out: &mut Vec<u8>) {
+    matches.clear();
+    matches.resize(src.len(), u32::MAX);
+    stack.clear();
+    for (i, &s) in src.iter().enumerate() {
+        if s == b'[' {
+            stack.push(i as u32);
+        } else if s == b']'
+            && let Some(open) = stack.pop()
+        {
+            matches[i] = open;
+            matches[open as usize] = i as u32;
+        }
+    }
+    out.clear();
+    for (i, &s) in src.iter().enumerate() {
+        out.push(match s {
+            b'a' if left_is(src, matches, i, b'b') => b'b',
+            b'a' if right_is(src, matches, i, b'b') => b'c',
+            b'b' => b'a',
+            s => s,
+        });
+    }
 }
 
 fn bench_context(c: &mut Criterion) {
@@ -118,6 +299,8 @@ fn bench_context(c: &mut Criterion) {
             '['
         } else if i % 10 == 5 {
             ']'
+        } else if i % 1000 == 7 {
+            'b'
         } else {
             'a'
         });
@@ -125,10 +308,48 @@ fn bench_context(c: &mut Criterion) {
     let s = setup(&axiom, &["b < a -> b", "b -> a", "a > b -> c"], &[], "+ -");
     let (mut a, mut b) = (ModuleString::new(), ModuleString::new());
     let produced = derive(&s, 1, &mut a, &mut b);
-    let mut g = c.benchmark_group("context");
+    let src = axiom.as_bytes().to_vec();
+    let (mut matches, mut stack, mut out) = (Vec::new(), Vec::new(), Vec::new());
+    signal_step(&src, &mut matches, &mut stack, &mut out);
+    let pge_text = {
+        let mut syms = SymbolTable::new();
+        let mut sys = System::new();
+        sys.ignore("+ -", &mut syms);
+        for r in ["b < a -> b", "b -> a", "a > b -> c"] {
+            sys.add_production(r, None, 0, &mut syms).expect("rule");
+        }
+        sys.prepare(&syms).expect("prepare");
+        let ax = sys
+            .parse_string(&axiom, &mut syms, &mut || 0.0)
+            .expect("axiom");
+        let mut next = ModuleString::new();
+        sys.step(
+            &ax,
+            &mut next,
+            &mut NativeHost {
+                rng: &mut Mt::new(1),
+            },
+            &StepOptions {
+                step: 1,
+                max_modules: 1_000_000,
+                stream: false,
+            },
+        )
+        .expect("derives");
+        next.to_text(&syms, "")
+    };
+    assert_eq!(
+        pge_text.as_bytes(),
+        out.as_slice(),
+        "same string as by hand"
+    );
+    let mut g = c.benchmark_group("context_signal");
     g.throughput(Throughput::Elements(produced));
-    g.bench_function("signal 100k", |bench| {
+    g.bench_function("pge", |bench| {
         bench.iter(|| derive(&s, 1, &mut a, &mut b));
+    });
+    g.bench_function("hand-written", |bench| {
+        bench.iter(|| signal_step(&src, &mut matches, &mut stack, &mut out));
     });
     g.finish();
 }
@@ -140,27 +361,41 @@ fn bench_lua(c: &mut Criterion) {
         .build()
         .expect("engine");
     let session = engine.session(SessionOptions::default()).expect("session");
-    let value = session
-        .eval_value(
+    let ctx = session.context();
+    let location = Location::new("bench", 0);
+    let mut g = c.benchmark_group("lua_rules");
+    g.sample_size(10);
+    let cases = [
+        (
+            "RRule A -> {B{}, A{}, B{}} on 100k",
             r#"local l = pge.LSystem("bench")
             l:axiom(string.rep("A", 100000))
             l:RRule("A", function(a) return { B{}, A{}, B{} } end)
             l:iterations(1)
             return l"#,
-        )
-        .expect("script");
-    let ctx = session.context();
-    let location = Location::new("bench", 0);
-    let mut g = c.benchmark_group("lua_rules");
-    g.throughput(Throughput::Elements(300_000));
-    g.sample_size(10);
-    g.bench_function("RRule A -> {B{}, A{}, B{}} on 100k", |bench| {
-        bench.iter(|| {
-            let d =
-                pge_lsystem::derive_value(session.lua(), &value, &ctx, &location).expect("derives");
-            assert_eq!(d.len(), 300_000);
+            300_000,
+        ),
+        (
+            "RRule A(x) -> A(x+1) on 100k",
+            r#"local l = pge.LSystem("bench")
+            l:axiom(string.rep("A(1)", 100000))
+            l:RRule("A", function(a) return A{a[1] + 1} end)
+            l:iterations(1)
+            return l"#,
+            100_000,
+        ),
+    ];
+    for (name, code, modules) in cases {
+        let value = session.eval_value(code).expect("script");
+        g.throughput(Throughput::Elements(modules));
+        g.bench_function(name, |bench| {
+            bench.iter(|| {
+                let d = pge_lsystem::derive_value(session.lua(), &value, &ctx, &location)
+                    .expect("derives");
+                assert_eq!(d.len() as u64, modules);
+            });
         });
-    });
+    }
     g.finish();
 }
 

@@ -403,8 +403,21 @@ enum Repr {
     Const(f64),
     Param(u16),
     Global(u16),
+    /// One binary operator on two loads (`l*r2`, `w+1`): no stack machine.
+    Bin(BinOp, Op, Op),
     /// Bytecode for a stack machine.
     Code(Box<[Op]>),
+}
+
+/// The value of a load (`Const`, `Param` or `Global`; other operations are never loads).
+#[inline]
+fn load(op: Op, params: &[f64], globals: &[f64]) -> f64 {
+    match op {
+        Op::Const(v) => v,
+        Op::Param(i) => params[i as usize],
+        Op::Global(i) => globals[i as usize],
+        _ => f64::NAN,
+    }
 }
 
 fn truth(v: f64) -> bool {
@@ -585,6 +598,11 @@ impl Expr {
             {
                 Repr::Const(run(&c.ops, &[], &[], &mut || 0.0))
             }
+            [
+                a @ (Op::Const(_) | Op::Param(_) | Op::Global(_)),
+                b @ (Op::Const(_) | Op::Param(_) | Op::Global(_)),
+                Op::Bin(op),
+            ] => Repr::Bin(*op, *a, *b),
             _ => Repr::Code(c.ops.into_boxed_slice()),
         }))
     }
@@ -605,6 +623,9 @@ impl Expr {
             Repr::Const(v) => *v,
             Repr::Param(i) => params[*i as usize],
             Repr::Global(i) => globals[*i as usize],
+            Repr::Bin(op, a, b) => {
+                binary(*op, load(*a, params, globals), load(*b, params, globals))
+            }
             Repr::Code(ops) => run(ops, params, globals, rand),
         }
     }

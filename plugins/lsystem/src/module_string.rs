@@ -103,10 +103,17 @@ impl ModuleString {
         Some(self.params[self.starts[i] as usize] as u32)
     }
 
+    #[inline]
     fn make_starts(&mut self) {
         if self.starts.is_empty() {
-            self.starts = vec![0; self.syms.len() + 1];
+            self.first_starts();
         }
+    }
+
+    /// The offsets of a string whose modules had no parameters so far.
+    #[cold]
+    fn first_starts(&mut self) {
+        self.starts = vec![0; self.syms.len() + 1];
     }
 
     /// Appends a module with numeric parameters.
@@ -183,11 +190,33 @@ impl ModuleString {
         self.starts.push(self.params.len() as u32);
     }
 
+    /// Appends a copy of the modules `range` of `other` (external modules keep their slots),
+    /// with bulk copies of symbols, parameters and offsets.
+    pub fn extend_from(&mut self, other: &ModuleString, range: std::ops::Range<usize>) {
+        if other.starts.is_empty() {
+            self.extend_plain(&other.syms[range]);
+            return;
+        }
+        let (a, b) = (other.starts[range.start], other.starts[range.end]);
+        if a == b && self.starts.is_empty() {
+            self.syms.extend_from_slice(&other.syms[range]);
+            return;
+        }
+        self.make_starts();
+        self.syms.extend_from_slice(&other.syms[range.clone()]);
+        let base = self.params.len() as u32;
+        self.params
+            .extend_from_slice(&other.params[a as usize..b as usize]);
+        self.starts.extend(
+            other.starts[range.start + 1..=range.end]
+                .iter()
+                .map(|&s| s - a + base),
+        );
+    }
+
     /// Appends all modules of `other`.
     pub fn append(&mut self, other: &ModuleString) {
-        for i in 0..other.len() {
-            self.push_from(other, i);
-        }
+        self.extend_from(other, 0..other.len());
     }
 
     /// Replaces the side-table slot of external module `i`.
@@ -279,6 +308,18 @@ mod tests {
         let mut b = ModuleString::new();
         b.append(&a);
         assert_eq!(a, b);
+        // Ranges copied in bulk equal module-by-module copies, onto flat and parametric
+        // strings alike.
+        for (from, to) in [(0, 3), (1, 3), (2, 2), (0, 1)] {
+            for mut head in [ModuleString::new(), a.clone()] {
+                let mut one = head.clone();
+                for i in from..to {
+                    one.push_from(&a, i);
+                }
+                head.extend_from(&a, from..to);
+                assert_eq!(head, one, "{from}..{to}");
+            }
+        }
         assert_eq!(b.external(1), Some(7));
         assert_eq!(b.params(1), &[] as &[f64]);
         assert_eq!(b.sym(1), Sym(3));

@@ -326,12 +326,59 @@ impl System {
             self.prepared,
             "System::prepare must be called after changing the rules"
         );
-        let deriver = Deriver {
+        self.deriver().step(src, out, host, opts)
+    }
+
+    /// One derivation step delivered in pieces, for a caller that streams the result instead
+    /// of keeping it: rewrites `src` like [`System::step`], appending the successors of every
+    /// `chunk` modules of `src` to `buf` (cleared before each piece) and handing it to `sink`.
+    /// The module cap holds for the whole step. Returns the number of modules produced.
+    ///
+    /// # Panics
+    /// If the rules changed since the last [`System::prepare`].
+    pub fn step_chunks<H: Host>(
+        &self,
+        src: &ModuleString,
+        buf: &mut ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+        chunk: usize,
+        sink: &mut dyn FnMut(&ModuleString) -> Result<(), H::Error>,
+    ) -> Result<u64, H::Error> {
+        assert!(
+            self.prepared,
+            "System::prepare must be called after changing the rules"
+        );
+        self.deriver()
+            .step_chunks(src, buf, host, opts, chunk, sink)
+    }
+
+    /// The number of modules one step would make of `src`, without keeping them (checking
+    /// the module cap and every rule as [`System::step`] does). A system of fixed successors
+    /// is counted without rewriting.
+    ///
+    /// # Panics
+    /// If the rules changed since the last [`System::prepare`].
+    pub fn step_count<H: Host>(
+        &self,
+        src: &ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+    ) -> Result<u64, H::Error> {
+        let deriver = self.deriver();
+        if deriver.plain_fast_path(src, opts) {
+            return Ok(deriver.plain_count(src, opts)?);
+        }
+        let mut buf = ModuleString::new();
+        self.step_chunks(src, &mut buf, host, opts, 1 << 16, &mut |_| Ok(()))
+    }
+
+    fn deriver(&self) -> Deriver<'_> {
+        Deriver {
             defs: &self.defs,
             globals: &self.global_values,
             tables: &self.tables,
-        };
-        deriver.step(src, out, host, opts)
+        }
     }
 }
 
@@ -757,6 +804,96 @@ mod tests {
                 max: 1000
             }
         );
+    }
+
+    /// One step of `r` delivered in pieces of `chunk` source modules, joined.
+    fn chunked(r: &Run, chunk: usize, max: usize) -> Result<(ModuleString, u64), LsError> {
+        let mut joined = ModuleString::new();
+        let mut buf = ModuleString::new();
+        let mut rng = r.rng.clone();
+        let opts = StepOptions {
+            step: r.steps + 1,
+            max_modules: max,
+            stream: false,
+        };
+        let n = r.system.step_chunks(
+            &r.string,
+            &mut buf,
+            &mut NativeHost { rng: &mut rng },
+            &opts,
+            chunk,
+            &mut |piece| {
+                joined.append(piece);
+                Ok(())
+            },
+        )?;
+        let counted = r.system.step_count(
+            &r.string,
+            &mut NativeHost {
+                rng: &mut r.rng.clone(),
+            },
+            &opts,
+        )?;
+        assert_eq!(counted, n);
+        Ok((joined, n))
+    }
+
+    #[test]
+    fn a_step_in_pieces_joins_to_the_whole_step() {
+        let cases: [(&str, &[&str]); 4] = [
+            ("X", &["X -> F[+X]F[-X]+X", "F -> FF"]),
+            (
+                "A(1,10)",
+                &[
+                    "A(l,w) -> !(w)F(l)[&(45)B(l*0.6,w*0.7)]/(137.5)A(l*0.9,w*0.7)",
+                    "B(l,w) : l > 0.2 -> !(w)F(l)[-(45)$B(l*0.6,w*0.7)]B(l*0.9,w*0.7)",
+                ],
+            ),
+            (
+                "baaa[aa]a[a[a]a]aa",
+                &["b < a -> b", "b -> c", "a > b -> d"],
+            ),
+            ("A(1)", &["A(x) -> A(x+1) B(x)", "A(x) -> B(x) A(x*2)"]),
+        ];
+        for (axiom, rules) in cases {
+            let mut r = Run::new(axiom, rules);
+            if axiom == "A(1)" {
+                // Stochastic: both alternatives, drawn from the same generator.
+                r = Run::with(axiom, &[], |system, symbols| {
+                    for rule in rules {
+                        system
+                            .add_production(rule, Some(1.0), 0, symbols)
+                            .expect("rule");
+                    }
+                });
+            }
+            r.steps(4);
+            let mut whole = Run {
+                string: r.string.clone(),
+                symbols: r.symbols.clone(),
+                system: r.system.clone(),
+                rng: r.rng.clone(),
+                steps: r.steps,
+                max: r.max,
+            };
+            whole.step().expect("derives");
+            for chunk in [1, 3, 1000] {
+                let (joined, n) = chunked(&r, chunk, r.max).expect("derives");
+                assert_eq!(
+                    n as usize,
+                    whole.string.len(),
+                    "{axiom} in pieces of {chunk}"
+                );
+                assert_eq!(joined, whole.string, "{axiom} in pieces of {chunk}");
+            }
+            // The cap holds for the whole step, not for each piece.
+            let max = whole.string.len() - 1;
+            let err = chunked(&r, 2, max).expect_err("over the cap");
+            assert!(
+                matches!(err, LsError::TooManyModules { step: 5, .. }),
+                "{err:?}"
+            );
+        }
     }
 
     #[test]

@@ -16,6 +16,7 @@ use pge_engine::{Algorithm, Error, RunContext, Step};
 use rand_mt::Mt;
 
 use super::config::{Axiom, Config};
+use super::derive::{LastStep, StreamHost};
 use super::host::{HostError, LuaHost};
 use super::session_symbols;
 use super::symbols::tags;
@@ -101,6 +102,63 @@ impl LSystemAlgorithm {
     #[must_use]
     pub fn steps_taken(&self) -> u32 {
         self.done
+    }
+
+    /// Moves the current string and the Lua parameter tables of its external modules out.
+    pub(crate) fn take_string(&mut self) -> (ModuleString, Vec<Value>) {
+        self.scratch = ModuleString::new();
+        (
+            std::mem::take(&mut self.string),
+            std::mem::take(&mut self.side),
+        )
+    }
+
+    /// Derives like [`pge_engine::algorithm::grow`] for `pge derive`. When nothing of Lua
+    /// takes part in the last step (no interpretation, rule functions or callbacks), that
+    /// step is only counted, checking every limit, and returned to be streamed: the current
+    /// string is then the one before it.
+    pub(crate) fn grow_for_output(
+        &mut self,
+        ctx: &RunContext,
+    ) -> pge_engine::Result<Option<LastStep>> {
+        self.init(ctx)?;
+        let target = ctx.steps.unwrap_or(self.cfg.iterations);
+        let stream = target > 0
+            && self.skip_interpretation
+            && !self.lua_involved
+            && !self.cfg.system.has_external();
+        let before = if stream { target - 1 } else { target };
+        while self.done < before {
+            if self.step(ctx)? == Step::Done {
+                break;
+            }
+        }
+        if !stream || self.done != before {
+            return Ok(None);
+        }
+        // The previous step's buffer is not needed any more.
+        self.scratch = ModuleString::new();
+        self.guarded(ctx, |me, _, ctx| {
+            let opts = StepOptions {
+                step: me.done + 1,
+                max_modules: me.max_modules,
+                stream: false,
+            };
+            let rng = me.rng.clone();
+            let location = me.cfg.location.clone();
+            let mut host = StreamHost {
+                rng: &mut me.rng,
+                limits: Some((ctx, &location)),
+            };
+            let len = me.cfg.system.step_count(&me.string, &mut host, &opts)?;
+            me.done += 1;
+            Ok(Some(LastStep {
+                system: me.cfg.system.clone(),
+                rng,
+                opts,
+                len,
+            }))
+        })
     }
 
     fn upgrade(&self) -> pge_engine::Result<Lua> {

@@ -4,27 +4,80 @@ use std::fmt::Write as _;
 use std::io::{self, Write};
 
 use mlua::{Lua, Value};
+use pge_engine::random::uniform;
 use pge_engine::{Error, Location, RunContext};
+use rand_mt::Mt;
 
 use super::algorithm::LSystemAlgorithm;
+use super::host::HostError;
 use super::object::LuaLSystem;
-use crate::{ModuleString, SymbolTable};
+use crate::{Host, LsError, ModuleString, StepOptions, SymbolTable, System};
 
-/// The parameters of a module whose parameter table is not a plain array of numbers.
-#[derive(Clone, Debug, PartialEq)]
-struct External {
-    /// The leading positional numbers (written by the `text` format).
-    positional: Vec<f64>,
-    /// The whole table as JSON (written by the `json` format).
-    json: serde_json::Value,
+/// The last derivation step, left to be streamed: derived anew, piece by piece, each time the
+/// string is read, and never kept whole.
+#[derive(Clone, Debug)]
+pub(crate) struct LastStep {
+    /// The rules (prepared).
+    pub(crate) system: System,
+    /// The instance's generator as the step starts.
+    pub(crate) rng: Mt,
+    /// The step's number and module cap.
+    pub(crate) opts: StepOptions,
+    /// The number of modules the step makes (counted once, checking every limit).
+    pub(crate) len: u64,
 }
 
-/// The result of a derivation: the final string with its symbol names and parameters.
+/// The host of a streamed last step: the instance's generator and, while the step is
+/// counted, the run's deadline (its errors point at the location). No Lua takes part in such
+/// a step. Writing derives the step again without checking the deadline: the count took as
+/// long, within the limit, and a write stopped halfway would leave half an output.
+pub(crate) struct StreamHost<'a> {
+    pub(crate) rng: &'a mut Mt,
+    pub(crate) limits: Option<(&'a RunContext, &'a Location)>,
+}
+
+impl Host for StreamHost<'_> {
+    type Error = HostError;
+
+    fn random(&mut self) -> f64 {
+        uniform(self.rng)
+    }
+
+    fn check(&mut self) -> Result<(), HostError> {
+        match self.limits {
+            Some((ctx, location)) => ctx.check_deadline(location).map_err(HostError::Engine),
+            None => Ok(()),
+        }
+    }
+
+    fn apply(
+        &mut self,
+        rule: u32,
+        _: &[usize],
+        _: &ModuleString,
+        _: &mut ModuleString,
+    ) -> Result<bool, HostError> {
+        Err(LsError::Syntax {
+            text: format!("external rule {rule}"),
+            message: "a streamed step runs no rule functions".into(),
+        }
+        .into())
+    }
+}
+
+/// The result of a derivation: the final string with its symbol names and parameters. The
+/// last step of a system without Lua is not kept: it is derived again, piece by piece, while
+/// the string is written, so a derivation holds the string of the step before.
 #[derive(Clone, Debug)]
 pub struct Derivation {
+    /// The final string, or the one before the last step when `last` is set.
     string: ModuleString,
+    last: Option<LastStep>,
     symbols: SymbolTable,
-    externals: Vec<External>,
+    /// Lua parameter tables of the external modules (read only when written).
+    side: Vec<Value>,
+    /// Keeps the Lua state of `side` alive as long as the derivation.
+    _lua: Option<Lua>,
     /// Derivation steps taken.
     pub steps: u32,
 }
@@ -74,43 +127,110 @@ fn to_json(v: &Value, depth: u32) -> serde_json::Value {
     }
 }
 
+/// The leading positional numbers of an external module's parameter table (written by the
+/// `text` format).
+fn positional(v: &Value, out: &mut String) {
+    let Value::Table(t) = v else { return };
+    let mut k = 0;
+    for i in 1..=t.raw_len() {
+        let x = match t.raw_get::<Value>(i) {
+            Ok(Value::Integer(x)) => x as f64,
+            Ok(Value::Number(x)) => x,
+            _ => break,
+        };
+        out.push(if k == 0 { '(' } else { ',' });
+        number(out, x);
+        k += 1;
+    }
+    if k > 0 {
+        out.push(')');
+    }
+}
+
+/// Text written before flushing to the output.
+const FLUSH_AT: usize = 60_000;
+/// Modules of the string before the last step rewritten per piece of a streamed step.
+const PIECE: usize = 1 << 14;
+
 impl Derivation {
     /// Number of modules, brackets included.
     #[must_use]
     pub fn len(&self) -> usize {
-        self.string.len()
+        match &self.last {
+            Some(last) => last.len as usize,
+            None => self.string.len(),
+        }
     }
 
     /// Whether the string is empty.
     #[must_use]
     pub fn is_empty(&self) -> bool {
-        self.string.is_empty()
+        self.len() == 0
+    }
+
+    /// Hands every piece of the final string to `f` in order (the whole string, or the
+    /// streamed last step piece by piece).
+    fn for_each_piece(&self, f: &mut dyn FnMut(&ModuleString) -> io::Result<()>) -> io::Result<()> {
+        let Some(last) = &self.last else {
+            return f(&self.string);
+        };
+        let mut rng = last.rng.clone();
+        let mut host = StreamHost {
+            rng: &mut rng,
+            limits: None,
+        };
+        let mut buf = ModuleString::new();
+        let mut failed = None;
+        let result = last.system.step_chunks(
+            &self.string,
+            &mut buf,
+            &mut host,
+            &last.opts,
+            PIECE,
+            &mut |piece| {
+                f(piece).map_err(|e| {
+                    failed = Some(e);
+                    HostError::Engine(Error::Cancelled {
+                        location: Location::default(),
+                    })
+                })
+            },
+        );
+        match (result, failed) {
+            (_, Some(e)) => Err(e),
+            (Ok(_), None) => Ok(()),
+            (Err(e), None) => Err(io::Error::other(match e {
+                HostError::Engine(e) => e.to_string(),
+                HostError::Ls(e) => e.to_string(),
+                HostError::Lua(e) => e.to_string(),
+            })),
+        }
     }
 
     /// Module `i` as `Name` or `Name(p1,p2,...)` (positional numeric parameters, shortest
-    /// round-trip form).
+    /// round-trip form). Reading a module of a streamed last step derives the step up to it.
     #[must_use]
     pub fn module_text(&self, i: usize) -> String {
         let mut out = String::new();
-        self.write_module(i, &mut out);
+        let mut skip = i;
+        let _ = self.for_each_piece(&mut |piece| {
+            if skip < piece.len() {
+                self.write_module(piece, skip, &mut out);
+                return Err(io::Error::other("found"));
+            }
+            skip -= piece.len();
+            Ok(())
+        });
         out
     }
 
-    fn write_module(&self, i: usize, out: &mut String) {
-        match self.string.external(i) {
-            None => self.string.write_module(i, &self.symbols, out),
+    fn write_module(&self, string: &ModuleString, i: usize, out: &mut String) {
+        match string.external(i) {
+            None => string.write_module(i, &self.symbols, out),
             Some(slot) => {
-                out.push_str(self.symbols.name(self.string.sym(i)));
-                let p = &self.externals[slot as usize].positional;
-                if !p.is_empty() {
-                    out.push('(');
-                    for (k, v) in p.iter().enumerate() {
-                        if k > 0 {
-                            out.push(',');
-                        }
-                        number(out, *v);
-                    }
-                    out.push(')');
+                out.push_str(self.symbols.name(string.sym(i)));
+                if let Some(v) = self.side.get(slot as usize) {
+                    positional(v, out);
                 }
             }
         }
@@ -118,17 +238,22 @@ impl Derivation {
 
     /// Writes the `text` format: modules separated by one space, then a newline.
     pub fn write_text(&self, w: &mut dyn Write) -> io::Result<()> {
-        let mut buf = String::with_capacity(1 << 16);
-        for i in 0..self.string.len() {
-            if i > 0 {
-                buf.push(' ');
+        let mut buf = String::with_capacity(FLUSH_AT + 4096);
+        let mut first = true;
+        self.for_each_piece(&mut |piece| {
+            for i in 0..piece.len() {
+                if !first {
+                    buf.push(' ');
+                }
+                first = false;
+                self.write_module(piece, i, &mut buf);
+                if buf.len() > FLUSH_AT {
+                    w.write_all(buf.as_bytes())?;
+                    buf.clear();
+                }
             }
-            self.write_module(i, &mut buf);
-            if buf.len() > 60_000 {
-                w.write_all(buf.as_bytes())?;
-                buf.clear();
-            }
-        }
+            Ok(())
+        })?;
         buf.push('\n');
         w.write_all(buf.as_bytes())
     }
@@ -136,36 +261,42 @@ impl Derivation {
     /// Writes the `json` format: an array of `{"name": ..., "params": ...}` (params is an
     /// array of numbers, or the parameter table as JSON when it is not one).
     pub fn write_json(&self, w: &mut dyn Write) -> io::Result<()> {
-        let mut buf = String::with_capacity(1 << 16);
+        let mut buf = String::with_capacity(FLUSH_AT + 4096);
         buf.push('[');
-        for i in 0..self.string.len() {
-            if i > 0 {
-                buf.push(',');
-            }
-            buf.push_str("{\"name\":");
-            buf.push_str(
-                &serde_json::Value::from(self.symbols.name(self.string.sym(i))).to_string(),
-            );
-            buf.push_str(",\"params\":");
-            match self.string.external(i) {
-                Some(slot) => buf.push_str(&self.externals[slot as usize].json.to_string()),
-                None => {
-                    buf.push('[');
-                    for (k, v) in self.string.params(i).iter().enumerate() {
-                        if k > 0 {
-                            buf.push(',');
+        let mut first = true;
+        self.for_each_piece(&mut |piece| {
+            for i in 0..piece.len() {
+                if !first {
+                    buf.push(',');
+                }
+                first = false;
+                buf.push_str("{\"name\":");
+                buf.push_str(&serde_json::Value::from(self.symbols.name(piece.sym(i))).to_string());
+                buf.push_str(",\"params\":");
+                match piece.external(i) {
+                    Some(slot) => buf.push_str(
+                        &to_json(self.side.get(slot as usize).unwrap_or(&Value::Nil), 0)
+                            .to_string(),
+                    ),
+                    None => {
+                        buf.push('[');
+                        for (k, v) in piece.params(i).iter().enumerate() {
+                            if k > 0 {
+                                buf.push(',');
+                            }
+                            number(&mut buf, *v);
                         }
-                        number(&mut buf, *v);
+                        buf.push(']');
                     }
-                    buf.push(']');
+                }
+                buf.push('}');
+                if buf.len() > FLUSH_AT {
+                    w.write_all(buf.as_bytes())?;
+                    buf.clear();
                 }
             }
-            buf.push('}');
-            if buf.len() > 60_000 {
-                w.write_all(buf.as_bytes())?;
-                buf.clear();
-            }
-        }
+            Ok(())
+        })?;
         buf.push_str("]\n");
         w.write_all(buf.as_bytes())
     }
@@ -173,7 +304,8 @@ impl Derivation {
 
 /// Derives the L-system a script returned (`value`), taking `ctx.steps` steps or the
 /// system's own `iterations`. A system without IRules and rule functions is not interpreted
-/// (interpretation could not change its string).
+/// (interpretation could not change its string); when no Lua takes part in its last step
+/// either, that step is only counted here (checking every limit) and streamed when written.
 pub fn derive_value(
     lua: &Lua,
     value: &Value,
@@ -189,34 +321,15 @@ pub fn derive_value(
     };
     let skip = cfg.irules.is_empty() && cfg.rrules.is_empty();
     let mut algorithm = LSystemAlgorithm::new(lua, cfg, skip);
-    pge_engine::algorithm::grow(&mut algorithm, ctx)?;
-    let string = algorithm.string().clone();
-    let mut externals = Vec::new();
-    let mut slotted = string.clone();
-    for i in 0..string.len() {
-        if let Some(v) = algorithm.external_params(i) {
-            let mut positional = Vec::new();
-            if let Value::Table(t) = v {
-                for k in 1..=t.raw_len() {
-                    match t.raw_get::<Value>(k) {
-                        Ok(Value::Integer(x)) => positional.push(x as f64),
-                        Ok(Value::Number(x)) => positional.push(x),
-                        _ => break,
-                    }
-                }
-            }
-            externals.push(External {
-                positional,
-                json: to_json(v, 0),
-            });
-            slotted.set_external_slot(i, externals.len() as u32 - 1);
-        }
-    }
+    let last = algorithm.grow_for_output(ctx)?;
+    let (string, side) = algorithm.take_string();
     let symbols = algorithm.symbols().clone();
     Ok(Derivation {
-        string: slotted,
+        string,
+        last,
         symbols,
-        externals,
+        _lua: (!side.is_empty()).then(|| lua.clone()),
+        side,
         steps: algorithm.steps_taken(),
     })
 }

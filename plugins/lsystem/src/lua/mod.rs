@@ -287,6 +287,41 @@ mod tests {
     }
 
     #[test]
+    fn a_streamed_last_step_writes_what_a_kept_one_does() {
+        // Without Lua in its last step the step is streamed while written; a callback
+        // (doing nothing) keeps it whole. Both must write the same string.
+        let system = r#"local l = pge.LSystem("t")
+            l:axiom("A(1,10)")
+            l:rule("A(l,w) : l > 0.3 -> !(w)F(l)[&(45)A(l*0.6,w*0.7)]/(137.5)A(l*0.9,w*0.7)", 2)
+            l:rule("A(l,w) -> F(l)[+B(l)]A(l*0.9,w)", 1)
+            l:rule("B(l) -> F(l)[-B(l*0.5)]")
+            l:iterations(6)"#;
+        let streamed =
+            derive_in(&session(3), &format!("{system} return l"), None).expect("derives");
+        let kept = derive_in(
+            &session(3),
+            &format!("{system} l:afterStep(function() end) return l"),
+            None,
+        )
+        .expect("derives");
+        assert!(streamed.len() > 100);
+        assert_eq!(streamed.len(), kept.len());
+        assert_eq!(streamed.steps, kept.steps);
+        for write in [Derivation::write_text, Derivation::write_json] {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            write(&streamed, &mut a).expect("writes");
+            write(&kept, &mut b).expect("writes");
+            assert_eq!(a, b);
+        }
+        assert_eq!(streamed.module_text(57), kept.module_text(57));
+        // The cap of the last step still holds: the error comes from the derivation.
+        let e = error(
+            "local l = pge.LSystem('big')\nl:axiom('A(1)')\nl:rule('A(x) -> A(x)A(x)')\nl:maxModules(100)\nl:iterations(7)\nreturn l",
+        );
+        assert!(e.contains("step 7: the string reached 102 modules"), "{e}");
+    }
+
+    #[test]
     fn randomness_is_per_instance_and_repeats_per_seed() {
         let code = r#"local l = pge.LSystem("t")
             l:axiom("AAAAAAAAAA")

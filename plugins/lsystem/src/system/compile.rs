@@ -30,6 +30,10 @@ pub(super) struct Compiled {
     pub(super) kind: CKind,
     /// A non-head member of a stochastic group: reached through its head only.
     pub(super) skip: bool,
+    /// The symbol of a one-symbol left context, tested before the full match.
+    pub(super) left1: Option<Sym>,
+    /// The symbol of a one-symbol right context (not a bracket), tested likewise.
+    pub(super) right1: Option<Sym>,
 }
 
 /// What a symbol turns into: itself, a fixed string of symbols (`plain_pool[start..]`), or
@@ -216,5 +220,19 @@ fn compile(
             }
         }
     };
-    Ok(Compiled { kind, skip: false })
+    let lhs = &def.lhs;
+    let left1 = match lhs.left.as_slice() {
+        [one] => Some(one.sym),
+        _ => None,
+    };
+    let right1 = match lhs.right.as_slice() {
+        [one] if one.sym != Sym::PUSH && one.sym != Sym::POP => Some(one.sym),
+        _ => None,
+    };
+    Ok(Compiled {
+        kind,
+        skip: false,
+        left1,
+        right1,
+    })
 }

@@ -19,6 +19,58 @@ pub struct StepOptions {
     pub stream: bool,
 }
 
+/// The symbol a one-symbol left context of module `i` would match (as
+/// [`super::context::match_left`] walks: skipping branches, climbing out of enclosing ones,
+/// skipping ignored symbols).
+#[inline]
+fn left_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usize) -> Option<Sym> {
+    let mut j = i;
+    loop {
+        if j == 0 {
+            return None;
+        }
+        j -= 1;
+        let s = src.sym(j);
+        if s == Sym::POP {
+            match matches[j] {
+                u32::MAX => return None,
+                open => j = open as usize,
+            }
+        } else if s != Sym::PUSH && !ignored.get(s.index()).copied().unwrap_or(false) {
+            return Some(s);
+        }
+    }
+}
+
+/// The symbol a one-symbol right context (not a bracket) of module `i` would match (as
+/// [`super::context::match_right`] walks: skipping branches and ignored symbols).
+#[inline]
+fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usize) -> Option<Sym> {
+    let n = src.len();
+    let mut j = i + 1;
+    while j < n {
+        let s = src.sym(j);
+        if ignored.get(s.index()).copied().unwrap_or(false) {
+            j += 1;
+        } else if s == Sym::PUSH {
+            match matches[j] {
+                u32::MAX => return None,
+                close => j = close as usize + 1,
+            }
+        } else {
+            return Some(s);
+        }
+    }
+    None
+}
+
+/// Reused buffers of a step: the modules a rule matched and their gathered parameters.
+#[derive(Default)]
+struct Scratch {
+    matched: Vec<usize>,
+    gathered: Vec<f64>,
+}
+
 /// A compiled system's rules, ready to derive.
 pub(super) struct Deriver<'a> {
     /// The rules as added (left sides, origins and texts for errors).
@@ -39,76 +91,208 @@ impl Deriver<'_> {
         opts: &StepOptions,
     ) -> Result<(), H::Error> {
         out.clear();
-        let too_many = |count: u64| LsError::TooManyModules {
-            step: opts.step,
-            count,
-            max: opts.max_modules,
-        };
-        if self.tables.all_plain && src.is_flat() && !opts.stream {
-            // Fast path: count first (fail before allocating), then copy slices.
-            let syms = src.raw_syms();
-            let mut total = 0u64;
-            for &s in syms {
-                total += match self.tables.dispatch.get(s as usize) {
-                    Some(Dispatch::Plain { len, .. }) => u64::from(*len),
-                    _ => 1,
-                };
-            }
-            if total > opts.max_modules as u64 {
-                return Err(too_many(total).into());
-            }
+        if self.plain_fast_path(src, opts) {
+            let total = self.plain_count(src, opts)?;
             out.reserve(total as usize);
-            for chunk in syms.chunks(1 << 16) {
+            for chunk in src.raw_syms().chunks(1 << 16) {
                 host.check()?;
-                for &s in chunk {
-                    match self.tables.dispatch.get(s as usize) {
-                        Some(Dispatch::Plain { start, len }) => out.extend_plain(
-                            &self.tables.plain_pool[*start as usize..(*start + *len) as usize],
-                        ),
-                        _ => out.extend_plain(&[s]),
-                    }
-                }
+                self.expand_plain(chunk, out);
             }
             return Ok(());
         }
-        let matches = if self.tables.uses_context {
+        let matches = self.bracket_matches(src);
+        let mut scratch = Scratch::default();
+        self.step_range(
+            src,
+            0..src.len(),
+            &matches,
+            0,
+            out,
+            host,
+            opts,
+            &mut scratch,
+        )
+    }
+
+    /// One derivation step delivered in pieces: the successors of every `chunk` modules of
+    /// `src` are appended to `buf` (cleared before each piece) and handed to `sink`. The
+    /// module cap holds for the whole step. Returns the number of modules produced.
+    pub(super) fn step_chunks<H: Host>(
+        &self,
+        src: &ModuleString,
+        buf: &mut ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+        chunk: usize,
+        sink: &mut dyn FnMut(&ModuleString) -> Result<(), H::Error>,
+    ) -> Result<u64, H::Error> {
+        let chunk = chunk.max(1);
+        let plain = self.plain_fast_path(src, opts);
+        let matches = if plain {
+            Vec::new()
+        } else {
+            self.bracket_matches(src)
+        };
+        let mut scratch = Scratch::default();
+        let mut total = 0u64;
+        let mut start = 0;
+        while start < src.len() {
+            let end = (start + chunk).min(src.len());
+            buf.clear();
+            if plain {
+                host.check()?;
+                self.expand_plain(&src.raw_syms()[start..end], buf);
+                if total + buf.len() as u64 > opts.max_modules as u64 {
+                    return Err(self.too_many(opts, total + buf.len() as u64).into());
+                }
+            } else {
+                self.step_range(
+                    src,
+                    start..end,
+                    &matches,
+                    total,
+                    buf,
+                    host,
+                    opts,
+                    &mut scratch,
+                )?;
+            }
+            total += buf.len() as u64;
+            sink(buf)?;
+            start = end;
+        }
+        Ok(total)
+    }
+
+    /// The number of modules one step of a plain system makes of `src` (see
+    /// [`Deriver::plain_fast_path`]), failing over the module cap.
+    pub(super) fn plain_count(
+        &self,
+        src: &ModuleString,
+        opts: &StepOptions,
+    ) -> Result<u64, LsError> {
+        let mut total = 0u64;
+        for &s in src.raw_syms() {
+            total += match self.tables.dispatch.get(s as usize) {
+                Some(Dispatch::Plain { len, .. }) => u64::from(*len),
+                _ => 1,
+            };
+        }
+        if total > opts.max_modules as u64 {
+            return Err(self.too_many(opts, total));
+        }
+        Ok(total)
+    }
+
+    /// Whether a step of `src` copies fixed strings of symbols only (no parameters, no
+    /// conditions, no contexts, no streaming interpretation).
+    pub(super) fn plain_fast_path(&self, src: &ModuleString, opts: &StepOptions) -> bool {
+        self.tables.all_plain && src.is_flat() && !opts.stream
+    }
+
+    fn too_many(&self, opts: &StepOptions, count: u64) -> LsError {
+        LsError::TooManyModules {
+            step: opts.step,
+            count,
+            max: opts.max_modules,
+        }
+    }
+
+    fn bracket_matches(&self, src: &ModuleString) -> Vec<u32> {
+        if self.tables.uses_context {
             src.bracket_matches()
         } else {
             Vec::new()
-        };
-        let mut matched: Vec<usize> = Vec::with_capacity(16);
-        let mut gathered: Vec<f64> = Vec::with_capacity(16);
-        let max = opts.max_modules;
-        for i in 0..src.len() {
-            if i & 0xFFFF == 0 {
-                host.check()?;
-            }
-            let from = out.len();
-            let s = src.sym(i);
-            match self.tables.dispatch.get(s.index()) {
+        }
+    }
+
+    /// Appends the successors of the parameterless modules `syms` of a plain system.
+    #[inline]
+    fn expand_plain(&self, syms: &[u32], out: &mut ModuleString) {
+        for &s in syms {
+            match self.tables.dispatch.get(s as usize) {
                 Some(Dispatch::Plain { start, len }) => out.extend_plain(
                     &self.tables.plain_pool[*start as usize..(*start + *len) as usize],
                 ),
+                _ => out.extend_plain(&[s]),
+            }
+        }
+    }
+
+    /// Rewrites the modules `range` of `src`, appending to `out`; `before` modules were
+    /// produced earlier in this step (for the module cap).
+    #[allow(clippy::too_many_arguments)]
+    fn step_range<H: Host>(
+        &self,
+        src: &ModuleString,
+        range: std::ops::Range<usize>,
+        matches: &[u32],
+        before: u64,
+        out: &mut ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+        scratch: &mut Scratch,
+    ) -> Result<(), H::Error> {
+        let max = opts.max_modules as u64;
+        let base = out.len() as u64;
+        let end = range.end;
+        let mut i = range.start;
+        // The deadline is checked every 65 536 modules of `src` (and once per range).
+        let mut next_check = i;
+        while i < end {
+            if i >= next_check {
+                host.check()?;
+                next_check = (i | 0xFFFF) + 1;
+            }
+            let from = out.len();
+            let s = src.sym(i);
+            let mut bulk = false;
+            match self.tables.dispatch.get(s.index()) {
+                Some(Dispatch::Plain { start, len }) => {
+                    out.extend_plain(
+                        &self.tables.plain_pool[*start as usize..(*start + *len) as usize],
+                    );
+                    i += 1;
+                }
                 Some(Dispatch::Rules { start, len }) => {
                     let list = &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
                     let applied = self.apply_rules(
                         list,
                         src,
-                        &matches,
+                        matches,
                         i,
                         out,
                         host,
-                        &mut matched,
-                        &mut gathered,
+                        &mut scratch.matched,
+                        &mut scratch.gathered,
                     )?;
                     if !applied {
                         out.push_from(src, i);
                     }
+                    i += 1;
                 }
-                _ => out.push_from(src, i),
+                _ => {
+                    // A run of modules without rules: copied in bulk.
+                    let mut j = i + 1;
+                    let stop = end.min(next_check);
+                    while j < stop
+                        && matches!(
+                            self.tables.dispatch.get(src.sym(j).index()),
+                            None | Some(Dispatch::Copy)
+                        )
+                    {
+                        j += 1;
+                    }
+                    out.extend_from(src, i..j);
+                    bulk = true;
+                    i = j;
+                }
             }
-            if out.len() > max {
-                return Err(too_many(out.len() as u64).into());
+            let count = before + out.len() as u64 - base;
+            if count > max {
+                // A bulk copy stops where a module-by-module one would have.
+                let count = if bulk { count.min(max + 1) } else { count };
+                return Err(self.too_many(opts, count).into());
             }
             if opts.stream {
                 host.interpret(out, from)?;
@@ -131,6 +315,18 @@ impl Deriver<'_> {
     ) -> Result<bool, H::Error> {
         for &r in list {
             let r = r as usize;
+            // One-symbol contexts, the common case, are rejected without the full match.
+            let compiled = &self.tables.rules[r];
+            if let Some(q) = compiled.left1
+                && left_neighbour(&self.tables.ignored, src, matches, i) != Some(q)
+            {
+                continue;
+            }
+            if let Some(q) = compiled.right1
+                && right_neighbour(&self.tables.ignored, src, matches, i) != Some(q)
+            {
+                continue;
+            }
             let def = &self.defs[r];
             let lhs = &def.lhs;
             matched.clear();
