@@ -4,6 +4,8 @@
 use std::rc::Rc;
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use crate::ForestError;
 use crate::poisson::{Rect, Sample, block_size, poisson};
 use crate::rng::{Rng, hash};
@@ -356,12 +358,29 @@ impl Forest {
                 Method::Jittered { jitter } => layer.cell(jitter),
             };
             let across = (self.size[0] / across).ceil() as u64;
+            // Draws, height and slope of every sample in parallel (each from its own seed);
+            // the density decides in order, as a script's density function must be called
+            // on the script's thread.
+            let site = Site {
+                terrain: &self.terrain,
+                seed: self.seed,
+                layer: l,
+                scale: layer.scale,
+                variants: layer.variants,
+                slope: layer.slope,
+                altitude: layer.altitude,
+            };
+            let candidates: Vec<Option<(Instance, f64)>> =
+                samples.par_iter().map(|s| site.candidate(s)).collect();
             let mut kept = Vec::new();
             let mut count = 0usize;
-            for s in samples {
-                let Some(inst) = self.grow_at(l, layer, &s)? else {
+            for (s, candidate) in samples.into_iter().zip(candidates) {
+                let Some((inst, keep)) = candidate else {
                     continue;
                 };
+                if keep >= self.density_at(layer, &s)? {
+                    continue;
+                }
                 kept.push((s.x, s.z));
                 if target.contains(s.x, s.z) {
                     let variant = match layer.variants {
@@ -390,39 +409,9 @@ impl Forest {
         Ok(layout)
     }
 
-    /// The instance a sample grows into, or `None` when the limits or the density say no.
-    fn grow_at(
-        &self,
-        l: usize,
-        layer: &Layer,
-        s: &Sample,
-    ) -> Result<Option<Instance>, ForestError> {
-        let mut rng = Rng::new(hash(&[
-            self.seed,
-            0x1257,
-            l as u64,
-            u64::from(s.cell[0]),
-            u64::from(s.cell[1]),
-            u64::from(s.index),
-        ]));
-        let keep = rng.uniform();
-        let yaw = rng.uniform() * std::f64::consts::TAU;
-        let scale = rng.range(layer.scale[0], layer.scale[1]);
-        let variant = match layer.variants {
-            Variants::Count(n) => rng.below(n),
-            Variants::Unique => 0,
-        };
-        let h = self.terrain.height(s.x, s.z);
-        if h < layer.altitude[0] || h > layer.altitude[1] {
-            return Ok(None);
-        }
-        if layer.slope != [0.0, 90.0] {
-            let slope = self.terrain.slope_degrees(s.x, s.z);
-            if slope < layer.slope[0] || slope > layer.slope[1] {
-                return Ok(None);
-            }
-        }
-        let d = match &layer.density {
+    /// The density of `layer` at sample `s`.
+    fn density_at(&self, layer: &Layer, s: &Sample) -> Result<f64, ForestError> {
+        Ok(match &layer.density {
             Density::Constant(d) => *d,
             Density::Map(m) => m.sample(
                 (s.x + 0.5 * self.size[0]) / self.size[0],
@@ -441,17 +430,58 @@ impl Forest {
                 }
                 d
             }
+        })
+    }
+}
+
+/// What a sample of one layer needs to become an instance, shareable across threads.
+struct Site<'a> {
+    terrain: &'a Terrain,
+    seed: u64,
+    layer: usize,
+    scale: [f64; 2],
+    variants: Variants,
+    slope: [f64; 2],
+    altitude: [f64; 2],
+}
+
+impl Site<'_> {
+    /// The instance sample `s` grows into and the draw its density must exceed, or `None`
+    /// when the altitude or slope limits exclude it.
+    fn candidate(&self, s: &Sample) -> Option<(Instance, f64)> {
+        let mut rng = Rng::new(hash(&[
+            self.seed,
+            0x1257,
+            self.layer as u64,
+            u64::from(s.cell[0]),
+            u64::from(s.cell[1]),
+            u64::from(s.index),
+        ]));
+        let keep = rng.uniform();
+        let yaw = rng.uniform() * std::f64::consts::TAU;
+        let scale = rng.range(self.scale[0], self.scale[1]);
+        let variant = match self.variants {
+            Variants::Count(n) => rng.below(n),
+            Variants::Unique => 0,
         };
-        if keep >= d {
-            return Ok(None);
+        let h = self.terrain.height(s.x, s.z);
+        if h < self.altitude[0] || h > self.altitude[1] {
+            return None;
         }
-        Ok(Some(Instance {
+        if self.slope != [0.0, 90.0] {
+            let slope = self.terrain.slope_degrees(s.x, s.z);
+            if slope < self.slope[0] || slope > self.slope[1] {
+                return None;
+            }
+        }
+        let inst = Instance {
             position: [s.x as f32, h as f32, s.z as f32],
             yaw: yaw as f32,
             scale: scale as f32,
-            layer: l as u32,
+            layer: self.layer as u32,
             variant,
-        }))
+        };
+        Some((inst, keep))
     }
 }
 
