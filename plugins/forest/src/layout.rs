@@ -760,6 +760,11 @@ mod tests {
             .map(|i| i.variant)
             .collect();
         assert_eq!(unique.len(), whole.iter().filter(|i| i.layer == 2).count());
+        // Trunks from different tiles keep the layer's distance across the seams.
+        for (l, layer) in f.layers.iter().enumerate() {
+            let d = closest_within_layer(&union, l as u32);
+            assert!(d >= layer.min_distance - 1e-4, "layer {l}: {d}");
+        }
         assert_eq!(sorted(union), whole);
     }
 
