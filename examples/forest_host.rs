@@ -2,12 +2,16 @@
 //! the layout read back instance by instance, then each variant given a mesh the host made
 //! itself (a cone) and the whole written as an instanced `.glb`.
 //!
-//! Run with `cargo run --example forest_host [OUT.glb]`.
+//! Run with `cargo run --example forest_host [OUT.glb]`. `tests/forest.rs` runs [`run`].
+
+use std::path::Path;
 
 use glam::Vec3;
 use pge_engine::export::{ExportMeta, glb_bytes};
 use pge_engine::geometry::{Mesh, Model};
-use pge_forest::{Density, FbmOptions, Forest, Grown, Layer, Terrain, Variants, assemble};
+use pge_forest::{
+    Density, FbmOptions, Forest, Grown, Instance, Layer, Terrain, Variants, assemble,
+};
 
 /// A cone of `height` metres: the host's stand-in for a tree.
 fn cone(height: f32, radius: f32) -> Result<Mesh, Box<dyn std::error::Error>> {
@@ -24,10 +28,9 @@ fn cone(height: f32, radius: f32) -> Result<Mesh, Box<dyn std::error::Error>> {
     Ok(Mesh::from_triangles(positions, indices)?)
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "forest_host.glb".into());
+/// Lays out a 300 m forest of firs (3 variants) and birches (2 variants), prints what it
+/// placed, writes the instanced `.glb` to `out` and returns the layout's instances.
+pub fn run(out: &Path) -> Result<Vec<Instance>, Box<dyn std::error::Error>> {
     let mut forest = Forest::new([300.0, 300.0], 42, Some(100.0))?;
     let relief = FbmOptions {
         height: 25.0,
@@ -72,7 +75,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
     ];
     let model = assemble(&forest, &layout, &grown, None);
-    std::fs::write(&out, glb_bytes(&model, &ExportMeta::default())?)?;
-    println!("{} instances written to {out}", model.instance_count() - 1);
-    Ok(())
+    std::fs::write(out, glb_bytes(&model, &ExportMeta::default())?)?;
+    println!(
+        "{} instances written to {}",
+        model.instance_count() - 1,
+        out.display()
+    );
+    Ok(layout.instances)
+}
+
+#[allow(dead_code, reason = "the test includes this file for run() alone")]
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let out = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "forest_host.glb".into());
+    run(Path::new(&out)).map(|_| ())
 }

@@ -3,6 +3,8 @@
 //! thread count; every bad input is a `FILE:LINE:` error with exit 1 and no output file.
 
 mod common;
+#[path = "../examples/forest_host.rs"]
+mod forest_host;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -378,7 +380,7 @@ fn bad_input_is_a_file_line_error_with_no_output() {
     expect_error(
         &scatter("minDistance = 3, density = 'nothing.png'"),
         &[],
-        &["forest.lua:2:", "nothing.png"],
+        &["forest.lua:2:", "density", "nothing.png"],
     );
     expect_error(
         &scatter("minDistance = 3, slope = {30, 10}"),
@@ -403,7 +405,17 @@ fn bad_input_is_a_file_line_error_with_no_output() {
     expect_error(
         "local f = pge.Forest{ size = 20000 }\nf:scatter{ species = \"stick.lua\", minDistance = 1 }\nreturn f\n",
         &[],
-        &["forest.lua:1:", "10000000"],
+        &["forest.lua:1:", "10000000", "minDistance"],
+    );
+    expect_error(
+        "local f = pge.Forest{ size = 60, tile = 0 }\nreturn f\n",
+        &[],
+        &["forest.lua:1:", "tile", "> 0"],
+    );
+    expect_error(
+        &scatter("minDistance = 3, scale = {0, 1}"),
+        &[],
+        &["forest.lua:2:", "scale"],
     );
     expect_error(
         &format!(
@@ -412,6 +424,64 @@ fn bad_input_is_a_file_line_error_with_no_output() {
         &[],
         &["density", "between 0 and 1"],
     );
+}
+
+#[test]
+fn the_host_example_writes_the_instances_it_laid_out() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("host.glb");
+    let instances = forest_host::run(&out).expect("the example runs");
+    assert!(instances.len() > 1000, "{}", instances.len());
+    let placed = placements(&std::fs::read(&out).expect("written"));
+    let names = ["fir", "birch"];
+    let mut expected: BTreeMap<String, Vec<[f32; 3]>> = BTreeMap::new();
+    for i in &instances {
+        let name = format!("{}/{}", names[i.layer as usize], i.variant);
+        expected.entry(name).or_default().push(i.position);
+    }
+    let got: BTreeMap<String, Vec<[f32; 3]>> = placed
+        .into_iter()
+        .filter(|(name, _)| name != "terrain")
+        .map(|(name, list)| (name, list.into_iter().map(|p| p.0).collect()))
+        .collect();
+    assert_eq!(got, expected);
+}
+
+#[test]
+fn unique_trees_keep_their_identity_in_every_tile() {
+    let (dir, script) = bad_script(
+        "local f = pge.Forest{ size = {60, 40}, tile = 20, seed = 3 }\n\
+         f:scatter{ species = \"stick.lua\", minDistance = 5, variants = \"unique\" }\n\
+         return f\n",
+    );
+    let script = script.to_string_lossy().to_string();
+    let whole = out_path(dir.path(), "whole.glb");
+    run_ok(&["run", &script, "-o", &whole, "-q"]);
+    let whole = placements(&std::fs::read(&whole).expect("whole"));
+    // One mesh per tree, named after the tree's identity.
+    let trees: Vec<_> = whole
+        .iter()
+        .filter(|(name, _)| *name != "terrain")
+        .collect();
+    assert!(trees.len() > 20, "{}", trees.len());
+    assert!(trees.iter().all(|(_, list)| list.len() == 1));
+    let mut union: BTreeMap<String, Vec<Placement>> = BTreeMap::new();
+    for (i, j) in [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)] {
+        let out = out_path(dir.path(), &format!("{i}_{j}.glb"));
+        let tile = format!("{i},{j}");
+        run_ok(&["run", &script, "-o", &out, "-q", "--tile", &tile]);
+        for (name, list) in placements(&std::fs::read(&out).expect("tile")) {
+            if name != "terrain" {
+                assert!(!union.contains_key(&name), "{name} in two tiles");
+                union.insert(name, list);
+            }
+        }
+    }
+    let whole: BTreeMap<String, Vec<Placement>> = trees
+        .into_iter()
+        .map(|(n, l)| (n.clone(), l.clone()))
+        .collect();
+    assert_eq!(union, whole);
 }
 
 #[test]

@@ -722,8 +722,18 @@ impl PreviewApp {
         }
         if self.log_fps && now.duration_since(self.last_fps_log) >= Duration::from_secs(1) {
             self.last_fps_log = now;
+            // Frame times over the last two seconds: mean and 95th percentile.
+            let mut gaps: Vec<f64> = self
+                .frames
+                .iter()
+                .zip(self.frames.iter().skip(1))
+                .map(|(a, b)| b.duration_since(*a).as_secs_f64() * 1000.0)
+                .collect();
+            gaps.sort_by(f64::total_cmp);
+            let mean = gaps.iter().sum::<f64>() / gaps.len().max(1) as f64;
+            let p95 = gaps.get(gaps.len() * 95 / 100).copied().unwrap_or(0.0);
             eprintln!(
-                "preview: {:.1} frames/s, draw {:.1} ms",
+                "preview: {:.1} frames/s, frame {mean:.0} ms mean, {p95:.0} ms p95, draw {:.1} ms",
                 self.fps(),
                 self.render_ms
             );

@@ -10,7 +10,8 @@
 //! With `--screenshot PNG` the window writes its first complete frame (after the first
 //! generation has ended) to the file and closes; the command then fails if the generation
 //! did. Setting the environment variable `PGE_PREVIEW_LOG=1` starts the turntable and prints
-//! frames per second and the time from each save to its model on screen to stderr (for
+//! frames per second, the mean and 95th-percentile frame times, and the time from each save
+//! to its model on screen to stderr (for
 //! measuring the viewport's speed and the reload latency); `PGE_PREVIEW_LOG=full` does the
 //! same with every frame drawn at full quality (no reduced detail while moving).
 

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use eframe::egui;
 use eframe::egui_wgpu::{self, wgpu};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
 use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines};
@@ -62,6 +62,10 @@ struct GpuMesh {
     /// An eighth of the leaves or the largest eighth of a big bark mesh (vertices, indices,
     /// index count), for frames drawn while the camera moves.
     coarse: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+    /// For leaves instanced by many trees (a forest's): the instances near the camera,
+    /// rewritten for each moving frame, and how many there are; far trees' leaves are not
+    /// drawn while the camera moves.
+    near: Option<(wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
 }
@@ -270,6 +274,15 @@ impl Renderer {
                             c.len() as u32,
                         )
                     }),
+                near: (mesh.is_leaf && mesh.instances.len() >= FAR_LEAVES_MIN).then(|| {
+                    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("near instances"),
+                        size: std::mem::size_of_val(mesh.instances.as_slice()) as u64,
+                        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    (buffer, 0)
+                }),
                 source: scene.clone(),
                 index_in_scene: index,
             });
@@ -297,10 +310,50 @@ impl Renderer {
         self.skeleton = lines("skeleton", skeleton);
     }
 
+    /// For a moving frame: the instances of many-times-instanced leaves (a forest's) that
+    /// are in view and in the nearest [`NEAR_FRACTION`] of their depth range.
+    fn pick_near(&mut self, view_proj: Mat4) {
+        for mesh in &mut self.meshes {
+            let Some((buffer, count)) = &mut mesh.near else {
+                continue;
+            };
+            let Some(all) = mesh.source.meshes.get(mesh.index_in_scene) else {
+                continue;
+            };
+            let clip: Vec<Vec4> = all
+                .instances
+                .iter()
+                .map(|m| view_proj * Vec4::new(m[12], m[13], m[14], 1.0))
+                .collect();
+            let (lo, hi) = clip
+                .iter()
+                .filter(|c| c.w > 0.0)
+                .fold((f32::INFINITY, 0.0f32), |(lo, hi), c| {
+                    (lo.min(c.w), hi.max(c.w))
+                });
+            let cut = lo + NEAR_FRACTION * (hi - lo);
+            // A crown reaches beyond its trunk: keep trunks a little outside the frame.
+            let near: Vec<[f32; 16]> = all
+                .instances
+                .iter()
+                .zip(&clip)
+                .filter(|(_, c)| {
+                    c.w > 0.0 && c.w <= cut && c.x.abs() <= 1.3 * c.w && c.y.abs() <= 1.3 * c.w
+                })
+                .map(|(m, _)| *m)
+                .collect();
+            if !near.is_empty() {
+                self.queue
+                    .write_buffer(buffer, 0, bytemuck::cast_slice(&near));
+            }
+            *count = near.len() as u32;
+        }
+    }
+
     /// Draws the model seen by `view_proj` into a `size` pixel texture and returns the egui
     /// texture showing it. While the camera is `moving`, an eighth of the leaves and of a big
     /// bark mesh are drawn (software renderers cannot turn a 100 000-leaf tree smoothly
-    /// otherwise).
+    /// otherwise), and a forest's far trees show their bark only.
     pub fn render(
         &mut self,
         egui_renderer: &mut egui_wgpu::Renderer,
@@ -336,6 +389,9 @@ impl Renderer {
         }
         if toggles.wireframe {
             self.build_edges();
+        }
+        if moving {
+            self.pick_near(view_proj);
         }
         let sun = Vec3::new(0.45, 0.8, 0.35).normalize();
         let ambient = self.environment.as_ref().map_or([1.0; 3], |(_, a)| *a);
@@ -414,9 +470,16 @@ impl Renderer {
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(1, &mesh.material, &[]);
                     pass.set_vertex_buffer(0, vertices.slice(..));
-                    pass.set_vertex_buffer(1, mesh.instances.slice(..));
+                    let (instances, instance_count) = match &mesh.near {
+                        Some((near, n)) if moving && !toggles.wireframe => (near, *n),
+                        _ => (&mesh.instances, mesh.instance_count),
+                    };
+                    if instance_count == 0 {
+                        continue;
+                    }
+                    pass.set_vertex_buffer(1, instances.slice(..));
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..count, 0, 0..mesh.instance_count);
+                    pass.draw_indexed(0..count, 0, 0..instance_count);
                 }
             }
             if toggles.grid
@@ -519,6 +582,14 @@ impl Renderer {
 }
 
 /// Bytes of the shader's `Globals`: view_proj, sun, inv_view_proj, ambient.
+/// Leaves instanced at least this many times (a forest's) are drawn for near trees only
+/// while the camera moves.
+const FAR_LEAVES_MIN: usize = 256;
+
+/// The share of their depth range, from the nearest, where such leaves are drawn while the
+/// camera moves.
+const NEAR_FRACTION: f32 = 0.3;
+
 const GLOBALS_BYTES: u64 = (16 + 4 + 16 + 4) * 4;
 
 /// The ambient light's factor under a sky of linear average colour `average`: half neutral,

@@ -151,7 +151,7 @@ impl Scene {
             } else if is_leaf(mesh) {
                 Some(coarse_leaves(&vertices, &mesh.indices))
             } else {
-                coarse_bark(&vertices, &mesh.indices)
+                coarse_bark(&vertices, &mesh.indices, instances.len())
             };
             meshes.push(SceneMesh {
                 vertices,
@@ -243,14 +243,20 @@ fn coarse_leaves(vertices: &[f32], indices: &[u32]) -> (Vec<f32>, Vec<u32>) {
 /// One leaf of how many is kept while the camera moves.
 const COARSE_KEEP: usize = 8;
 
-/// Bark meshes with at least this many triangles get a coarse version for moving frames.
+/// Bark meshes that draw at least this many triangles (over all their instances: a forest's
+/// small bushes count by the thousand) get a coarse version for moving frames.
 const COARSE_BARK_MIN: usize = 20_000;
 
-/// The largest eighth of a big bark mesh's triangles (by area: trunk and limbs stay, twigs
-/// go), compacted, for frames drawn while the camera moves; `None` for small meshes.
-fn coarse_bark(vertices: &[f32], indices: &[u32]) -> Option<(Vec<f32>, Vec<u32>)> {
+/// The largest eighth of the triangles of a bark mesh drawn `instances` times (by area:
+/// trunk and limbs stay, twigs go), compacted, for frames drawn while the camera moves;
+/// `None` for meshes that draw few triangles.
+fn coarse_bark(
+    vertices: &[f32],
+    indices: &[u32],
+    instances: usize,
+) -> Option<(Vec<f32>, Vec<u32>)> {
     let triangles = indices.len() / 3;
-    if triangles < COARSE_BARK_MIN {
+    if triangles < 8 || triangles.saturating_mul(instances.max(1)) < COARSE_BARK_MIN {
         return None;
     }
     let position = |i: u32| {
@@ -495,7 +501,7 @@ mod tests {
             }
         }
         let indices: Vec<u32> = (0..3 * n).collect();
-        let (v, i) = coarse_bark(&vertices, &indices).expect("big enough");
+        let (v, i) = coarse_bark(&vertices, &indices, 1).expect("big enough");
         assert_eq!(i.len() / 3, (n / 8) as usize);
         assert_eq!(v.len(), i.len() * VERTEX_FLOATS);
         assert!(
@@ -503,9 +509,14 @@ mod tests {
                 .all(|p| p[0] == 0.0 || p[0] > (n - n / 8) as f32)
         );
         assert_eq!(
-            coarse_bark(&vertices[..9 * VERTEX_FLOATS], &[0, 1, 2]),
+            coarse_bark(&vertices[..9 * VERTEX_FLOATS], &[0, 1, 2], 1),
             None
         );
+        // A small bush instanced by the thousand (a forest's) draws many triangles: coarse.
+        let small = &indices[..3 * 1000];
+        assert_eq!(coarse_bark(&vertices, small, 1), None);
+        let (_, i) = coarse_bark(&vertices, small, 5000).expect("drawn often enough");
+        assert_eq!(i.len() / 3, 1000 / 8);
     }
 
     #[test]

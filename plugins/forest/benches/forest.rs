@@ -40,10 +40,20 @@ fn sampling(c: &mut Criterion) {
         .expect("fits")
         .len();
     let mut g = c.benchmark_group("poisson");
+    g.sample_size(10);
     g.throughput(Throughput::Elements(n as u64));
-    g.bench_function("500m_r1", |b| {
-        b.iter(|| poisson(world, world, 1.0, black_box(1), &|_, _| false, 1 << 24))
-    });
+    // Single-threaded, then the blocks of each phase on two threads.
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool");
+        g.bench_function(format!("500m_r1_{threads}thread"), |b| {
+            b.iter(|| {
+                pool.install(|| poisson(world, world, 1.0, black_box(1), &|_, _| false, 1 << 24))
+            })
+        });
+    }
     g.finish();
 }
 

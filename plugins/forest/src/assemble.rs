@@ -48,6 +48,25 @@ pub fn assemble(
     grown: &[Grown],
     tile: Option<(usize, usize)>,
 ) -> Model {
+    let unique: Vec<bool> = forest
+        .layers
+        .iter()
+        .map(|l| l.variants == Variants::Unique)
+        .collect();
+    build(forest, layout, grown, tile, &unique)
+}
+
+/// [`assemble`], with the layers whose trees are grown one per instance (`unique[l]`): their
+/// k-th instance is placed by their k-th grown tree, and the group is named after the
+/// instance's variant (its identity, the same in every tile).
+fn build(
+    forest: &Forest,
+    layout: &Layout,
+    grown: &[Grown],
+    tile: Option<(usize, usize)>,
+    unique: &[bool],
+) -> Model {
+    let by_rank = |l: usize| unique.get(l).copied().unwrap_or(false);
     let mut model = Model::new();
     let grid = forest.terrain.grid(forest.tile);
     let (kx, kz) = forest.terrain.patch(&grid, tile);
@@ -56,6 +75,16 @@ pub fn assemble(
     for (l, g) in grown.iter().enumerate() {
         first_group.push(model.groups.len());
         let name = forest.layers.get(l).map_or("layer", |x| x.name.as_str());
+        let ids: Vec<u32> = if by_rank(l) {
+            layout
+                .instances
+                .iter()
+                .filter(|i| i.layer as usize == l)
+                .map(|i| i.variant)
+                .collect()
+        } else {
+            Vec::new()
+        };
         for (v, variant) in g.variants.iter().enumerate() {
             let mut meshes = Vec::new();
             for inst in &variant.instances {
@@ -69,7 +98,7 @@ pub fn assemble(
                 meshes.push(model.meshes.len() - 1);
             }
             model.groups.push(InstanceGroup {
-                name: format!("{name}/{v}"),
+                name: format!("{name}/{}", ids.get(v).copied().unwrap_or(v as u32)),
                 meshes,
                 transforms: Vec::new(),
             });
@@ -79,11 +108,19 @@ pub fn assemble(
                 .extend(variant.stats.warnings.iter().cloned());
         }
     }
+    let mut rank = vec![0usize; grown.len()];
     for inst in &layout.instances {
         let l = inst.layer as usize;
-        if let Some(&first) = first_group.get(l)
-            && let Some(group) = model.groups.get_mut(first + inst.variant as usize)
-        {
+        let Some(&first) = first_group.get(l) else {
+            continue;
+        };
+        let v = if by_rank(l) {
+            rank[l] += 1;
+            rank[l] - 1
+        } else {
+            inst.variant as usize
+        };
+        if let Some(group) = model.groups.get_mut(first + v) {
             group
                 .transforms
                 .push(transform(inst.position, inst.yaw, inst.scale));
@@ -166,7 +203,7 @@ pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize
             i.variant = 0;
         }
     }
-    assemble(forest, &unique, &grown, tile)
+    build(forest, &unique, &grown, tile, &[])
 }
 
 #[cfg(test)]

@@ -4,6 +4,8 @@
 use std::rc::Rc;
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use crate::ForestError;
 use crate::poisson::{Rect, Sample, block_size, poisson};
 use crate::rng::{Rng, hash};
@@ -189,7 +191,8 @@ pub struct Instance {
     pub scale: f32,
     /// Index of the layer.
     pub layer: u32,
-    /// Variant (0-based); with `"unique"` the instance's rank in its layer.
+    /// Variant (0-based); with `"unique"` the tree's identity, from its cell (the same in
+    /// every tile), which names its mesh.
     pub variant: u32,
 }
 
@@ -349,17 +352,40 @@ impl Forest {
                     jittered(world, region, layer.cell(jitter), jitter, seed, &blocked)
                 }
             };
+            // Cells along x, for the identity of "unique" trees.
+            let across = match layer.method {
+                Method::Poisson => block_size(r),
+                Method::Jittered { jitter } => layer.cell(jitter),
+            };
+            let across = (self.size[0] / across).ceil() as u64;
+            // Draws, height and slope of every sample in parallel (each from its own seed);
+            // the density decides in order, as a script's density function must be called
+            // on the script's thread.
+            let site = Site {
+                terrain: &self.terrain,
+                seed: self.seed,
+                layer: l,
+                scale: layer.scale,
+                variants: layer.variants,
+                slope: layer.slope,
+                altitude: layer.altitude,
+            };
+            let candidates: Vec<Option<(Instance, f64)>> =
+                samples.par_iter().map(|s| site.candidate(s)).collect();
             let mut kept = Vec::new();
             let mut count = 0usize;
-            for s in samples {
-                let Some(inst) = self.grow_at(l, layer, &s)? else {
+            for (s, candidate) in samples.into_iter().zip(candidates) {
+                let Some((inst, keep)) = candidate else {
                     continue;
                 };
+                if keep >= self.density_at(layer, &s)? {
+                    continue;
+                }
                 kept.push((s.x, s.z));
                 if target.contains(s.x, s.z) {
                     let variant = match layer.variants {
                         Variants::Count(_) => inst.variant,
-                        Variants::Unique => count as u32,
+                        Variants::Unique => unique_id(&s, across)?,
                     };
                     layout.instances.push(Instance { variant, ..inst });
                     count += 1;
@@ -383,39 +409,9 @@ impl Forest {
         Ok(layout)
     }
 
-    /// The instance a sample grows into, or `None` when the limits or the density say no.
-    fn grow_at(
-        &self,
-        l: usize,
-        layer: &Layer,
-        s: &Sample,
-    ) -> Result<Option<Instance>, ForestError> {
-        let mut rng = Rng::new(hash(&[
-            self.seed,
-            0x1257,
-            l as u64,
-            u64::from(s.cell[0]),
-            u64::from(s.cell[1]),
-            u64::from(s.index),
-        ]));
-        let keep = rng.uniform();
-        let yaw = rng.uniform() * std::f64::consts::TAU;
-        let scale = rng.range(layer.scale[0], layer.scale[1]);
-        let variant = match layer.variants {
-            Variants::Count(n) => rng.below(n),
-            Variants::Unique => 0,
-        };
-        let h = self.terrain.height(s.x, s.z);
-        if h < layer.altitude[0] || h > layer.altitude[1] {
-            return Ok(None);
-        }
-        if layer.slope != [0.0, 90.0] {
-            let slope = self.terrain.slope_degrees(s.x, s.z);
-            if slope < layer.slope[0] || slope > layer.slope[1] {
-                return Ok(None);
-            }
-        }
-        let d = match &layer.density {
+    /// The density of `layer` at sample `s`.
+    fn density_at(&self, layer: &Layer, s: &Sample) -> Result<f64, ForestError> {
+        Ok(match &layer.density {
             Density::Constant(d) => *d,
             Density::Map(m) => m.sample(
                 (s.x + 0.5 * self.size[0]) / self.size[0],
@@ -434,18 +430,69 @@ impl Forest {
                 }
                 d
             }
+        })
+    }
+}
+
+/// What a sample of one layer needs to become an instance, shareable across threads.
+struct Site<'a> {
+    terrain: &'a Terrain,
+    seed: u64,
+    layer: usize,
+    scale: [f64; 2],
+    variants: Variants,
+    slope: [f64; 2],
+    altitude: [f64; 2],
+}
+
+impl Site<'_> {
+    /// The instance sample `s` grows into and the draw its density must exceed, or `None`
+    /// when the altitude or slope limits exclude it.
+    fn candidate(&self, s: &Sample) -> Option<(Instance, f64)> {
+        let mut rng = Rng::new(hash(&[
+            self.seed,
+            0x1257,
+            self.layer as u64,
+            u64::from(s.cell[0]),
+            u64::from(s.cell[1]),
+            u64::from(s.index),
+        ]));
+        let keep = rng.uniform();
+        let yaw = rng.uniform() * std::f64::consts::TAU;
+        let scale = rng.range(self.scale[0], self.scale[1]);
+        let variant = match self.variants {
+            Variants::Count(n) => rng.below(n),
+            Variants::Unique => 0,
         };
-        if keep >= d {
-            return Ok(None);
+        let h = self.terrain.height(s.x, s.z);
+        if h < self.altitude[0] || h > self.altitude[1] {
+            return None;
         }
-        Ok(Some(Instance {
+        if self.slope != [0.0, 90.0] {
+            let slope = self.terrain.slope_degrees(s.x, s.z);
+            if slope < self.slope[0] || slope > self.slope[1] {
+                return None;
+            }
+        }
+        let inst = Instance {
             position: [s.x as f32, h as f32, s.z as f32],
             yaw: yaw as f32,
             scale: scale as f32,
-            layer: l as u32,
+            layer: self.layer as u32,
             variant,
-        }))
+        };
+        Some((inst, keep))
     }
+}
+
+/// The identity of a `"unique"` tree: its cell's index in the world (z, then x) and its
+/// rank in the cell (a Poisson block holds 25 samples at most, one per background cell), the
+/// same in a tile as in the whole forest.
+fn unique_id(s: &Sample, across: u64) -> Result<u32, ForestError> {
+    let cell = u64::from(s.cell[1]) * across + u64::from(s.cell[0]);
+    u32::try_from(cell * 32 + u64::from(s.index)).map_err(|_| ForestError::TooMany {
+        estimate: cell.saturating_mul(32),
+    })
 }
 
 /// The seed of variant `v` of layer `l`.
@@ -474,7 +521,7 @@ fn jittered(
     cell: f64,
     jitter: f64,
     seed: u64,
-    blocked: &dyn Fn(f64, f64) -> bool,
+    blocked: &(dyn Fn(f64, f64) -> bool + Sync),
 ) -> Vec<Sample> {
     let n = [
         ((world.max[0] - world.min[0]) / cell).ceil() as i64,
@@ -515,38 +562,99 @@ impl Trunks {
         self.0.extend(more);
     }
 
+    /// A flat grid over the trunks for tests at distance `r`: cells of side `r` at least
+    /// (larger when the trunks spread over too many cells of `r`), each cell's trunks
+    /// contiguous.
     fn index(&self, r: f64) -> TrunkIndex {
-        let mut cells: std::collections::HashMap<(i64, i64), Vec<(f64, f64)>> =
-            std::collections::HashMap::new();
+        let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for &(x, z) in &self.0 {
-            cells
-                .entry(((x / r).floor() as i64, (z / r).floor() as i64))
-                .or_default()
-                .push((x, z));
+            min = [min[0].min(x), min[1].min(z)];
+            max = [max[0].max(x), max[1].max(z)];
         }
-        TrunkIndex { r, cells }
+        if self.0.is_empty() {
+            return TrunkIndex {
+                origin: [0.0; 2],
+                cell: r,
+                dims: [0, 0],
+                starts: Vec::new(),
+                points: Vec::new(),
+            };
+        }
+        let extent = (max[0] - min[0]).max(max[1] - min[1]);
+        // Four cells per trunk at most: sparse trunks get larger cells.
+        let budget = (4 * self.0.len()).max(1024) as f64;
+        let cell = r.max(extent / budget.sqrt());
+        let dims = [
+            ((max[0] - min[0]) / cell) as usize + 1,
+            ((max[1] - min[1]) / cell) as usize + 1,
+        ];
+        let cell_of = |x: f64, z: f64| {
+            let cx = (((x - min[0]) / cell) as usize).min(dims[0] - 1);
+            let cz = (((z - min[1]) / cell) as usize).min(dims[1] - 1);
+            cz * dims[0] + cx
+        };
+        let mut starts = vec![0u32; dims[0] * dims[1] + 1];
+        for &(x, z) in &self.0 {
+            starts[cell_of(x, z) + 1] += 1;
+        }
+        for k in 1..starts.len() {
+            starts[k] += starts[k - 1];
+        }
+        let mut fill = starts.clone();
+        let mut points = vec![[0.0; 2]; self.0.len()];
+        for &(x, z) in &self.0 {
+            let k = cell_of(x, z);
+            points[fill[k] as usize] = [x, z];
+            fill[k] += 1;
+        }
+        TrunkIndex {
+            origin: min,
+            cell,
+            dims,
+            starts,
+            points,
+        }
     }
 }
 
+/// Trunks sorted into a flat grid (compressed rows: `starts[k]..starts[k + 1]` of
+/// `points` are cell `k`'s).
 struct TrunkIndex {
-    r: f64,
-    cells: std::collections::HashMap<(i64, i64), Vec<(f64, f64)>>,
+    origin: [f64; 2],
+    cell: f64,
+    dims: [usize; 2],
+    starts: Vec<u32>,
+    points: Vec<[f64; 2]>,
 }
 
 impl TrunkIndex {
+    /// Whether a trunk stands closer than `d` to `(x, z)`.
     fn any_within(&self, x: f64, z: f64, d: f64) -> bool {
-        if self.cells.is_empty() {
+        if self.points.is_empty() {
             return false;
         }
-        let (cx, cz) = ((x / self.r).floor() as i64, (z / self.r).floor() as i64);
-        for gz in cz - 1..=cz + 1 {
-            for gx in cx - 1..=cx + 1 {
-                if let Some(v) = self.cells.get(&(gx, gz))
-                    && v.iter()
-                        .any(|&(px, pz)| (px - x).powi(2) + (pz - z).powi(2) < d * d)
-                {
-                    return true;
-                }
+        let range = |v: f64, axis: usize| {
+            let a = ((v - d - self.origin[axis]) / self.cell).floor();
+            let b = ((v + d - self.origin[axis]) / self.cell).floor();
+            let n = self.dims[axis] as f64 - 1.0;
+            if b < 0.0 || a > n {
+                None
+            } else {
+                Some((a.max(0.0) as usize, b.min(n) as usize))
+            }
+        };
+        let (Some((x0, x1)), Some((z0, z1))) = (range(x, 0), range(z, 1)) else {
+            return false;
+        };
+        let d2 = d * d;
+        for cz in z0..=z1 {
+            let row = cz * self.dims[0];
+            let (a, b) = (self.starts[row + x0], self.starts[row + x1 + 1]);
+            if self.points[a as usize..b as usize].iter().any(|p| {
+                let (dx, dz) = (p[0] - x, p[1] - z);
+                dx * dx + dz * dz < d2
+            }) {
+                return true;
             }
         }
         false
@@ -640,17 +748,24 @@ mod tests {
             union.extend(part.instances);
         }
         let key = |i: &Instance| (i.layer, i.position[0].to_bits(), i.position[2].to_bits());
-        // Unique variants are ranks, which differ per tile: compare the rest.
-        let strip = |mut v: Vec<Instance>| {
-            for i in &mut v {
-                if i.layer == 2 {
-                    i.variant = 0;
-                }
-            }
+        // Variants too, "unique" ones (layer 2) included: they are identities, not ranks.
+        let sorted = |mut v: Vec<Instance>| {
             v.sort_by_key(key);
             v
         };
-        assert_eq!(strip(union), strip(whole.instances));
+        let whole = sorted(whole.instances);
+        let unique: std::collections::HashSet<u32> = whole
+            .iter()
+            .filter(|i| i.layer == 2)
+            .map(|i| i.variant)
+            .collect();
+        assert_eq!(unique.len(), whole.iter().filter(|i| i.layer == 2).count());
+        // Trunks from different tiles keep the layer's distance across the seams.
+        for (l, layer) in f.layers.iter().enumerate() {
+            let d = closest_within_layer(&union, l as u32);
+            assert!(d >= layer.min_distance - 1e-4, "layer {l}: {d}");
+        }
+        assert_eq!(sorted(union), whole);
     }
 
     #[test]

@@ -118,7 +118,12 @@ fn shown_path(canonical: &Path) -> String {
 }
 
 fn image(lua: &Lua, o: &Options, key: &str, relative: &str) -> mlua::Result<Arc<Raster>> {
-    let path: PathBuf = resolve_path(lua, relative)?;
+    let path: PathBuf = resolve_path(lua, relative).map_err(|e| {
+        // The sandbox's message, without the location the option's error gives again.
+        let text = e.to_string();
+        let reason = text.find("file '").map_or(text.as_str(), |k| &text[k..]);
+        o.problem(key, format!("cannot be read: {reason}"))
+    })?;
     Raster::load(&path)
         .map(Arc::new)
         .map_err(|e| o.problem(key, format!("cannot be read: {e}")))

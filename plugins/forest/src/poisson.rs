@@ -1,13 +1,23 @@
-//! Blue noise that tiles agree on: Bridson's Poisson-disk sampling run block by block.
+//! Blue noise that tiles agree on: Poisson-disk sampling run block by block.
 //!
 //! The world is cut into square blocks of side `3 r` aligned on its −x, −z corner. Blocks are
 //! processed in four phases by the parity of their coordinates, so two blocks of one phase
-//! never touch and their order within the phase does not matter. A block is sampled with its
-//! own generator (seeded by the seed and its coordinates): darts start Bridson's growth,
-//! which keeps candidates inside the block at least `r` from every sample, those of the
-//! neighbouring blocks of earlier phases included. A block's result thus depends only on its neighbours of earlier
-//! phases, whose results depend on theirs: three blocks around a region are enough to sample
-//! that region exactly as the whole world would (DESIGN.md §3.8).
+//! never touch: they are sampled in parallel, and their order within the phase does not
+//! matter. A block is sampled with its own generator (seeded by the seed and its
+//! coordinates): darts start a Bridson growth, which keeps candidates inside the block at
+//! least `r` from every sample, those of the neighbouring blocks of earlier phases included.
+//! A block's result thus depends only on its neighbours of earlier phases, whose results
+//! depend on theirs: three blocks around a region are enough to sample that region exactly
+//! as the whole world would (DESIGN.md §3.8).
+//!
+//! The growth is Bridson's with Roberts' candidates: an active sample tries
+//! [`CANDIDATES`] points evenly spaced on the circle of radius `r` around it, from one of 256
+//! random directions, which packs denser and retires samples sooner than random candidates in the
+//! annulus `[r, 2r]`. Samples live in a flat background grid of `5 x 5` cells per block; a
+//! block works on a copy of its `9 x 9` cells neighbourhood, so a neighbour test reads 25
+//! cells of one small array.
+
+use rayon::prelude::*;
 
 use crate::rng::{Rng, hash};
 
@@ -62,10 +72,25 @@ pub struct Sample {
     pub index: u32,
 }
 
-/// Candidates tried around an active sample before it retires (Bridson's k).
-const CANDIDATES: u32 = 30;
+/// Candidates tried around an active sample before it retires, evenly spaced on a circle.
+const CANDIDATES: usize = 8;
+/// Darts in a row that must miss before a block is full.
+const MISSES: u32 = 4;
 /// Blocks of margin that make a region's samples equal to the whole world's.
 pub const MARGIN_BLOCKS: i64 = 3;
+/// Background grid cells along a block's side: a cell is `0.6 r`, its diagonal below `r`,
+/// so a cell holds one sample at most and a neighbour test reads the cells within two.
+const CELLS: usize = 5;
+/// Cells along a block's neighbourhood: the block and two cells on every side.
+const WINDOW: usize = CELLS + 4;
+/// An empty cell: a point infinitely far, so the distance test needs no branch.
+const EMPTY: [f64; 2] = [f64::INFINITY, f64::INFINITY];
+
+/// The candidates' radius, a hair above the tested distance.
+const RADIUS: f64 = 1.0 + 1e-5;
+/// The distance tested, a hair above `r`: the window's single precision (relative to the
+/// block, a few `r` wide) then never lets two samples closer than `r`.
+const TESTED: f64 = 1.0 + 2e-6;
 
 /// The side of a block for minimum distance `r`.
 #[must_use]
@@ -76,13 +101,13 @@ pub fn block_size(r: f64) -> f64 {
 /// The samples of `world` (minimum distance `r`, seed `seed`) in the blocks that meet
 /// `region`, in block order (z, then x) and rank. Points where `blocked` is true are never
 /// sampled (trunks of earlier layers). More than `cap` samples is an error carrying the
-/// count reached.
+/// count reached. The result is the same for any number of rayon threads.
 pub fn poisson(
     world: Rect,
     region: Rect,
     r: f64,
     seed: u64,
-    blocked: &dyn Fn(f64, f64) -> bool,
+    blocked: &(dyn Fn(f64, f64) -> bool + Sync),
     cap: usize,
 ) -> Result<Vec<Sample>, usize> {
     let b = block_size(r);
@@ -93,48 +118,51 @@ pub fn poisson(
     let block_of = |v: f64, axis: usize| ((v - world.min[axis]) / b).floor() as i64;
     let mut lo = [0i64; 2];
     let mut hi = [0i64; 2];
+    let mut wanted = [[0i64; 2]; 2];
     for a in 0..2 {
         let r0 = block_of(region.min[a].max(world.min[a]), a);
         let r1 = block_of(region.max[a].min(world.max[a]) - 1e-9, a);
-        lo[a] = (r0 - MARGIN_BLOCKS).clamp(0, nb[a] - 1);
-        hi[a] = (r1 + MARGIN_BLOCKS).clamp(0, nb[a] - 1);
         if r1 < r0 {
             return Ok(Vec::new());
         }
+        lo[a] = (r0 - MARGIN_BLOCKS).clamp(0, nb[a] - 1);
+        hi[a] = (r1 + MARGIN_BLOCKS).clamp(0, nb[a] - 1);
+        wanted[a] = [r0.clamp(0, nb[a] - 1), r1.clamp(0, nb[a] - 1)];
     }
-    let wanted = [
-        [
-            (block_of(region.min[0].max(world.min[0]), 0)).clamp(0, nb[0] - 1),
-            (block_of(region.max[0].min(world.max[0]) - 1e-9, 0)).clamp(0, nb[0] - 1),
-        ],
-        [
-            (block_of(region.min[1].max(world.min[1]), 1)).clamp(0, nb[1] - 1),
-            (block_of(region.max[1].min(world.max[1]) - 1e-9, 1)).clamp(0, nb[1] - 1),
-        ],
-    ];
-    let mut s = Sampler::new(world, lo, hi, r, b);
+    // The grid holds 25 cells per block: more blocks than the cap allows samples is refused
+    // before it is allocated (a block holds about 6.6 samples).
+    let blocks = (hi[0] - lo[0] + 1).saturating_mul(hi[1] - lo[1] + 1) as usize;
+    if blocks > cap {
+        return Err(blocks.saturating_mul(6));
+    }
+    let mut grid = Grid::new(world, lo, hi, r);
+    let mut total = 0usize;
     for phase in 0..4i64 {
         let (px, pz) = (phase & 1, phase >> 1);
-        for bz in lo[1]..=hi[1] {
-            if bz.rem_euclid(2) != pz {
-                continue;
-            }
-            for bx in lo[0]..=hi[0] {
-                if bx.rem_euclid(2) != px {
-                    continue;
-                }
-                s.block(bx, bz, seed, blocked);
-                if s.samples.len() > cap.saturating_mul(4).max(cap) {
-                    return Err(s.samples.len());
-                }
-            }
+        let blocks: Vec<(i64, i64)> = (lo[1]..=hi[1])
+            .filter(|bz| bz.rem_euclid(2) == pz)
+            .flat_map(|bz| {
+                (lo[0]..=hi[0])
+                    .filter(|bx| bx.rem_euclid(2) == px)
+                    .map(move |bx| (bx, bz))
+            })
+            .collect();
+        let sampled: Vec<Vec<Sample>> = blocks
+            .par_iter()
+            .map(|&(bx, bz)| grid.sample_block(bx, bz, seed, blocked))
+            .collect();
+        for ((bx, bz), samples) in blocks.into_iter().zip(sampled) {
+            total += samples.len();
+            grid.insert(bx, bz, samples);
+        }
+        if total > cap.saturating_mul(4).max(cap) {
+            return Err(total);
         }
     }
     let mut out = Vec::new();
     for bz in wanted[1][0]..=wanted[1][1] {
         for bx in wanted[0][0]..=wanted[0][1] {
-            let (a, e) = s.ranges[s.local(bx, bz)];
-            out.extend_from_slice(&s.samples[a as usize..e as usize]);
+            out.extend_from_slice(&grid.samples[grid.block_index(bx, bz)]);
             if out.len() > cap {
                 return Err(out.len());
             }
@@ -143,146 +171,226 @@ pub fn poisson(
     Ok(out)
 }
 
-struct Sampler {
+/// The background grid over the blocks `lo..=hi` and their samples.
+struct Grid {
     world: Rect,
     lo: [i64; 2],
-    hi: [i64; 2],
     r: f64,
     b: f64,
-    cell: f64,
-    origin: [f64; 2],
-    dims: [usize; 2],
-    /// Background grid: sample index + 1, 0 for none (one sample per cell at most).
-    grid: Vec<u32>,
-    samples: Vec<Sample>,
-    ranges: Vec<(u32, u32)>,
-    active: Vec<(f64, f64)>,
+    /// One over a cell's side.
+    per_cell: f64,
+    /// The first candidate's direction `(cos, sin)`, one of 256 around the circle.
+    directions: Vec<(f64, f64)>,
+    /// Blocks along x and z.
+    blocks: [usize; 2],
+    /// Cells along x (the row stride).
+    stride: usize,
+    /// One point per cell, [`EMPTY`] for none.
+    cells: Vec<[f64; 2]>,
+    /// Each block's samples, in rank order.
+    samples: Vec<Vec<Sample>>,
 }
 
-impl Sampler {
-    fn new(world: Rect, lo: [i64; 2], hi: [i64; 2], r: f64, b: f64) -> Sampler {
-        let cell = r / std::f64::consts::SQRT_2;
-        let origin = [
-            world.min[0] + lo[0] as f64 * b,
-            world.min[1] + lo[1] as f64 * b,
-        ];
-        let dims = [
-            (((hi[0] - lo[0] + 1) as f64 * b) / cell).ceil() as usize + 1,
-            (((hi[1] - lo[1] + 1) as f64 * b) / cell).ceil() as usize + 1,
-        ];
-        let blocks = ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1)) as usize;
-        Sampler {
-            world,
-            lo,
-            hi,
-            r,
-            b,
-            cell,
+/// Floats per window row: a test reads eight cells from the point's cell minus two (the
+/// three beyond the five that matter hold points farther than `r`, harmless to test), so
+/// rows are padded to the last cell such a read can reach.
+const ROW: usize = WINDOW + 3;
+
+/// A block's neighbourhood of `WINDOW x WINDOW` cells, points relative to the block's
+/// corner in single precision (x and z apart, so a row's test is two vector ops).
+struct Window {
+    origin: [f64; 2],
+    r2: f32,
+    xs: [[f32; ROW]; WINDOW],
+    zs: [[f32; ROW]; WINDOW],
+}
+
+impl Window {
+    fn new(origin: [f64; 2], r: f64) -> Window {
+        Window {
             origin,
-            dims,
-            grid: vec![0; dims[0] * dims[1]],
-            samples: Vec::new(),
-            ranges: vec![(0, 0); blocks],
-            active: Vec::new(),
+            r2: ((r * TESTED) * (r * TESTED)) as f32,
+            xs: [[f32::INFINITY; ROW]; WINDOW],
+            zs: [[f32::INFINITY; ROW]; WINDOW],
         }
     }
 
-    fn local(&self, bx: i64, bz: i64) -> usize {
-        ((bz - self.lo[1]) * (self.hi[0] - self.lo[0] + 1) + (bx - self.lo[0])) as usize
+    /// Sets window cell `(wx, wz)` to the point `(x, z)` (an infinite point leaves it empty).
+    fn put(&mut self, wx: usize, wz: usize, x: f64, z: f64) {
+        self.xs[wz][wx] = (x - self.origin[0]) as f32;
+        self.zs[wz][wx] = (z - self.origin[1]) as f32;
     }
 
-    fn cell_of(&self, x: f64, z: f64) -> (usize, usize) {
-        (
-            (((x - self.origin[0]) / self.cell) as usize).min(self.dims[0] - 1),
-            (((z - self.origin[1]) / self.cell) as usize).min(self.dims[1] - 1),
-        )
+    /// Whether `(x, z)`, in the block's cell `(cx, cz)`, is at least `r` from every point of
+    /// the cells within two of its own. The middle rows go first: they hit most often.
+    fn free(&self, cx: usize, cz: usize, x: f64, z: f64) -> bool {
+        let (x, z) = ((x - self.origin[0]) as f32, (z - self.origin[1]) as f32);
+        [2, 1, 3, 0, 4].into_iter().all(|dz| {
+            let (Some(xs), Some(zs)) = (
+                self.xs[cz + dz][cx..].first_chunk::<8>(),
+                self.zs[cz + dz][cx..].first_chunk::<8>(),
+            ) else {
+                return true;
+            };
+            let mut near = [false; 8];
+            for k in 0..8 {
+                let (dx, dz) = (xs[k] - x, zs[k] - z);
+                near[k] = dx * dx + dz * dz < self.r2;
+            }
+            !near.contains(&true)
+        })
+    }
+}
+
+impl Grid {
+    fn new(world: Rect, lo: [i64; 2], hi: [i64; 2], r: f64) -> Grid {
+        let b = block_size(r);
+        let blocks = [(hi[0] - lo[0] + 1) as usize, (hi[1] - lo[1] + 1) as usize];
+        let stride = blocks[0] * CELLS;
+        Grid {
+            world,
+            lo,
+            r,
+            b,
+            per_cell: CELLS as f64 / b,
+            directions: (0..256)
+                .map(|k| {
+                    let (s, c) = (f64::from(k) * std::f64::consts::TAU / 256.0).sin_cos();
+                    (c, s)
+                })
+                .collect(),
+            blocks,
+            stride,
+            cells: vec![EMPTY; stride * blocks[1] * CELLS],
+            samples: vec![Vec::new(); blocks[0] * blocks[1]],
+        }
     }
 
-    fn free(&self, x: f64, z: f64) -> bool {
-        let (cx, cz) = self.cell_of(x, z);
-        let r2 = self.r * self.r;
-        for gz in cz.saturating_sub(2)..=(cz + 2).min(self.dims[1] - 1) {
-            let row = gz * self.dims[0];
-            for gx in cx.saturating_sub(2)..=(cx + 2).min(self.dims[0] - 1) {
-                let k = self.grid[row + gx];
-                if k != 0 {
-                    let s = &self.samples[k as usize - 1];
-                    let (dx, dz) = (s.x - x, s.z - z);
-                    if dx * dx + dz * dz < r2 {
-                        return false;
-                    }
+    fn block_index(&self, bx: i64, bz: i64) -> usize {
+        (bz - self.lo[1]) as usize * self.blocks[0] + (bx - self.lo[0]) as usize
+    }
+
+    /// The block's ground, clipped to the world.
+    fn rect(&self, bx: i64, bz: i64) -> Rect {
+        let w = &self.world;
+        Rect {
+            min: [w.min[0] + bx as f64 * self.b, w.min[1] + bz as f64 * self.b],
+            max: [
+                (w.min[0] + (bx + 1) as f64 * self.b).min(w.max[0]),
+                (w.min[1] + (bz + 1) as f64 * self.b).min(w.max[1]),
+            ],
+        }
+    }
+
+    /// The cell of `(x, z)` inside its block `rect`, `0..CELLS` per axis.
+    fn cell_in_block(&self, rect: &Rect, x: f64, z: f64) -> (usize, usize) {
+        let c = |v: f64, min: f64| (((v - min) * self.per_cell) as usize).min(CELLS - 1);
+        (c(x, rect.min[0]), c(z, rect.min[1]))
+    }
+
+    /// Samples block `(bx, bz)` against the samples already in the grid (blocks of earlier
+    /// phases); reads the grid only.
+    fn sample_block(
+        &self,
+        bx: i64,
+        bz: i64,
+        seed: u64,
+        blocked: &(dyn Fn(f64, f64) -> bool + Sync),
+    ) -> Vec<Sample> {
+        let rect = self.rect(bx, bz);
+        // The block's cells and two around them, copied from the grid.
+        let mut window = Window::new(rect.min, self.r);
+        let gx0 = (bx - self.lo[0]) * CELLS as i64 - 2;
+        let gz0 = (bz - self.lo[1]) * CELLS as i64 - 2;
+        let rows = (self.blocks[1] * CELLS) as i64;
+        for wz in 0..WINDOW {
+            let gz = gz0 + wz as i64;
+            if gz < 0 || gz >= rows {
+                continue;
+            }
+            let row = gz as usize * self.stride;
+            for wx in 0..WINDOW {
+                let gx = gx0 + wx as i64;
+                if gx >= 0 && (gx as usize) < self.stride {
+                    let [x, z] = self.cells[row + gx as usize];
+                    window.put(wx, wz, x, z);
                 }
             }
         }
-        true
-    }
-
-    fn add(&mut self, x: f64, z: f64, cell: [u32; 2], index: u32) {
-        let (cx, cz) = self.cell_of(x, z);
-        self.samples.push(Sample { x, z, cell, index });
-        self.grid[cz * self.dims[0] + cx] = self.samples.len() as u32;
-    }
-
-    fn block(&mut self, bx: i64, bz: i64, seed: u64, blocked: &dyn Fn(f64, f64) -> bool) {
-        let rect = Rect {
-            min: [
-                self.world.min[0] + bx as f64 * self.b,
-                self.world.min[1] + bz as f64 * self.b,
-            ],
-            max: [
-                (self.world.min[0] + (bx + 1) as f64 * self.b).min(self.world.max[0]),
-                (self.world.min[1] + (bz + 1) as f64 * self.b).min(self.world.max[1]),
-            ],
-        };
         let mut rng = Rng::new(hash(&[seed, 0xb10c, bx as u64, bz as u64]));
-        let start = self.samples.len() as u32;
         let cell = [bx as u32, bz as u32];
-        // Darts thrown into the block start Bridson's growth, which fills the block up to
-        // the samples of the neighbours of earlier phases (they are in the grid); a new
-        // round of darts starts after each growth, until four darts in a row fail.
-        self.active.clear();
-        let mut index = 0u32;
-        let r2 = self.r * self.r;
+        let mut samples: Vec<Sample> = Vec::new();
+        let mut active: Vec<(f64, f64)> = Vec::new();
+        let (step_sin, step_cos) = (std::f64::consts::TAU / CANDIDATES as f64).sin_cos();
+        let radius = self.r * RADIUS;
+        let fits = |window: &Window, x: f64, z: f64| {
+            rect.contains(x, z) && {
+                let (cx, cz) = self.cell_in_block(&rect, x, z);
+                window.free(cx, cz, x, z) && !blocked(x, z)
+            }
+        };
+        let accept = |window: &mut Window, samples: &mut Vec<Sample>, x: f64, z: f64| {
+            let (cx, cz) = self.cell_in_block(&rect, x, z);
+            window.put(cx + 2, cz + 2, x, z);
+            samples.push(Sample {
+                x,
+                z,
+                cell,
+                index: samples.len() as u32,
+            });
+        };
+        // Darts thrown into the block start the growth, which fills the block up to the
+        // samples of the neighbours of earlier phases; a new dart follows each growth, until
+        // MISSES darts in a row fail.
         let mut misses = 0;
-        while misses < 4 {
+        while misses < MISSES {
             let (x, z) = (
                 rng.range(rect.min[0], rect.max[0]),
                 rng.range(rect.min[1], rect.max[1]),
             );
-            if !(rect.contains(x, z) && self.free(x, z) && !blocked(x, z)) {
+            if !fits(&window, x, z) {
                 misses += 1;
                 continue;
             }
             misses = 0;
-            self.add(x, z, cell, index);
-            index += 1;
-            self.active.push((x, z));
-            while !self.active.is_empty() {
-                let i = rng.below(self.active.len() as u32) as usize;
-                let (px, pz) = self.active[i];
+            accept(&mut window, &mut samples, x, z);
+            active.push((x, z));
+            while !active.is_empty() {
+                let i = rng.below(active.len() as u32) as usize;
+                let (px, pz) = active[i];
+                let (mut c, mut s) = self.directions[(rng.next_u64() >> 56) as usize];
                 let mut found = false;
                 for _ in 0..CANDIDATES {
-                    let angle = rng.uniform() * std::f64::consts::TAU;
-                    let d = (r2 * (1.0 + 3.0 * rng.uniform())).sqrt();
-                    let (x, z) = (px + d * angle.cos(), pz + d * angle.sin());
-                    if rect.contains(x, z) && self.free(x, z) && !blocked(x, z) {
-                        self.add(x, z, cell, index);
-                        index += 1;
-                        self.active.push((x, z));
+                    let (x, z) = (px + radius * c, pz + radius * s);
+                    if fits(&window, x, z) {
+                        accept(&mut window, &mut samples, x, z);
+                        active.push((x, z));
                         found = true;
                         break;
                     }
+                    (c, s) = (c * step_cos - s * step_sin, s * step_cos + c * step_sin);
                 }
                 if !found {
-                    self.active.swap_remove(i);
+                    active.swap_remove(i);
                 }
             }
         }
-        let l = self.local(bx, bz);
-        self.ranges[l] = (start, self.samples.len() as u32);
+        samples
+    }
+
+    /// Stores block `(bx, bz)`'s samples in the grid.
+    fn insert(&mut self, bx: i64, bz: i64, samples: Vec<Sample>) {
+        let rect = self.rect(bx, bz);
+        let gx0 = (bx - self.lo[0]) as usize * CELLS;
+        let gz0 = (bz - self.lo[1]) as usize * CELLS;
+        for s in &samples {
+            let (cx, cz) = self.cell_in_block(&rect, s.x, s.z);
+            self.cells[(gz0 + cz) * self.stride + gx0 + cx] = [s.x, s.z];
+        }
+        let k = self.block_index(bx, bz);
+        self.samples[k] = samples;
     }
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -306,6 +414,17 @@ mod tests {
         // Maximal Poisson-disk sets hold between ~0.55 and 0.9 points per r².
         let per_r2 = pts.len() as f64 / (world.area() / 4.0);
         assert!(per_r2 > 0.55 && per_r2 < 0.95, "{per_r2}");
+        // No hole wider than 2 r: every point of the world is within 2 r of a sample.
+        for k in 0..2000 {
+            let (x, z) = (
+                -50.0 + (k % 50) as f64 * 2.0 + 0.5,
+                -40.0 + (k / 50) as f64 * 2.0 + 0.5,
+            );
+            let near = pts
+                .iter()
+                .any(|p| (p.x - x).powi(2) + (p.z - z).powi(2) < 16.0);
+            assert!(near, "hole at ({x}, {z})");
+        }
     }
 
     #[test]
@@ -328,6 +447,22 @@ mod tests {
         let mut whole_sorted = whole.clone();
         whole_sorted.sort_by_key(key);
         assert_eq!(union, whole_sorted);
+    }
+
+    #[test]
+    fn one_and_two_threads_sample_alike() {
+        let world = Rect::new([-40.0, -30.0], [40.0, 30.0]);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| poisson(world, world, 1.0, 5, &|x, z| x * z > 300.0, 1 << 20))
+                .expect("fits")
+        };
+        let one = run(1);
+        assert!(one.len() > 1000);
+        assert_eq!(one, run(2));
     }
 
     #[test]
