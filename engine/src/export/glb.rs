@@ -381,9 +381,10 @@ fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
 }
 
 /// The `.glb` bytes of a model: one buffer, u32 indices, embedded PNG textures, one node per
-/// instance, and the root `extras.pge` with generator, seed, params and stats (and, when the
-/// model has an environment, `environment = {image = <image index>, mapping =
-/// "equirectangular"}`). Groups of instances are written with [`Instancing::Gpu`].
+/// instance, one scene (an empty model's holds one empty node), and on the root and the
+/// scene `extras.pge` with generator, seed, params and stats (and, when the model has an
+/// environment, `environment = {image = <image index>, mapping = "equirectangular"}`).
+/// Groups of instances are written with [`Instancing::Gpu`].
 pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
     glb_bytes_with(model, meta, Instancing::Gpu)
 }
@@ -395,11 +396,7 @@ pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) 
     model.validate()?;
     let mut b = Builder::new();
     b.instancing = instancing;
-    // A scene needs at least one node (and the gltf crate refuses one without), so an empty
-    // model is written without a scene: a valid, empty glTF.
-    if let Some(scene) = b.scene(model, "pge")? {
-        b.root.scene = Some(scene);
-    }
+    b.root.scene = Some(b.scene(model, "pge")?);
     b.finish(model, meta, None)
 }
 
@@ -416,9 +413,7 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
     let mut summary = Vec::with_capacity(stages.len());
     for (name, model) in stages {
         model.validate()?;
-        if let Some(scene) = b.scene(model, name)? {
-            b.root.scene = Some(scene);
-        }
+        b.root.scene = Some(b.scene(model, name)?);
         summary.push(json!({
             "name": name,
             "vertices": model.vertex_count(),
@@ -445,9 +440,10 @@ impl Builder {
     }
 
     /// Writes the model's meshes, one node per instance and its instance groups (as
-    /// `self.instancing` says), gathered in a scene named `name`; `None` (and nothing written
-    /// but the meshes) when the model places nothing.
-    fn scene(&mut self, model: &Model, name: &str) -> Result<Option<json::Index<json::Scene>>> {
+    /// `self.instancing` says), gathered in a scene named `name`. A model that places nothing
+    /// gets a scene holding one empty node named `empty`: clients expect a scene (three.js's
+    /// `gltf.scene`), and a glTF scene lists at least one node.
+    fn scene(&mut self, model: &Model, name: &str) -> Result<json::Index<json::Scene>> {
         // Meshes only groups use are written inside their group's mesh, not on their own.
         let mut meshes = Vec::with_capacity(model.meshes.len());
         for (i, m) in model.meshes.iter().enumerate() {
@@ -517,14 +513,17 @@ impl Builder {
             }
         }
         if nodes.is_empty() {
-            return Ok(None);
+            nodes.push(self.root.push(json::Node {
+                name: Some("empty".into()),
+                ..Default::default()
+            }));
         }
-        Ok(Some(self.root.push(json::Scene {
+        Ok(self.root.push(json::Scene {
             extensions: None,
             extras: None,
             name: Some(name.into()),
             nodes,
-        })))
+        }))
     }
 
     /// The root extras (describing `model`), the buffer and the GLB container.
@@ -563,7 +562,13 @@ impl Builder {
         if let Some(stages) = stages {
             pge.insert("stages".into(), stages);
         }
-        b.root.extras = raw(&json!({ "pge": pge }))?;
+        // Blender keeps a scene's extras but drops the root's, three.js shows a scene's as
+        // `userData`: every scene carries the run's extras too.
+        let extras = raw(&json!({ "pge": pge }))?;
+        for scene in &mut b.root.scenes {
+            scene.extras.clone_from(&extras);
+        }
+        b.root.extras = extras;
         while !b.bin.len().is_multiple_of(4) {
             b.bin.push(0);
         }
@@ -825,9 +830,42 @@ mod empty_tests {
     }
 
     #[test]
-    fn an_empty_model_is_a_valid_glb() {
+    fn an_empty_model_has_a_scene_with_one_empty_node() {
         let bytes = glb_bytes(&Model::new(), &ExportMeta::default()).expect("exports");
         let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
-        assert_eq!(gltf.nodes().count(), 0);
+        let scene = gltf.default_scene().expect("a default scene");
+        let nodes: Vec<_> = scene.nodes().collect();
+        assert_eq!(nodes.len(), 1);
+        assert_eq!(nodes[0].name(), Some("empty"));
+        assert!(nodes[0].mesh().is_none());
+        assert_eq!(gltf.meshes().count(), 0);
+    }
+
+    #[test]
+    fn every_scene_carries_the_runs_extras() {
+        let meta = ExportMeta {
+            seed: 11,
+            params: vec![("h".into(), json!(3))],
+        };
+        let stages = vec![
+            ("step 1".to_string(), super::tests::textured_model()),
+            ("step 2".to_string(), super::tests::textured_model()),
+        ];
+        for bytes in [
+            glb_bytes(&super::tests::textured_model(), &meta).expect("glb"),
+            glb_stages_bytes(&stages, &meta).expect("glb"),
+        ] {
+            let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+            let root = gltf.document.as_json().extras.as_ref().expect("root").get();
+            for scene in gltf.scenes() {
+                let extras = scene.extras().as_ref().expect("scene extras").get();
+                assert_eq!(extras, root);
+                let value: JsonValue = serde_json::from_str(extras).expect("json");
+                assert_eq!(value["pge"]["generator"], GENERATOR);
+                assert_eq!(value["pge"]["seed"], 11);
+                assert_eq!(value["pge"]["params"]["h"], 3);
+                assert_eq!(value["pge"]["stats"]["triangles"], 2);
+            }
+        }
     }
 }

@@ -187,6 +187,18 @@ impl Model {
         }
     }
 
+    /// Adds a warning (`SCRIPT: warning: the model is empty: ...`) to the stats when the
+    /// model draws no vertex: the file written for it holds an empty scene, which is rarely
+    /// what the script meant.
+    pub fn warn_if_empty(&mut self, script: &std::path::Path) {
+        if self.vertex_count() == 0 {
+            self.stats.warnings.push(format!(
+                "{}: warning: the model is empty: the script generated nothing to draw",
+                script.display()
+            ));
+        }
+    }
+
     /// Vertices drawn, counting every instance (of groups too).
     #[must_use]
     pub fn vertex_count(&self) -> usize {
