@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
@@ -147,6 +147,28 @@ impl Builder {
             b,
             Some(json::buffer::Target::ArrayBuffer),
         )
+    }
+
+    /// A `COLOR_0` accessor: linear RGBA as normalized unsigned bytes (4 bytes a vertex
+    /// instead of 16), rounded to the nearest of the 256 steps.
+    fn colors(&mut self, colors: &[Vec4]) -> json::Index<json::Accessor> {
+        let bytes: Vec<u8> = colors
+            .iter()
+            .flat_map(|c| c.to_array())
+            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+            .collect();
+        let index = self.accessor(
+            &bytes,
+            colors.len(),
+            json::accessor::ComponentType::U8,
+            json::accessor::Type::Vec4,
+            None,
+            Some(json::buffer::Target::ArrayBuffer),
+        );
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
     }
 
     /// A float accessor of per-instance data (no buffer view target: not a vertex attribute).
@@ -304,13 +326,13 @@ impl Builder {
             let n: Vec<f32> = mesh.normals.iter().flat_map(|p| p.to_array()).collect();
             attributes.insert(Valid(Semantic::Normals), self.floats(&n, 3, false));
         }
-        if !mesh.uvs.is_empty() {
+        // Texture coordinates only where a texture reads them.
+        if !mesh.uvs.is_empty() && mesh.material.texture.is_some() {
             let t: Vec<f32> = mesh.uvs.iter().flat_map(|p| p.to_array()).collect();
             attributes.insert(Valid(Semantic::TexCoords(0)), self.floats(&t, 2, false));
         }
         if !mesh.colors.is_empty() {
-            let c: Vec<f32> = mesh.colors.iter().flat_map(|p| p.to_array()).collect();
-            attributes.insert(Valid(Semantic::Colors(0)), self.floats(&c, 4, false));
+            attributes.insert(Valid(Semantic::Colors(0)), self.colors(&mesh.colors));
         }
         let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let indices = self.accessor(
@@ -712,6 +734,58 @@ mod tests {
         )
         .expect("json");
         assert_eq!(mesh_extras["pge"]["skeleton"]["parents"], json!([-1, 0]));
+    }
+
+    #[test]
+    fn colours_are_normalized_bytes_and_untextured_meshes_have_no_uvs() {
+        let mut mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+        mesh.colors = vec![
+            glam::Vec4::new(1.0, 0.0, 0.5, 1.0),
+            glam::Vec4::new(0.2, 0.4, 0.6, 0.8),
+            glam::Vec4::new(0.0, 1.0, 0.0, 0.0),
+        ];
+        let bytes = glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default()).expect("glb");
+        let (doc, buffers, _) = gltf::import_slice(&bytes).expect("parses");
+        let prim = doc
+            .meshes()
+            .next()
+            .and_then(|m| m.primitives().next())
+            .expect("primitive");
+        let colour = prim
+            .get(&gltf::Semantic::Colors(0))
+            .expect("a colour accessor");
+        assert_eq!(colour.data_type(), gltf::accessor::DataType::U8);
+        assert!(colour.normalized());
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let read: Vec<[u8; 4]> = reader
+            .read_colors(0)
+            .expect("colours")
+            .into_rgba_u8()
+            .collect();
+        assert_eq!(
+            read,
+            [[255, 0, 128, 255], [51, 102, 153, 204], [0, 255, 0, 0]]
+        );
+        assert!(
+            reader.read_tex_coords(0).is_none(),
+            "no texture, so no texture coordinates"
+        );
+        // A textured mesh keeps its coordinates.
+        let (doc, buffers, _) =
+            gltf::import_slice(glb_bytes(&textured_model(), &ExportMeta::default()).expect("glb"))
+                .expect("parses");
+        let prim = doc
+            .meshes()
+            .next()
+            .and_then(|m| m.primitives().next())
+            .expect("primitive");
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        assert_eq!(
+            reader.read_tex_coords(0).expect("uvs").into_f32().count(),
+            3
+        );
     }
 
     #[test]
