@@ -64,6 +64,6 @@ golden! {
     modellers_coral: "scripts/modellers/coral.lua" => 0xeef6617cd7aced4e,
     modellers_crystals: "scripts/modellers/crystals.lua" => 0x888e428b25002502,
     modellers_sierpinski: "scripts/modellers/sierpinski.lua" => 0x0279153693a1c478,
-    modellers_fireworks: "scripts/modellers/fireworks.lua" => 0xdc1ebb0139729023,
-    modellers_explorers: "scripts/modellers/explorers.lua" => 0x1fc71c83dd560d74,
+    modellers_fireworks: "scripts/modellers/fireworks.lua" => 0x042203ceaf1f1535,
+    modellers_explorers: "scripts/modellers/explorers.lua" => 0xed40a9b32442becb,
 }
