@@ -370,7 +370,10 @@ fn an_empty_model_writes_a_glb_that_parses() {
     let out = dir.path().join("e.glb");
     run_to("tests/scripts/outside.lua", &out, &[]);
     let (doc, _, _) = gltf::import(&out).expect("imports");
-    assert_eq!(doc.nodes().count(), 0);
+    // Only the empty node the scene needs.
+    assert_eq!(doc.nodes().count(), 1);
+    assert!(doc.nodes().all(|n| n.mesh().is_none()));
+    assert_eq!(doc.meshes().count(), 0);
 }
 script_error!(
     a_failing_model_method_shows_its_own_error,
