@@ -86,6 +86,7 @@ fn generate_stages(args: &RunArgs, stages: &[u32], bar: &ProgressBar) -> anyhow:
             bar.set_position(u64::from(taken));
         }
         let mut model = algorithm.finish(&ctx)?;
+        model.remove_unusable_triangles();
         model.warn_if_empty(&args.script.script);
         models.push((format!("step {stage}"), model));
     }

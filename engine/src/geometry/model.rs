@@ -199,6 +199,19 @@ impl Model {
         }
     }
 
+    /// Removes degenerate and repeated triangles from every mesh
+    /// ([`Mesh::remove_unusable_triangles`]); a mesh with none is left as it is (still
+    /// shared), one with some is replaced by a cleaned copy. Returns how many were removed.
+    pub fn remove_unusable_triangles(&mut self) -> usize {
+        let mut removed = 0;
+        for mesh in &mut self.meshes {
+            if mesh.has_unusable_triangles() {
+                removed += Arc::make_mut(mesh).remove_unusable_triangles();
+            }
+        }
+        removed
+    }
+
     /// Vertices drawn, counting every instance (of groups too).
     #[must_use]
     pub fn vertex_count(&self) -> usize {
