@@ -48,7 +48,7 @@ macro_rules! golden {
 golden! {
     examples_spiral: "scripts/examples/spiral.lua" => 0x50acda51ba7f7b4f,
     examples_terrain: "scripts/examples/terrain.lua" => 0x63bda6c98dfd29bd,
-    examples_sky: "scripts/examples/sky.lua" => 0x10f8185833876647,
+    examples_sky: "scripts/examples/sky.lua" => 0xa26916ad21c9ceca,
     lsystems_bush: "scripts/lsystems/bush.lua" => 0xf2f4cce84ab8ef3f,
     lsystems_koch: "scripts/lsystems/koch.lua" => 0x822c968a13e0f950,
     lsystems_plants: "scripts/lsystems/plants.lua" => 0x16b9d9b943a65fd3,

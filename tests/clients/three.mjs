@@ -114,7 +114,12 @@ window.show = async (url, expectEmpty) => {
     if (result.meshes > 0 || result.lines > 0) throw new Error("an empty model drew something");
     return result;
   }
-  const box = new THREE.Box3().setFromObject(gltf.scene, true);
+  // Framed by the model: a sky dome (the node named "sky") is the background around it.
+  const box = new THREE.Box3();
+  for (const child of gltf.scene.children) {
+    if (child.name !== "sky") box.expandByObject(child, true);
+  }
+  result.sky = gltf.scene.children.some((c) => c.name === "sky");
   if (box.isEmpty()) {
     throw new Error("the scene's bounding box is empty");
   }
@@ -213,6 +218,7 @@ try {
       `${result.meshes} meshes (${result.instanced} instanced, ${result.lines} lines), ` +
       `${result.triangles} triangles` +
       (result.drawn < result.triangles ? ` (${result.drawn} drawn)` : "") +
+      (result.sky ? ", a sky dome" : "") +
       `, ${(100 * result.pixelShare).toFixed(1)} % of the frame`;
     if (problems.length > 0) {
       failures++;

@@ -52,6 +52,10 @@ struct Builder {
     /// Nodes that need `EXT_mesh_gpu_instancing`, with their TRANSLATION/ROTATION/SCALE
     /// accessors.
     gpu_nodes: Vec<(usize, [usize; 3])>,
+    /// The sky dome's mesh, once written (models with an environment).
+    sky: Option<json::Index<json::Mesh>>,
+    /// Materials that need `KHR_materials_unlit` (the sky's).
+    unlit: Vec<usize>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -540,12 +544,53 @@ impl Builder {
                 ..Default::default()
             }));
         }
+        if let Some(env) = &model.environment {
+            let dome = self.sky_dome(env)?;
+            // Around the model, ten times as far as its farthest corner (50 m at least).
+            let (lo, hi) = model.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+            let radius = (10.0 * (hi - lo).length() / 2.0).max(SKY_MIN_RADIUS);
+            let centre = (lo + hi) / 2.0;
+            let mut n = node(
+                dome,
+                &Mat4::from_scale_rotation_translation(
+                    Vec3::splat(radius),
+                    glam::Quat::IDENTITY,
+                    centre,
+                ),
+            );
+            n.name = Some("sky".into());
+            nodes.push(self.root.push(n));
+        }
         Ok(self.root.push(json::Scene {
             extensions: None,
             extras: None,
             name: Some(name.into()),
             nodes,
         }))
+    }
+
+    /// The sky dome's mesh (written once): a unit sphere seen from inside, its texture the
+    /// environment image mapped as the preview reads it (row 0 straight up, the middle
+    /// column along -Z, a quarter to its right +X), with an unlit material.
+    fn sky_dome(&mut self, env: &Arc<Texture>) -> Result<json::Index<json::Mesh>> {
+        if let Some(mesh) = self.sky {
+            return Ok(mesh);
+        }
+        let mut mesh = sky_sphere(SKY_SEGMENTS, SKY_RINGS);
+        mesh.material = Arc::new(Material {
+            name: "sky".into(),
+            base_color: [1.0; 4],
+            texture: Some(env.clone()),
+            metallic: 0.0,
+            roughness: 1.0,
+            ..Material::default()
+        });
+        let index = self.mesh(&mesh)?;
+        if let Some(material) = written(&self.materials, &mesh.material) {
+            self.unlit.push(material.value());
+        }
+        self.sky = Some(index);
+        Ok(index)
     }
 
     /// The root extras (describing `model`), the buffer and the GLB container.
@@ -603,10 +648,10 @@ impl Builder {
                 extras: None,
             });
         }
-        let mut text = if b.gpu_nodes.is_empty() {
+        let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() {
             b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
         } else {
-            with_gpu_instancing(&b.root, &b.gpu_nodes)?
+            with_extensions(&b.root, &b.gpu_nodes, &b.unlit)?
         };
         while !text.len().is_multiple_of(4) {
             text.push(b' ');
@@ -628,12 +673,77 @@ impl Builder {
     }
 }
 
+/// The name of the glTF extension the sky dome's material uses.
+pub const UNLIT: &str = "KHR_materials_unlit";
+
+/// The sky dome's radius for a model smaller than a few metres.
+const SKY_MIN_RADIUS: f32 = 50.0;
+/// Columns of the sky dome's mesh.
+const SKY_SEGMENTS: u32 = 48;
+/// Rows of the sky dome's mesh.
+const SKY_RINGS: u32 = 24;
+
+/// A unit sphere seen from inside: `segments` columns and `rings` rows, texture coordinates
+/// of an equirectangular image (v = 0 straight up; u = 0.5 along -Z, u = 0.75 along +X),
+/// inward normals and counter-clockwise triangles as seen from the centre. The seam column
+/// is doubled; each pole is one triangle per column (no zero-area triangles).
+fn sky_sphere(segments: u32, rings: u32) -> Mesh {
+    use std::f32::consts::{PI, TAU};
+    let mut mesh = Mesh {
+        name: "sky".into(),
+        ..Mesh::default()
+    };
+    for r in 0..=rings {
+        let v = r as f32 / rings as f32;
+        let polar = v * PI;
+        for k in 0..=segments {
+            let u = k as f32 / segments as f32;
+            let azimuth = (u - 0.5) * TAU;
+            let dir = Vec3::new(
+                polar.sin() * azimuth.sin(),
+                polar.cos(),
+                -polar.sin() * azimuth.cos(),
+            );
+            mesh.positions.push(dir);
+            mesh.normals.push(-dir);
+            mesh.uvs.push(glam::Vec2::new(u, v));
+        }
+    }
+    let at = |r: u32, k: u32| r * (segments + 1) + k;
+    for r in 0..rings {
+        for k in 0..segments {
+            let (a, b, c, d) = (at(r, k), at(r, k + 1), at(r + 1, k), at(r + 1, k + 1));
+            // Seen from the centre, u grows to the right and v downwards.
+            if r > 0 {
+                mesh.indices.extend([a, c, b]);
+            }
+            if r + 1 < rings {
+                mesh.indices.extend([b, c, d]);
+            }
+        }
+    }
+    mesh
+}
+
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
-/// ROTATION, SCALE] accessors) and the extension declared in `extensionsUsed` (gltf-json
-/// has no field for it without its `extensions` feature).
-fn with_gpu_instancing(root: &json::Root, nodes: &[(usize, [usize; 3])]) -> Result<Vec<u8>> {
+/// ROTATION, SCALE] accessors), `KHR_materials_unlit` on the given materials, and the
+/// extensions used declared in `extensionsUsed` (gltf-json has no fields for them without
+/// its extension features).
+fn with_extensions(
+    root: &json::Root,
+    nodes: &[(usize, [usize; 3])],
+    unlit: &[usize],
+) -> Result<Vec<u8>> {
     let export = |e: serde_json::Error| Error::Export(e.to_string());
     let mut value = serde_json::to_value(root).map_err(export)?;
+    for &index in unlit {
+        let material = value
+            .get_mut("materials")
+            .and_then(|m| m.get_mut(index))
+            .and_then(JsonValue::as_object_mut)
+            .ok_or_else(|| Error::Export("an unlit material is missing".into()))?;
+        material.insert("extensions".into(), json!({ UNLIT: {} }));
+    }
     for &(index, [t, r, s]) in nodes {
         let node = value
             .get_mut("nodes")
@@ -646,8 +756,15 @@ fn with_gpu_instancing(root: &json::Root, nodes: &[(usize, [usize; 3])]) -> Resu
                 "TRANSLATION": t, "ROTATION": r, "SCALE": s } } }),
         );
     }
+    let mut used = Vec::new();
+    if !nodes.is_empty() {
+        used.push(GPU_INSTANCING);
+    }
+    if !unlit.is_empty() {
+        used.push(UNLIT);
+    }
     if let Some(root) = value.as_object_mut() {
-        root.insert("extensionsUsed".into(), json!([GPU_INSTANCING]));
+        root.insert("extensionsUsed".into(), json!(used));
     }
     serde_json::to_vec(&value).map_err(export)
 }
@@ -858,6 +975,87 @@ mod environment_tests {
         let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
         assert_eq!(gltf.images().count(), 1);
         assert_eq!(gltf.textures().count(), 1);
+    }
+
+    #[test]
+    fn the_environment_is_a_sky_dome_around_the_model() {
+        let sky = Arc::new(
+            Texture::from_rgba("sky", 2, 1, &[0, 0, 255, 255, 9, 9, 9, 255]).expect("png"),
+        );
+        let mesh = Mesh::from_triangles(
+            vec![
+                Vec3::ZERO,
+                Vec3::new(20.0, 0.0, 0.0),
+                Vec3::new(0.0, 20.0, 0.0),
+            ],
+            vec![0, 1, 2],
+        )
+        .expect("valid");
+        let mut model = Model::from_mesh(mesh);
+        model.environment = Some(sky.clone());
+        let bytes = glb_bytes(&model, &ExportMeta::default()).expect("exports");
+        let (doc, buffers, images) = gltf::import_slice(&bytes).expect("parses");
+        assert_eq!(
+            images.len(),
+            1,
+            "the dome shows the environment image itself"
+        );
+        let text = String::from_utf8_lossy(&bytes);
+        assert!(text.contains("\"extensionsUsed\":[\"KHR_materials_unlit\"]"));
+        let scene = doc.default_scene().expect("scene");
+        let dome = scene
+            .nodes()
+            .find(|n| n.name() == Some("sky"))
+            .expect("a node named sky");
+        let (t, _, s) = dome.transform().decomposed();
+        // Centred on the model, ten times as far as its farthest corner.
+        assert_eq!(t, [10.0, 10.0, 0.0]);
+        let radius = 10.0 * (800.0f32).sqrt() / 2.0;
+        assert!((s[0] - radius).abs() < 1e-3, "{s:?}");
+        let mesh = dome.mesh().expect("the dome's mesh");
+        assert_eq!(mesh.name(), Some("sky"));
+        let prim = mesh.primitives().next().expect("primitive");
+        let material = prim.material();
+        let json: JsonValue = serde_json::from_slice(
+            &bytes[20..20
+                + u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize],
+        )
+        .expect("json chunk");
+        let index = material.index().expect("a material");
+        assert_eq!(json["materials"][index]["extensions"], json!({ UNLIT: {} }));
+        let texture = material
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .expect("textured");
+        assert_eq!(texture.texture().source().index(), 0);
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let p: Vec<Vec3> = reader
+            .read_positions()
+            .expect("positions")
+            .map(Vec3::from)
+            .collect();
+        let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).expect("uvs").into_f32().collect();
+        let idx: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+        for (q, [u, v]) in p.iter().zip(&uv) {
+            assert!((q.length() - 1.0).abs() < 1e-5);
+            // Row 0 straight up; the middle column along -Z, a quarter to its right +X.
+            if *v == 0.0 {
+                assert!(q.y > 0.999);
+            }
+            if *v == 0.5 && *u == 0.5 {
+                assert!(q.z < -0.999, "{q}");
+            }
+            if *v == 0.5 && *u == 0.75 {
+                assert!(q.x > 0.999, "{q}");
+            }
+        }
+        // Every triangle has an area and faces the centre.
+        for t in idx.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| p[i as usize]);
+            let face = (b - a).cross(c - a);
+            assert!(face.length() > 1e-5);
+            assert!(face.dot(a + b + c) < 0.0, "faces inward");
+        }
     }
 
     #[test]
