@@ -128,6 +128,7 @@ pub fn generate_with(engine: &Engine, request: &Request, kept: &mut Kept) -> Out
         kept.start(&*algorithm, &ctx);
         taken = kept.advance(&mut *algorithm, &ctx, 0)?;
         let mut model = algorithm.finish(&ctx)?;
+        model.remove_unusable_triangles();
         model
             .stats
             .phases
@@ -370,7 +371,8 @@ impl Kept {
         };
         let result = (|| {
             let taken = self.advance(&mut *algorithm, &ctx, from)?;
-            let model = algorithm.finish(&ctx)?;
+            let mut model = algorithm.finish(&ctx)?;
+            model.remove_unusable_triangles();
             model.validate()?;
             Ok::<_, pge_engine::Error>((taken, model))
         })();
