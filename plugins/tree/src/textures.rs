@@ -231,12 +231,12 @@ fn bark_sample(style: BarkStyle, color: [f32; 4], u: f32, v: f32) -> Sample {
             let wu = u + 0.05 * (value(u, v, 4, 3, 11) - 0.5);
             let (f1, f2, id) = cellular(wu, v, 8, 2, 12);
             let edge = f2 - f1;
-            let ridge = smoothstep(0.0, 0.45, edge);
-            let (g1, g2, _) = cellular(u, v, 16, 10, 13);
-            let crack = smoothstep(0.0, 0.12, g2 - g1);
+            let ridge = smoothstep(0.02, 0.6, edge);
+            let (g1, g2, _) = cellular(u, v, 16, 6, 13);
+            let crack = smoothstep(0.0, 0.1, g2 - g1);
             let fibre = fractal(u, v, 64, 6, 2, 14);
-            let height = (0.72 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.08 * fibre)
-                * (0.85 + 0.15 * crack);
+            let height = (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre)
+                * (0.94 + 0.06 * crack);
             let top = mix(c, grey(1.5), 0.35 * smoothstep(0.6, 0.95, height));
             let shade = mix([0.0; 3], top, 0.28 + 0.9 * height);
             Sample {
