@@ -138,6 +138,21 @@ fn unit(h: u32) -> f32 {
     (h >> 8) as f32 / (1u32 << 24) as f32
 }
 
+/// `i` modulo `n` in `0..n`, without a division for the values noise lookups meet (one
+/// period either side).
+fn wrap(i: i64, n: u32) -> u32 {
+    let n = i64::from(n);
+    if (0..n).contains(&i) {
+        i as u32
+    } else if (-n..0).contains(&i) {
+        (i + n) as u32
+    } else if (n..2 * n).contains(&i) {
+        (i - n) as u32
+    } else {
+        i.rem_euclid(n) as u32
+    }
+}
+
 fn smooth(t: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
@@ -152,11 +167,11 @@ fn value(u: f32, v: f32, px: u32, py: u32, seed: u32) -> f32 {
     let (x, y) = (u * px as f32, v * py as f32);
     let (fx, fy) = (x.floor(), y.floor());
     let (tx, ty) = (smooth(x - fx), smooth(y - fy));
-    let (ix, iy) = (
-        (fx as i64).rem_euclid(i64::from(px)) as u32,
-        (fy as i64).rem_euclid(i64::from(py)) as u32,
+    let (ix, iy) = (wrap(fx as i64, px), wrap(fy as i64, py));
+    let (jx, jy) = (
+        if ix + 1 == px { 0 } else { ix + 1 },
+        if iy + 1 == py { 0 } else { iy + 1 },
     );
-    let (jx, jy) = ((ix + 1) % px, (iy + 1) % py);
     let at = |x, y| unit(hash(x, y, seed));
     let top = at(ix, iy) + (at(jx, iy) - at(ix, iy)) * tx;
     let bottom = at(ix, jy) + (at(jx, jy) - at(ix, jy)) * tx;
@@ -185,11 +200,7 @@ fn cellular(u: f32, v: f32, nx: u32, ny: u32, seed: u32) -> (f32, f32, u32) {
     for dy in -1..=1 {
         for dx in -1..=1 {
             let (gx, gy) = (cx + dx, cy + dy);
-            let h = hash(
-                gx.rem_euclid(i64::from(nx)) as u32,
-                gy.rem_euclid(i64::from(ny)) as u32,
-                seed,
-            );
+            let h = hash(wrap(gx, nx), wrap(gy, ny), seed);
             let fx = gx as f32 + 0.1 + 0.8 * unit(h);
             let fy = gy as f32 + 0.1 + 0.8 * unit(h.rotate_left(16));
             let d = (fx - x).powi(2) + (fy - y).powi(2);
@@ -883,6 +894,15 @@ mod tests {
             blade += u32::from(img.get_pixel(140, y)[0]);
         }
         assert!(rib > blade, "midrib {rib} vs blade {blade}");
+    }
+
+    #[test]
+    fn wrap_is_the_euclidean_remainder() {
+        for n in [1u32, 2, 7, 22] {
+            for i in -100i64..100 {
+                assert_eq!(wrap(i, n), i.rem_euclid(i64::from(n)) as u32, "{i} mod {n}");
+            }
+        }
     }
 
     #[test]
