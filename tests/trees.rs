@@ -28,7 +28,17 @@ fn run_tree(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec
 fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
     let (doc, buffers, images) =
         gltf::import_slice(glb).unwrap_or_else(|e| panic!("{script}: {e}"));
-    assert_eq!(images.len(), 2, "{script}: bark and leaf textures embedded");
+    // Bark and leaves each carry a PBR set: base colour, normal and roughness maps, 512 px
+    // or more.
+    assert_eq!(
+        images.len(),
+        6,
+        "{script}: bark and leaf texture sets embedded"
+    );
+    assert!(
+        images.iter().all(|i| i.width >= 512 && i.height >= 512),
+        "{script}: maps of 512 px or more"
+    );
     let meshes: Vec<_> = doc.meshes().collect();
     assert_eq!(meshes.len(), 2, "{script}: a bark mesh and a leaf mesh");
     let mut counts = [0usize; 2];
@@ -52,6 +62,14 @@ fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
             assert!(positions.iter().flatten().all(|c| c.is_finite()));
             counts[k] += indices.len() / 3;
             let material = prim.material();
+            assert!(
+                material.normal_texture().is_some()
+                    && material
+                        .pbr_metallic_roughness()
+                        .metallic_roughness_texture()
+                        .is_some(),
+                "{script}: normal and roughness maps"
+            );
             assert!(
                 material
                     .pbr_metallic_roughness()
@@ -102,7 +120,7 @@ macro_rules! species {
             assert!(stats["leaves"].as_u64().expect("leaves") > 100, "{script}: {stats}");
             assert_eq!(stats["triangles"].as_u64(), Some((bark + leaves) as u64));
             assert_eq!(leaves as u64, 2 * stats["leaves"].as_u64().expect("leaves"));
-            for phase in ["points", "growth", "radii", "meshing", "leaves", "export"] {
+            for phase in ["points", "growth", "radii", "meshing", "leaves", "textures", "export"] {
                 assert!(stats["phases"][phase].is_number(), "{script}: phase {phase} in {stats}");
             }
         }

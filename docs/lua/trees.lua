@@ -94,6 +94,11 @@ function pge.shape.predicate(f, bounds) end
 ---@field radii? "pipe"|"keep" pipe model from tipRadius, or the generator's radii ("pipe"; turtle "keep")
 ---@field color? string bark colour "#rrggbb" of the procedural texture ("#6b5444")
 ---@field texture? string a PNG bark texture (relative to the script for SpaceColonization)
+---@field bark? "furrowed"|"plated"|"smooth"|"fibrous"|{style?: string, depth?: number} procedural bark pattern ("furrowed"; depth 0..4, 1)
+---@field textureSize? integer side of the procedural bark maps in pixels (16..2048, 512)
+---@field textureScale? number metres of bark one texture tile covers (> 0, 0.6)
+---@field light? number[] direction light comes from; branch UV seams face away ({0.45, 0.8, 0.35})
+---@field flare? boolean|{roots?: integer, spread?: number, height?: number} trunk flare (off; roots 5, spread 1, height 1)
 
 ---Leaves hung at branch tips. Unknown keys are errors.
 ---@class pge.LeafOptions
@@ -103,6 +108,8 @@ function pge.shape.predicate(f, bounds) end
 ---@field colors? string[]|string two colours "#rrggbb" a leaf's colour is drawn between ({"#2f6b1f", "#7da83a"})
 ---@field maxDepth? integer leaves hang on a tip's last maxDepth + 1 segments, 0..1000 (2)
 ---@field texture? string a PNG leaf texture (alpha-masked) instead of the procedural silhouette
+---@field shape? "ovate"|"lobed"|"lanceolate"|"palmate"|"needles" procedural leaf silhouette ("ovate")
+---@field textureSize? integer side of the procedural leaf maps in pixels (16..2048, 512)
 
 ---The bark and leaf options every tree generator reads. Keys in `mesh` win over the
 ---shorthands `radius`, `smoothing` and `sides`.

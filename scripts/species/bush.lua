@@ -17,6 +17,6 @@ return pge.SpaceColonization{
   roots = roots,
   tropism = {0, 0.1, 0},
   radius = { tip = 0.01, exponent = 2.3 },
-  mesh = { sides = 5, mergeStraight = 5, color = "#5e4b3b" },
+  mesh = { sides = 5, mergeStraight = 5, color = "#7a7266", bark = "smooth" },
   leaves = { perTip = {3, 5}, size = 0.16, maxDepth = 2, colors = {"#3d6b25", "#6e9a35"} },
 }

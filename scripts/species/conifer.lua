@@ -1,6 +1,7 @@
 -- A conifer (spruce): a cone envelope and a straight leader grown first through the whole
 -- crown (strong apical growth); the points along it pull the leader's nodes into side
--- branches, longest at the bottom, which droop a little and carry small dark needles.
+-- branches, longest at the bottom, which droop a little and carry sprays of dark needles.
+-- Plated bark, like a pine's.
 local p = pge.params{
   points = {3500, min = 100, max = 200000, doc = "attraction points"},
   height = {12, min = 3, max = 40, doc = "tree height (m)"},
@@ -17,6 +18,7 @@ return pge.SpaceColonization{
   trunk = p.height - base - 0.5,
   tropism = {0, -0.3, 0},
   radius = { tip = 0.015, exponent = 2.6 },
-  mesh = { sides = 6, mergeStraight = 5, color = "#4a3b30" },
-  leaves = { perTip = {10, 14}, size = 0.3, width = 0.3, maxDepth = 3, colors = {"#163b22", "#2c5a30"} },
+  mesh = { sides = 7, mergeStraight = 5, color = "#5a4032", bark = "plated" },
+  leaves = { perTip = {6, 9}, size = 0.4, width = 0.8, maxDepth = 3, colors = {"#163b22", "#2c5a30"},
+             shape = "needles" },
 }

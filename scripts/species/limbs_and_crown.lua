@@ -1,6 +1,6 @@
 -- One skeleton, two methods: an L-system draws the trunk and four main limbs, then space
 -- colonization fills a crown from the limbs' tips. pge.tree meshes the joined skeleton
--- with one bark and one set of leaves.
+-- with one bark and one set of leaves: smooth grey bark and palmate leaves, like a maple.
 local p = pge.params{
   points = {2500, min = 100, max = 50000, doc = "attraction points in the crown"},
 }
@@ -23,6 +23,6 @@ local crown = pge.SpaceColonization{
 return pge.tree{
   skeleton = crown:skeleton(),
   radius = { tip = 0.015, exponent = 2.4 },
-  mesh = { sides = 7, color = "#665043" },
-  leaves = { perTip = {3, 5}, size = 0.2, maxDepth = 2, colors = {"#2f6b1f", "#7da83a"} },
+  mesh = { sides = 7, color = "#8a8478", bark = "smooth" },
+  leaves = { perTip = {3, 5}, size = 0.24, maxDepth = 2, colors = {"#2f6b1f", "#7da83a"}, shape = "palmate" },
 }

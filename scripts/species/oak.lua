@@ -1,4 +1,5 @@
--- A broad oak: a wide, flattened ellipsoid crown on a short, thick trunk, dark leaves.
+-- A broad oak: a wide, flattened ellipsoid crown on a short, thick trunk flaring into its
+-- roots, deeply furrowed bark, dark lobed leaves.
 local p = pge.params{
   points = {3000, min = 100, max = 200000, doc = "attraction points in the crown"},
   width = {5.5, min = 1, max = 20, doc = "crown half-width (m)"},
@@ -13,7 +14,8 @@ return pge.SpaceColonization{
   tropism = {0, 0.05, 0},
   radius = { tip = 0.025, exponent = 2.2 },
   smoothing = 0.5,
-  mesh = { sides = 8, mergeStraight = 6, color = "#5a4636" },
+  mesh = { sides = 10, mergeStraight = 6, color = "#5a4636",
+           bark = { style = "furrowed", depth = 1.3 }, flare = { roots = 5, spread = 0.9 } },
   leaves = { perTip = {math.max(0, p.leaves - 3), p.leaves}, size = 0.38, maxDepth = 3,
-             colors = {"#2c5418", "#4e7a26"} },
+             colors = {"#2c5418", "#4e7a26"}, shape = "lobed" },
 }

@@ -1,7 +1,7 @@
 -- A weeping willow: the points lie only in a thick dome-shaped shell that reaches almost to
 -- the ground; a straight trunk grows up the empty middle to the top of the dome, and the
 -- long thin branches spread from there over the shell and, pulled by a strong downward
--- tropism, hang down its outside. Many small, light leaves.
+-- tropism, hang down its outside. Fibrous bark, many small, light, narrow leaves.
 local p = pge.params{
   points = {3500, min = 100, max = 200000, doc = "attraction points"},
   droop = {0.6, min = 0, max = 0.95, doc = "downward tropism"},
@@ -19,6 +19,7 @@ return pge.SpaceColonization{
   tropism = {0, -p.droop, 0},
   radius = { tip = 0.014, exponent = 2.1 },
   smoothing = 0.3,
-  mesh = { sides = 6, mergeStraight = 4, color = "#6a5a48" },
-  leaves = { perTip = {6, 9}, size = 0.24, maxDepth = 4, colors = {"#7f9f3a", "#b5c95a"} },
+  mesh = { sides = 8, mergeStraight = 4, color = "#6a5a48", bark = "fibrous", flare = { roots = 4, spread = 0.6 } },
+  leaves = { perTip = {6, 9}, size = 0.3, maxDepth = 4, colors = {"#7f9f3a", "#b5c95a"},
+             shape = "lanceolate" },
 }

@@ -33,6 +33,8 @@ pub struct AppOptions {
     pub turntable: bool,
     /// Draw moving frames at full quality too (for measurements).
     pub full_quality_motion: bool,
+    /// Where `--camera` places the camera once the first model is framed.
+    pub camera: Option<super::CameraSpec>,
 }
 
 enum Shot {
@@ -50,6 +52,8 @@ pub struct PreviewApp {
     renderer: Option<Renderer>,
     uploaded: u64,
     camera: OrbitCamera,
+    /// `--camera`, applied when the first model is framed.
+    camera_spec: Option<super::CameraSpec>,
     framed: bool,
     toggles: Toggles,
     turntable: bool,
@@ -99,6 +103,7 @@ impl PreviewApp {
             renderer,
             uploaded: 0,
             camera: OrbitCamera::default(),
+            camera_spec: options.camera,
             framed: false,
             toggles: Toggles::default(),
             turntable: options.turntable,
@@ -150,6 +155,9 @@ impl PreviewApp {
                     && let Some(b) = g.scene.bounds
                 {
                     self.camera.frame(b);
+                    if let Some(spec) = self.camera_spec {
+                        self.camera.place(spec.distance, spec.height, spec.target);
+                    }
                     self.framed = true;
                 }
                 if g.settings.steps.is_none() {

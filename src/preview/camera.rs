@@ -67,6 +67,17 @@ impl OrbitCamera {
         self.distance = radius / (FOV_Y / 2.0).sin() * 1.05;
     }
 
+    /// Places the eye `distance` metres from `target` (the current target when `None`)
+    /// horizontally, at height `height`, keeping the yaw (`--camera`).
+    pub fn place(&mut self, distance: f32, height: f32, target: Option<Vec3>) {
+        if let Some(t) = target {
+            self.target = t;
+        }
+        let rise = height - self.target.y;
+        self.distance = (distance * distance + rise * rise).sqrt().max(1e-3);
+        self.pitch = rise.atan2(distance).clamp(-1.55, 1.55);
+    }
+
     /// Projection times view for a viewport of the given aspect ratio, with depth in [0, 1].
     #[must_use]
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
@@ -80,6 +91,20 @@ impl OrbitCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn place_puts_the_eye_at_the_distance_and_height() {
+        let mut c = OrbitCamera::default();
+        c.place(2.0, 1.5, Some(Vec3::new(0.0, 1.0, 0.0)));
+        let eye = c.eye();
+        assert!((eye.y - 1.5).abs() < 1e-5, "{eye}");
+        let flat = Vec3::new(eye.x, 0.0, eye.z).length();
+        assert!((flat - 2.0).abs() < 1e-5, "{flat}");
+        let before = c.target;
+        c.place(10.0, 0.0, None);
+        assert_eq!(c.target, before);
+        assert!((c.eye().y).abs() < 1e-5);
+    }
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-4

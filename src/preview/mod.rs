@@ -51,6 +51,11 @@ pub struct PreviewArgs {
     /// Writes the first complete frame to this PNG file and exits.
     #[arg(long, value_name = "PNG")]
     pub screenshot: Option<PathBuf>,
+    /// Places the camera instead of framing the model: `D` metres from the target
+    /// horizontally, the eye at height `H`, looking at `TX,TY,TZ` (default: the centre of the
+    /// model's bounds).
+    #[arg(long, value_name = "D,H[,TX,TY,TZ]", value_parser = parse_camera, allow_hyphen_values = true)]
+    pub camera: Option<CameraSpec>,
     /// Seconds one generation may take.
     #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = parse_seconds)]
     pub time_limit: f64,
@@ -66,6 +71,39 @@ fn parse_set(text: &str) -> Result<(String, String), String> {
         }
         _ => Err(format!("'{text}' is not NAME=VALUE")),
     }
+}
+
+/// A camera placement from `--camera D,H[,TX,TY,TZ]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSpec {
+    /// Horizontal distance from the target, metres.
+    pub distance: f32,
+    /// Height of the eye, metres.
+    pub height: f32,
+    /// The point looked at; `None`: the centre of the model's bounds.
+    pub target: Option<glam::Vec3>,
+}
+
+fn parse_camera(text: &str) -> Result<CameraSpec, String> {
+    let bad = || format!("'{text}' is not D,H or D,H,TX,TY,TZ (numbers, D > 0)");
+    let numbers = text
+        .split(',')
+        .map(|s| s.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<Vec<f32>>>()
+        .ok_or_else(bad)?;
+    let target = match numbers.len() {
+        2 => None,
+        5 => Some(glam::Vec3::new(numbers[2], numbers[3], numbers[4])),
+        _ => return Err(bad()),
+    };
+    if numbers[0] <= 0.0 {
+        return Err(bad());
+    }
+    Ok(CameraSpec {
+        distance: numbers[0],
+        height: numbers[1],
+        target,
+    })
 }
 
 fn parse_seconds(text: &str) -> Result<f64, String> {
@@ -97,6 +135,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
     let options = AppOptions {
         screenshot: args.screenshot.clone(),
         screenshot_result: screenshot_result.clone(),
+        camera: args.camera,
         log_fps: measuring,
         turntable: measuring,
         full_quality_motion: log == "full",
@@ -152,6 +191,25 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn camera_placements_are_parsed() {
+        assert_eq!(
+            parse_camera("2,1.5"),
+            Ok(CameraSpec {
+                distance: 2.0,
+                height: 1.5,
+                target: None
+            })
+        );
+        assert_eq!(
+            parse_camera("30, 8, 0, -1, 2.5").map(|c| c.target),
+            Ok(Some(glam::Vec3::new(0.0, -1.0, 2.5)))
+        );
+        for bad in ["2", "2,1,0", "0,1", "-1,2", "a,b", "2,NaN"] {
+            assert!(parse_camera(bad).is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn set_and_seconds_are_parsed() {

@@ -244,6 +244,25 @@ impl Builder {
             extensions: None,
             extras: None,
         });
+        let normal_texture = m
+            .normal_texture
+            .as_ref()
+            .map(|t| json::material::NormalTexture {
+                index: self.texture(t),
+                scale: 1.0,
+                tex_coord: 0,
+                extensions: None,
+                extras: None,
+            });
+        let metallic_roughness_texture =
+            m.metallic_roughness_texture
+                .as_ref()
+                .map(|t| json::texture::Info {
+                    index: self.texture(t),
+                    tex_coord: 0,
+                    extensions: None,
+                    extras: None,
+                });
         let (alpha_mode, alpha_cutoff) = match m.alpha {
             AlphaMode::Opaque => (json::material::AlphaMode::Opaque, None),
             AlphaMode::Mask(c) => (
@@ -262,8 +281,10 @@ impl Builder {
                 base_color_texture,
                 metallic_factor: json::material::StrengthFactor(m.metallic),
                 roughness_factor: json::material::StrengthFactor(m.roughness),
+                metallic_roughness_texture,
                 ..Default::default()
             },
+            normal_texture,
             ..Default::default()
         });
         self.materials.push((m.clone(), index));
@@ -798,6 +819,32 @@ mod tests {
             Mat4::from_rotation_translation(Quat::from_rotation_y(1.0), Vec3::X),
         );
         model
+    }
+
+    #[test]
+    fn normal_and_roughness_maps_are_written_once_each() {
+        let mut model = textured_model();
+        let png = |name: &str| Arc::new(Texture::from_rgba(name, 2, 2, &[128; 16]).expect("png"));
+        let (normal, rough) = (png("bark normal"), png("bark roughness"));
+        let mut mesh = (*model.meshes[0]).clone();
+        mesh.material = Arc::new(Material {
+            normal_texture: Some(normal),
+            metallic_roughness_texture: Some(rough),
+            ..(*mesh.material).clone()
+        });
+        model.meshes[0] = Arc::new(mesh);
+        let bytes = glb_bytes(&model, &ExportMeta::default()).expect("exports");
+        let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+        assert_eq!(gltf.images().count(), 3);
+        let m = gltf.materials().next().expect("material");
+        let n = m.normal_texture().expect("normal texture");
+        assert_eq!(n.texture().source().name(), Some("bark normal"));
+        assert_eq!(n.scale(), 1.0);
+        let mr = m
+            .pbr_metallic_roughness()
+            .metallic_roughness_texture()
+            .expect("metallic-roughness texture");
+        assert_eq!(mr.texture().source().name(), Some("bark roughness"));
     }
 
     #[test]

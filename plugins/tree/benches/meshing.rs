@@ -4,7 +4,10 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
-use pge_tree::{LeafOptions, MeshOptions, TreeOptions, append_bark, build_tree, pipe_radii};
+use pge_tree::{
+    BarkParams, BarkStyle, LeafOptions, LeafParams, LeafShape, MeshOptions, TreeOptions,
+    append_bark, bark_set, build_tree, leaf_set, pipe_radii,
+};
 use std::hint::black_box;
 
 /// A deterministic branching skeleton: each node continues, and every `fork_every`-th node
@@ -40,7 +43,7 @@ fn skeleton(nodes: usize, fork_every: usize) -> Skeleton {
 fn bench_meshing(c: &mut Criterion) {
     let s = skeleton(20_000, 7);
     let mut mesh = pge_engine::geometry::Mesh::default();
-    append_bark(&s, 8, true, &mut mesh);
+    append_bark(&s, &MeshOptions::default(), &mut mesh);
     let triangles = mesh.triangle_count() as u64;
     let mut group = c.benchmark_group("bark");
     group.throughput(Throughput::Elements(triangles));
@@ -52,7 +55,7 @@ fn bench_meshing(c: &mut Criterion) {
                 mesh.normals.clear();
                 mesh.uvs.clear();
                 mesh.indices.clear();
-                append_bark(black_box(&s), 8, true, &mut mesh);
+                append_bark(black_box(&s), &MeshOptions::default(), &mut mesh);
                 black_box(mesh.indices.len())
             })
         },
@@ -81,15 +84,34 @@ fn bench_tree(c: &mut Criterion) {
     });
 }
 
+/// One species' full texture set at 512 px, generated and PNG-encoded (no cache): the bark
+/// maps (colour, normal, roughness) and the leaf maps. Budget: 40 ms.
 fn bench_textures(c: &mut Criterion) {
-    // A new bark colour each time defeats the per-process texture cache.
-    let mut k = 0u32;
-    c.bench_function("bark texture (uncached)", |b| {
-        b.iter(|| {
-            k += 1;
-            pge_tree::bark_texture([0.2, 0.1, (k % 100_000) as f32 * 1e-6, 1.0]).expect("bark")
-        })
-    });
+    let mut group = c.benchmark_group("textures");
+    group.sample_size(10);
+    for style in [BarkStyle::Furrowed, BarkStyle::Plated] {
+        let bark = BarkParams {
+            style,
+            color: [0.2, 0.12, 0.07, 1.0],
+            size: 512,
+            depth: 1.0,
+        };
+        let leaf = LeafParams {
+            shape: LeafShape::Lobed,
+            size: 512,
+        };
+        group.bench_function(
+            format!("species set 512 px ({style:?} bark, lobed leaf)"),
+            |b| {
+                b.iter(|| {
+                    let bark = bark_set(black_box(&bark)).expect("bark");
+                    let leaf = leaf_set(black_box(&leaf)).expect("leaf");
+                    (bark, leaf)
+                })
+            },
+        );
+    }
+    group.finish();
 }
 
 criterion_group!(benches, bench_meshing, bench_tree, bench_textures);

@@ -4,11 +4,13 @@
 //! The skeleton is cut into branches: a branch starts at a root, or at a fork for every child
 //! but the one that continues the parent's branch (see [`main_children`]), and follows the
 //! continuing children to a tip. Each branch is one tube: a ring of `sides` points (plus one
-//! duplicated seam vertex, so `u` runs from 0 to 1 around it) at every node, each ring
+//! duplicated seam vertex, where the texture's `u` restarts) at every node, each ring
 //! oriented between the incoming and the outgoing direction so joints stay continuous, and
-//! framed by parallel transport so tubes do not twist. Normals point from the ring centre to
-//! the vertex; `v` grows with length along the branch (one unit per circumference, so the
-//! texture keeps its aspect). A lateral branch starts with a ring of its own radius at the
+//! framed by parallel transport so tubes do not twist (the seam, though, is turned away from
+//! the light). Normals point from the ring centre to the vertex; UVs keep one texel density
+//! everywhere (`u` around the circumference and `v` along the branch both in texture tiles
+//! of `texture_scale` metres). A trunk flare widens the first metre of every root tube into
+//! buttresses. A lateral branch starts with a ring of its own radius at the
 //! fork node, inside its parent. Tips (and the base of each root) get a flat cap.
 
 use std::f32::consts::TAU;
@@ -16,15 +18,23 @@ use std::f32::consts::TAU;
 use glam::{Quat, Vec2, Vec3};
 use pge_engine::geometry::{Mesh, Skeleton};
 
+use crate::options::{Flare, MeshOptions};
 use crate::radii::main_children;
 
 /// Appends the bark tubes of `skeleton` to `mesh` (positions, normals, uvs, indices; the
 /// mesh's other attributes must be empty or are left short). Radii are used as they are.
+/// Of the options, `sides` (clamped to `3..=1024`), `caps`, `texture_scale`, `light` and
+/// `flare` are used.
 ///
-/// `sides` is clamped to `3..=1024`. Every vertex is finite when the skeleton is; a branch
-/// of zero length keeps the direction of the segment before it.
-pub fn append_bark(skeleton: &Skeleton, sides: u32, caps: bool, mesh: &mut Mesh) {
-    let sides = sides.clamp(3, 1024) as usize;
+/// UVs keep a constant texel density: `u` runs around each ring over its circumference
+/// divided by `texture_scale` (so `u` ends where the ring's bark ends, at the seam, not at
+/// 1), `v` grows by the length travelled divided by `texture_scale`. The seam (`u = 0`)
+/// faces away from `light` wherever the branch is not parallel to it. Every vertex is
+/// finite when the skeleton is; a branch of zero length keeps the direction of the segment
+/// before it.
+pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) {
+    let sides = options.sides.clamp(3, 1024) as usize;
+    let caps = options.caps;
     let trig: Vec<(f32, f32)> = (0..=sides)
         .map(|k| {
             if k == sides {
@@ -50,17 +60,24 @@ pub fn append_bark(skeleton: &Skeleton, sides: u32, caps: bool, mesh: &mut Mesh)
     mesh.indices
         .reserve(rings * sides * 6 + caps_count * sides * 3);
 
+    let scale = if options.texture_scale > 0.0 && options.texture_scale.is_finite() {
+        options.texture_scale
+    } else {
+        MeshOptions::default().texture_scale
+    };
     let mut builder = Tube {
         trig: &trig,
         sides,
         mesh,
         points: Vec::new(),
+        scale,
+        away: -options.light.try_normalize().unwrap_or(Vec3::ZERO),
     };
     for i in 0..skeleton.len() {
         if skeleton.parents[i].is_none() {
             builder.points.clear();
             walk(skeleton, &main, i, &mut builder.points);
-            builder.emit(caps, caps, Vec3::Y);
+            builder.emit(caps, caps, Vec3::Y, options.flare);
         }
         for &c in &children[i] {
             if Some(c) != main[i] {
@@ -71,7 +88,7 @@ pub fn append_bark(skeleton: &Skeleton, sides: u32, caps: bool, mesh: &mut Mesh)
                 let incoming = skeleton.parents[i]
                     .and_then(|p| (attach - skeleton.positions[p as usize]).try_normalize())
                     .unwrap_or(Vec3::Y);
-                builder.emit(false, caps, incoming);
+                builder.emit(false, caps, incoming, None);
             }
         }
     }
@@ -80,12 +97,12 @@ pub fn append_bark(skeleton: &Skeleton, sides: u32, caps: bool, mesh: &mut Mesh)
 /// A bark mesh of `skeleton` alone: [`append_bark`] into an empty mesh named `bark`, with the
 /// default material.
 #[must_use]
-pub fn bark_mesh(skeleton: &Skeleton, sides: u32, caps: bool) -> Mesh {
+pub fn bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> Mesh {
     let mut mesh = Mesh {
         name: "bark".into(),
         ..Mesh::default()
     };
-    append_bark(skeleton, sides, caps, &mut mesh);
+    append_bark(skeleton, options, &mut mesh);
     mesh
 }
 
@@ -101,21 +118,65 @@ fn walk(skeleton: &Skeleton, main: &[Option<u32>], start: usize, out: &mut Vec<(
     }
 }
 
+/// Where a flared trunk gets rings of its own: fractions of the flare's height.
+const FLARE_RINGS: [f32; 9] = [0.0, 0.03, 0.08, 0.15, 0.25, 0.38, 0.55, 0.75, 1.0];
+
+/// The points of a tube with extra points in its first `height` metres (at
+/// [`FLARE_RINGS`]), each with its distance from the start along the tube.
+fn with_flare_rings(points: &[(Vec3, f32)], height: f32) -> Vec<(Vec3, f32, f32)> {
+    let mut out = Vec::with_capacity(points.len() + FLARE_RINGS.len());
+    let mut travelled = 0.0;
+    out.push((points[0].0, points[0].1, 0.0));
+    for w in points.windows(2) {
+        let ((a, ra), (b, rb)) = (w[0], w[1]);
+        let len = a.distance(b);
+        for f in FLARE_RINGS {
+            let s = f * height;
+            if s > travelled + 1e-3 && s < travelled + len - 1e-3 {
+                let t = (s - travelled) / len;
+                out.push((a.lerp(b, t), ra + (rb - ra) * t, s));
+            }
+        }
+        travelled += len;
+        out.push((b, rb, travelled));
+    }
+    out
+}
+
 struct Tube<'a> {
     trig: &'a [(f32, f32)],
     sides: usize,
     mesh: &'a mut Mesh,
     points: Vec<(Vec3, f32)>,
+    /// Metres of bark per texture tile.
+    scale: f32,
+    /// The unit direction the seams face (away from the light), or zero.
+    away: Vec3,
 }
 
 impl Tube<'_> {
     /// Emits one tube through `self.points`; `fallback` is the direction used while the tube
-    /// has no segment of non-zero length yet.
-    fn emit(&mut self, base_cap: bool, tip_cap: bool, fallback: Vec3) {
-        let pts = &self.points;
-        if pts.len() < 2 {
+    /// has no segment of non-zero length yet; `flare` widens its first metres.
+    fn emit(&mut self, base_cap: bool, tip_cap: bool, fallback: Vec3, flare: Option<Flare>) {
+        if self.points.len() < 2 {
             return;
         }
+        let flare = flare.filter(|f| f.height > 0.0 && f.spread > 0.0 && f.roots > 0);
+        let pts: Vec<(Vec3, f32, f32)> = match flare {
+            Some(f) => with_flare_rings(&self.points, f.height),
+            None => {
+                let mut travelled = 0.0;
+                let mut prev = self.points[0].0;
+                self.points
+                    .iter()
+                    .map(|&(p, r)| {
+                        travelled += p.distance(prev);
+                        prev = p;
+                        (p, r, travelled)
+                    })
+                    .collect()
+            }
+        };
         // Segment directions, each falling back to the previous one.
         let first_dir = pts
             .windows(2)
@@ -136,26 +197,34 @@ impl Tube<'_> {
                 (seg[j - 1] + seg[j]).try_normalize().unwrap_or(seg[j])
             }
         };
+        // The seam faces away from the light where the ring's plane allows it; where the
+        // branch runs along the light, the side is carried on from the ring before.
+        let away = self.away;
+        let seam_side = |dir: Vec3, carried: Vec3| -> Vec3 {
+            let target = away - dir * away.dot(dir);
+            if target.length_squared() > 0.0025 {
+                target.normalize()
+            } else {
+                carried
+            }
+        };
         let stride = (self.sides + 1) as u32;
         let mut dir = ring_dir(0);
-        let mut side = dir.any_orthonormal_vector();
+        let mut side = seam_side(dir, dir.any_orthonormal_vector());
         let mut v = 0.0f32;
-        if base_cap && pts[0].1 > 0.0 {
+        if base_cap && pts[0].1 > 0.0 && flare.is_none() {
             self.cap(pts[0].0, pts[0].1, side, dir, -1.0, v);
         }
-        let pts = &self.points;
         let first_index = self.mesh.positions.len() as u32;
         for j in 0..pts.len() {
             if j > 0 {
                 let next_dir = ring_dir(j);
-                side = transport(side, dir, next_dir);
+                side = seam_side(next_dir, transport(side, dir, next_dir));
                 dir = next_dir;
-                let len = pts[j].0.distance(pts[j - 1].0);
-                let circumference = TAU * 0.5 * (pts[j].1 + pts[j - 1].1);
-                v += len / circumference.max(0.25 * len).max(f32::MIN_POSITIVE);
+                v += pts[j].0.distance(pts[j - 1].0) / self.scale;
             }
             let binormal = dir.cross(side);
-            let (centre, radius) = pts[j];
+            let (centre, radius, travelled) = pts[j];
             // At a bend the ring cuts the tube obliquely: stretch it along the bend by
             // 1/cos(half the turn) (Bloomenthal) so the joint keeps the branch's thickness.
             let (bend, stretch) = if j > 0 && j < seg.len() {
@@ -165,14 +234,27 @@ impl Tube<'_> {
             } else {
                 (Vec3::ZERO, 0.0)
             };
+            let around = TAU * radius / self.scale;
             for (k, &(c, s)) in self.trig.iter().enumerate() {
                 let offset = side * c + binormal * s;
                 let shape = offset + bend * (stretch * offset.dot(bend));
-                self.mesh.positions.push(centre + shape * radius);
-                self.mesh.normals.push(offset);
+                let (widen, normal) = match flare {
+                    Some(f) if travelled < f.height => flared(
+                        f,
+                        travelled,
+                        k as f32 / self.sides as f32,
+                        radius,
+                        offset,
+                        binormal * c - side * s,
+                        dir,
+                    ),
+                    _ => (1.0, offset),
+                };
+                self.mesh.positions.push(centre + shape * radius * widen);
+                self.mesh.normals.push(normal);
                 self.mesh
                     .uvs
-                    .push(Vec2::new(k as f32 / self.sides as f32, v));
+                    .push(Vec2::new(around * k as f32 / self.sides as f32, v));
             }
             if j > 0 {
                 let a0 = first_index + (j as u32 - 1) * stride;
@@ -183,7 +265,7 @@ impl Tube<'_> {
                 }
             }
         }
-        let (centre, radius) = self.points[self.points.len() - 1];
+        let (centre, radius, _) = pts[pts.len() - 1];
         if tip_cap && radius > 0.0 {
             self.cap(centre, radius, side, dir, 1.0, v);
         }
@@ -194,6 +276,7 @@ impl Tube<'_> {
         let binormal = dir.cross(side);
         let normal = dir * sign;
         let base = self.mesh.positions.len() as u32;
+        let r = radius / self.scale;
         self.mesh.positions.push(centre);
         self.mesh.normals.push(normal);
         self.mesh.uvs.push(Vec2::new(0.5, v));
@@ -202,7 +285,7 @@ impl Tube<'_> {
                 .positions
                 .push(centre + (side * c + binormal * s) * radius);
             self.mesh.normals.push(normal);
-            self.mesh.uvs.push(Vec2::new(0.5 + 0.5 * c, v + 0.5 * s));
+            self.mesh.uvs.push(Vec2::new(0.5 + r * c, v + r * s));
         }
         let n = self.sides as u32;
         for k in 0..n {
@@ -214,6 +297,34 @@ impl Tube<'_> {
             }
         }
     }
+}
+
+/// A flared ring vertex at `travelled` metres up the trunk and `turn` turns around it: the
+/// factor its offset from the axis is widened by, and its normal. The flare fades from
+/// `1 + spread` on a buttress at the ground to nothing at `height`; buttresses are
+/// `roots` lobes around the ring. `radial` and `tangent` are the vertex's unit directions
+/// out of and around the ring, `dir` the trunk's.
+fn flared(
+    f: Flare,
+    travelled: f32,
+    turn: f32,
+    radius: f32,
+    radial: Vec3,
+    tangent: Vec3,
+    dir: Vec3,
+) -> (f32, Vec3) {
+    let h = (1.0 - travelled / f.height).clamp(0.0, 1.0);
+    let fade = f.spread * h.powf(2.5);
+    let dfade = -2.5 * f.spread / f.height * h.powf(1.5);
+    let n = f.roots as f32;
+    let wave = 0.5 + 0.5 * (TAU * n * turn).cos();
+    let lobe = 0.2 + 0.8 * wave * wave;
+    let dlobe = 0.8 * 2.0 * wave * (-0.5 * n * (TAU * n * turn).sin());
+    let widen = 1.0 + fade * lobe;
+    // The surface r(theta, s) = radius * widen: its normal leans back against the growth of
+    // r around the ring and up the trunk.
+    let normal = radial - tangent * (fade * dlobe / widen) - dir * (radius * dfade * lobe);
+    (widen, normal.try_normalize().unwrap_or(radial))
 }
 
 /// Carries `side` from a ring facing `from` to a ring facing `to` (parallel transport),
@@ -229,6 +340,17 @@ fn transport(side: Vec3, from: Vec3, to: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
+    fn mesh_of(s: &Skeleton, sides: u32, caps: bool) -> Mesh {
+        bark_mesh(
+            s,
+            &MeshOptions {
+                sides,
+                caps,
+                ..MeshOptions::default()
+            },
+        )
+    }
+
     fn approx(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
     }
@@ -242,7 +364,7 @@ mod tests {
 
     #[test]
     fn a_single_segment_is_a_capped_cylinder() {
-        let m = bark_mesh(&column(), 4, true);
+        let m = mesh_of(&column(), 4, true);
         m.validate().expect("valid");
         // Two rings of 5 (seam duplicated) and two caps of 1 + 4.
         assert_eq!(m.positions.len(), 2 * 5 + 2 * 5);
@@ -267,20 +389,167 @@ mod tests {
     }
 
     #[test]
-    fn the_seam_vertex_is_duplicated_with_u_0_and_1() {
-        let m = bark_mesh(&column(), 6, false);
+    fn the_seam_vertex_is_duplicated_and_u_spans_the_circumference() {
+        let m = mesh_of(&column(), 6, false);
+        let scale = MeshOptions::default().texture_scale;
         assert_eq!(m.positions.len(), 2 * 7);
-        for ring in 0..2 {
+        for (ring, radius) in [(0, 0.5), (1, 0.25)] {
             let first = ring * 7;
             let last = first + 6;
             assert_eq!(m.positions[first], m.positions[last]);
             assert_eq!(m.uvs[first].x, 0.0);
-            assert_eq!(m.uvs[last].x, 1.0);
+            assert!((m.uvs[last].x - TAU * radius / scale).abs() < 1e-5);
             assert_eq!(m.uvs[first].y, m.uvs[last].y);
         }
-        // v grows with length: 2 units over a mean circumference of 2*pi*0.375.
-        assert!((m.uvs[7].y - 2.0 / (TAU * 0.375)).abs() < 1e-5);
+        // v grows with length: 2 metres in tiles of `scale` metres.
+        assert!((m.uvs[7].y - 2.0 / scale).abs() < 1e-5);
         assert_eq!(m.uvs[0].y, 0.0);
+    }
+
+    /// The texel density of each quad of a tube: UV area over world area, square-rooted
+    /// (texture tiles per metre), with the quad's distance up the tube.
+    fn densities(m: &Mesh, sides: usize, rings: usize) -> Vec<(f32, f32)> {
+        let stride = sides + 1;
+        let mut out = Vec::new();
+        for j in 0..rings - 1 {
+            for k in 0..sides {
+                let [a, b, c, d] = [
+                    j * stride + k,
+                    j * stride + k + 1,
+                    (j + 1) * stride + k + 1,
+                    (j + 1) * stride + k,
+                ];
+                let area3 = |p: [usize; 3]| {
+                    0.5 * (m.positions[p[1]] - m.positions[p[0]])
+                        .cross(m.positions[p[2]] - m.positions[p[0]])
+                        .length()
+                };
+                let area2 = |p: [usize; 3]| {
+                    let (e1, e2) = (m.uvs[p[1]] - m.uvs[p[0]], m.uvs[p[2]] - m.uvs[p[0]]);
+                    0.5 * (e1.x * e2.y - e1.y * e2.x).abs()
+                };
+                let world = area3([a, b, c]) + area3([a, c, d]);
+                let uv = area2([a, b, c]) + area2([a, c, d]);
+                out.push((m.positions[a].y, (uv / world).sqrt()));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn texel_density_is_constant_along_a_long_tapering_branch() {
+        // A 12 m branch tapering from 0.4 m to 1 cm, in 24 segments of varying length, bent.
+        let mut s = Skeleton::new();
+        let mut prev = s.push(Vec3::ZERO, None, 0.4, 0);
+        let mut y = 0.0;
+        for i in 1..=24 {
+            y += if i % 3 == 0 { 0.9 } else { 0.3 };
+            let t = i as f32 / 24.0;
+            let p = Vec3::new(0.3 * (t * 3.0).sin(), y, 0.2 * t * t);
+            prev = s.push(p, Some(prev), 0.4 * (1.0 - t) + 0.01 * t, 0);
+        }
+        let sides = 12;
+        let m = mesh_of(&s, sides, false);
+        let d = densities(&m, sides as usize, 25);
+        let (lo, hi) = d
+            .iter()
+            .fold((f32::MAX, 0f32), |(lo, hi), &(_, x)| (lo.min(x), hi.max(x)));
+        assert!(
+            hi / lo < 1.2,
+            "texel density from {lo} to {hi} tiles per metre"
+        );
+        // And it is the one the options ask for.
+        let want = 1.0 / MeshOptions::default().texture_scale;
+        assert!(
+            (lo / want - 1.0).abs() < 0.2 && (hi / want - 1.0).abs() < 0.2,
+            "{lo}..{hi} vs {want}"
+        );
+    }
+
+    #[test]
+    fn the_seam_faces_away_from_the_light() {
+        let mut s = Skeleton::new();
+        let r = s.push(Vec3::ZERO, None, 0.3, 0);
+        let a = s.push(Vec3::new(0.0, 2.0, 0.0), Some(r), 0.2, 0);
+        s.push(Vec3::new(0.5, 3.8, 0.3), Some(a), 0.1, 0);
+        for light in [
+            Vec3::new(0.45, 0.8, 0.35),
+            Vec3::new(-1.0, 0.2, 0.0),
+            Vec3::Z,
+        ] {
+            let options = MeshOptions {
+                sides: 8,
+                caps: false,
+                light,
+                ..MeshOptions::default()
+            };
+            let m = bark_mesh(&s, &options);
+            for ring in 0..3 {
+                let first = ring * 9;
+                let centre: Vec3 = m.positions[first..first + 8].iter().sum::<Vec3>() / 8.0;
+                let seam = (m.positions[first] - centre).normalize();
+                // The seam is the ring's point most turned away from the light.
+                for k in 1..8 {
+                    let other = (m.positions[first + k] - centre).normalize();
+                    assert!(
+                        seam.dot(light) <= other.dot(light) + 1e-4,
+                        "ring {ring}, light {light}: vertex {k} is darker than the seam"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_flared_trunk_spreads_into_buttresses_over_its_first_metre() {
+        let mut s = Skeleton::new();
+        let r = s.push(Vec3::ZERO, None, 0.3, 0);
+        s.push(Vec3::new(0.0, 4.0, 0.0), Some(r), 0.2, 0);
+        let flare = Flare {
+            roots: 5,
+            spread: 1.0,
+            height: 1.0,
+        };
+        let options = MeshOptions {
+            sides: 40,
+            flare: Some(flare),
+            ..MeshOptions::default()
+        };
+        let m = bark_mesh(&s, &options);
+        m.validate().expect("valid");
+        assert!(m.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-4));
+        // Rings at the flare's heights, then the top.
+        let rings = m.positions.len() / 41 - 1; // and the tip cap
+        assert_eq!(rings, FLARE_RINGS.len() + 1);
+        let reach = |y: f32| {
+            m.positions
+                .iter()
+                .filter(|p| (p.y - y).abs() < 1e-4)
+                .map(|p| Vec3::new(p.x, 0.0, p.z).length())
+                .fold((f32::MAX, 0f32), |(lo, hi), r| (lo.min(r), hi.max(r)))
+        };
+        let (lo, hi) = reach(0.0);
+        assert!(
+            hi > 0.55 && lo < 0.4,
+            "at the ground the buttresses reach {lo}..{hi}"
+        );
+        let (lo, hi) = reach(1.0);
+        assert!(hi - lo < 1e-3, "round again at 1 m: {lo}..{hi}");
+        // Five buttresses: the ground ring's radius has five maxima around.
+        let ground: Vec<f32> = (0..40)
+            .map(|k| Vec3::new(m.positions[k].x, 0.0, m.positions[k].z).length())
+            .collect();
+        let peaks = (0..40)
+            .filter(|&k| ground[k] > ground[(k + 39) % 40] && ground[k] >= ground[(k + 1) % 40])
+            .count();
+        assert_eq!(peaks, 5);
+        // Every face still points outward.
+        for t in m.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+            let face = (m.positions[b] - m.positions[a]).cross(m.positions[c] - m.positions[a]);
+            let avg = m.normals[a] + m.normals[b] + m.normals[c];
+            assert!(face.dot(avg) > 0.0, "inward triangle {t:?}");
+        }
     }
 
     #[test]
@@ -289,7 +558,7 @@ mod tests {
         let r = s.push(Vec3::ZERO, None, 0.1, 0);
         let a = s.push(Vec3::Y, Some(r), 0.1, 0);
         s.push(Vec3::new(1.0, 1.0, 0.0), Some(a), 0.1, 0);
-        let m = bark_mesh(&s, 8, false);
+        let m = mesh_of(&s, 8, false);
         let bisector = Vec3::new(1.0, 1.0, 0.0).normalize();
         // The ring is an ellipse in the bisecting plane: 0.1 across the bend, stretched by
         // 1/cos(45 degrees) along it (Bloomenthal), so the joint keeps its thickness.
@@ -315,7 +584,7 @@ mod tests {
         let a = s.push(Vec3::Y, Some(r), 0.2, 0);
         s.push(Vec3::new(0.0, 2.0, 0.0), Some(a), 0.15, 0);
         s.push(Vec3::new(1.0, 1.5, 0.0), Some(a), 0.1, 1);
-        let m = bark_mesh(&s, 5, true);
+        let m = mesh_of(&s, 5, true);
         m.validate().expect("valid");
         // Main tube: 3 rings, lateral: 2 rings; caps: the root base and two tips.
         assert_eq!(m.positions.len(), 5 * 6 + 3 * 6);
@@ -363,9 +632,9 @@ mod tests {
         {
             prev = s.push(*p, Some(prev), 0.25 - 0.05 * k as f32, 0);
         }
-        let closed = bark_mesh(&s, 7, true);
+        let closed = mesh_of(&s, 7, true);
         assert!(is_closed(&closed), "caps close the tube");
-        let open = bark_mesh(&s, 7, false);
+        let open = mesh_of(&s, 7, false);
         assert!(!is_closed(&open), "without caps the ends are open");
     }
 
@@ -376,7 +645,7 @@ mod tests {
         let a = s.push(Vec3::ZERO, Some(r), 0.1, 0);
         let b = s.push(Vec3::ZERO, Some(a), 0.0, 0);
         s.push(Vec3::X, Some(b), 0.0, 0);
-        let m = bark_mesh(&s, 3, true);
+        let m = mesh_of(&s, 3, true);
         m.validate().expect("finite");
         assert!(m.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-4));
     }

@@ -52,12 +52,17 @@ use rand_mt::Mt64;
 pub use cylinders::{append_bark, bark_mesh};
 pub use leaves::{append_leaf_quads, tip_leaves};
 pub use merge::merge_straight;
-pub use options::{LeafOptions, MeshOptions, RadiiMode, TextureSource, TreeOptions};
+pub use options::{
+    BarkStyle, Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TextureSource, TreeOptions,
+};
 /// Foliage levels of detail options (`lod = {...}`), from `pge_lod`.
 pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
-pub use textures::{bark_texture, leaf_texture, load_png};
+pub use textures::{
+    BarkParams, LeafParams, TextureCache, TextureSet, bark_set, bark_textures, leaf_set,
+    leaf_textures, load_png,
+};
 #[cfg(feature = "lua")]
 pub use tree_lua::TreePlugin;
 
@@ -76,6 +81,9 @@ pub enum TreeError {
         /// Why.
         message: String,
     },
+    /// A procedural texture could not be made (an encoder failure).
+    #[error("texture: {0}")]
+    Generated(String),
     /// A mesh or texture broke an invariant.
     #[error(transparent)]
     Geometry(#[from] GeometryError),
@@ -147,33 +155,71 @@ pub fn mesh_skeleton(skeleton: &Skeleton, options: &MeshOptions) -> Result<Mesh,
 }
 
 fn bark_of(skeleton: Arc<Skeleton>, options: &MeshOptions) -> Result<Mesh, TreeError> {
-    let mut mesh = bark_mesh(&skeleton, options.sides, options.caps);
-    let texture =
-        textures::resolve_texture(&options.texture, "bark", || bark_texture(options.color))?;
-    mesh.material = Arc::new(Material {
-        name: "bark".into(),
-        base_color: [1.0; 4],
-        texture: Some(texture),
-        roughness: 0.95,
-        ..Material::default()
-    });
+    let mut mesh = bark_mesh(&skeleton, options);
+    mesh.material = bark_material(options)?;
     mesh.skeleton = Some(skeleton);
     Ok(mesh)
 }
 
-/// The leaf material: the texture (procedural silhouette or file), alpha mask at 0.5,
-/// double-sided.
+/// The bark material: the procedural PBR set of the options' style, colour and size (base
+/// colour, normal and roughness maps, from the process's [`TextureCache`]), or a file's
+/// image as the base colour alone.
+pub fn bark_material(options: &MeshOptions) -> Result<Arc<Material>, TreeError> {
+    let mut material = Material {
+        name: "bark".into(),
+        base_color: [1.0; 4],
+        roughness: 1.0,
+        ..Material::default()
+    };
+    match &options.texture {
+        TextureSource::Procedural => {
+            let set = bark_textures(&BarkParams {
+                style: options.bark,
+                color: options.color,
+                size: options.texture_size,
+                depth: options.bark_depth,
+            })?;
+            material.texture = Some(set.color.clone());
+            material.normal_texture = Some(set.normal.clone());
+            material.metallic_roughness_texture = Some(set.roughness.clone());
+        }
+        TextureSource::Image(t) => material.texture = Some(t.clone()),
+        TextureSource::File(path) => material.texture = Some(load_png(path, "bark")?),
+    }
+    if material.metallic_roughness_texture.is_none() {
+        material.roughness = 0.95;
+    }
+    Ok(Arc::new(material))
+}
+
+/// The leaf material: the procedural PBR set of the options' shape (alpha-masked colour,
+/// normal and roughness maps) or a file's image, alpha mask at 0.5, double-sided.
 pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> {
-    let texture = textures::resolve_texture(&options.texture, "leaf", leaf_texture)?;
-    Ok(Arc::new(Material {
+    let mut material = Material {
         name: "leaves".into(),
         base_color: [1.0; 4],
-        texture: Some(texture),
         alpha: AlphaMode::Mask(0.5),
         double_sided: true,
-        roughness: 0.8,
+        roughness: 1.0,
         ..Material::default()
-    }))
+    };
+    match &options.texture {
+        TextureSource::Procedural => {
+            let set = leaf_textures(&LeafParams {
+                shape: options.shape,
+                size: options.texture_size,
+            })?;
+            material.texture = Some(set.color.clone());
+            material.normal_texture = Some(set.normal.clone());
+            material.metallic_roughness_texture = Some(set.roughness.clone());
+        }
+        TextureSource::Image(t) => material.texture = Some(t.clone()),
+        TextureSource::File(path) => material.texture = Some(load_png(path, "leaf")?),
+    }
+    if material.metallic_roughness_texture.is_none() {
+        material.roughness = 0.8;
+    }
+    Ok(Arc::new(material))
 }
 
 /// Builds the whole tree: bark (see [`mesh_skeleton`]) and leaves, as a model with the bark
@@ -185,7 +231,9 @@ pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> 
 /// written in the order of the vector V with its LOD table (see [`pge_lod::lod_mesh`]); a
 /// tree without leaves then gets a warning instead. The bark mesh's skeleton holds every
 /// leaf point. Stats:
-/// `nodes` (after merging), `leaves`, and the phases `radii`, `meshing` and `leaves`.
+/// `nodes` (after merging), `leaves`, and the phases `radii`, `meshing`, `leaves` and
+/// `textures` (generating and PNG-encoding the procedural maps, or reading them from the
+/// process's [`TextureCache`]).
 pub fn build_tree(
     skeleton: &Skeleton,
     options: &TreeOptions,
@@ -206,11 +254,24 @@ pub fn build_tree(
 
     let t = Instant::now();
     let prepared = Arc::new(prepared);
-    if prepared.parents.iter().any(Option::is_some) {
+    let has_bark = prepared.parents.iter().any(Option::is_some);
+    let bark = if has_bark {
         // At least one segment, so the bark mesh has triangles.
-        model.add_mesh(bark_of(prepared.clone(), &options.mesh)?, Mat4::IDENTITY);
-    }
+        let mut mesh = bark_mesh(&prepared, &options.mesh);
+        mesh.skeleton = Some(prepared.clone());
+        Some(mesh)
+    } else {
+        None
+    };
     model.stats.add_phase("meshing", t.elapsed().as_secs_f64());
+
+    let t = Instant::now();
+    if let Some(mut mesh) = bark {
+        mesh.material = bark_material(&options.mesh)?;
+        model.add_mesh(mesh, Mat4::IDENTITY);
+    }
+    let mut textures_time = t.elapsed().as_secs_f64();
+    let mut leaf_textures_time = 0.0;
 
     let t = Instant::now();
     if !prepared.leaves.is_empty() {
@@ -227,7 +288,9 @@ pub fn build_tree(
             ..Mesh::default()
         };
         append_leaf_quads(&prepared.leaves, style, &mut rng, &mut mesh);
+        let tm = Instant::now();
         mesh.material = leaf_material(style)?;
+        leaf_textures_time = tm.elapsed().as_secs_f64();
         if let Some(lod) = &options.lod {
             mesh = lod_leaves(&mesh, lod, &prepared)?;
         }
@@ -242,9 +305,10 @@ pub fn build_tree(
             "{at}warning: lod: the tree has no leaves, so it has no LOD table (give it leaves = {{...}})"
         ));
     }
-    model
-        .stats
-        .add_phase("leaves", leaves_time + t.elapsed().as_secs_f64());
+    let leaves_time = leaves_time + t.elapsed().as_secs_f64() - leaf_textures_time;
+    textures_time += leaf_textures_time;
+    model.stats.add_phase("leaves", leaves_time.max(0.0));
+    model.stats.add_phase("textures", textures_time);
     model.stats.nodes = prepared.len() as u64;
     model.stats.leaves = prepared.leaves.len() as u64;
     Ok(model)
@@ -322,7 +386,7 @@ mod tests {
         assert!(leaves.material.double_sided);
         assert_eq!(leaves.positions.len() as u64, 4 * a.stats.leaves);
         let phases: Vec<&str> = a.stats.phases.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(phases, ["radii", "meshing", "leaves"]);
+        assert_eq!(phases, ["radii", "meshing", "leaves", "textures"]);
     }
 
     #[test]

@@ -8,9 +8,12 @@
 //!   smoothing = 0.5,                           -- shorthand for mesh.smoothing
 //!   sides = 8,                                 -- shorthand for mesh.sides
 //!   mesh = { sides = 8, caps = true, exponent = 2.3, tipRadius = 0.02, mergeStraight = 5,
-//!            smoothing = 0, radii = "pipe", color = "#6b5444", texture = "bark.png" },
+//!            smoothing = 0, radii = "pipe", color = "#6b5444", texture = "bark.png",
+//!            bark = "furrowed",            -- or { style = "plated", depth = 1.5 }
+//!            textureSize = 512, textureScale = 0.6, light = {0.45, 0.8, 0.35},
+//!            flare = { roots = 5, spread = 1, height = 1 } },   -- or flare = true
 //!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
-//!              texture = "leaf.png" },
+//!              texture = "leaf.png", shape = "lobed", textureSize = 512 },
 //!   lod = { sectors = 1, atlas = false },      -- foliage levels of detail (pge_lod)
 //! }
 //! ```
@@ -23,7 +26,9 @@ use std::path::PathBuf;
 use mlua::{Lua, Value};
 use pge_engine::lua::{Bounds, Options, error_message, resolve_path, script_error};
 
-use crate::options::{LeafOptions, MeshOptions, RadiiMode, TextureSource, TreeOptions};
+use crate::options::{
+    BarkStyle, Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TextureSource, TreeOptions,
+};
 use crate::textures::load_png;
 
 pub use pge_lod::lua::lod_options;
@@ -85,7 +90,9 @@ pub fn tree_options(o: &Options) -> mlua::Result<TreeOptions> {
 /// Reads a `mesh = {...}` table (its [`Options`], from [`Options::child`]) into `mesh`:
 /// `sides`, `caps`, `exponent`, `tipRadius`, `mergeStraight` (degrees, or a boolean: true is
 /// 5 degrees), `smoothing`, `radii` (`"pipe"` or `"keep"`), `color`, `texture` (a PNG path,
-/// not loaded yet: see [`load_texture`]). Absent keys keep what `mesh` holds.
+/// not loaded yet: see [`load_texture`]), `bark` (a style name or `{style, depth}`),
+/// `textureSize`, `textureScale`, `light` and `flare` (`true` or `{roots, spread, height}`).
+/// Absent keys keep what `mesh` holds.
 pub fn read_mesh(o: &Options, mesh: &mut MeshOptions) -> mlua::Result<()> {
     if let Some(v) = o.integer("sides", 3..=64)? {
         mesh.sides = v as u32;
@@ -120,12 +127,65 @@ pub fn read_mesh(o: &Options, mesh: &mut MeshOptions) -> mlua::Result<()> {
     if let Some(path) = o.string("texture")? {
         mesh.texture = TextureSource::File(PathBuf::from(path));
     }
+    match o.value("bark")? {
+        Value::Nil => {}
+        Value::Table(t) => {
+            let b = o.child("bark", t);
+            if let Some(style) = b.choice("style", &BarkStyle::NAMES)? {
+                mesh.bark = BarkStyle::from_name(style).unwrap_or_default();
+            }
+            if let Some(v) = b.number_f32("depth", Bounds::Between(0.0, 4.0))? {
+                mesh.bark_depth = v;
+            }
+            b.finish()?;
+        }
+        _ => {
+            if let Some(style) = o.choice("bark", &BarkStyle::NAMES)? {
+                mesh.bark = BarkStyle::from_name(style).unwrap_or_default();
+            }
+        }
+    }
+    if let Some(v) = o.integer("textureSize", 16..=2048)? {
+        mesh.texture_size = v as u32;
+    }
+    if let Some(v) = o.number_f32("textureScale", Bounds::Above(0.0))? {
+        mesh.texture_scale = v;
+    }
+    if let Some(v) = o.vec3("light")? {
+        if v.length_squared() == 0.0 {
+            return Err(o.problem("light", "must be a non-zero direction {x, y, z}"));
+        }
+        mesh.light = v;
+    }
+    match o.value("flare")? {
+        Value::Nil | Value::Boolean(false) => {}
+        Value::Boolean(true) => mesh.flare = Some(Flare::default()),
+        Value::Table(t) => {
+            let f = o.child("flare", t);
+            let mut flare = Flare::default();
+            if let Some(v) = f.integer("roots", 2..=16)? {
+                flare.roots = v as u32;
+            }
+            if let Some(v) = f.number_f32("spread", Bounds::Between(0.0, 4.0))? {
+                flare.spread = v;
+            }
+            if let Some(v) = f.number_f32("height", Bounds::Above(0.0))? {
+                flare.height = v;
+            }
+            f.finish()?;
+            mesh.flare = Some(flare);
+        }
+        other => {
+            return Err(o.wrong_type("flare", "true or a table {roots, spread, height}", &other));
+        }
+    }
     o.finish()
 }
 
 /// Reads a `leaves = {...}` table (its [`Options`], from [`Options::child`]): `perTip =
 /// {min, max}` (or one number), `size`, `width`, `colors = {"#rrggbb", "#rrggbb"}` (or one
-/// colour), `maxDepth`, `texture` (a PNG path, not loaded yet: see [`load_texture`]).
+/// colour), `maxDepth`, `texture` (a PNG path, not loaded yet: see [`load_texture`]),
+/// `shape` (`"ovate"`, `"lobed"`, `"lanceolate"`, `"palmate"` or `"needles"`), `textureSize`.
 pub fn leaf_options(o: &Options) -> mlua::Result<LeafOptions> {
     let mut leaves = LeafOptions::default();
     if let Some((min, max)) = o.integer_range("perTip", 0..=1000)? {
@@ -178,6 +238,12 @@ pub fn leaf_options(o: &Options) -> mlua::Result<LeafOptions> {
     }
     if let Some(path) = o.string("texture")? {
         leaves.texture = TextureSource::File(PathBuf::from(path));
+    }
+    if let Some(shape) = o.choice("shape", &LeafShape::NAMES)? {
+        leaves.shape = LeafShape::from_name(shape).unwrap_or_default();
+    }
+    if let Some(v) = o.integer("textureSize", 16..=2048)? {
+        leaves.texture_size = v as u32;
     }
     o.finish()?;
     Ok(leaves)
@@ -335,12 +401,58 @@ mod tests {
             (
                 "{ mesh = { side = 3 } }",
                 "unknown option 'mesh.side': 'mesh.side' is not an option (known: sides, caps, exponent, tipRadius, \
-                 mergeStraight, smoothing, radii, color, texture)",
+                 mergeStraight, smoothing, radii, color, texture, bark, textureSize, textureScale, light, flare)",
+            ),
+            (
+                "{ mesh = { bark = 'rough' } }",
+                "mesh.bark must be \"furrowed\", \"plated\", \"smooth\" or \"fibrous\", got \"rough\"",
+            ),
+            (
+                "{ mesh = { textureSize = 4096 } }",
+                "mesh.textureSize must be an integer between 16 and 2048, got 4096",
+            ),
+            (
+                "{ mesh = { flare = { roots = 1 } } }",
+                "mesh.flare.roots must be an integer between 2 and 16, got 1",
+            ),
+            (
+                "{ leaves = { shape = 'round' } }",
+                "leaves.shape must be \"ovate\", \"lobed\", \"lanceolate\", \"palmate\" or \"needles\", got \"round\"",
             ),
         ];
         for (src, want) in cases {
             assert_eq!(error(src), want, "{src}");
         }
+    }
+
+    #[test]
+    fn bark_leaf_shape_and_flare_options() {
+        let o = parse(
+            "{ mesh = { bark = { style = 'plated', depth = 2 }, textureSize = 1024, textureScale = 0.4, \
+               light = {0, 1, 0}, flare = { roots = 6 } }, leaves = { shape = 'palmate', textureSize = 256 } }",
+        )
+        .expect("ok");
+        assert_eq!(o.mesh.bark, BarkStyle::Plated);
+        assert_eq!(o.mesh.bark_depth, 2.0);
+        assert_eq!(o.mesh.texture_size, 1024);
+        assert_eq!(o.mesh.texture_scale, 0.4);
+        assert_eq!(o.mesh.light, glam::Vec3::Y);
+        assert_eq!(
+            o.mesh.flare,
+            Some(Flare {
+                roots: 6,
+                ..Flare::default()
+            })
+        );
+        let l = o.leaves.expect("leaves");
+        assert_eq!((l.shape, l.texture_size), (LeafShape::Palmate, 256));
+        let o = parse("{ mesh = { bark = 'smooth', flare = true } }").expect("ok");
+        assert_eq!(o.mesh.bark, BarkStyle::Smooth);
+        assert_eq!(o.mesh.flare, Some(Flare::default()));
+        assert!(
+            error("{ mesh = { light = {0, 0, 0} } }")
+                .contains("mesh.light must be a non-zero direction")
+        );
     }
 
     #[test]

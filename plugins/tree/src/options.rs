@@ -20,6 +20,95 @@ pub enum RadiiMode {
     Keep,
 }
 
+/// The pattern of the procedural bark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BarkStyle {
+    /// Deep vertical furrows between long ridges, from stretched cellular noise (oak; Lua
+    /// `"furrowed"`).
+    #[default]
+    Furrowed,
+    /// Irregular flat plates split by narrow cracks (pine; Lua `"plated"`).
+    Plated,
+    /// Smooth mottled bark with horizontal lenticels (beech, birch; Lua `"smooth"`).
+    Smooth,
+    /// Interlaced fibrous ridges (willow; Lua `"fibrous"`).
+    Fibrous,
+}
+
+impl BarkStyle {
+    /// The Lua names, in the order of the variants.
+    pub const NAMES: [&'static str; 4] = ["furrowed", "plated", "smooth", "fibrous"];
+
+    /// The style of a Lua name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<BarkStyle> {
+        match name {
+            "furrowed" => Some(BarkStyle::Furrowed),
+            "plated" => Some(BarkStyle::Plated),
+            "smooth" => Some(BarkStyle::Smooth),
+            "fibrous" => Some(BarkStyle::Fibrous),
+            _ => None,
+        }
+    }
+}
+
+/// The silhouette of the procedural leaf texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LeafShape {
+    /// An egg-shaped blade with a midrib and side veins (Lua `"ovate"`).
+    #[default]
+    Ovate,
+    /// An oak leaf: rounded lobes and deep sinuses (Lua `"lobed"`).
+    Lobed,
+    /// A long narrow willow blade (Lua `"lanceolate"`).
+    Lanceolate,
+    /// A maple leaf: five pointed lobes with veins from the stalk (Lua `"palmate"`).
+    Palmate,
+    /// A conifer's needle spray: needles on both sides of a twig (Lua `"needles"`).
+    Needles,
+}
+
+impl LeafShape {
+    /// The Lua names, in the order of the variants.
+    pub const NAMES: [&'static str; 5] = ["ovate", "lobed", "lanceolate", "palmate", "needles"];
+
+    /// The shape of a Lua name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<LeafShape> {
+        match name {
+            "ovate" => Some(LeafShape::Ovate),
+            "lobed" => Some(LeafShape::Lobed),
+            "lanceolate" => Some(LeafShape::Lanceolate),
+            "palmate" => Some(LeafShape::Palmate),
+            "needles" => Some(LeafShape::Needles),
+            _ => None,
+        }
+    }
+}
+
+/// A trunk flare: the base of every root tube widens into `roots` buttresses that spread
+/// into the ground over the first `height` metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flare {
+    /// Number of root buttresses (2..=16, default 5).
+    pub roots: u32,
+    /// Extra radius at the ground, as a multiple of the trunk radius, on a buttress (> 0,
+    /// default 1).
+    pub spread: f32,
+    /// Height over which the flare fades out, metres (> 0, default 1).
+    pub height: f32,
+}
+
+impl Default for Flare {
+    fn default() -> Self {
+        Flare {
+            roots: 5,
+            spread: 1.0,
+            height: 1.0,
+        }
+    }
+}
+
 /// Where a texture comes from.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub enum TextureSource {
@@ -54,8 +143,24 @@ pub struct MeshOptions {
     pub radii: RadiiMode,
     /// Bark colour (sRGB `#rrggbb`, stored linear) used by the procedural bark texture.
     pub color: [f32; 4],
-    /// The bark texture.
+    /// The bark texture: procedural (a PBR set of colour, normal and roughness maps of
+    /// `bark` style), or a file (colour only).
     pub texture: TextureSource,
+    /// The procedural bark's pattern.
+    pub bark: BarkStyle,
+    /// The procedural bark's relief in the normal map (0..=4, default 1).
+    pub bark_depth: f32,
+    /// Side of the procedural bark maps in pixels (16..=2048, default 512).
+    pub texture_size: u32,
+    /// Metres of bark one texture tile covers, around and along every branch (> 0, default
+    /// 0.6): the texel density is `texture_size / texture_scale` pixels per metre
+    /// everywhere.
+    pub texture_scale: f32,
+    /// The direction light comes from (default up and to the side, `(0.45, 0.8, 0.35)`):
+    /// the UV seam of every branch faces away from it.
+    pub light: glam::Vec3,
+    /// The trunk flare, or `None` (default).
+    pub flare: Option<Flare>,
 }
 
 impl Default for MeshOptions {
@@ -70,6 +175,12 @@ impl Default for MeshOptions {
             radii: RadiiMode::Pipe,
             color: hex(DEFAULT_BARK),
             texture: TextureSource::Procedural,
+            bark: BarkStyle::Furrowed,
+            bark_depth: 1.0,
+            texture_size: 512,
+            texture_scale: 0.6,
+            light: glam::Vec3::new(0.45, 0.8, 0.35),
+            flare: None,
         }
     }
 }
@@ -89,8 +200,13 @@ pub struct LeafOptions {
     /// A tip's leaves hang on its last `max_depth + 1` segments: 0 puts them on the tip
     /// segment only (0..=1000, default 2).
     pub max_depth: u32,
-    /// The leaf texture (alpha-masked silhouette).
+    /// The leaf texture: procedural (a PBR set with the silhouette of `shape` in alpha), or
+    /// a file (colour only).
     pub texture: TextureSource,
+    /// The procedural leaf's silhouette and veins.
+    pub shape: LeafShape,
+    /// Side of the procedural leaf maps in pixels (16..=2048, default 512).
+    pub texture_size: u32,
 }
 
 impl Default for LeafOptions {
@@ -102,6 +218,8 @@ impl Default for LeafOptions {
             colors: [hex(DEFAULT_LEAF_COLORS[0]), hex(DEFAULT_LEAF_COLORS[1])],
             max_depth: 2,
             texture: TextureSource::Procedural,
+            shape: LeafShape::Ovate,
+            texture_size: 512,
         }
     }
 }

@@ -1,187 +1,662 @@
-//! Procedural textures: bark from noise and an alpha-masked leaf silhouette, so a tree needs
-//! no image files. Both are deterministic and cached per process (the same options give the
-//! same `Arc<Texture>`), and both tile where they must: bark in `u` (around the branch) and
-//! `v` (along it).
+//! Procedural PBR textures: bark and leaves as sets of three maps (base colour, tangent-space
+//! normal, roughness), so a tree needs no image files.
+//!
+//! Every map is a pure function of its parameters ([`BarkParams`], [`LeafParams`]): a height
+//! field from fast hashed noise (periodic value noise and stretched cellular noise), the
+//! normal map derived from that height field by central differences, colour and roughness
+//! from the same field. Rows are computed in parallel (rayon) and the three maps are
+//! PNG-encoded in parallel with fast compression; none of it depends on the thread count.
+//!
+//! Sets are generated once per distinct parameter set and process ([`TextureCache`]): the
+//! variants of a forest, built in parallel sessions, share one set per species. Bark tiles
+//! in `u` (around the branch) and `v` (along it).
 
 use std::collections::HashMap;
-use std::f64::consts::TAU;
+use std::f32::consts::{PI, TAU};
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 
-use noise::{NoiseFn, Perlin};
 use pge_engine::geometry::Texture;
+use rayon::prelude::*;
 
 use crate::TreeError;
-use crate::options::TextureSource;
+use crate::options::{BarkStyle, LeafShape};
 
-/// Side of the procedural bark texture in pixels.
-pub const BARK_SIZE: u32 = 128;
-/// Side of the procedural leaf texture in pixels.
-pub const LEAF_SIZE: u32 = 128;
-
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
-enum Key {
-    Bark([u32; 4]),
-    Leaf,
+/// The parameters a bark texture set is made from: its cache key.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BarkParams {
+    /// The pattern.
+    pub style: BarkStyle,
+    /// The bark colour (linear RGBA): the colour of the ridges' sides; furrows are darker,
+    /// ridge tops lighter.
+    pub color: [f32; 4],
+    /// Side of every map in pixels.
+    pub size: u32,
+    /// Relief: how deep furrows and cracks look in the normal map (0 flat, 1 the style's
+    /// own, up to 4).
+    pub depth: f32,
 }
 
-fn cache() -> &'static Mutex<HashMap<Key, Arc<Texture>>> {
-    static CACHE: OnceLock<Mutex<HashMap<Key, Arc<Texture>>>> = OnceLock::new();
-    CACHE.get_or_init(|| Mutex::new(HashMap::new()))
+/// The parameters a leaf texture set is made from: its cache key.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafParams {
+    /// The silhouette and its veins.
+    pub shape: LeafShape,
+    /// Side of every map in pixels.
+    pub size: u32,
 }
 
-fn cached(
-    key: Key,
-    make: impl FnOnce() -> Result<Texture, TreeError>,
-) -> Result<Arc<Texture>, TreeError> {
-    if let Some(t) = cache().lock().ok().and_then(|c| c.get(&key).cloned()) {
-        return Ok(t);
+/// One material's maps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSet {
+    /// Base colour (sRGB; RGBA with the silhouette in alpha for leaves).
+    pub color: Arc<Texture>,
+    /// Tangent-space normal map (glTF convention: +X right, +Y up in the image).
+    pub normal: Arc<Texture>,
+    /// glTF metallic-roughness map: roughness in G, metalness (0) in B.
+    pub roughness: Arc<Texture>,
+}
+
+type Cell = Arc<OnceLock<Result<Arc<TextureSet>, String>>>;
+
+/// Texture sets by parameter set, each generated once however many sessions ask for it at
+/// the same time: the first asker generates, the others wait for its result (one
+/// generate-once cell per key, the map locked only to find the cell).
+#[derive(Default)]
+pub struct TextureCache {
+    cells: Mutex<HashMap<String, Cell>>,
+    generated: AtomicU64,
+}
+
+impl TextureCache {
+    /// The process's cache, shared by every session and tree.
+    pub fn global() -> &'static TextureCache {
+        static CACHE: OnceLock<TextureCache> = OnceLock::new();
+        CACHE.get_or_init(TextureCache::default)
     }
-    let t = Arc::new(make()?);
-    if let Ok(mut c) = cache().lock() {
-        c.insert(key, t.clone());
+
+    /// How many sets this cache has generated (not counting the ones it handed out again).
+    pub fn generated(&self) -> u64 {
+        self.generated.load(Ordering::Relaxed)
     }
-    Ok(t)
+
+    /// The bark set of `params`, generated on first use.
+    pub fn bark(&self, params: &BarkParams) -> Result<Arc<TextureSet>, TreeError> {
+        self.get(format!("bark {params:?}"), || bark_set(params))
+    }
+
+    /// The leaf set of `params`, generated on first use.
+    pub fn leaf(&self, params: &LeafParams) -> Result<Arc<TextureSet>, TreeError> {
+        self.get(format!("leaf {params:?}"), || leaf_set(params))
+    }
+
+    fn get(
+        &self,
+        key: String,
+        make: impl FnOnce() -> Result<TextureSet, TreeError>,
+    ) -> Result<Arc<TextureSet>, TreeError> {
+        let cell = {
+            let mut cells = self.cells.lock().unwrap_or_else(|e| e.into_inner());
+            cells.entry(key).or_default().clone()
+        };
+        cell.get_or_init(|| {
+            self.generated.fetch_add(1, Ordering::Relaxed);
+            make().map(Arc::new).map_err(|e| e.to_string())
+        })
+        .clone()
+        .map_err(TreeError::Generated)
+    }
 }
 
-/// The bark texture of `color` (linear RGBA): vertical furrows and plates from 4D Perlin
-/// noise sampled on a torus, so it tiles in both directions. The grey pattern is computed
-/// once per process; each colour only tints and encodes it.
-pub fn bark_texture(color: [f32; 4]) -> Result<Arc<Texture>, TreeError> {
-    cached(Key::Bark(color.map(f32::to_bits)), || {
-        let shade = bark_shade();
-        let mut rgba = Vec::with_capacity(shade.len() * 4);
-        for s in shade {
-            for c in &color[..3] {
-                rgba.push(linear_to_srgb8(c * s));
+/// The bark set of `params` from the process's cache.
+pub fn bark_textures(params: &BarkParams) -> Result<Arc<TextureSet>, TreeError> {
+    TextureCache::global().bark(params)
+}
+
+/// The leaf set of `params` from the process's cache.
+pub fn leaf_textures(params: &LeafParams) -> Result<Arc<TextureSet>, TreeError> {
+    TextureCache::global().leaf(params)
+}
+
+// ---------------------------------------------------------------------------------------
+// Noise: hashed, periodic, cheap.
+
+/// A 32-bit hash of a lattice point and a seed (integer mixing, no tables).
+fn hash(x: u32, y: u32, seed: u32) -> u32 {
+    let mut h =
+        x.wrapping_mul(0x8da6_b343) ^ y.wrapping_mul(0xd816_3841) ^ seed.wrapping_mul(0xcb1a_b31f);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x2c1b_3c6d);
+    h ^= h >> 12;
+    h = h.wrapping_mul(0x297a_2d39);
+    h ^ (h >> 15)
+}
+
+/// A hash as a number in `[0, 1)`.
+fn unit(h: u32) -> f32 {
+    (h >> 8) as f32 / (1u32 << 24) as f32
+}
+
+/// `i` modulo `n` in `0..n`, without a division for the values noise lookups meet (one
+/// period either side).
+fn wrap(i: i64, n: u32) -> u32 {
+    let n = i64::from(n);
+    if (0..n).contains(&i) {
+        i as u32
+    } else if (-n..0).contains(&i) {
+        (i + n) as u32
+    } else if (n..2 * n).contains(&i) {
+        (i - n) as u32
+    } else {
+        i.rem_euclid(n) as u32
+    }
+}
+
+fn smooth(t: f32) -> f32 {
+    t * t * (3.0 - 2.0 * t)
+}
+
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    smooth(((x - a) / (b - a)).clamp(0.0, 1.0))
+}
+
+/// Value noise in `[0, 1]` with `px x py` lattice cells over the unit square, periodic in
+/// both directions (so it tiles); `(u, v)` may lie outside `[0, 1)`.
+fn value(u: f32, v: f32, px: u32, py: u32, seed: u32) -> f32 {
+    let (x, y) = (u * px as f32, v * py as f32);
+    let (fx, fy) = (x.floor(), y.floor());
+    let (tx, ty) = (smooth(x - fx), smooth(y - fy));
+    let (ix, iy) = (wrap(fx as i64, px), wrap(fy as i64, py));
+    let (jx, jy) = (
+        if ix + 1 == px { 0 } else { ix + 1 },
+        if iy + 1 == py { 0 } else { iy + 1 },
+    );
+    let at = |x, y| unit(hash(x, y, seed));
+    let top = at(ix, iy) + (at(jx, iy) - at(ix, iy)) * tx;
+    let bottom = at(ix, jy) + (at(jx, jy) - at(ix, jy)) * tx;
+    top + (bottom - top) * ty
+}
+
+/// Periodic fractal value noise: `octaves` octaves from `px x py` cells, in `[0, 1]`.
+fn fractal(u: f32, v: f32, px: u32, py: u32, octaves: u32, seed: u32) -> f32 {
+    let (mut sum, mut weight, mut amp) = (0.0, 0.0, 1.0);
+    for o in 0..octaves {
+        let k = 1 << o;
+        sum += amp * value(u, v, px * k, py * k, seed + o);
+        weight += amp;
+        amp *= 0.5;
+    }
+    sum / weight
+}
+
+/// Cellular (Worley) noise with `nx x ny` cells over the unit square, periodic, distances
+/// measured in cell units (so cells wider in `v` than in `u` are stretched along `v`).
+/// Returns the nearest and second-nearest feature distances and the nearest cell's hash.
+fn cellular(u: f32, v: f32, nx: u32, ny: u32, seed: u32) -> (f32, f32, u32) {
+    let (x, y) = (u * nx as f32, v * ny as f32);
+    let (cx, cy) = (x.floor() as i64, y.floor() as i64);
+    let (mut f1, mut f2, mut id) = (f32::MAX, f32::MAX, 0);
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let (gx, gy) = (cx + dx, cy + dy);
+            let h = hash(wrap(gx, nx), wrap(gy, ny), seed);
+            let fx = gx as f32 + 0.1 + 0.8 * unit(h);
+            let fy = gy as f32 + 0.1 + 0.8 * unit(h.rotate_left(16));
+            let d = (fx - x).powi(2) + (fy - y).powi(2);
+            if d < f1 {
+                f2 = f1;
+                f1 = d;
+                id = h;
+            } else if d < f2 {
+                f2 = d;
             }
-            rgba.push(255);
-        }
-        Ok(Texture::from_rgba("bark", BARK_SIZE, BARK_SIZE, &rgba)?)
-    })
-}
-
-/// Perlin noise sampled on a `g x g` grid over the torus (`fu` cycles-ish around, `fv`
-/// along), to be read back with [`wrapped`].
-fn torus_grid(perlin: &Perlin, g: usize, fu: f64, fv: f64) -> Vec<f32> {
-    let mut out = Vec::with_capacity(g * g);
-    for y in 0..g {
-        let b = TAU * y as f64 / g as f64;
-        for x in 0..g {
-            let a = TAU * x as f64 / g as f64;
-            out.push(perlin.get([a.cos() * fu, a.sin() * fu, b.cos() * fv, b.sin() * fv]) as f32);
         }
     }
+    (f1.sqrt(), f2.sqrt(), id)
+}
+
+// ---------------------------------------------------------------------------------------
+// Bark.
+
+/// What one bark pixel is made of: height in `[0, 1]`, a colour factor and roughness.
+struct Sample {
+    height: f32,
+    shade: [f32; 3],
+    roughness: f32,
+}
+
+/// The bark sample at `(u, v)` of the unit tile: each style's pattern.
+fn bark_sample(style: BarkStyle, color: [f32; 4], u: f32, v: f32) -> Sample {
+    let c = [color[0], color[1], color[2]];
+    let mix = |a: [f32; 3], b: [f32; 3], t: f32| [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t);
+    let grey = |k: f32| {
+        let l = 0.3 * c[0] + 0.55 * c[1] + 0.15 * c[2];
+        [l * k, l * k, l * k]
+    };
+    match style {
+        BarkStyle::Furrowed => {
+            // Oak: long ridges between deep vertical furrows. Cells 3.5 times taller than
+            // wide, their borders wandering with a low noise, are the ridges; the furrows are
+            // the borders (F2 - F1 small), with small cross-cracks on the ridges.
+            let wu = u + 0.05 * (value(u, v, 4, 3, 11) - 0.5);
+            let (f1, f2, id) = cellular(wu, v, 8, 2, 12);
+            let edge = f2 - f1;
+            let ridge = smoothstep(0.02, 0.6, edge);
+            let (g1, g2, _) = cellular(u, v, 16, 6, 13);
+            let crack = smoothstep(0.0, 0.1, g2 - g1);
+            let fibre = fractal(u, v, 64, 6, 2, 14);
+            let height = (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre)
+                * (0.94 + 0.06 * crack);
+            let top = mix(c, grey(1.5), 0.35 * smoothstep(0.6, 0.95, height));
+            let shade = mix([0.0; 3], top, 0.28 + 0.9 * height);
+            Sample {
+                height,
+                shade,
+                roughness: 0.97 - 0.12 * height,
+            }
+        }
+        BarkStyle::Plated => {
+            // Pine: irregular flat plates split by narrow dark cracks, each plate its own
+            // tint and tilt, flaking into smaller scales.
+            let wu = u + 0.04 * (value(u, v, 5, 5, 21) - 0.5);
+            let wv = v + 0.04 * (value(u, v, 5, 5, 22) - 0.5);
+            let (f1, f2, id) = cellular(wu, wv, 5, 4, 23);
+            let crack = smoothstep(0.0, 0.14, f2 - f1);
+            let (g1, g2, sub) = cellular(wu, wv, 12, 9, 24);
+            let scale = smoothstep(0.0, 0.08, g2 - g1);
+            let tilt = 0.15 * (1.0 - f1);
+            let grain = fractal(u, v, 32, 32, 2, 25);
+            let height = crack
+                * (0.5 + 0.2 * unit(id) + tilt + 0.12 * scale + 0.06 * unit(sub) + 0.06 * grain);
+            let warm = [c[0] * 1.35, c[1] * 1.05, c[2] * 0.85];
+            let plate = mix(c, warm, unit(id.rotate_left(7)));
+            let plate = mix(plate, grey(1.3), 0.25 * unit(sub));
+            let shade = mix(
+                [0.0; 3],
+                plate,
+                0.15 + 0.85 * crack * (0.8 + 0.2 * scale) + 0.1 * grain,
+            );
+            Sample {
+                height,
+                shade,
+                roughness: 0.9 - 0.15 * crack,
+            }
+        }
+        BarkStyle::Smooth => {
+            // Beech, birch: smooth mottled bark with lenticels, short dark horizontal marks,
+            // one per cell at a random place and length.
+            let mottle = fractal(u, v, 6, 6, 3, 31);
+            let (gx, gy) = (u * 7.0, v * 22.0);
+            let (cx, cy) = (gx.floor(), gy.floor());
+            let h = hash(
+                (cx as i64).rem_euclid(7) as u32,
+                (cy as i64).rem_euclid(22) as u32,
+                32,
+            );
+            let (px, py) = (0.3 + 0.4 * unit(h), 0.3 + 0.4 * unit(h.rotate_left(11)));
+            let half = 0.15 + 0.3 * unit(h.rotate_left(22));
+            let dx = ((gx - cx) - px) / half;
+            let dy = ((gy - cy) - py) / 0.09;
+            let mark = if unit(h.rotate_left(5)) < 0.75 {
+                1.0 - smoothstep(0.6, 1.0, dx * dx + dy * dy)
+            } else {
+                0.0
+            };
+            let height = 0.55 + 0.25 * mottle - 0.35 * mark;
+            let skin = mix(c, grey(1.25), 0.3 * mottle);
+            let shade = mix(skin, [c[0] * 0.18, c[1] * 0.15, c[2] * 0.13], mark);
+            Sample {
+                height,
+                shade,
+                roughness: 0.55 + 0.3 * mark + 0.1 * mottle,
+            }
+        }
+        BarkStyle::Fibrous => {
+            // Willow: interlaced fibrous ridges, long diamond-shaped furrows and fine
+            // vertical fibres.
+            let wu = u + 0.06 * (value(u, v, 3, 2, 41) - 0.5) + 0.03 * (v * TAU * 2.0).sin();
+            let (f1, f2, id) = cellular(wu, v, 11, 2, 42);
+            let ridge = smoothstep(0.0, 0.35, f2 - f1);
+            let fibres = fractal(u + 0.01 * (v * 40.0).sin(), v, 96, 4, 3, 43);
+            let height = 0.55 * ridge + 0.35 * fibres * (0.4 + 0.6 * ridge) + 0.1 * unit(id);
+            let shade = mix(
+                [0.0; 3],
+                mix(c, grey(1.4), 0.25 * fibres),
+                0.3 + 0.8 * height,
+            );
+            Sample {
+                height,
+                shade,
+                roughness: 0.93 - 0.1 * height,
+            }
+        }
+    }
+}
+
+/// Normal-map strength of each style at relief 1: the height change across one texel of a
+/// 512 px map is multiplied by this (and scaled with the map size).
+fn relief(style: BarkStyle) -> f32 {
+    match style {
+        BarkStyle::Furrowed => 7.0,
+        BarkStyle::Plated => 6.0,
+        BarkStyle::Smooth => 2.0,
+        BarkStyle::Fibrous => 5.0,
+    }
+}
+
+/// The bark set of `params`: every pixel's sample in parallel rows, the normal map from the
+/// height field (wrapping, as the texture tiles), the three maps encoded in parallel.
+pub fn bark_set(params: &BarkParams) -> Result<TextureSet, TreeError> {
+    let n = params.size.clamp(16, 4096) as usize;
+    let mut heights = vec![0.0f32; n * n];
+    let mut color = vec![0u8; n * n * 3];
+    let mut rough = vec![0u8; n * n * 3];
+    heights
+        .par_chunks_mut(n)
+        .zip(color.par_chunks_mut(n * 3))
+        .zip(rough.par_chunks_mut(n * 3))
+        .enumerate()
+        .for_each(|(y, ((h, c), r))| {
+            let v = (y as f32 + 0.5) / n as f32;
+            for x in 0..n {
+                let u = (x as f32 + 0.5) / n as f32;
+                let s = bark_sample(params.style, params.color, u, v);
+                h[x] = s.height;
+                for i in 0..3 {
+                    c[x * 3 + i] = linear_to_srgb8(s.shade[i]);
+                }
+                r[x * 3 + 1] = (s.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+            }
+        });
+    let strength = relief(params.style) * params.depth * n as f32 / 512.0;
+    let normal = normal_map(&heights, n, strength, true);
+    encode_set("bark", n as u32, (color, 3), normal, rough)
+}
+
+/// A tangent-space normal map of an `n x n` height field: central differences (wrapping
+/// around the edges when `wrap`, else clamped), `strength` times the height change per texel.
+fn normal_map(h: &[f32], n: usize, strength: f32, wrap: bool) -> Vec<u8> {
+    let mut out = vec![0u8; n * n * 3];
+    let at = |x: isize, y: isize| -> f32 {
+        let (x, y) = if wrap {
+            (x.rem_euclid(n as isize), y.rem_euclid(n as isize))
+        } else {
+            (x.clamp(0, n as isize - 1), y.clamp(0, n as isize - 1))
+        };
+        h[y as usize * n + x as usize]
+    };
+    out.par_chunks_mut(n * 3).enumerate().for_each(|(y, row)| {
+        let y = y as isize;
+        for x in 0..n {
+            let xi = x as isize;
+            let dx = (at(xi + 1, y) - at(xi - 1, y)) * 0.5 * strength;
+            // Image rows grow downwards; +Y of the normal map points up the image.
+            let dy = (at(xi, y - 1) - at(xi, y + 1)) * 0.5 * strength;
+            let len = (dx * dx + dy * dy + 1.0).sqrt();
+            let nrm = [-dx / len, -dy / len, 1.0 / len];
+            for i in 0..3 {
+                row[x * 3 + i] = ((nrm[i] * 0.5 + 0.5) * 255.0 + 0.5) as u8;
+            }
+        }
+    });
     out
 }
 
-/// Bilinear read of a `g x g` periodic grid at `(u, v)` in `[0, 1)`.
-fn wrapped(grid: &[f32], g: usize, u: f32, v: f32) -> f32 {
-    let (x, y) = (u * g as f32, v * g as f32);
-    let (x0, y0) = (x.floor() as usize % g, y.floor() as usize % g);
-    let (x1, y1) = ((x0 + 1) % g, (y0 + 1) % g);
-    let (fx, fy) = (x.fract(), y.fract());
-    let at = |x: usize, y: usize| grid[y * g + x];
-    let top = at(x0, y0) + (at(x1, y0) - at(x0, y0)) * fx;
-    let bottom = at(x0, y1) + (at(x1, y1) - at(x0, y1)) * fx;
-    top + (bottom - top) * fy
-}
-
-/// The grey bark pattern, `BARK_SIZE` squared values around 1, computed once per process.
-/// Noise is sampled on coarse periodic grids and interpolated (a few thousand noise calls
-/// instead of one per pixel and octave), plus a per-pixel hashed grain.
-fn bark_shade() -> &'static [f32] {
-    static SHADE: OnceLock<Vec<f32>> = OnceLock::new();
-    SHADE.get_or_init(|| {
-        let n = BARK_SIZE as usize;
-        let perlin = Perlin::new(7);
-        // Around the branch the pattern changes fast, along it slowly: furrows.
-        let furrows = torus_grid(&perlin, 32, 2.2, 0.6);
-        let plates = torus_grid(&perlin, 48, 5.0, 3.0);
-        let fine = torus_grid(&perlin, 64, 10.0, 8.0);
-        let mut out = Vec::with_capacity(n * n);
-        for y in 0..n {
-            let v = y as f32 / n as f32;
-            for x in 0..n {
-                let u = x as f32 / n as f32;
-                let furrow = (1.0 - wrapped(&furrows, 32, u, v).abs() * 2.0).max(0.0);
-                let detail = wrapped(&plates, 48, u, v) * 0.5 + wrapped(&fine, 64, u, v) * 0.25;
-                let hash = ((x as u32).wrapping_mul(0x9e37_79b1)
-                    ^ (y as u32).wrapping_mul(0x85eb_ca77))
-                .wrapping_mul(0xc2b2_ae3d);
-                let grain = (hash >> 24) as f32 / 255.0 - 0.5;
-                out.push(
-                    (0.62 + 0.38 * furrow.powf(0.7) + 0.18 * detail + 0.06 * grain)
-                        .clamp(0.15, 1.3),
-                );
-            }
-        }
-        out
+/// Encodes the three maps of a set in parallel, named `<what> color`, `<what> normal` and
+/// `<what> roughness`.
+fn encode_set(
+    what: &str,
+    n: u32,
+    color: (Vec<u8>, u8),
+    normal: Vec<u8>,
+    rough: Vec<u8>,
+) -> Result<TextureSet, TreeError> {
+    let jobs = [
+        (format!("{what} color"), color.1, color.0),
+        (format!("{what} normal"), 3, normal),
+        (format!("{what} roughness"), 3, rough),
+    ];
+    let mut maps = jobs
+        .into_par_iter()
+        .map(|(name, channels, px)| {
+            Texture::from_pixels_fast(name, n, n, channels, &px).map(Arc::new)
+        })
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter();
+    let mut next = || {
+        maps.next()
+            .ok_or_else(|| TreeError::Generated("a map is missing".into()))
+    };
+    Ok(TextureSet {
+        color: next()?,
+        normal: next()?,
+        roughness: next()?,
     })
 }
 
-/// Half-width of the leaf blade at `t` along it (0 at the stalk end of the blade, 1 at the
-/// tip), in texture units.
-fn blade_half_width(t: f64) -> f64 {
+// ---------------------------------------------------------------------------------------
+// Leaves.
+
+/// What a leaf texture holds at one pixel: inside the silhouette or not, a height (veins
+/// sunk, the blade domed) and a shade (veins lighter).
+struct LeafPixel {
+    inside: bool,
+    height: f32,
+    shade: f32,
+    roughness: f32,
+}
+
+/// Half-width of an ovate blade at `t` along it (0 at the stalk end, 1 at the tip).
+fn ovate(t: f32) -> f32 {
     if !(0.0..=1.0).contains(&t) {
         return 0.0;
     }
-    0.44 * (std::f64::consts::PI * t.powf(0.8)).sin().powf(0.85) * (1.0 - 0.25 * t)
+    0.44 * (PI * t.powf(0.8)).sin().max(0.0).powf(0.85) * (1.0 - 0.25 * t)
 }
 
-/// The leaf texture: a light leaf silhouette (stalk at `v = 0`, tip at `v = 1`) with a
-/// midrib and veins, alpha 255 inside and 0 outside for alpha masking. It is nearly white so
-/// that each leaf's vertex colour gives its hue.
-pub fn leaf_texture() -> Result<Arc<Texture>, TreeError> {
-    cached(Key::Leaf, || {
-        let n = LEAF_SIZE as usize;
-        let perlin = Perlin::new(11);
-        let mottles: Vec<f32> = (0..16 * 16)
-            .map(|i| {
-                perlin.get([(i % 16) as f64 * 9.0 / 16.0, (i / 16) as f64 * 9.0 / 16.0]) as f32
-            })
-            .collect();
-        let mut rgba = Vec::with_capacity(n * n * 4);
-        for y in 0..n {
-            let v = (y as f64 + 0.5) / n as f64;
-            let t = (v - 0.12) / 0.86;
-            let edge = blade_half_width(t) * (1.0 + 0.06 * perlin.get([v * 40.0, 0.5]));
-            for x in 0..n {
-                let u = (x as f64 + 0.5) / n as f64;
-                let across = (u - 0.5).abs();
-                let stalk = v < 0.14 && across < 0.018;
-                let inside = stalk || across < edge;
-                let mottle = f64::from(wrapped(&mottles, 16, u as f32, v as f32)) * 0.06;
-                let midrib = across < 0.012;
-                let vein = ((v - across * 0.9) * 9.0).fract() < 0.07 && across < edge * 0.85;
-                let shade = if midrib || stalk {
+/// Half-width of a blade of `shape` at `t` along it, for the shapes with a midrib.
+fn blade_half_width(shape: LeafShape, t: f32) -> f32 {
+    if !(0.0..=1.0).contains(&t) {
+        return 0.0;
+    }
+    match shape {
+        LeafShape::Lobed => {
+            // Oak: four to five rounded lobes a side, deep sinuses between them.
+            let outline = 0.42 * (PI * t.powf(0.85)).sin().max(0.0).powf(0.6) * (1.0 - 0.15 * t);
+            let lobes = 0.5 + 0.5 * (TAU * 4.5 * t - 0.6).cos();
+            outline * (0.55 + 0.45 * lobes.sqrt())
+        }
+        LeafShape::Lanceolate => 0.14 * (PI * t.powf(0.75)).sin().max(0.0).powf(0.9),
+        _ => ovate(t),
+    }
+}
+
+/// The leaf pixel at `(x, v)`: `x` across the card in `[-0.5, 0.5]`, `v` from the stalk (0)
+/// to the far edge (1).
+fn leaf_pixel(shape: LeafShape, x: f32, v: f32) -> LeafPixel {
+    let outside = LeafPixel {
+        inside: false,
+        height: 0.0,
+        shade: 1.0,
+        roughness: 0.6,
+    };
+    let stalk = v < 0.13 && x.abs() < 0.014;
+    match shape {
+        LeafShape::Needles => needle_pixel(x, v),
+        LeafShape::Palmate => {
+            // Maple: five pointed lobes around the top of the stalk, main veins radiating
+            // to their tips.
+            let (cx, cy) = (0.0, 0.4);
+            let (dx, dy) = (x, v - cy);
+            let r = (dx * dx + dy * dy).sqrt();
+            let phi = dy.atan2(dx); // pi/2 is up the card.
+            let lobe_axes = [PI / 2.0, PI / 2.0 - 0.95, PI / 2.0 + 0.95, -0.25, PI + 0.25];
+            let lobe_len = [0.58, 0.5, 0.5, 0.36, 0.36];
+            let (mut reach, mut vein) = (0.0f32, f32::MAX);
+            for (axis, len) in lobe_axes.iter().zip(lobe_len) {
+                let off = angle_diff(phi, *axis);
+                let lobe = len * (1.0 - (off.abs() / 0.62).min(1.0)).powf(0.8);
+                let teeth = 1.0 - 0.06 * (0.5 + 0.5 * (off * 28.0).cos());
+                reach = reach.max(lobe * teeth);
+                vein = vein.min(off.abs() * r);
+            }
+            let reach = reach.max(0.12);
+            let _ = cx;
+            let inside = stalk || (r < reach && v > 0.12);
+            if !inside {
+                return outside;
+            }
+            let veins = 1.0 - smoothstep(0.004, 0.012, vein);
+            let side = side_veins(dx.abs() + 0.3 * r, r, 0.09);
+            let edge = r / reach;
+            LeafPixel {
+                inside,
+                height: 0.6 * (1.0 - edge * edge) - 0.5 * veins - 0.2 * side,
+                shade: if stalk {
                     1.0
-                } else if vein {
-                    0.93
                 } else {
-                    0.8 + mottle - 0.12 * (across / edge.max(1e-3))
-                };
-                let g = linear_to_srgb8(shade.clamp(0.0, 1.0) as f32);
-                rgba.extend_from_slice(&[g, g, g, if inside { 255 } else { 0 }]);
+                    0.82 + 0.16 * veins + 0.05 * side - 0.1 * edge
+                },
+                roughness: 0.5 + 0.2 * veins,
             }
         }
-        Ok(Texture::from_rgba("leaf", LEAF_SIZE, LEAF_SIZE, &rgba)?)
+        _ => {
+            let t = (v - 0.12) / 0.86;
+            let w = blade_half_width(shape, t);
+            let inside = stalk || x.abs() < w;
+            if !inside {
+                return outside;
+            }
+            let across = x.abs() / w.max(1e-3);
+            let midrib = 1.0 - smoothstep(0.006, 0.014, x.abs());
+            let slope = if shape == LeafShape::Lanceolate {
+                3.0
+            } else {
+                0.9
+            };
+            let spacing = if shape == LeafShape::Lanceolate {
+                0.06
+            } else {
+                0.1
+            };
+            let side =
+                side_veins(v - x.abs() * slope, x.abs(), spacing) * smoothstep(1.0, 0.8, across);
+            let veins = midrib.max(side);
+            LeafPixel {
+                inside,
+                height: 0.5 * (1.0 - across * across) - 0.5 * midrib - 0.3 * side,
+                shade: if stalk {
+                    1.0
+                } else {
+                    0.8 + 0.18 * veins - 0.1 * across
+                },
+                roughness: 0.5 + 0.2 * veins,
+            }
+        }
+    }
+}
+
+/// Secondary veins: thin lines where `along` is a multiple of `spacing`, fading with
+/// distance `out` from the midrib.
+fn side_veins(along: f32, out: f32, spacing: f32) -> f32 {
+    let f = (along / spacing).rem_euclid(1.0);
+    let d = f.min(1.0 - f) * spacing;
+    (1.0 - smoothstep(0.002, 0.006, d)) * (1.0 - smoothstep(0.25, 0.5, out))
+}
+
+/// `a - b` wrapped to `[-pi, pi]`.
+fn angle_diff(a: f32, b: f32) -> f32 {
+    (a - b + PI).rem_euclid(TAU) - PI
+}
+
+/// A needle spray: a twig up the middle of the card with needles leaving it on both sides
+/// at about 50 degrees towards the tip, each a little different in angle and length.
+fn needle_pixel(x: f32, v: f32) -> LeafPixel {
+    let twig = x.abs() < 0.012 * (1.2 - v) && v < 0.97;
+    if twig {
+        return LeafPixel {
+            inside: true,
+            height: 0.8,
+            shade: 0.75,
+            roughness: 0.8,
+        };
+    }
+    let spacing = 0.018;
+    let side = if x < 0.0 { 1u32 } else { 0 };
+    let ax = x.abs();
+    let mut best: Option<LeafPixel> = None;
+    // The needle through this pixel starts at t0 = v - |x| cot(angle); look at the nearest
+    // starts, each needle with its own angle and length.
+    let base = 50f32.to_radians();
+    let guess = ((v - ax / base.tan()) / spacing).round() as i64;
+    for i in guess - 2..=guess + 2 {
+        if !(1..=52).contains(&i) {
+            continue;
+        }
+        let h = hash(i as u32, side, 51);
+        let angle = base + (unit(h) - 0.5) * 0.35;
+        let t0 = i as f32 * spacing;
+        let taper = 1.0 - t0;
+        let len = (0.34 + 0.12 * unit(h.rotate_left(9))) * (0.45 + 0.55 * taper.max(0.0));
+        let (dx, dy) = (angle.sin(), angle.cos());
+        let (px, py) = (ax, v - t0);
+        let along = px * dx + py * dy;
+        if along < 0.0 || along > len {
+            continue;
+        }
+        let across = (px * dy - py * dx).abs();
+        let half = 0.0055 * (1.0 - 0.7 * along / len);
+        if across < half {
+            let k = across / half;
+            best = Some(LeafPixel {
+                inside: true,
+                height: 0.6 * (1.0 - k * k),
+                shade: 0.85 + 0.12 * (1.0 - k) + 0.03 * unit(h),
+                roughness: 0.45,
+            });
+            break;
+        }
+    }
+    best.unwrap_or(LeafPixel {
+        inside: false,
+        height: 0.0,
+        shade: 1.0,
+        roughness: 0.6,
     })
 }
 
-/// The texture a source gives: the procedural one from `procedural`, a file read and
-/// re-encoded as PNG, or the image as it is.
-pub fn resolve_texture(
-    source: &TextureSource,
-    name: &str,
-    procedural: impl FnOnce() -> Result<Arc<Texture>, TreeError>,
-) -> Result<Arc<Texture>, TreeError> {
-    match source {
-        TextureSource::Procedural => procedural(),
-        TextureSource::Image(t) => Ok(t.clone()),
-        TextureSource::File(path) => load_png(path, name),
-    }
+/// The leaf set of `params`: a near-white silhouette (each leaf's vertex colour gives the
+/// hue) with lighter veins, alpha 255 inside and 0 outside for masking; the normal map of
+/// the domed blade and its sunken veins; roughness.
+pub fn leaf_set(params: &LeafParams) -> Result<TextureSet, TreeError> {
+    let n = params.size.clamp(16, 4096) as usize;
+    let mut heights = vec![0.0f32; n * n];
+    let mut color = vec![0u8; n * n * 4];
+    let mut rough = vec![0u8; n * n * 3];
+    heights
+        .par_chunks_mut(n)
+        .zip(color.par_chunks_mut(n * 4))
+        .zip(rough.par_chunks_mut(n * 3))
+        .enumerate()
+        .for_each(|(y, ((h, c), r))| {
+            let v = (y as f32 + 0.5) / n as f32;
+            for xi in 0..n {
+                let u = (xi as f32 + 0.5) / n as f32;
+                let p = leaf_pixel(params.shape, u - 0.5, v);
+                let mottle = 0.05 * (fractal(u, v, 8, 8, 2, 61) - 0.5);
+                let g = linear_to_srgb8(p.shade + mottle);
+                c[xi * 4..xi * 4 + 4].copy_from_slice(&[g, g, g, if p.inside { 255 } else { 0 }]);
+                h[xi] = p.height;
+                r[xi * 3 + 1] = (p.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+            }
+        });
+    let normal = normal_map(&heights, n, 3.0 * n as f32 / 512.0, false);
+    encode_set("leaf", n as u32, (color, 4), normal, rough)
 }
+
+// ---------------------------------------------------------------------------------------
+// Files.
 
 /// Reads an image file (PNG, or anything `image` decodes) as a texture called `name`.
 pub fn load_png(path: &Path, name: &str) -> Result<Arc<Texture>, TreeError> {
@@ -197,68 +672,237 @@ pub fn load_png(path: &Path, name: &str) -> Result<Arc<Texture>, TreeError> {
         })
 }
 
-/// Linear [0, 1] to an sRGB byte.
+/// Linear [0, 1] to an sRGB byte, from a table of 4096 steps (a `powf` per channel and
+/// pixel would cost more than the noise).
 fn linear_to_srgb8(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 {
-        c * 12.92
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
+    static TABLE: OnceLock<Vec<u8>> = OnceLock::new();
+    let table = TABLE.get_or_init(|| {
+        (0..=4096)
+            .map(|i| {
+                let c = i as f32 / 4096.0;
+                let s = if c <= 0.003_130_8 {
+                    c * 12.92
+                } else {
+                    1.055 * c.powf(1.0 / 2.4) - 0.055
+                };
+                (s * 255.0 + 0.5) as u8
+            })
+            .collect()
+    });
+    table[(c.clamp(0.0, 1.0) * 4096.0 + 0.5) as usize]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn rgba(t: &Texture) -> image::RgbaImage {
+    fn decode(t: &Texture) -> image::RgbaImage {
         image::load_from_memory(&t.png).expect("decodes").to_rgba8()
     }
 
-    #[test]
-    fn bark_is_cached_and_deterministic() {
-        let a = bark_texture([0.2, 0.1, 0.05, 1.0]).expect("bark");
-        let b = bark_texture([0.2, 0.1, 0.05, 1.0]).expect("bark");
-        assert!(Arc::ptr_eq(&a, &b));
-        assert_eq!((a.width, a.height), (BARK_SIZE, BARK_SIZE));
-        let c = bark_texture([0.3, 0.1, 0.05, 1.0]).expect("bark");
-        assert_ne!(a.png, c.png);
-        let img = rgba(&a);
-        assert!(img.pixels().all(|p| p[3] == 255));
-        // It tiles: the first and last columns are neighbours on the torus, close in value.
-        let (w, h) = img.dimensions();
-        for y in 0..h {
-            let (l, r) = (
-                img.get_pixel(0, y)[0] as i32,
-                img.get_pixel(w - 1, y)[0] as i32,
-            );
-            assert!((l - r).abs() < 40, "row {y}: {l} vs {r}");
+    fn bark(style: BarkStyle, size: u32) -> BarkParams {
+        BarkParams {
+            style,
+            color: [0.2, 0.12, 0.07, 1.0],
+            size,
+            depth: 1.0,
         }
     }
 
     #[test]
-    fn leaf_silhouette_is_a_mask() {
-        let t = leaf_texture().expect("leaf");
-        assert_eq!((t.width, t.height), (LEAF_SIZE, LEAF_SIZE));
-        let img = rgba(&t);
-        let n = LEAF_SIZE;
-        assert_eq!(
-            img.get_pixel(n / 2, n / 2)[3],
-            255,
-            "the blade's middle is opaque"
-        );
-        assert_eq!(img.get_pixel(n / 2, 2)[3], 255, "the stalk is opaque");
-        assert_eq!(img.get_pixel(2, n / 2)[3], 0, "the sides are transparent");
-        assert_eq!(img.get_pixel(n - 3, n - 3)[3], 0);
+    fn sets_are_made_once_per_parameter_set_across_threads() {
+        let cache = TextureCache::default();
+        let params = [
+            bark(BarkStyle::Furrowed, 32),
+            bark(BarkStyle::Plated, 32),
+            BarkParams {
+                color: [0.3, 0.3, 0.3, 1.0],
+                ..bark(BarkStyle::Furrowed, 32)
+            },
+        ];
+        let leaf = LeafParams {
+            shape: LeafShape::Lobed,
+            size: 32,
+        };
+        // 24 variants, as a forest builds them: in parallel, asking for the same sets.
+        let sets: Vec<Vec<Arc<TextureSet>>> = (0..24)
+            .into_par_iter()
+            .map(|i| {
+                vec![
+                    cache.bark(&params[i % 3]).expect("bark"),
+                    cache.leaf(&leaf).expect("leaf"),
+                ]
+            })
+            .collect();
+        assert_eq!(cache.generated(), 4, "three bark sets and one leaf set");
+        for (i, s) in sets.iter().enumerate() {
+            assert!(
+                Arc::ptr_eq(&s[0], &sets[i % 3][0]),
+                "variant {i} shares its bark"
+            );
+            assert!(Arc::ptr_eq(&s[1], &sets[0][1]));
+        }
         assert!(
-            img.pixels().all(|p| p[3] == 0 || p[3] == 255),
-            "a binary mask"
+            !Arc::ptr_eq(&sets[0][0], &sets[2][0]),
+            "another colour, another set"
         );
-        assert_eq!(blade_half_width(-0.1), 0.0);
-        assert_eq!(blade_half_width(0.0), 0.0);
-        assert!(blade_half_width(0.5) > 0.3);
-        assert!(blade_half_width(1.0) < 0.01);
+        // A new cache makes the same bytes: the sets depend on their parameters only.
+        let again = TextureCache::default().bark(&params[1]).expect("bark");
+        assert_eq!(again.color.png, sets[1][0].color.png);
+        assert_eq!(again.normal.png, sets[1][0].normal.png);
+    }
+
+    #[test]
+    fn every_bark_style_has_relief_and_tiles() {
+        let mut colors = Vec::new();
+        for style in [
+            BarkStyle::Furrowed,
+            BarkStyle::Plated,
+            BarkStyle::Smooth,
+            BarkStyle::Fibrous,
+        ] {
+            let set = bark_set(&bark(style, 64)).expect("bark");
+            for t in [&set.color, &set.normal, &set.roughness] {
+                assert_eq!((t.width, t.height), (64, 64));
+            }
+            let relief = bark_set(&BarkParams {
+                depth: 4.0,
+                ..bark(style, 64)
+            })
+            .expect("bark");
+            let normal = decode(&relief.normal);
+            // The normal map is not flat, and it points out of the surface everywhere.
+            let tilted = normal
+                .pixels()
+                .filter(|p| (p[0] as i32 - 128).abs() > 12 || (p[1] as i32 - 128).abs() > 12)
+                .count();
+            assert!(tilted > 64 * 64 / 25, "{style:?}: {tilted} tilted texels");
+            assert!(normal.pixels().all(|p| p[2] >= 128), "{style:?}");
+            // Tiling: the last column (row) continues into the first as any column does into
+            // the next.
+            let img = decode(&set.color);
+            let g = |x: u32, y: u32| i32::from(img.get_pixel(x % 64, y % 64)[1]);
+            for (name, step) in [("around", (1, 0)), ("along", (0, 1))] {
+                let diff = |x: u32, y: u32| (g(x, y) - g(x + step.0, y + step.1)).abs();
+                let seam: i32 = (0..64)
+                    .map(|k| {
+                        if step.0 == 1 {
+                            diff(63, k)
+                        } else {
+                            diff(k, 63)
+                        }
+                    })
+                    .sum();
+                let inner: i32 = (0..63)
+                    .map(|i| {
+                        (0..64)
+                            .map(|k| if step.0 == 1 { diff(i, k) } else { diff(k, i) })
+                            .sum::<i32>()
+                    })
+                    .sum::<i32>()
+                    / 63;
+                assert!(
+                    seam <= 2 * inner + 64,
+                    "{style:?} {name}: seam {seam}, inside {inner}"
+                );
+            }
+            let rough = decode(&set.roughness);
+            assert!(
+                rough.pixels().all(|p| p[1] > 100 && p[2] == 0),
+                "{style:?}: rough, not metal"
+            );
+            colors.push(set.color.png.clone());
+        }
+        colors.dedup();
+        assert_eq!(colors.len(), 4, "four different patterns");
+    }
+
+    #[test]
+    fn furrows_run_along_the_branch() {
+        // Oak furrows are vertical: heights change faster around the branch (x) than along
+        // it (y).
+        let set = bark_set(&bark(BarkStyle::Furrowed, 128)).expect("bark");
+        let img = decode(&set.color);
+        let (mut dx, mut dy) = (0i64, 0i64);
+        for y in 0..127 {
+            for x in 0..127 {
+                let g = |x, y| i64::from(img.get_pixel(x, y)[1]);
+                dx += (g(x + 1, y) - g(x, y)).abs();
+                dy += (g(x, y + 1) - g(x, y)).abs();
+            }
+        }
+        assert!(dx > dy * 3 / 2, "around {dx}, along {dy}");
+    }
+
+    #[test]
+    fn leaf_silhouettes_are_masks_of_their_shape() {
+        let mut opaque = Vec::new();
+        for shape in [
+            LeafShape::Ovate,
+            LeafShape::Lobed,
+            LeafShape::Lanceolate,
+            LeafShape::Palmate,
+            LeafShape::Needles,
+        ] {
+            let set = leaf_set(&LeafParams { shape, size: 128 }).expect("leaf");
+            let img = decode(&set.color);
+            assert!(
+                img.pixels().all(|p| p[3] == 0 || p[3] == 255),
+                "{shape:?}: a binary mask"
+            );
+            assert_eq!(
+                img.get_pixel(64, 4)[3],
+                255,
+                "{shape:?}: the stalk is opaque"
+            );
+            assert_eq!(img.get_pixel(1, 1)[3], 0, "{shape:?}: the corner is clear");
+            let n = img.pixels().filter(|p| p[3] == 255).count();
+            opaque.push(n);
+            let normal = decode(&set.normal);
+            assert!(
+                normal.pixels().any(|p| (p[0] as i32 - 128).abs() > 20),
+                "{shape:?}: veins and dome in the normal map"
+            );
+        }
+        // Willow leaves are narrow, oak leaves lobed (less than the ovate blade), needles thin.
+        assert!(opaque[2] * 2 < opaque[0], "{opaque:?}");
+        assert!(opaque[1] < opaque[0], "{opaque:?}");
+        assert!(opaque[4] < opaque[0], "{opaque:?}");
+        // The oak outline goes in and out: the half-width along the blade has several
+        // local minima (the sinuses).
+        let w: Vec<f32> = (1..100)
+            .map(|i| blade_half_width(LeafShape::Lobed, i as f32 / 100.0))
+            .collect();
+        let sinuses = w.windows(3).filter(|s| s[1] < s[0] && s[1] < s[2]).count();
+        assert!(sinuses >= 3, "{sinuses} sinuses");
+        assert_eq!(blade_half_width(LeafShape::Ovate, -0.1), 0.0);
+        assert!(blade_half_width(LeafShape::Ovate, 1.0) < 0.01);
+    }
+
+    #[test]
+    fn veins_are_lighter_in_colour() {
+        let set = leaf_set(&LeafParams {
+            shape: LeafShape::Ovate,
+            size: 256,
+        })
+        .expect("leaf");
+        let img = decode(&set.color);
+        // Along the midrib vs a little beside it.
+        let (mut rib, mut blade) = (0u32, 0u32);
+        for y in 100..200 {
+            rib += u32::from(img.get_pixel(128, y)[0]);
+            blade += u32::from(img.get_pixel(140, y)[0]);
+        }
+        assert!(rib > blade, "midrib {rib} vs blade {blade}");
+    }
+
+    #[test]
+    fn wrap_is_the_euclidean_remainder() {
+        for n in [1u32, 2, 7, 22] {
+            for i in -100i64..100 {
+                assert_eq!(wrap(i, n), i.rem_euclid(i64::from(n)) as u32, "{i} mod {n}");
+            }
+        }
     }
 
     #[test]
