@@ -432,8 +432,9 @@ fn write_model(w: &mut Writer, model: &Model) {
         stats,
         environment,
     } = model;
-    // Shared parts once, in tables: textures, materials, skeletons.
-    let mut textures = Vec::new();
+    // Shared parts once, in tables: textures, materials, skeletons. The materials are
+    // written first into a buffer of their own, which collects the textures they use; the
+    // table of textures goes before them.
     let mut materials = Vec::new();
     let mut skeletons = Vec::new();
     for m in meshes {
@@ -442,10 +443,33 @@ fn write_model(w: &mut Writer, model: &Model) {
             shared(&mut skeletons, s);
         }
     }
+    let mut textures = Vec::new();
+    let mut table = Writer::default();
+    table.len(materials.len());
     for m in &materials {
-        if let Some(t) = &m.texture {
-            shared(&mut textures, t);
+        let Material {
+            name,
+            base_color,
+            texture,
+            alpha,
+            double_sided,
+            metallic,
+            roughness,
+        } = &**m;
+        table.str(name);
+        table.f32s(base_color);
+        write_texture_ref(&mut table, &mut textures, texture.as_ref());
+        match alpha {
+            AlphaMode::Opaque => table.u8(0),
+            AlphaMode::Mask(cutoff) => {
+                table.u8(1);
+                table.f32(*cutoff);
+            }
+            AlphaMode::Blend => table.u8(2),
         }
+        table.u8(u8::from(*double_sided));
+        table.f32(*metallic);
+        table.f32(*roughness);
     }
     if let Some(t) = environment {
         shared(&mut textures, t);
@@ -463,32 +487,7 @@ fn write_model(w: &mut Writer, model: &Model) {
         w.u32(*height);
         w.bytes(png);
     }
-    w.len(materials.len());
-    for m in &materials {
-        let Material {
-            name,
-            base_color,
-            texture,
-            alpha,
-            double_sided,
-            metallic,
-            roughness,
-        } = &**m;
-        w.str(name);
-        w.f32s(base_color);
-        write_texture_ref(w, &mut textures, texture.as_ref());
-        match alpha {
-            AlphaMode::Opaque => w.u8(0),
-            AlphaMode::Mask(cutoff) => {
-                w.u8(1);
-                w.f32(*cutoff);
-            }
-            AlphaMode::Blend => w.u8(2),
-        }
-        w.u8(u8::from(*double_sided));
-        w.f32(*metallic);
-        w.f32(*roughness);
-    }
+    w.0.extend_from_slice(&table.0);
     w.len(skeletons.len());
     for s in &skeletons {
         let Skeleton {
