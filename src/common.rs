@@ -35,12 +35,17 @@ fn parse_set(s: &str) -> Result<(String, String), String> {
 impl ScriptArgs {
     /// The engine with these limits.
     pub fn engine(&self) -> anyhow::Result<Engine> {
+        self.engine_with_forest(pge_forest::ForestPlugin::default())
+    }
+
+    /// The engine with these limits and `forest` as its forest plugin.
+    pub fn engine_with_forest(&self, forest: pge_forest::ForestPlugin) -> anyhow::Result<Engine> {
         let time = if self.time_limit > 0.0 && self.time_limit.is_finite() {
             Some(Duration::from_secs_f64(self.time_limit))
         } else {
             anyhow::bail!("--time-limit must be a positive number of seconds");
         };
-        Ok(pge::default_engine()
+        Ok(pge::engine_with_forest(forest)
             .time_limit(time)
             .memory_limit_mib(self.memory_limit)
             .build()?)

@@ -53,6 +53,13 @@ fn find_library(start: &Path) -> Option<PathBuf> {
 /// An engine builder with every PGE plugin and the script library ([`library_folder`]).
 #[must_use]
 pub fn default_engine() -> pge_engine::EngineBuilder {
+    engine_with_forest(pge_forest::ForestPlugin::default())
+}
+
+/// [`default_engine`] with `forest` as its forest plugin (one with a variant cache, for
+/// `pge run --variant-cache`).
+#[must_use]
+pub fn engine_with_forest(forest: pge_forest::ForestPlugin) -> pge_engine::EngineBuilder {
     let builder = match library_folder() {
         Some(folder) => pge_engine::Engine::builder().library(folder),
         None => pge_engine::Engine::builder(),
@@ -66,7 +73,7 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)
         .plugin(pge_canvas::CanvasPlugin)
-        .plugin(pge_forest::ForestPlugin)
+        .plugin(forest)
         .plugin(pge_lod::LodPlugin)
 }
 

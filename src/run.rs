@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pge_engine::export::Instancing;
 use pge_engine::mlua::{ObjectLike, Value};
 use pge_engine::{Generated, Session};
+use pge_forest::{ForestPlugin, VariantCache};
 
 use crate::common::ScriptArgs;
 use crate::output::{export_meta, write_model};
@@ -46,6 +47,10 @@ pub struct RunArgs {
     /// or nodes (one node per instance).
     #[arg(long, value_enum, default_value_t = InstancingArg::Gpu)]
     pub instancing: InstancingArg,
+    /// Keep the variants a forest's species scripts grow in DIR and read them back on the
+    /// next run (the tiles of a world grow each variant once); the output is the same.
+    #[arg(long, value_name = "DIR")]
+    pub variant_cache: Option<PathBuf>,
 }
 
 /// `--instancing`.
@@ -155,7 +160,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         }
         return crate::stages::run_stages(args, stages, &output);
     }
-    let engine = args.script.engine()?;
+    let forest = match &args.variant_cache {
+        Some(dir) => ForestPlugin::with_variant_cache(VariantCache::new(dir)),
+        None => ForestPlugin::default(),
+    };
+    let engine = args.script.engine_with_forest(forest)?;
     let session = engine.session(args.script.session_options(args.steps))?;
     let bar = progress_bar(args.quiet);
     bar.set_message(args.script.script.display().to_string());

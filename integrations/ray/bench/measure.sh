@@ -2,8 +2,10 @@
 # The measurements of integrations/ray/README.md, in one run on one machine:
 #   A. `pge run` of the whole forest (every core);
 #   B. its tiles by `pge run --tile I,J --threads 1`, two at a time, without Ray;
+#   B'. the same with a variant cache (--variant-cache, cold: a new folder);
 #   C. the same tiles through pge-world on a local Ray cluster of two one-CPU nodes
-#      (a head and one worker node on 127.0.0.1), then `pge merge`.
+#      (a head and one worker node on 127.0.0.1), with a cold variant cache, and
+#   C'. again without the variant cache (--no-variant-cache), then (D) `pge merge`.
 # Usage (from the repository root, after .ci/ray or with ray and pge-world installed):
 #   integrations/ray/bench/measure.sh [SCRIPT] [WORKDIR]
 set -euo pipefail
@@ -43,6 +45,17 @@ t1=$(now)
 local_tiles=$(echo "$t1 - $t0" | bc)
 echo "B. pge run --tile, 16 tiles two at a time: ${local_tiles}s, $(du -cb "$work"/local/*.glb | tail -1 | cut -f1) bytes"
 
+mkdir -p "$work/cached"
+t0=$(now)
+pge tiles "$script" | grep -o '"i":[0-9]*,"j":[0-9]*' | sed 's/"i":\([0-9]*\),"j":\([0-9]*\)/\1 \2/' |
+  xargs -P 2 -L 1 sh -c 'pge run "$SCRIPT" --tile "$0,$1" --threads 1 -q -o "$WORK/cached/$0_$1.glb" --variant-cache "$WORK/variants-local"'
+t1=$(now)
+cached_tiles=$(echo "$t1 - $t0" | bc)
+echo "B'. the same with a cold --variant-cache: ${cached_tiles}s, $(du -cb "$work"/variants-local | tail -1 | cut -f1) bytes of cache"
+for f in "$work"/local/*.glb; do
+  cmp -s "$f" "$work/cached/$(basename "$f")" || { echo "tile $(basename "$f") differs with the cache"; exit 1; }
+done
+
 temp=$(mktemp -d /tmp/pgerayb.XXXXXX)
 head_port=${free[0]}
 cleanup() { ray stop --force >/dev/null 2>&1 || true; rm -rf "$temp"; }
@@ -55,18 +68,27 @@ ray start --head --node-ip-address=127.0.0.1 --port="$head_port" --num-cpus=1 \
 ray start --address="127.0.0.1:$head_port" --node-ip-address=127.0.0.1 --num-cpus=1 \
   --object-store-memory=600000000 $(ports 1) >/dev/null
 t0=$(now)
-pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port"
+pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port" \
+  --variant-cache "$work/variants-ray"
 t1=$(now)
 ray_time=$(echo "$t1 - $t0" | bc)
-echo "C. pge-world on Ray, 2 nodes x 1 CPU: ${ray_time}s, $(du -cb "$work"/world/tiles/*.glb | tail -1 | cut -f1) bytes"
+echo "C. pge-world on Ray, 2 nodes x 1 CPU, cold variant cache: ${ray_time}s, $(du -cb "$work"/world/tiles/*.glb | tail -1 | cut -f1) bytes"
+t0=$(now)
+pge-world "$script" --out "$work/world-plain" --address "127.0.0.1:$head_port" --no-variant-cache
+t1=$(now)
+plain_time=$(echo "$t1 - $t0" | bc)
+echo "C'. pge-world on Ray, 2 nodes x 1 CPU, no variant cache: ${plain_time}s"
 for f in "$work"/local/*.glb; do
   cmp -s "$f" "$work/world/tiles/$(basename "$f")" || { echo "tile $(basename "$f") differs"; exit 1; }
+  cmp -s "$f" "$work/world-plain/tiles/$(basename "$f")" || { echo "tile $(basename "$f") differs"; exit 1; }
 done
 echo "   every tile equals the local one"
 t0=$(now)
 pge merge "$work/world" -o "$work/merged.glb"
 t1=$(now)
 echo "D. pge merge: $(echo "$t1 - $t0" | bc)s, $(stat -c %s "$work/merged.glb") bytes"
-echo "ratios: Ray / whole = $(echo "scale=2; $ray_time / $whole" | bc)," \
-  "Ray / local tiles = $(echo "scale=2; $ray_time / $local_tiles" | bc)"
+echo "ratios: C / A = $(echo "scale=2; $ray_time / $whole" | bc)," \
+  "C' / A = $(echo "scale=2; $plain_time / $whole" | bc)," \
+  "B' / A = $(echo "scale=2; $cached_tiles / $whole" | bc)," \
+  "B / A = $(echo "scale=2; $local_tiles / $whole" | bc)"
 echo "load after: $(uptime)"

@@ -83,6 +83,19 @@ def parser():
         help="pge's --time-limit for every tile (default: pge's own)",
     )
     p.add_argument(
+        "--variant-cache",
+        default="",
+        metavar="DIR",
+        help="pge's --variant-cache on every worker: the folder where the tiles of a machine "
+        "share the species variants they grow (a path that exists on every machine, local "
+        "or shared); default: pge-variants-USER in each machine's temporary folder",
+    )
+    p.add_argument(
+        "--no-variant-cache",
+        action="store_true",
+        help="every tile grows every variant itself",
+    )
+    p.add_argument(
         "--adopt",
         action="store_true",
         help="take tile files already in DIR/tiles that the manifest does not list (written "
@@ -258,11 +271,14 @@ def grow(args):
         retry_exceptions=False,
         scheduling_strategy="SPREAD",
     )
+    variant_cache = args.variant_cache and os.path.abspath(args.variant_cache)
+    if args.no_variant_cache:
+        variant_cache = None
     pending = {}
     for t in todo:
         ref = task.remote(
             args.pge, script, args.seed, overrides, t["i"], t["j"], args.cpus_per_tile,
-            args.time_limit,
+            args.time_limit, variant_cache,
         )
         pending[ref] = t
     written = dict(done)

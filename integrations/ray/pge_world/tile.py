@@ -4,6 +4,7 @@ This module imports nothing from Ray, so the same function runs in a Ray task, i
 by hand.
 """
 
+import getpass
 import json
 import os
 import shutil
@@ -57,9 +58,24 @@ def pge_args(script, seed, overrides, time_limit=None):
     return args
 
 
-def grow_tile(program, script, seed, overrides, i, j, threads=1, time_limit=None):
+def default_variant_cache():
+    """This machine's variant cache: a folder of the user's in the temporary folder, so the
+    tiles that run on one machine grow each species variant once."""
+    try:
+        user = getpass.getuser()
+    except (KeyError, OSError):
+        user = "user"
+    return os.path.join(tempfile.gettempdir(), f"pge-variants-{user}")
+
+
+def grow_tile(
+    program, script, seed, overrides, i, j, threads=1, time_limit=None, variant_cache=""
+):
     """Runs ``pge run SCRIPT --tile I,J`` with ``program`` (a name looked up on this
     machine's PATH, or a path) and returns ``{"glb": bytes, "instances": n, "node": host}``.
+
+    ``variant_cache`` is pge's ``--variant-cache`` folder: ``""`` for this machine's own
+    (:func:`default_variant_cache`), None for none.
 
     Raises :class:`TileFailed` when ``program`` is missing or ``pge`` exits with an error.
     """
@@ -74,6 +90,10 @@ def grow_tile(program, script, seed, overrides, i, j, threads=1, time_limit=None
         out = os.path.join(folder, f"{i}_{j}.glb")
         cmd = [exe, "run"] + pge_args(script, seed, overrides, time_limit)
         cmd += ["--tile", f"{i},{j}", "-o", out, "-q", "--stats", "--threads", str(threads)]
+        if variant_cache == "":
+            variant_cache = default_variant_cache()
+        if variant_cache is not None:
+            cmd += ["--variant-cache", variant_cache]
         proc = subprocess.run(
             cmd,
             stdin=subprocess.DEVNULL,

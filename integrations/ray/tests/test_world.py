@@ -69,9 +69,14 @@ def tile_bytes(folder, world):
 
 def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, reference, tmp_path):
     out = str(tmp_path / "world")
-    p = pge_world(cluster, "--out", out, "--set", "spin=0")
+    variants = tmp_path / "variants"
+    p = pge_world(cluster, "--out", out, "--set", "spin=0", "--variant-cache", str(variants))
     assert p.returncode == 0, p.stderr
     assert "tiles 16/16" in p.stderr, p.stderr
+    # The tiles shared the variants of the script species (shrub.lua, two variants) through
+    # the cache: two entries, and still every tile's bytes equal a local run without it.
+    entries = [n for n in os.listdir(variants) if n.endswith(".pgevariant")]
+    assert len(entries) == 2, os.listdir(variants)
     world = read_world(out)
     assert world["complete"] is True
     assert world["seed"] == 1 and world["set"] == {"spin": "0"}

@@ -20,6 +20,7 @@
 //! ```
 
 mod assemble;
+mod cache;
 mod layout;
 #[cfg(feature = "lua")]
 pub mod lua;
@@ -28,6 +29,7 @@ mod rng;
 mod terrain;
 
 pub use assemble::{Grown, assemble, layout_model, transform};
+pub use cache::{GrownVariant, VariantCache, VariantKey};
 pub use layout::{
     Density, Forest, Instance, Layer, Layout, MAX_INSTANCES, Method, Tile, Variants, unique_seed,
     variant_seed,

@@ -20,13 +20,26 @@ use pge_engine::{Algorithm, Engine, Error, Location, Plugin, RunContext, Session
 use rayon::prelude::*;
 
 use crate::{
-    Density, FbmOptions, Forest, ForestError, Grown, Layer, Layout, Method, Raster, Terrain,
-    Variants, assemble, layout_model, unique_seed, variant_seed,
+    Density, FbmOptions, Forest, ForestError, Grown, GrownVariant, Layer, Layout, Method, Raster,
+    Terrain, VariantCache, VariantKey, Variants, assemble, layout_model, unique_seed, variant_seed,
 };
 
 /// Adds `pge.Forest` to every session.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ForestPlugin;
+#[derive(Clone, Debug, Default)]
+pub struct ForestPlugin {
+    variant_cache: Option<VariantCache>,
+}
+
+impl ForestPlugin {
+    /// Forests keep the variants their species scripts grow in `cache` and read them back
+    /// from there (`pge run --variant-cache DIR`); the output is the same.
+    #[must_use]
+    pub fn with_variant_cache(cache: VariantCache) -> ForestPlugin {
+        ForestPlugin {
+            variant_cache: Some(cache),
+        }
+    }
+}
 
 impl Plugin for ForestPlugin {
     fn name(&self) -> &str {
@@ -34,6 +47,9 @@ impl Plugin for ForestPlugin {
     }
 
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
+        if let Some(cache) = &self.variant_cache {
+            lua.set_app_data(cache.clone());
+        }
         pge.set("Forest", lua.create_function(new_forest)?)
     }
 }
@@ -402,21 +418,47 @@ struct ForestAlgorithm {
 /// A species script: its shown path and `params` overrides.
 type ScriptSpecies = (String, Vec<(String, String)>);
 
-/// Grows one variant of a species script in a session of its own.
+/// Grows one variant of a species script in a session of its own; returns it with the
+/// files the session read.
 fn grow_script(
     engine: &Engine,
     shown: &str,
     params: &[(String, String)],
     seed: u64,
     ctx: &RunContext,
-) -> pge_engine::Result<Model> {
+) -> pge_engine::Result<GrownVariant> {
     let session = engine.session(SessionOptions {
         seed,
         params: params.to_vec(),
         steps: None,
         cancel: ctx.cancel.clone(),
     })?;
-    Ok(session.generate(Path::new(shown), &mut |_, _| {})?.model)
+    let model = session.generate(Path::new(shown), &mut |_, _| {})?.model;
+    Ok((model, session.loaded_files()))
+}
+
+/// [`grow_script`] through the variant cache, when the run has one (`--variant-cache`).
+fn grow_cached(
+    engine: &Engine,
+    cache: Option<&VariantCache>,
+    (shown, params): &ScriptSpecies,
+    seed: u64,
+    ctx: &RunContext,
+    location: &Location,
+) -> pge_engine::Result<Model> {
+    let grow = || grow_script(engine, shown, params, seed, ctx);
+    match cache {
+        None => grow().map(|(model, _)| model),
+        Some(cache) => {
+            let key = VariantKey {
+                shown,
+                params,
+                seed,
+                max_modules: ctx.max_modules,
+            };
+            cache.variant(&key, &location.to_string(), grow)
+        }
+    }
 }
 
 impl ForestAlgorithm {
@@ -468,10 +510,28 @@ impl ForestAlgorithm {
                 })
                 .collect();
             let ctx_send = ctx.clone();
+            // Layers of a few variants shared by every tile go through the cache; "unique"
+            // trees are grown where they stand.
+            let cache = self.lua.try_upgrade().and_then(|lua| {
+                lua.app_data_ref::<VariantCache>()
+                    .map(|c| VariantCache::clone(&c))
+            });
+            let cached: Vec<Option<&VariantCache>> = spec
+                .forest
+                .layers
+                .iter()
+                .map(|layer| match layer.variants {
+                    Variants::Count(_) => cache.as_ref(),
+                    Variants::Unique => None,
+                })
+                .collect();
+            let locations: Vec<Location> = spec.species.iter().map(|(_, l)| l.clone()).collect();
             let results: Vec<pge_engine::Result<Model>> = scripts
                 .par_iter()
                 .map(|&(l, _, s)| match &paths[l] {
-                    Some((shown, params)) => grow_script(&engine, shown, params, s, &ctx_send),
+                    Some(species) => {
+                        grow_cached(&engine, cached[l], species, s, &ctx_send, &locations[l])
+                    }
                     None => Err(Error::Export("not a script species".into())),
                 })
                 .collect();
