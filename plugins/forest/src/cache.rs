@@ -26,7 +26,7 @@ use serde_json::{Map, Number, Value};
 use crate::rng::splitmix;
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x01";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x02";
 
 /// A folder of grown variants shared by runs (and by processes: entries appear atomically).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -451,6 +451,8 @@ fn write_model(w: &mut Writer, model: &Model) {
             name,
             base_color,
             texture,
+            normal_texture,
+            metallic_roughness_texture,
             alpha,
             double_sided,
             metallic,
@@ -459,6 +461,8 @@ fn write_model(w: &mut Writer, model: &Model) {
         table.str(name);
         table.f32s(base_color);
         write_texture_ref(&mut table, &mut textures, texture.as_ref());
+        write_texture_ref(&mut table, &mut textures, normal_texture.as_ref());
+        write_texture_ref(&mut table, &mut textures, metallic_roughness_texture.as_ref());
         match alpha {
             AlphaMode::Opaque => table.u8(0),
             AlphaMode::Mask(cutoff) => {
@@ -656,6 +660,8 @@ fn read_model(r: &mut Reader) -> Option<Model> {
             let name = r.str()?;
             let base_color = [r.f32()?, r.f32()?, r.f32()?, r.f32()?];
             let texture = read_texture_ref(r, &textures)?;
+            let normal_texture = read_texture_ref(r, &textures)?;
+            let metallic_roughness_texture = read_texture_ref(r, &textures)?;
             let alpha = match r.u8()? {
                 0 => AlphaMode::Opaque,
                 1 => AlphaMode::Mask(r.f32()?),
@@ -666,6 +672,8 @@ fn read_model(r: &mut Reader) -> Option<Model> {
                 name,
                 base_color,
                 texture,
+                normal_texture,
+                metallic_roughness_texture,
                 alpha,
                 double_sided: r.u8()? != 0,
                 metallic: r.f32()?,
