@@ -349,3 +349,16 @@ fn bad_lod_input_is_a_located_error() {
         );
     }
 }
+
+#[test]
+fn a_preview_level_outside_the_range_is_a_usage_error() {
+    for bad in ["0", "1.5", "NaN", "x"] {
+        let o = pge(&["preview", "scripts/examples/lod.lua", "--lod-level", bad]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(
+            stderr.contains("--lod-level") && stderr.contains("between 0.01 and 1"),
+            "{bad}: {stderr}"
+        );
+    }
+}

@@ -33,6 +33,8 @@ pub struct AppOptions {
     pub turntable: bool,
     /// Draw moving frames at full quality too (for measurements).
     pub full_quality_motion: bool,
+    /// Percent of the leaves drawn of trees with levels of detail (`--lod-level`).
+    pub lod_percent: u8,
 }
 
 enum Shot {
@@ -100,7 +102,10 @@ impl PreviewApp {
             uploaded: 0,
             camera: OrbitCamera::default(),
             framed: false,
-            toggles: Toggles::default(),
+            toggles: Toggles {
+                lod_percent: options.lod_percent,
+                ..Toggles::default()
+            },
             turntable: options.turntable,
             viewport_dirty: true,
             last_viewport: None,
@@ -406,6 +411,7 @@ impl PreviewApp {
         ui.checkbox(&mut self.toggles.skeleton, "skeleton (K)");
         ui.checkbox(&mut self.toggles.leaves, "leaves (L)");
         ui.checkbox(&mut self.toggles.grid, "ground grid (G)");
+        self.lod_ui(ui);
         ui.checkbox(&mut self.turntable, "turntable (T)");
         if ui.button("Frame the model (F)").clicked() {
             self.frame_model();
@@ -423,6 +429,30 @@ impl PreviewApp {
             self.camera.frame(b);
             self.viewport_dirty = true;
         }
+    }
+
+    /// The leaf level slider, for a model with levels of detail: redraws through the two
+    /// ranges of V of each sector, the geometry stays on the GPU.
+    fn lod_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(g) = self.live.reloader().current() else {
+            return;
+        };
+        let lods: Vec<_> = g
+            .scene
+            .meshes
+            .iter()
+            .filter_map(|m| m.lod.as_ref())
+            .collect();
+        if lods.is_empty() {
+            return;
+        }
+        ui.add(
+            egui::Slider::new(&mut self.toggles.lod_percent, 1..=100)
+                .suffix("%")
+                .text("leaf level"),
+        );
+        let drawn: u32 = lods.iter().map(|l| l.drawn(self.toggles.lod_percent)).sum();
+        ui.label(RichText::new(format!("{drawn} leaves drawn")).small());
     }
 
     fn stats_ui(&mut self, ui: &mut egui::Ui) {

@@ -17,6 +17,7 @@
 mod app;
 pub mod camera;
 pub mod live;
+pub mod lod;
 mod pipeline;
 pub mod reload;
 pub mod render;
@@ -50,6 +51,9 @@ pub struct PreviewArgs {
     /// Writes the first complete frame to this PNG file and exits.
     #[arg(long, value_name = "PNG")]
     pub screenshot: Option<PathBuf>,
+    /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
+    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = parse_fraction)]
+    pub lod_level: f64,
     /// Seconds one generation may take.
     #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = parse_seconds)]
     pub time_limit: f64,
@@ -64,6 +68,13 @@ fn parse_set(text: &str) -> Result<(String, String), String> {
             Ok((name.trim().to_string(), value.to_string()))
         }
         _ => Err(format!("'{text}' is not NAME=VALUE")),
+    }
+}
+
+fn parse_fraction(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(f) if (0.01..=1.0).contains(&f) => Ok(f),
+        _ => Err(format!("'{text}' is not a fraction between 0.01 and 1")),
     }
 }
 
@@ -95,6 +106,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
     let measuring = log == "1" || log == "full";
     let options = AppOptions {
         screenshot: args.screenshot.clone(),
+        lod_percent: (args.lod_level * 100.0).round().clamp(1.0, 100.0) as u8,
         screenshot_result: screenshot_result.clone(),
         log_fps: measuring,
         turntable: measuring,

@@ -34,6 +34,9 @@ pub struct Toggles {
     pub leaves: bool,
     /// The ground grid.
     pub grid: bool,
+    /// Percent of the leaves drawn of meshes with levels of detail (100: the finest level,
+    /// the index buffer itself).
+    pub lod_percent: u8,
 }
 
 impl Default for Toggles {
@@ -43,6 +46,7 @@ impl Default for Toggles {
             skeleton: false,
             leaves: true,
             grid: true,
+            lod_percent: 100,
         }
     }
 }
@@ -64,6 +68,8 @@ struct GpuMesh {
     coarse: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
+    /// Sequential quads over all of V and the LOD tables, for a leaf mesh with levels.
+    lod: Option<(wgpu::Buffer, super::lod::LeafLod)>,
 }
 
 struct Target {
@@ -237,6 +243,16 @@ impl Renderer {
                     wgpu::BufferUsages::INDEX,
                 ),
                 index_count: mesh.indices.len() as u32,
+                lod: mesh.lod.as_ref().map(|lod| {
+                    let quads = lod.quad_indices();
+                    let buffer = buffer_init(
+                        device,
+                        "lod quads",
+                        index_bytes(&quads),
+                        wgpu::BufferUsages::INDEX,
+                    );
+                    (buffer, lod.clone())
+                }),
                 instances: buffer_init(
                     device,
                     "instances",
@@ -415,6 +431,18 @@ impl Renderer {
                     pass.set_bind_group(1, &mesh.material, &[]);
                     pass.set_vertex_buffer(0, vertices.slice(..));
                     pass.set_vertex_buffer(1, mesh.instances.slice(..));
+                    // A coarser level of detail: its two ranges of V per sector.
+                    if let Some((quads, lod)) = &mesh.lod
+                        && toggles.lod_percent < 100
+                        && !toggles.wireframe
+                        && std::ptr::eq(vertices, &mesh.vertices)
+                    {
+                        pass.set_index_buffer(quads.slice(..), wgpu::IndexFormat::Uint32);
+                        for range in lod.index_ranges(toggles.lod_percent) {
+                            pass.draw_indexed(range, 0, 0..mesh.instance_count);
+                        }
+                        continue;
+                    }
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..count, 0, 0..mesh.instance_count);
                 }
