@@ -331,6 +331,21 @@ fn bad_lod_input_is_a_located_error() {
             "pge.lod.budget: distances[2] must be a number >= 0, got NaN",
         ),
         (
+            "sectors_zero.lua",
+            2,
+            "lod.sectors' must be an integer between 1 and 64, got 0",
+        ),
+        (
+            "budget_negative.lua",
+            2,
+            "pge.lod.budget: distances[3] must be a number >= 0, got -2",
+        ),
+        (
+            "budget_near.lua",
+            2,
+            "pge.lod.budget: near must be a number >= 0, got -1",
+        ),
+        (
             "budget_order.lua",
             2,
             "pge.lod.budget: near must be at most far, got near = 100 and far = 10",

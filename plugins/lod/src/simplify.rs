@@ -182,7 +182,7 @@ pub fn simplify(leaves: &[Leaf], selection: &Selection) -> Chain {
 const CANDIDATES: usize = 8;
 
 /// How many times a leaf whose candidates were all refused looks farther.
-const RETRIES: u8 = 2;
+const RETRIES: u8 = 1;
 
 /// A candidate's sort key: the cost's bits (non-negative floats order like their bits)
 /// above the partner's label, so ties go to the lower label.
@@ -297,7 +297,13 @@ impl Simplifier {
     /// the bounds, otherwise its leaf moves on too. A leaf whose list is used up searches
     /// again, for partners it has not consumed yet.
     fn run(&mut self) {
-        for i in 0..self.leaves.len() as u32 {
+        // The first searches go cell by cell, so neighbouring searches share the cells they
+        // read (the queue pops by key alone, so the order of pushes does not matter).
+        let mut order = Vec::with_capacity(self.leaves.len());
+        for cell in &self.grid.cells {
+            order.extend(cell.iter().map(|slot| slot.label));
+        }
+        for i in order {
             self.search(i, false);
         }
         while let Some(Reverse((key, a))) = self.heap.pop() {
