@@ -453,6 +453,7 @@ impl PreviewApp {
         );
         let drawn: u32 = lods.iter().map(|l| l.drawn(self.toggles.lod_percent)).sum();
         ui.label(RichText::new(format!("{drawn} leaves drawn")).small());
+        ui.checkbox(&mut self.toggles.lod_colors, "colour leaves by level");
     }
 
     fn stats_ui(&mut self, ui: &mut egui::Ui) {

@@ -4,7 +4,10 @@
 
 use std::ops::Range;
 
+use pge_lod::{Row, first_levels};
 use serde_json::Value;
+
+use super::scene::VERTEX_FLOATS;
 
 /// One sector's V: its leaves are `offset..` in the mesh (four vertices each) and its table
 /// rows `[a, b, c]` are relative to `offset`.
@@ -99,6 +102,30 @@ impl LeafLod {
         out
     }
 
+    /// A copy of a leaf mesh's interleaved vertices ([`VERTEX_FLOATS`] floats each, colour
+    /// last) with every leaf coloured by the level that created it (the first level drawing
+    /// it): blue for the coarsest, through green, to yellow for the original leaves.
+    #[must_use]
+    pub fn level_colors(&self, vertices: &[f32]) -> Vec<f32> {
+        let mut out = vertices.to_vec();
+        for s in &self.sectors {
+            let len = (2 * s.leaves).saturating_sub(s.roots) as usize;
+            let rows: Vec<Row> = s.rows.iter().map(|&[a, b, c]| Row { a, b, c }).collect();
+            let last = (rows.len().max(2) - 1) as f32;
+            for (k, level) in first_levels(&rows, len).into_iter().enumerate() {
+                let t = level as f32 / last;
+                let color = [t, 0.35 + 0.5 * t, 1.0 - 0.9 * t, 1.0];
+                for v in 0..4 {
+                    let at = (4 * (s.offset as usize + k) + v) * VERTEX_FLOATS + 8;
+                    if let Some(slot) = out.get_mut(at..at + 4) {
+                        slot.copy_from_slice(&color);
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// The leaves drawn by [`LeafLod::index_ranges`].
     #[must_use]
     pub fn drawn(&self, percent: u8) -> u32 {
@@ -136,5 +163,17 @@ mod tests {
         // Out of the mesh: ignored.
         assert!(LeafLod::from_extras(extras.as_object().expect("object"), 20).is_none());
         assert!(LeafLod::from_extras(&serde_json::Map::new(), 24).is_none());
+        // Colour by level: the roots (level 0) blue, the original leaves yellow.
+        let extras = json!({"lod": {"leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]}});
+        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 12).expect("lod");
+        let colored = lod.level_colors(&vec![0.5; 12 * VERTEX_FLOATS]);
+        let near = |leaf: usize, want: [f32; 4]| {
+            let got = &colored[4 * leaf * VERTEX_FLOATS + 8..][..4];
+            got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6)
+        };
+        assert!(near(0, [1.0, 0.85, 0.1, 1.0]) && near(1, [1.0, 0.85, 0.1, 1.0]));
+        assert!(near(2, [0.0, 0.35, 1.0, 1.0]));
+        // Positions are untouched.
+        assert_eq!(&colored[..8], &[0.5; 8]);
     }
 }

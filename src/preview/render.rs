@@ -37,6 +37,8 @@ pub struct Toggles {
     /// Percent of the leaves drawn of meshes with levels of detail (100: the finest level,
     /// the index buffer itself).
     pub lod_percent: u8,
+    /// Leaves of meshes with levels of detail coloured by the level that created them.
+    pub lod_colors: bool,
 }
 
 impl Default for Toggles {
@@ -47,6 +49,7 @@ impl Default for Toggles {
             leaves: true,
             grid: true,
             lod_percent: 100,
+            lod_colors: false,
         }
     }
 }
@@ -68,8 +71,9 @@ struct GpuMesh {
     coarse: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
-    /// Sequential quads over all of V and the LOD tables, for a leaf mesh with levels.
-    lod: Option<(wgpu::Buffer, super::lod::LeafLod)>,
+    /// Sequential quads over all of V, the vertices coloured by level and the LOD tables,
+    /// for a leaf mesh with levels.
+    lod: Option<(wgpu::Buffer, wgpu::Buffer, super::lod::LeafLod)>,
 }
 
 struct Target {
@@ -245,13 +249,22 @@ impl Renderer {
                 index_count: mesh.indices.len() as u32,
                 lod: mesh.lod.as_ref().map(|lod| {
                     let quads = lod.quad_indices();
-                    let buffer = buffer_init(
-                        device,
-                        "lod quads",
-                        index_bytes(&quads),
-                        wgpu::BufferUsages::INDEX,
-                    );
-                    (buffer, lod.clone())
+                    let colored = lod.level_colors(&mesh.vertices);
+                    (
+                        buffer_init(
+                            device,
+                            "lod quads",
+                            index_bytes(&quads),
+                            wgpu::BufferUsages::INDEX,
+                        ),
+                        buffer_init(
+                            device,
+                            "lod colours",
+                            bytemuck::cast_slice(&colored),
+                            wgpu::BufferUsages::VERTEX,
+                        ),
+                        lod.clone(),
+                    )
                 }),
                 instances: buffer_init(
                     device,
@@ -432,11 +445,14 @@ impl Renderer {
                     pass.set_vertex_buffer(0, vertices.slice(..));
                     pass.set_vertex_buffer(1, mesh.instances.slice(..));
                     // A coarser level of detail: its two ranges of V per sector.
-                    if let Some((quads, lod)) = &mesh.lod
-                        && toggles.lod_percent < 100
+                    if let Some((quads, colored, lod)) = &mesh.lod
+                        && (toggles.lod_percent < 100 || toggles.lod_colors)
                         && !toggles.wireframe
                         && std::ptr::eq(vertices, &mesh.vertices)
                     {
+                        if toggles.lod_colors {
+                            pass.set_vertex_buffer(0, colored.slice(..));
+                        }
                         pass.set_index_buffer(quads.slice(..), wgpu::IndexFormat::Uint32);
                         for range in lod.index_ranges(toggles.lod_percent) {
                             pass.draw_indexed(range, 0, 0..mesh.instance_count);
