@@ -440,25 +440,32 @@ impl Renderer {
                     if count == 0 {
                         continue;
                     }
-                    pass.set_pipeline(pipeline);
-                    pass.set_bind_group(1, &mesh.material, &[]);
-                    pass.set_vertex_buffer(0, vertices.slice(..));
-                    pass.set_vertex_buffer(1, mesh.instances.slice(..));
-                    // A coarser level of detail: its two ranges of V per sector.
+                    // A coarser level of detail, or leaves coloured by level: the two ranges
+                    // of V per sector over the sequential quads.
                     if let Some((quads, colored, lod)) = &mesh.lod
                         && (toggles.lod_percent < 100 || toggles.lod_colors)
                         && !toggles.wireframe
                         && std::ptr::eq(vertices, &mesh.vertices)
                     {
-                        if toggles.lod_colors {
-                            pass.set_vertex_buffer(0, colored.slice(..));
-                        }
+                        let vertices = if toggles.lod_colors {
+                            colored
+                        } else {
+                            vertices
+                        };
+                        pass.set_pipeline(pipeline);
+                        pass.set_bind_group(1, &mesh.material, &[]);
+                        pass.set_vertex_buffer(0, vertices.slice(..));
+                        pass.set_vertex_buffer(1, mesh.instances.slice(..));
                         pass.set_index_buffer(quads.slice(..), wgpu::IndexFormat::Uint32);
                         for range in lod.index_ranges(toggles.lod_percent) {
                             pass.draw_indexed(range, 0, 0..mesh.instance_count);
                         }
                         continue;
                     }
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(1, &mesh.material, &[]);
+                    pass.set_vertex_buffer(0, vertices.slice(..));
+                    pass.set_vertex_buffer(1, mesh.instances.slice(..));
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..count, 0, 0..mesh.instance_count);
                 }
