@@ -23,6 +23,8 @@ pub type ScreenshotResult = Arc<Mutex<Option<anyhow::Result<()>>>>;
 
 /// Options of the window besides the script's settings.
 pub struct AppOptions {
+    /// Percent of the leaves drawn of trees with levels of detail (`--lod-level`).
+    pub lod_percent: u8,
     /// Write the first complete frame here and close.
     pub screenshot: Option<PathBuf>,
     /// Where the screenshot run's result goes.
@@ -33,8 +35,6 @@ pub struct AppOptions {
     pub turntable: bool,
     /// Draw moving frames at full quality too (for measurements).
     pub full_quality_motion: bool,
-    /// Percent of the leaves drawn of trees with levels of detail (`--lod-level`).
-    pub lod_percent: u8,
 }
 
 enum Shot {

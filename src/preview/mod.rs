@@ -42,6 +42,9 @@ use self::reload::Settings;
 pub struct PreviewArgs {
     /// The Lua script to show.
     pub script: PathBuf,
+    /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
+    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = lod::parse_fraction)]
+    pub lod_level: f64,
     /// Seed of every random draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -51,9 +54,6 @@ pub struct PreviewArgs {
     /// Writes the first complete frame to this PNG file and exits.
     #[arg(long, value_name = "PNG")]
     pub screenshot: Option<PathBuf>,
-    /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
-    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = parse_fraction)]
-    pub lod_level: f64,
     /// Seconds one generation may take.
     #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = parse_seconds)]
     pub time_limit: f64,
@@ -68,13 +68,6 @@ fn parse_set(text: &str) -> Result<(String, String), String> {
             Ok((name.trim().to_string(), value.to_string()))
         }
         _ => Err(format!("'{text}' is not NAME=VALUE")),
-    }
-}
-
-fn parse_fraction(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(f) if (0.01..=1.0).contains(&f) => Ok(f),
-        _ => Err(format!("'{text}' is not a fraction between 0.01 and 1")),
     }
 }
 
