@@ -28,8 +28,9 @@ fn run(script: &str, dir: &Path, name: &str, args: &[&str]) -> (Vec<u8>, String)
     (std::fs::read(&out).expect("glb written"), stderr)
 }
 
-/// The leaf mesh's quads (four vertices each, in index order) and its `extras.pge`.
-fn leaf_mesh(glb: &[u8]) -> (Vec<Quad>, Value) {
+/// The leaf mesh's quads (four vertices each, in vertex order: leaf `k` of V is vertices
+/// `4k..4k+4`), the quads its index buffer draws, and its `extras.pge`.
+fn leaf_mesh(glb: &[u8]) -> (Vec<Quad>, Vec<Quad>, Value) {
     let (doc, buffers, _) = gltf::import_slice(glb).expect("valid glb");
     let mesh = doc
         .meshes()
@@ -45,14 +46,25 @@ fn leaf_mesh(glb: &[u8]) -> (Vec<Quad>, Value) {
     let positions: Vec<[f32; 3]> = reader.read_positions().expect("positions").collect();
     let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
     assert_eq!(indices.len() % 6, 0);
-    let quads = indices
+    assert_eq!(positions.len() % 4, 0);
+    let quads = positions
+        .chunks(4)
+        .map(|q| [q[0], q[1], q[2], q[3]])
+        .collect();
+    let drawn = indices
         .chunks(6)
         .map(|t| {
-            // Two triangles (q0 q1 q2) (q0 q2 q3).
+            // Two triangles (q0 q1 q2) (q0 q2 q3) of one leaf's four vertices.
+            let base = t[0] - t[0] % 4;
+            assert_eq!(t, [base, base + 1, base + 2, base, base + 2, base + 3]);
             [t[0], t[1], t[2], t[5]].map(|i| positions[i as usize])
         })
         .collect();
-    (quads, extras.get("pge").cloned().unwrap_or(Value::Null))
+    (
+        quads,
+        drawn,
+        extras.get("pge").cloned().unwrap_or(Value::Null),
+    )
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
@@ -114,15 +126,16 @@ fn a_tree_with_lod_keeps_its_promises() {
     let mut plain_args = small.to_vec();
     plain_args.extend_from_slice(&["--set", "lod=0"]);
     let (plain_glb, _) = run(script, dir.path(), "plain", &plain_args);
-    let (quads, pge_extras) = leaf_mesh(&glb);
-    let (plain, plain_extras) = leaf_mesh(&plain_glb);
+    let (quads, indexed, pge_extras) = leaf_mesh(&glb);
+    let (_, plain, plain_extras) = leaf_mesh(&plain_glb);
     assert!(plain_extras.get("lod").is_none());
     let lod = &pge_extras["lod"];
     let originals = lod["leaves"].as_u64().expect("leaves") as usize;
     let roots = lod["roots"].as_u64().expect("roots") as usize;
     assert_eq!(originals, plain.len());
     assert!(originals > 500, "{originals} leaves");
-    assert!(roots * 2 < originals, "{roots} roots of {originals}");
+    // The chain goes down to a tenth of the leaves or fewer: a 10% level is in the table.
+    assert!(roots * 10 <= originals, "{roots} roots of {originals}");
     let m = quads.len();
     assert_eq!(m, 2 * originals - roots, "|M| = |O| + collapses");
     let rows = table(lod);
@@ -147,6 +160,8 @@ fn a_tree_with_lod_keeps_its_promises() {
         finest, expected,
         "the finest level is the plain tree's leaves"
     );
+    // An ordinary viewer draws the index buffer: exactly the finest level, V[0..|O|).
+    assert_eq!(indexed, quads[..originals].to_vec());
     assert_eq!(drawn(&rows[0]).len(), roots);
 
     // Consecutive levels differ by one split: one leaf out, its two children in.
@@ -235,7 +250,7 @@ fn sectors_and_the_atlas_are_written() {
         "atlas=1",
     ];
     let (glb, _) = run("scripts/examples/lod.lua", dir.path(), "sectors", &args);
-    let (quads, extras) = leaf_mesh(&glb);
+    let (quads, indexed, extras) = leaf_mesh(&glb);
     let lod = &extras["lod"];
     let sectors = lod["sectors"].as_array().expect("sectors");
     assert_eq!(sectors.len(), 4);
@@ -257,6 +272,15 @@ fn sectors_and_the_atlas_are_written() {
         roots += r;
     }
     assert_eq!(offset, quads.len());
+    // The index buffer draws each sector's original leaves, sector after sector.
+    let finest: Vec<Quad> = sectors
+        .iter()
+        .flat_map(|s| {
+            let at = s["offset"].as_u64().expect("offset") as usize;
+            quads[at..at + s["leaves"].as_u64().expect("leaves") as usize].to_vec()
+        })
+        .collect();
+    assert_eq!(indexed, finest);
     assert_eq!(lod["leaves"].as_u64(), Some(leaves as u64));
     assert_eq!(lod["roots"].as_u64(), Some(roots as u64));
     let (doc, _, images) = gltf::import_slice(&glb).expect("glb");
@@ -307,6 +331,21 @@ fn bad_lod_input_is_a_located_error() {
             "pge.lod.budget: distances[2] must be a number >= 0, got NaN",
         ),
         (
+            "sectors_zero.lua",
+            2,
+            "lod.sectors' must be an integer between 1 and 64, got 0",
+        ),
+        (
+            "budget_negative.lua",
+            2,
+            "pge.lod.budget: distances[3] must be a number >= 0, got -2",
+        ),
+        (
+            "budget_near.lua",
+            2,
+            "pge.lod.budget: near must be a number >= 0, got -1",
+        ),
+        (
             "budget_order.lua",
             2,
             "pge.lod.budget: near must be at most far, got near = 100 and far = 10",
@@ -322,6 +361,19 @@ fn bad_lod_input_is_a_located_error() {
         assert!(
             stderr.contains(&format!("{script}:{line}: ")) && stderr.contains(message),
             "{script}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn a_preview_level_outside_the_range_is_a_usage_error() {
+    for bad in ["0", "1.5", "NaN", "x"] {
+        let o = pge(&["preview", "scripts/examples/lod.lua", "--lod-level", bad]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(
+            stderr.contains("--lod-level") && stderr.contains("between 0.01 and 1"),
+            "{bad}: {stderr}"
         );
     }
 }

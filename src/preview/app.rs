@@ -23,6 +23,8 @@ pub type ScreenshotResult = Arc<Mutex<Option<anyhow::Result<()>>>>;
 
 /// Options of the window besides the script's settings.
 pub struct AppOptions {
+    /// Percent of the leaves drawn of trees with levels of detail (`--lod-level`).
+    pub lod_percent: u8,
     /// Write the first complete frame here and close.
     pub screenshot: Option<PathBuf>,
     /// Where the screenshot run's result goes.
@@ -105,7 +107,10 @@ impl PreviewApp {
             camera: OrbitCamera::default(),
             camera_spec: options.camera,
             framed: false,
-            toggles: Toggles::default(),
+            toggles: Toggles {
+                lod_percent: options.lod_percent,
+                ..Toggles::default()
+            },
             turntable: options.turntable,
             viewport_dirty: true,
             last_viewport: None,
@@ -414,6 +419,7 @@ impl PreviewApp {
         ui.checkbox(&mut self.toggles.skeleton, "skeleton (K)");
         ui.checkbox(&mut self.toggles.leaves, "leaves (L)");
         ui.checkbox(&mut self.toggles.grid, "ground grid (G)");
+        self.lod_ui(ui);
         ui.checkbox(&mut self.turntable, "turntable (T)");
         if ui.button("Frame the model (F)").clicked() {
             self.frame_model();
@@ -431,6 +437,31 @@ impl PreviewApp {
             self.camera.frame(b);
             self.viewport_dirty = true;
         }
+    }
+
+    /// The leaf level slider, for a model with levels of detail: redraws through the two
+    /// ranges of V of each sector, the geometry stays on the GPU.
+    fn lod_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(g) = self.live.reloader().current() else {
+            return;
+        };
+        let lods: Vec<_> = g
+            .scene
+            .meshes
+            .iter()
+            .filter_map(|m| m.lod.as_ref())
+            .collect();
+        if lods.is_empty() {
+            return;
+        }
+        ui.add(
+            egui::Slider::new(&mut self.toggles.lod_percent, 1..=100)
+                .suffix("%")
+                .text("leaf level"),
+        );
+        let drawn: u32 = lods.iter().map(|l| l.drawn(self.toggles.lod_percent)).sum();
+        ui.label(RichText::new(format!("{drawn} leaves drawn")).small());
+        ui.checkbox(&mut self.toggles.lod_colors, "colour leaves by level");
     }
 
     fn stats_ui(&mut self, ui: &mut egui::Ui) {

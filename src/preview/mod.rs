@@ -18,6 +18,7 @@
 mod app;
 pub mod camera;
 pub mod live;
+pub mod lod;
 mod pipeline;
 pub mod reload;
 pub mod render;
@@ -42,6 +43,9 @@ use self::reload::Settings;
 pub struct PreviewArgs {
     /// The Lua script to show.
     pub script: PathBuf,
+    /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
+    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = lod::parse_fraction)]
+    pub lod_level: f64,
     /// Seed of every random draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -134,6 +138,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
     let measuring = log == "1" || log == "full";
     let options = AppOptions {
         screenshot: args.screenshot.clone(),
+        lod_percent: (args.lod_level * 100.0).round().clamp(1.0, 100.0) as u8,
         screenshot_result: screenshot_result.clone(),
         camera: args.camera,
         log_fps: measuring,

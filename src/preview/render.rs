@@ -34,6 +34,11 @@ pub struct Toggles {
     pub leaves: bool,
     /// The ground grid.
     pub grid: bool,
+    /// Percent of the leaves drawn of meshes with levels of detail (100: the finest level,
+    /// the index buffer itself).
+    pub lod_percent: u8,
+    /// Leaves of meshes with levels of detail coloured by the level that created them.
+    pub lod_colors: bool,
 }
 
 impl Default for Toggles {
@@ -43,6 +48,8 @@ impl Default for Toggles {
             skeleton: false,
             leaves: true,
             grid: true,
+            lod_percent: 100,
+            lod_colors: false,
         }
     }
 }
@@ -68,6 +75,9 @@ struct GpuMesh {
     near: Option<(wgpu::Buffer, u32)>,
     source: Arc<Scene>,
     index_in_scene: usize,
+    /// Sequential quads over all of V, the vertices coloured by level and the LOD tables,
+    /// for a leaf mesh with levels.
+    lod: Option<(wgpu::Buffer, wgpu::Buffer, super::lod::LeafLod)>,
 }
 
 struct Target {
@@ -241,6 +251,25 @@ impl Renderer {
                     wgpu::BufferUsages::INDEX,
                 ),
                 index_count: mesh.indices.len() as u32,
+                lod: mesh.lod.as_ref().map(|lod| {
+                    let quads = lod.quad_indices();
+                    let colored = lod.level_colors(&mesh.vertices);
+                    (
+                        buffer_init(
+                            device,
+                            "lod quads",
+                            index_bytes(&quads),
+                            wgpu::BufferUsages::INDEX,
+                        ),
+                        buffer_init(
+                            device,
+                            "lod colours",
+                            bytemuck::cast_slice(&colored),
+                            wgpu::BufferUsages::VERTEX,
+                        ),
+                        lod.clone(),
+                    )
+                }),
                 instances: buffer_init(
                     device,
                     "instances",
@@ -465,6 +494,28 @@ impl Renderer {
                         }
                     };
                     if count == 0 {
+                        continue;
+                    }
+                    // A coarser level of detail, or leaves coloured by level: the two ranges
+                    // of V per sector over the sequential quads.
+                    if let Some((quads, colored, lod)) = &mesh.lod
+                        && (toggles.lod_percent < 100 || toggles.lod_colors)
+                        && !toggles.wireframe
+                        && std::ptr::eq(vertices, &mesh.vertices)
+                    {
+                        let vertices = if toggles.lod_colors {
+                            colored
+                        } else {
+                            vertices
+                        };
+                        pass.set_pipeline(pipeline);
+                        pass.set_bind_group(1, &mesh.material, &[]);
+                        pass.set_vertex_buffer(0, vertices.slice(..));
+                        pass.set_vertex_buffer(1, mesh.instances.slice(..));
+                        pass.set_index_buffer(quads.slice(..), wgpu::IndexFormat::Uint32);
+                        for range in lod.index_ranges(toggles.lod_percent) {
+                            pass.draw_indexed(range, 0, 0..mesh.instance_count);
+                        }
                         continue;
                     }
                     pass.set_pipeline(pipeline);

@@ -49,6 +49,8 @@ pub struct SceneMesh {
     /// indices), drawn while the camera moves. Compact, because a
     /// software renderer shades every vertex in the index range, used or not.
     pub coarse: Option<(Vec<f32>, Vec<u32>)>,
+    /// A leaf mesh's levels of detail (`extras.pge.lod`).
+    pub lod: Option<super::lod::LeafLod>,
 }
 
 /// The model's environment: an equirectangular sky drawn behind everything, whose average
@@ -167,6 +169,7 @@ impl Scene {
                 double_sided: mesh.material.double_sided,
                 is_leaf: is_leaf(mesh),
                 coarse,
+                lod: super::lod::LeafLod::from_extras(&mesh.extras, mesh.positions.len()),
             });
         }
         let stats = SceneStats {

@@ -3,6 +3,8 @@
 //! number of leaves from its distance to the camera, then the numbers are rescaled
 //! proportionally so that their sum meets the budget T.
 
+use std::cmp::Reverse;
+
 /// Why a budget cannot be computed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -76,7 +78,7 @@ impl Budget {
             0
         } else {
             let t = (self.far - distance) / (self.far - self.near);
-            let extra = f64::from(leaves - roots) * f64::from(t * t);
+            let extra = (leaves - roots) as f32 * (t * t);
             roots + (extra.round() as u32).min(leaves - roots)
         }
     }
@@ -86,17 +88,19 @@ impl Budget {
 /// camera, so that the total is at most `budget.total` (seed 003, algorithm 4 "Escalado").
 ///
 /// The tentative counts ([`Budget::tentative`]) add up to D over the n drawn instances. If
-/// `D > T`, each drawn instance loses `ceil((d - |R|) / (D - n|R|) * (D - T))` leaves (never
-/// more than what is still to remove), down to `|R|`; if `D < T`, each gains
-/// `ceil((|O| - d) / (n|O| - D) * (T - D))` (never more than what is still to add), up to
-/// `|O|`. The thesis walks the instances in input order; here reductions go from the farthest
-/// instance to the nearest and additions from the nearest to the farthest, so that the
-/// rounding surplus lands on the nearer ones and a nearer instance never gets fewer leaves
-/// than a farther one. Where the thesis stops with an error because even `n|R|` exceeds T,
-/// the farthest instances are left out (0 leaves) until the rest fit, as its text advises.
+/// `D > T`, each drawn instance loses its share `(d - |R|) / (D - n|R|) * (D - T)` of the
+/// surplus, down to `|R|`; if `D < T`, each gains `(|O| - d) / (n|O| - D) * (T - D)`, up to
+/// `|O|`. The thesis rounds every share up and walks the instances in input order until the
+/// budget is met, so the last ones absorb the rounding. Here every share is rounded down and
+/// the remainder (fewer leaves than instances) goes one leaf each to the farthest instances
+/// that can still lose one, or the nearest that can still gain one: the budget is met exactly,
+/// and since the shares grow with `d`, a nearer instance never gets fewer leaves than a
+/// farther one. Where the thesis stops with an error because even `n|R|` exceeds T, the
+/// farthest instances are left out (0 leaves) until the rest fit, as its text advises.
 ///
 /// The level of an instance drawing `k > 0` leaves is `k - |R|` in the LOD table; 0 means
-/// not drawn. Runs in `O(n log n)` (one sort by distance).
+/// not drawn. Runs in linear time: a few passes over the instances, and a selection (not a
+/// sort) wherever the farthest or nearest few are needed.
 pub fn assign(
     distances: &[f32],
     leaves: u32,
@@ -122,68 +126,81 @@ pub fn assign(
     if leaves == 0 {
         return Ok(counts);
     }
-    // Nearest first; ties by index. Non-negative finite floats order like their bits.
-    let mut order: Vec<u64> = distances
-        .iter()
-        .enumerate()
-        .map(|(i, d)| (u64::from(d.to_bits()) << 32) | i as u64)
-        .collect();
-    order.sort_unstable();
-    let index = |key: u64| (key & 0xffff_ffff) as usize;
-
+    // Instances are ordered by distance, ties by index: non-negative finite floats order
+    // like their bits.
+    let key = |i: usize| (u64::from(distances[i].to_bits()) << 32) | i as u64;
     let (o, r, t) = (u64::from(leaves), u64::from(roots), budget.total);
     let mut drawn = counts.iter().filter(|&&c| c > 0).count() as u64;
     // Too many instances even at their coarsest: leave out the farthest.
     if drawn * r > t {
-        for &key in order.iter().rev() {
-            if drawn * r <= t {
-                break;
-            }
-            let i = index(key);
-            if counts[i] > 0 {
-                counts[i] = 0;
-                drawn -= 1;
+        let keep = (t / r) as usize;
+        let mut keys: Vec<u64> = (0..counts.len())
+            .filter(|&i| counts[i] > 0)
+            .map(key)
+            .collect();
+        // keep < drawn, so the key at `keep` is the nearest left out.
+        let (_, &mut first_out, _) = keys.select_nth_unstable(keep);
+        for (i, c) in counts.iter_mut().enumerate() {
+            if *c > 0 && key(i) >= first_out {
+                *c = 0;
             }
         }
+        drawn = keep as u64;
     }
     let sum: u64 = counts.iter().map(|&c| u64::from(c)).sum();
     let (d_min, d_max) = (drawn * r, drawn * o);
     if t < sum && sum > d_min {
-        // Reduce the resolution, farthest first.
-        let mut alpha = sum - t;
-        let (num, den) = (sum - t, sum - d_min);
-        for &key in order.iter().rev() {
-            if alpha == 0 {
-                break;
-            }
-            let i = index(key);
-            let d = u64::from(counts[i]);
-            if d == 0 {
-                continue;
-            }
-            let cut = alpha.min(((d - r) * num).div_ceil(den));
-            counts[i] = (d - cut) as u32;
-            alpha -= cut;
+        // Reduce: every drawn instance loses its share, rounded down...
+        let (num, den) = (u128::from(sum - t), u128::from(sum - d_min));
+        let mut left = sum - t;
+        for c in counts.iter_mut().filter(|c| **c > 0) {
+            let cut = (u128::from(u64::from(*c) - r) * num / den) as u64;
+            *c -= cut as u32;
+            left -= cut;
         }
+        // ...and the farthest that can lose one more lose the remainder.
+        spread(&mut counts, left, |c| c > roots, |i| Reverse(key(i)), -1);
     } else if t > sum && sum < d_max {
-        // Raise the resolution, nearest first.
-        let mut alpha = t - sum;
-        let (num, den) = (t - sum, d_max - sum);
-        for &key in &order {
-            if alpha == 0 {
-                break;
-            }
-            let i = index(key);
-            let d = u64::from(counts[i]);
-            if d == 0 {
-                continue;
-            }
-            let add = alpha.min(((o - d) * num).div_ceil(den)).min(o - d);
-            counts[i] = (d + add) as u32;
-            alpha -= add;
+        // At most up to the full trees.
+        let gain = t.min(d_max) - sum;
+        let (num, den) = (u128::from(gain), u128::from(d_max - sum));
+        let mut left = gain;
+        for c in counts.iter_mut().filter(|c| **c > 0) {
+            let add = (u128::from(o - u64::from(*c)) * num / den) as u64;
+            *c += add as u32;
+            left -= add;
         }
+        spread(&mut counts, left, |c| c > 0 && c < leaves, key, 1);
     }
     Ok(counts)
+}
+
+/// Adds `step` (±1) to the count of the `left` first instances by `order` among those whose
+/// count is `eligible`, found by a selection.
+fn spread<K: Ord + Copy>(
+    counts: &mut [u32],
+    left: u64,
+    eligible: impl Fn(u32) -> bool,
+    order: impl Fn(usize) -> K,
+    step: i32,
+) {
+    if left == 0 {
+        return;
+    }
+    let mut keys: Vec<K> = (0..counts.len())
+        .filter(|&i| eligible(counts[i]))
+        .map(&order)
+        .collect();
+    let n = (left as usize).min(keys.len());
+    if n == 0 {
+        return;
+    }
+    let (_, &mut last, _) = keys.select_nth_unstable(n - 1);
+    for (i, c) in counts.iter_mut().enumerate() {
+        if eligible(*c) && order(i) <= last {
+            *c = c.saturating_add_signed(step);
+        }
+    }
 }
 
 #[cfg(test)]

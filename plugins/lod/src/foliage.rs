@@ -145,8 +145,11 @@ pub fn simplify_sectors(leaves: &[Leaf], options: &LodOptions) -> Vec<(Chain, Ve
 
 /// Gives a leaf mesh levels of detail: its quads ([`leaves_of`]) are simplified per sector
 /// ([`simplify_sectors`]), each sector laid out as V with its table ([`LodTable`]), and the
-/// mesh rebuilt with four vertices per leaf of V in V's order (sectors one after another)
-/// and six indices per leaf in the same order, so the index buffer is V. Original leaves
+/// mesh rebuilt with four vertices per leaf of V in V's order (sectors one after another):
+/// leaf `k` of the mesh is vertices `4k..4k + 4`, two triangles `(0 1 2) (0 2 3)`. The index
+/// buffer holds those six indices for the finest level only (`V[0..|O|)` of each sector), so
+/// a viewer that knows nothing of LOD draws exactly the original leaves; a LOD renderer
+/// draws the leaves of a level's two ranges from the vertices. Original leaves
 /// keep their vertices; a collapsed leaf gets its rectangle, its normal, the mean colour of
 /// the leaves it stands for, and texture coordinates covering the whole leaf texture or,
 /// with `options.atlas`, the atlas cell chosen by its count and density (the material then
@@ -193,9 +196,20 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
     for (chain, ids) in &sectors {
         let table = LodTable::new(chain);
         let colors = has_c.then(|| chain_colors(chain, ids, &mesh.colors));
-        for &label in &table.order {
+        for (position, &label) in table.order.iter().enumerate() {
             let base = out.positions.len() as u32;
             let l = label as usize;
+            // The index buffer draws the finest level only: V[0..|O|) of each sector.
+            if position < chain.originals {
+                out.indices.extend_from_slice(&[
+                    base,
+                    base + 1,
+                    base + 2,
+                    base,
+                    base + 2,
+                    base + 3,
+                ]);
+            }
             if l < chain.originals {
                 let v = 4 * ids[l] as usize;
                 out.positions.extend_from_slice(&mesh.positions[v..v + 4]);
@@ -237,8 +251,6 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                     out.colors.extend_from_slice(&[c[l]; 4]);
                 }
             }
-            out.indices
-                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
         }
         let len = table.order.len() as u32;
         result.push(Sector { offset, table });
@@ -362,8 +374,10 @@ mod tests {
             lod["table"][0],
             json!([table.rows[0].a, table.rows[0].b, table.rows[0].c])
         );
-        // Indices are sequential quads: the index buffer is V.
+        // The index buffer is the finest level: the first 120 leaves of V, in order.
+        assert_eq!(out.indices.len(), 6 * 120);
         assert_eq!(&out.indices[6..12], &[4, 5, 6, 4, 6, 7]);
+        assert_eq!(out.indices.iter().max(), Some(&(4 * 120 - 1)));
     }
 
     #[test]
@@ -400,6 +414,13 @@ mod tests {
             Some(4)
         );
         assert_eq!(out.extras["lod"]["leaves"], 96);
+        // The index buffer draws each sector's original leaves, sector after sector.
+        let finest: Vec<u32> = sectors
+            .iter()
+            .flat_map(|s| s.offset..s.offset + s.table.originals)
+            .collect();
+        let drawn: Vec<u32> = out.indices.chunks(6).map(|q| q[0] / 4).collect();
+        assert_eq!(drawn, finest);
     }
 
     #[test]

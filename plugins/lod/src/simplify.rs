@@ -3,17 +3,20 @@
 //! distance, within bounds that forbid far or differently oriented pairs, until no pair is
 //! allowed. The result is the collapse forest ([`Chain`]).
 //!
-//! The thesis evaluates every pair at every step (cubic in the number of leaves). Here the
-//! candidates of a leaf are the living leaves in the 8 cells of a uniform grid nearest it
-//! (the grid is rebuilt coarser as leaves merge), each leaf keeps its best candidate in a
-//! priority queue, and stale entries are refreshed lazily when popped: a pair whose partner
-//! has gone makes the survivor look for a new best, and a new leaf looks for its own. Costs
-//! never change while both leaves live, so every collapse joins the cheapest pair the queue
-//! knows of; the result is deterministic (ties go to the lower label).
+//! The thesis evaluates every pair at every step (cubic in the number of leaves). Here a
+//! leaf's candidates come from a dense uniform grid (rebuilt coarser each time half the
+//! leaves have merged): the living leaves no larger than it within the distance bound, of
+//! which it keeps the eight cheapest in a list. A priority queue holds one entry per leaf,
+//! its cheapest unconsumed candidate, and is updated lazily: a popped pair whose partner has
+//! gone, or whose new leaf would break the area bounds, moves its leaf on to its next
+//! candidate; a leaf whose list is used up searches again (for partners made since, or
+//! beyond the ones it consumed), and a new leaf searches for its own. Costs never change
+//! while both leaves live and the bounds are checked on the new leaf only when its pair is
+//! the cheapest in the queue, which then becomes the new leaf itself. Nothing is allocated
+//! per collapse; the result is deterministic (ties go to the lower label).
 
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
-use std::hash::{BuildHasherDefault, Hasher};
+use std::collections::BinaryHeap;
 
 use glam::Vec3;
 
@@ -77,7 +80,7 @@ impl Default for Bounds {
         Bounds {
             max_distance: 1.5,
             max_angle: 75.0,
-            max_growth: 1.3,
+            max_growth: 2.0,
             min_density: 0.1,
             max_overhang: 0.1,
         }
@@ -175,15 +178,46 @@ pub fn simplify(leaves: &[Leaf], selection: &Selection) -> Chain {
     }
 }
 
-/// A queue entry: the cost bits (non-negative floats order like their bits), the leaf and
-/// its best partner.
-type Entry = Reverse<(u32, u32, u32)>;
+/// How many candidate partners a leaf remembers between searches (its nearest by cost).
+const CANDIDATES: usize = 8;
+
+/// How many times a leaf whose candidates were all refused looks farther.
+const RETRIES: u8 = 1;
+
+/// A candidate's sort key: the cost's bits (non-negative floats order like their bits)
+/// above the partner's label, so ties go to the lower label.
+fn key(cost: f32, label: u32) -> u64 {
+    (u64::from(cost.to_bits()) << 32) | u64::from(label)
+}
+
+/// A queue entry: a leaf's current candidate key and the leaf. Every living leaf has at most
+/// one entry in the queue; entries of dead leaves are skipped when popped.
+type Entry = Reverse<(u64, u32)>;
+
+/// What the simplifier keeps per leaf label besides the leaf: its candidate list (the
+/// `CANDIDATES` cheapest allowed-by-angle partners of its last search, by key), how far it
+/// has been consumed, the largest key consumed and the first label its last search did not
+/// see.
+#[derive(Clone, Copy)]
+struct Search {
+    len: u8,
+    next: u8,
+    /// Whether a candidate of the list was found dead (the search is worth repeating).
+    died: bool,
+    /// Searches repeated although every candidate had been refused.
+    refused: u8,
+    floor: u64,
+    seen_below: u32,
+}
 
 struct Simplifier {
     leaves: Vec<Leaf>,
     children: Vec<[u32; 2]>,
     alive: Vec<bool>,
     alive_count: usize,
+    /// `CANDIDATES` keys per label (only the first `len` of each are meaningful).
+    candidates: Vec<u64>,
+    searches: Vec<Search>,
     grid: Grid,
     built_with: usize,
     heap: BinaryHeap<Entry>,
@@ -214,14 +248,20 @@ impl Simplifier {
             .iter()
             .map(|l| axis.distance(l.center))
             .fold(0.0f32, f32::max);
+        // A chain has at most 2|O| - 1 leaves: everything per label is allocated once.
+        let capacity = 2 * leaves.len();
+        let mut all = Vec::with_capacity(capacity);
+        all.extend_from_slice(leaves);
         let mut s = Simplifier {
-            leaves: leaves.to_vec(),
+            leaves: all,
             children: Vec::with_capacity(leaves.len()),
-            alive: vec![true; leaves.len()],
+            alive: Vec::with_capacity(capacity),
             alive_count: leaves.len(),
-            grid: Grid::new(1.0),
+            candidates: Vec::with_capacity(capacity * CANDIDATES),
+            searches: Vec::with_capacity(capacity),
+            grid: Grid::default(),
             built_with: 0,
-            heap: BinaryHeap::with_capacity(leaves.len() * 2),
+            heap: BinaryHeap::with_capacity(capacity),
             weights: selection.weights,
             max_distance: selection.bounds.max_distance.max(0.0),
             max_growth: selection.bounds.max_growth,
@@ -237,137 +277,242 @@ impl Simplifier {
             axis,
             inv_crown: if crown > 0.0 { 1.0 / crown } else { 0.0 },
         };
+        s.alive.resize(leaves.len(), true);
+        s.candidates.resize(leaves.len() * CANDIDATES, 0);
+        let fresh = Search {
+            len: 0,
+            next: 0,
+            died: false,
+            refused: 0,
+            floor: 0,
+            seen_below: 0,
+        };
+        s.searches.resize(leaves.len(), fresh);
         s.rebuild_grid();
         s
     }
 
+    /// Pops the cheapest candidate pair until none is left. A pair with a dead partner moves
+    /// its leaf on to its next candidate; a living pair is collapsed if the new leaf keeps
+    /// the bounds, otherwise its leaf moves on too. A leaf whose list is used up searches
+    /// again, for partners it has not consumed yet.
     fn run(&mut self) {
-        for i in 0..self.leaves.len() as u32 {
-            self.push_best(i);
+        // The first searches go cell by cell, so neighbouring searches share the cells they
+        // read (the queue pops by key alone, so the order of pushes does not matter).
+        let mut order = Vec::with_capacity(self.leaves.len());
+        for cell in &self.grid.cells {
+            order.extend(cell.iter().map(|slot| slot.label));
         }
-        while let Some(Reverse((_, a, b))) = self.heap.pop() {
+        for i in order {
+            self.search(i, false);
+        }
+        while let Some(Reverse((key, a))) = self.heap.pop() {
             if !self.alive[a as usize] {
                 continue;
             }
-            if !self.alive[b as usize] {
-                self.push_best(a);
-                continue;
-            }
-            let leaf = Leaf::collapse(&self.leaves[a as usize], &self.leaves[b as usize]);
-            let label = self.leaves.len() as u32;
-            for old in [a, b] {
-                self.alive[old as usize] = false;
-                self.grid.remove(old, self.leaves[old as usize].center);
-            }
-            // The thesis' figure 2.3 keeps the lower label on the left.
-            self.children.push([a.min(b), a.max(b)]);
-            self.leaves.push(leaf);
-            self.alive.push(true);
-            self.alive_count -= 1;
-            if self.alive_count * 2 <= self.built_with {
-                self.rebuild_grid();
-            } else {
-                self.grid.insert(label, &leaf);
-            }
-            self.push_best(label);
-        }
-    }
-
-    /// A grid whose cells hold a few living leaves each, twice as wide as the distance
-    /// bound between leaves of the mean size, so that the eight cells nearest a leaf reach
-    /// its allowed partners of similar size.
-    fn rebuild_grid(&mut self) {
-        let living: Vec<u32> = (0..self.leaves.len() as u32)
-            .filter(|&i| self.alive[i as usize])
-            .collect();
-        let mean_radius = living
-            .iter()
-            .map(|&i| f64::from(self.leaves[i as usize].radius()))
-            .sum::<f64>()
-            / living.len().max(1) as f64;
-        let reach = (self.max_distance as f64 * 4.0 * mean_radius) as f32;
-        let cell = if reach > 0.0 && reach.is_finite() {
-            reach
-        } else {
-            1.0
-        };
-        let mut grid = Grid::new(cell);
-        for &i in &living {
-            grid.insert(i, &self.leaves[i as usize]);
-        }
-        self.grid = grid;
-        self.built_with = living.len();
-    }
-
-    fn push_best(&mut self, a: u32) {
-        if let Some((cost, b)) = self.best(a) {
-            self.heap.push(Reverse((cost.to_bits(), a, b)));
-        }
-    }
-
-    /// The allowed partner of `a` with the least cost among the living leaves in the 8
-    /// cells nearest it (ties: the lower label).
-    fn best(&self, a: u32) -> Option<(f32, u32)> {
-        let la = &self.leaves[a as usize];
-        let me = Slot {
-            center: la.center,
-            radius: la.radius(),
-            normal: la.normal,
-            area: la.area(),
-            count: la.count,
-            label: a,
-        };
-        let mut candidates: Vec<(f32, u32)> = Vec::new();
-        for cell in self.grid.around(la.center) {
-            for slot in cell {
-                // The distance bound first: it needs no square root.
-                let reach = self.max_distance * (me.radius + slot.radius);
-                if slot.label == a || me.center.distance_squared(slot.center) > reach * reach {
+            let b = key as u32;
+            let dead = !self.alive[b as usize];
+            if !dead {
+                let new = Leaf::collapse(&self.leaves[a as usize], &self.leaves[b as usize]);
+                if self.allowed(a, b, &new) {
+                    self.collapse(a, b, new);
                     continue;
                 }
-                if let Some(cost) = self.cost(&me, slot) {
-                    candidates.push((cost, slot.label));
-                }
             }
+            self.advance(a, key, dead);
         }
-        // The area bounds need the new leaf: check the cheapest candidates first (usually
-        // the first passes, so no sort).
-        while !candidates.is_empty() {
-            let (k, &(cost, b)) = candidates
-                .iter()
-                .enumerate()
-                .min_by(|x, y| x.1.0.total_cmp(&y.1.0).then(x.1.1.cmp(&y.1.1)))?;
-            let lb = &self.leaves[b as usize];
-            let new = Leaf::collapse(la, lb);
-            let area = new.area();
-            let slack = (new.hi - new.lo) * self.max_overhang;
-            let (lo, hi) = (new.lo - slack, new.hi + slack);
-            let inside = new
+    }
+
+    /// Joins `a` and `b` into `new`, which searches for its own partners.
+    fn collapse(&mut self, a: u32, b: u32, new: Leaf) {
+        let label = self.leaves.len() as u32;
+        for old in [a, b] {
+            self.alive[old as usize] = false;
+            self.grid.remove(old, self.leaves[old as usize].center);
+        }
+        // The thesis' figure 2.3 keeps the lower label on the left.
+        self.children.push([a.min(b), a.max(b)]);
+        self.leaves.push(new);
+        self.alive.push(true);
+        self.candidates.extend_from_slice(&[0; CANDIDATES]);
+        self.searches.push(Search {
+            len: 0,
+            next: 0,
+            died: false,
+            refused: 0,
+            floor: 0,
+            seen_below: 0,
+        });
+        self.alive_count -= 1;
+        if self.alive_count * 2 <= self.built_with {
+            self.rebuild_grid();
+        } else {
+            self.grid.insert(label, &new);
+        }
+        self.search(label, false);
+    }
+
+    /// `a`'s candidate `consumed` is `dead` or refused: queue its next living candidate, or
+    /// search again when the list is used up and one of its candidates had died.
+    fn advance(&mut self, a: u32, consumed: u64, dead: bool) {
+        let s = &mut self.searches[a as usize];
+        s.floor = s.floor.max(consumed);
+        s.died |= dead;
+        let base = a as usize * CANDIDATES;
+        while s.next < s.len {
+            let key = self.candidates[base + s.next as usize];
+            s.next += 1;
+            if self.alive[key as u32 as usize] {
+                self.heap.push(Reverse((key, a)));
+                return;
+            }
+            s.floor = s.floor.max(key);
+            s.died = true;
+        }
+        // A list whose every candidate was refused by the bounds looks farther only
+        // `RETRIES` times, then retires its leaf; new leaves near it still find it.
+        if s.died || s.refused < RETRIES {
+            s.refused += u8::from(!s.died);
+            self.search(a, true);
+        }
+    }
+
+    /// Fills `a`'s candidate list with its `CANDIDATES` nearest partners allowed by the
+    /// distance and angle bounds, cheapest first, and queues the first. The grid is searched
+    /// in rings of cells around `a` until the ring is farther than the farthest of them, or
+    /// than the distance bound to a partner as large as `a`. A repeated search (`again`) skips the
+    /// partners consumed before (keys up to the floor) unless they were made after the last
+    /// search.
+    fn search(&mut self, a: u32, again: bool) {
+        let la = &self.leaves[a as usize];
+        let me = Slot::of(a, la);
+        let (floor, seen_below) = {
+            let s = &self.searches[a as usize];
+            (s.floor, s.seen_below)
+        };
+        // The distance bound to partners no larger than `a`: larger ones find `a` in their
+        // own searches.
+        let reach = self.max_distance * 2.0 * me.radius;
+        // The nearest allowed partners: (distance squared, key), by distance.
+        let mut near = [(f32::MAX, u64::MAX); CANDIDATES];
+        let mut len = 0usize;
+        let centre = self.grid.coords(me.center);
+        let mut ring = 0i32;
+        loop {
+            self.grid.ring(centre, ring, |cell| {
+                for slot in cell {
+                    let d2 = me.center.distance_squared(slot.center);
+                    let limit = self.max_distance * (me.radius + slot.radius);
+                    if slot.label == a
+                        || d2 > limit * limit
+                        || (len == CANDIDATES && d2 >= near[CANDIDATES - 1].0)
+                    {
+                        continue;
+                    }
+                    let Some(cost) = self.cost(&me, la, slot) else {
+                        continue;
+                    };
+                    let k = key(cost, slot.label);
+                    if again && k <= floor && slot.label < seen_below {
+                        continue;
+                    }
+                    // Insertion into the sorted, bounded list.
+                    let mut i = len.min(CANDIDATES - 1);
+                    while i > 0 && near[i - 1].0 > d2 {
+                        near[i] = near[i - 1];
+                        i -= 1;
+                    }
+                    near[i] = (d2, k);
+                    len = (len + 1).min(CANDIDATES);
+                }
+            });
+            // Every point of the rings beyond is at least `ring` cells away.
+            let beyond = ring as f32 * self.grid.cell;
+            if (len == CANDIDATES && beyond * beyond >= near[len - 1].0)
+                || beyond >= reach
+                || !self.grid.has_ring(centre, ring + 1)
+            {
+                break;
+            }
+            ring += 1;
+        }
+        let mut best = near.map(|(_, k)| k);
+        best[..len].sort_unstable();
+        let base = a as usize * CANDIDATES;
+        self.candidates[base..base + CANDIDATES].copy_from_slice(&best);
+        let s = &mut self.searches[a as usize];
+        s.died = false;
+        s.len = len as u8;
+        s.next = u8::from(len > 0);
+        s.seen_below = self.leaves.len() as u32;
+        if len > 0 {
+            self.heap.push(Reverse((best[0], a)));
+        }
+    }
+
+    /// Whether the new leaf of `a` and `b` keeps the area bounds: it grows the pair's area by
+    /// at most `max_growth`, its leaves cover at least `min_density` of it, and its corners
+    /// stay within `max_overhang` of the box around the original leaves it stands for.
+    fn allowed(&self, a: u32, b: u32, new: &Leaf) -> bool {
+        let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
+        let area = new.area();
+        let slack = (new.hi - new.lo) * self.max_overhang;
+        let (lo, hi) = (new.lo - slack, new.hi + slack);
+        area <= self.max_growth * (la.area() + lb.area())
+            && new.leaf_area >= self.min_density * area
+            && new
                 .corners()
                 .iter()
-                .all(|c| c.cmpge(lo).all() && c.cmple(hi).all());
-            if area <= self.max_growth * (la.area() + lb.area())
-                && new.leaf_area >= self.min_density * area
-                && inside
-            {
-                return Some((cost, b));
-            }
-            candidates.swap_remove(k);
+                .all(|c| c.cmpge(lo).all() && c.cmple(hi).all())
+    }
+
+    /// A grid of the living leaves with about three leaves per occupied cell, so that the
+    /// nearest partners of a leaf are found in its cell and the next ring or two.
+    fn rebuild_grid(&mut self) {
+        let mut lo = Vec3::splat(f32::MAX);
+        let mut hi = Vec3::splat(f32::MIN);
+        let mut radii = 0.0f64;
+        let mut living = 0usize;
+        for (leaf, _) in self.leaves.iter().zip(&self.alive).filter(|(_, a)| **a) {
+            lo = lo.min(leaf.center);
+            hi = hi.max(leaf.center);
+            radii += f64::from(leaf.radius());
+            living += 1;
         }
-        None
+        let mean_radius = (radii / living.max(1) as f64) as f32;
+        // Cells as wide as the reach of a leaf of the mean size, narrower while the occupied
+        // ones hold more than three leaves each (and the grid has at most a cell per leaf).
+        let mut cell = self.max_distance * 2.0 * mean_radius;
+        loop {
+            let mut grid = Grid::new(lo, hi, cell, living);
+            for (i, leaf) in self.leaves.iter().enumerate() {
+                if self.alive[i] {
+                    grid.insert(i as u32, leaf);
+                }
+            }
+            let occupied = grid.cells.iter().filter(|c| !c.is_empty()).count();
+            let finer = grid.cells.len() * 8 <= living;
+            cell = grid.cell * 0.5;
+            self.grid = grid;
+            if occupied * 3 >= living || !finer {
+                break;
+            }
+        }
+        self.built_with = living;
     }
 
     /// The weighted distance of seed 003 §2.4.1 between two leaves within the distance
     /// bound, or `None` when the angle bound forbids the pair.
-    fn cost(&self, a: &Slot, b: &Slot) -> Option<f32> {
-        let cos = a.normal.dot(b.normal).abs();
+    fn cost(&self, a: &Slot, la: &Leaf, b: &Slot) -> Option<f32> {
+        let lb = &self.leaves[b.label as usize];
+        let cos = la.normal.dot(lb.normal).abs();
         if cos < self.min_cos {
             return None;
         }
         let d = a.center.distance(b.center) / (a.radius + b.radius);
         let w = &self.weights;
-        let (na, nb) = (a.count as f32, b.count as f32);
-        let (aa, ab) = (a.area, b.area);
+        let (na, nb) = (la.count as f32, lb.count as f32);
+        let (aa, ab) = (la.area(), lb.area());
         let mid = (a.center + b.center) * 0.5;
         let cost = w.distance * d
             + w.coplanarity * (1.0 - cos.min(1.0))
@@ -378,101 +523,126 @@ impl Simplifier {
     }
 }
 
-/// A grid cell's copy of what the first test of a candidate needs, so the scan reads
-/// contiguous memory.
+/// A grid cell's copy of what the distance test of a candidate needs (20 bytes), so the scan
+/// reads little, contiguous memory; the rest is read from the leaf when it passes.
 #[derive(Clone, Copy)]
 struct Slot {
     center: Vec3,
     radius: f32,
-    normal: Vec3,
-    area: f32,
-    count: u32,
     label: u32,
 }
 
-/// A uniform grid of living leaves by cell.
+impl Slot {
+    fn of(label: u32, leaf: &Leaf) -> Slot {
+        Slot {
+            center: leaf.center,
+            radius: leaf.radius(),
+            label,
+        }
+    }
+}
+
+/// A dense uniform grid of living leaves over the box of their centres; points outside the
+/// box (new leaves may stray a little) go to the nearest border cell.
+#[derive(Default)]
 struct Grid {
+    origin: Vec3,
+    cell: f32,
     inv_cell: f32,
-    cells: HashMap<[i32; 3], Vec<Slot>, BuildHasherDefault<CellHasher>>,
+    dims: [i32; 3],
+    cells: Vec<Vec<Slot>>,
 }
 
 impl Grid {
-    fn new(cell: f32) -> Grid {
+    /// At most one cell per leaf: a wider cell than asked when the box is large.
+    fn new(lo: Vec3, hi: Vec3, cell: f32, leaves: usize) -> Grid {
+        let extent = (hi - lo).max(Vec3::ZERO);
+        let most = leaves.max(1) as f32;
+        let mut cell = if cell > 0.0 && cell.is_finite() {
+            cell
+        } else {
+            extent.max_element().max(1.0)
+        };
+        let count = |cell: f32| {
+            let n = (extent / cell).floor() + Vec3::ONE;
+            n.x * n.y * n.z
+        };
+        let cells = count(cell);
+        if cells > most {
+            cell *= (cells / most).cbrt().max(1.0) * 1.01;
+            while count(cell) > most {
+                cell *= 1.26;
+            }
+        }
+        let n = (extent / cell).floor() + Vec3::ONE;
+        // `as` saturates and maps NaN to 0 (coordinates near f32::MAX): at least one cell.
+        let dims = [n.x, n.y, n.z].map(|v| (v as i32).max(1));
         Grid {
+            origin: lo,
+            cell,
             inv_cell: 1.0 / cell,
-            cells: HashMap::default(),
+            dims,
+            cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
         }
     }
 
-    fn key(&self, p: Vec3) -> [i32; 3] {
-        let k = (p * self.inv_cell).floor();
-        [k.x as i32, k.y as i32, k.z as i32]
+    /// The cell coordinates of `p`, clamped to the grid.
+    fn coords(&self, p: Vec3) -> [i32; 3] {
+        let q = ((p - self.origin) * self.inv_cell).floor();
+        let clamp = |v: f32, n: i32| {
+            // `as` saturates and maps NaN to 0.
+            (v as i32).clamp(0, n - 1)
+        };
+        [
+            clamp(q.x, self.dims[0]),
+            clamp(q.y, self.dims[1]),
+            clamp(q.z, self.dims[2]),
+        ]
+    }
+
+    fn index(&self, c: [i32; 3]) -> usize {
+        ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize
     }
 
     fn insert(&mut self, label: u32, leaf: &Leaf) {
-        let key = self.key(leaf.center);
-        self.cells.entry(key).or_default().push(Slot {
-            center: leaf.center,
-            radius: leaf.radius(),
-            normal: leaf.normal,
-            area: leaf.area(),
-            count: leaf.count,
-            label,
-        });
+        let i = self.index(self.coords(leaf.center));
+        self.cells[i].push(Slot::of(label, leaf));
     }
 
     fn remove(&mut self, label: u32, p: Vec3) {
-        let key = self.key(p);
-        if let Some(cell) = self.cells.get_mut(&key)
-            && let Some(i) = cell.iter().position(|s| s.label == label)
-        {
-            cell.swap_remove(i);
+        let i = self.index(self.coords(p));
+        let cell = &mut self.cells[i];
+        if let Some(k) = cell.iter().position(|s| s.label == label) {
+            cell.swap_remove(k);
         }
     }
 
-    /// The eight cells nearest `p` (its own and the neighbours on the sides it is nearer
-    /// to) that hold leaves: with cells twice the search radius, they hold every leaf
-    /// within that radius.
-    fn around(&self, p: Vec3) -> impl Iterator<Item = &Vec<Slot>> {
-        let q = p * self.inv_cell;
-        let k = q.floor();
-        let step = |f: f32| if f < 0.5 { -1 } else { 1 };
-        let base = [k.x as i32, k.y as i32, k.z as i32];
-        let off = [step(q.x - k.x), step(q.y - k.y), step(q.z - k.z)];
-        (0..8).filter_map(move |n| {
-            let key = [
-                base[0].saturating_add(if n & 1 == 0 { 0 } else { off[0] }),
-                base[1].saturating_add(if n & 2 == 0 { 0 } else { off[1] }),
-                base[2].saturating_add(if n & 4 == 0 { 0 } else { off[2] }),
-            ];
-            self.cells.get(&key)
-        })
-    }
-}
-
-/// A multiply-rotate hasher for grid keys (std's SipHash is needlessly slow here).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        // The splitmix64 finaliser, so that every bit of the key reaches the low bits.
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+    /// Whether any cell lies `ring` cells away from `c` (Chebyshev distance).
+    fn has_ring(&self, c: [i32; 3], ring: i32) -> bool {
+        (0..3).any(|k| c[k] - ring >= 0 || c[k] + ring < self.dims[k])
     }
 
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
+    /// Calls `visit` on the cells exactly `ring` cells away from `c` (Chebyshev distance)
+    /// within the grid.
+    fn ring(&self, c: [i32; 3], ring: i32, mut visit: impl FnMut(&[Slot])) {
+        let lo = [0, 1, 2].map(|k| (c[k] - ring).max(0));
+        let hi = [0, 1, 2].map(|k| (c[k] + ring).min(self.dims[k] - 1));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                if ring == 0 || (z - c[2]).abs() == ring || (y - c[1]).abs() == ring {
+                    for x in lo[0]..=hi[0] {
+                        visit(&self.cells[self.index([x, y, z])]);
+                    }
+                } else {
+                    // Off the ring's faces in y and z only the two x ends are on it.
+                    for x in [c[0] - ring, c[0] + ring] {
+                        if x >= 0 && x < self.dims[0] {
+                            visit(&self.cells[self.index([x, y, z])]);
+                        }
+                    }
+                }
+            }
         }
-    }
-
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(23) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
     }
 }
 

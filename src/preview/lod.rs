@@ -1,0 +1,187 @@
+//! Foliage levels of detail in the preview: a leaf mesh with `extras.pge.lod` (API.md §7)
+//! is drawn at a chosen fraction of its leaves through the two ranges of V of each sector,
+//! from one index buffer of sequential quads over all of V uploaded once with the mesh.
+
+use std::ops::Range;
+
+use pge_lod::{Row, first_levels};
+use serde_json::Value;
+
+use super::scene::VERTEX_FLOATS;
+
+/// Parses `--lod-level`: a fraction of the leaves between 0.01 and 1.
+pub fn parse_fraction(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(f) if (0.01..=1.0).contains(&f) => Ok(f),
+        _ => Err(format!("'{text}' is not a fraction between 0.01 and 1")),
+    }
+}
+
+/// One sector's V: its leaves are `offset..` in the mesh (four vertices each) and its table
+/// rows `[a, b, c]` are relative to `offset`.
+#[derive(Clone, Debug, PartialEq)]
+struct Sector {
+    offset: u32,
+    leaves: u32,
+    roots: u32,
+    rows: Vec<[u32; 3]>,
+}
+
+/// The LOD tables of a leaf mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LeafLod {
+    sectors: Vec<Sector>,
+    /// Leaves in V (all sectors): the mesh's vertices over four.
+    quads: u32,
+}
+
+impl LeafLod {
+    /// Reads `extras.pge.lod` (`{leaves, roots, table}` or `{leaves, roots, sectors}`) of a
+    /// mesh with `vertices` vertices; `None` when absent or inconsistent with the mesh.
+    #[must_use]
+    pub fn from_extras(extras: &serde_json::Map<String, Value>, vertices: usize) -> Option<Self> {
+        let lod = extras.get("lod")?;
+        let number =
+            |v: &Value, key: &str| v.get(key)?.as_u64().and_then(|n| u32::try_from(n).ok());
+        let sector = |v: &Value, offset: u32| -> Option<Sector> {
+            let rows = v
+                .get("table")?
+                .as_array()?
+                .iter()
+                .map(|r| {
+                    let r = r.as_array()?;
+                    let get = |k: usize| r.get(k)?.as_u64().and_then(|n| u32::try_from(n).ok());
+                    Some([get(0)?, get(1)?, get(2)?])
+                })
+                .collect::<Option<Vec<_>>>()?;
+            Some(Sector {
+                offset,
+                leaves: number(v, "leaves")?,
+                roots: number(v, "roots")?,
+                rows,
+            })
+        };
+        let sectors = match lod.get("sectors").and_then(Value::as_array) {
+            Some(list) => list
+                .iter()
+                .map(|s| sector(s, number(s, "offset")?))
+                .collect::<Option<Vec<_>>>()?,
+            None => vec![sector(lod, 0)?],
+        };
+        let quads = u32::try_from(vertices / 4).ok()?;
+        // Every range must lie in the mesh.
+        let fits = sectors.iter().all(|s| {
+            !s.rows.is_empty()
+                && s.rows.iter().all(|&[a, b, c]| {
+                    u64::from(s.offset) + u64::from(a) <= u64::from(quads)
+                        && u64::from(s.offset) + u64::from(b) + u64::from(c) <= u64::from(quads)
+                })
+        });
+        (fits && vertices.is_multiple_of(4)).then_some(LeafLod { sectors, quads })
+    }
+
+    /// Six indices per leaf of V, two triangles `(0 1 2) (0 2 3)` of its four vertices.
+    #[must_use]
+    pub fn quad_indices(&self) -> Vec<u32> {
+        (0..self.quads)
+            .flat_map(|k| {
+                let b = 4 * k;
+                [b, b + 1, b + 2, b, b + 2, b + 3]
+            })
+            .collect()
+    }
+
+    /// The ranges of [`LeafLod::quad_indices`] to draw at `percent` of the leaves (1..=100):
+    /// each sector at the level with `max(roots, percent% of its leaves)` leaves.
+    #[must_use]
+    pub fn index_ranges(&self, percent: u8) -> Vec<Range<u32>> {
+        let mut out = Vec::with_capacity(2 * self.sectors.len());
+        for s in &self.sectors {
+            let want = (u64::from(s.leaves) * u64::from(percent.clamp(1, 100))).div_ceil(100);
+            let level = (want.saturating_sub(u64::from(s.roots)) as usize).min(s.rows.len() - 1);
+            let [a, b, c] = s.rows[level];
+            let o = s.offset;
+            for r in [o..o + a, o + b..o + b + c] {
+                if !r.is_empty() {
+                    out.push(6 * r.start..6 * r.end);
+                }
+            }
+        }
+        out
+    }
+
+    /// A copy of a leaf mesh's interleaved vertices ([`VERTEX_FLOATS`] floats each, colour
+    /// last) with every leaf coloured by the level that created it (the first level drawing
+    /// it): blue for the coarsest, through green, to yellow for the original leaves.
+    #[must_use]
+    pub fn level_colors(&self, vertices: &[f32]) -> Vec<f32> {
+        let mut out = vertices.to_vec();
+        for s in &self.sectors {
+            let len = (2 * s.leaves).saturating_sub(s.roots) as usize;
+            let rows: Vec<Row> = s.rows.iter().map(|&[a, b, c]| Row { a, b, c }).collect();
+            let last = (rows.len().max(2) - 1) as f32;
+            for (k, level) in first_levels(&rows, len).into_iter().enumerate() {
+                let t = level as f32 / last;
+                let color = [t, 0.35 + 0.5 * t, 1.0 - 0.9 * t, 1.0];
+                for v in 0..4 {
+                    let at = (4 * (s.offset as usize + k) + v) * VERTEX_FLOATS + 8;
+                    if let Some(slot) = out.get_mut(at..at + 4) {
+                        slot.copy_from_slice(&color);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The leaves drawn by [`LeafLod::index_ranges`].
+    #[must_use]
+    pub fn drawn(&self, percent: u8) -> u32 {
+        self.index_ranges(percent)
+            .iter()
+            .map(|r| (r.end - r.start) / 6)
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn levels_are_read_and_drawn_as_two_ranges_per_sector() {
+        // Four original leaves and two collapses (six leaves in V), as pge-lod writes them.
+        let extras = json!({"lod": {"leaves": 4, "roots": 2,
+                              "table": [[0, 4, 2], [2, 5, 1], [4, 4, 0]]}});
+        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 24).expect("lod");
+        assert_eq!(lod.quad_indices().len(), 36);
+        assert_eq!(lod.index_ranges(100), vec![0..24]);
+        assert_eq!(lod.drawn(100), 4);
+        assert_eq!(lod.index_ranges(1), vec![24..36]);
+        assert_eq!(lod.drawn(75), 3);
+        assert_eq!(lod.index_ranges(75), vec![0..12, 30..36]);
+        // Two sectors, one after the other.
+        let extras = json!({"lod": {"leaves": 4, "roots": 2, "sectors": [
+            {"offset": 0, "leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]},
+            {"offset": 3, "leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]}]}});
+        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 24).expect("lod");
+        assert_eq!(lod.index_ranges(1), vec![12..18, 30..36]);
+        assert_eq!(lod.index_ranges(100), vec![0..12, 18..30]);
+        // Out of the mesh: ignored.
+        assert!(LeafLod::from_extras(extras.as_object().expect("object"), 20).is_none());
+        assert!(LeafLod::from_extras(&serde_json::Map::new(), 24).is_none());
+        // Colour by level: the roots (level 0) blue, the original leaves yellow.
+        let extras = json!({"lod": {"leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]}});
+        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 12).expect("lod");
+        let colored = lod.level_colors(&vec![0.5; 12 * VERTEX_FLOATS]);
+        let near = |leaf: usize, want: [f32; 4]| {
+            let got = &colored[4 * leaf * VERTEX_FLOATS + 8..][..4];
+            got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6)
+        };
+        assert!(near(0, [1.0, 0.85, 0.1, 1.0]) && near(1, [1.0, 0.85, 0.1, 1.0]));
+        assert!(near(2, [0.0, 0.35, 1.0, 1.0]));
+        // Positions are untouched.
+        assert_eq!(&colored[..8], &[0.5; 8]);
+    }
+}
