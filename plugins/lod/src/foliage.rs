@@ -174,8 +174,11 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
     let mut out = Mesh {
         name: mesh.name.clone(),
         material: match &atlas {
+            // The leaf's normal and roughness maps do not line up with the atlas' UVs.
             Some(a) => Arc::new(Material {
                 texture: Some(a.texture.clone()),
+                normal_texture: None,
+                metallic_roughness_texture: None,
                 ..(*mesh.material).clone()
             }),
             None => mesh.material.clone(),
