@@ -498,32 +498,19 @@ fn read_mesh(mesh: &gltf::Mesh, blob: Option<&[u8]>) -> anyhow::Result<(String, 
     Ok((name, parts))
 }
 
-/// A glTF material as PGE's, its base colour texture read back from the binary chunk.
+/// A glTF material as PGE's, its textures (base colour, normal, metallic-roughness) read
+/// back from the binary chunk.
 fn read_material(m: &gltf::Material, blob: Option<&[u8]>) -> anyhow::Result<Material> {
     let pbr = m.pbr_metallic_roughness();
-    let texture = match pbr.base_color_texture() {
-        None => None,
-        Some(info) => {
-            let image = info.texture().source();
-            let gltf::image::Source::View { view, .. } = image.source() else {
-                bail!("an image outside the .glb");
-            };
-            let png = blob
-                .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
-                .context("an image outside the binary chunk")?;
-            let (width, height) = png_size(png).context("an image that is not a PNG")?;
-            Some(Arc::new(Texture {
-                name: image.name().unwrap_or_default().to_string(),
-                width,
-                height,
-                png: png.to_vec(),
-            }))
-        }
+    let read = |texture: Option<gltf::Texture>| -> anyhow::Result<Option<Arc<Texture>>> {
+        texture.map(|t| read_texture(&t, blob)).transpose()
     };
     Ok(Material {
         name: m.name().unwrap_or_default().to_string(),
         base_color: pbr.base_color_factor(),
-        texture,
+        texture: read(pbr.base_color_texture().map(|i| i.texture()))?,
+        normal_texture: read(m.normal_texture().map(|i| i.texture()))?,
+        metallic_roughness_texture: read(pbr.metallic_roughness_texture().map(|i| i.texture()))?,
         alpha: match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
@@ -533,6 +520,24 @@ fn read_material(m: &gltf::Material, blob: Option<&[u8]>) -> anyhow::Result<Mate
         metallic: pbr.metallic_factor(),
         roughness: pbr.roughness_factor(),
     })
+}
+
+/// A texture's PNG image, read back from the binary chunk.
+fn read_texture(texture: &gltf::Texture, blob: Option<&[u8]>) -> anyhow::Result<Arc<Texture>> {
+    let image = texture.source();
+    let gltf::image::Source::View { view, .. } = image.source() else {
+        bail!("an image outside the .glb");
+    };
+    let png = blob
+        .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
+        .context("an image outside the binary chunk")?;
+    let (width, height) = png_size(png).context("an image that is not a PNG")?;
+    Ok(Arc::new(Texture {
+        name: image.name().unwrap_or_default().to_string(),
+        width,
+        height,
+        png: png.to_vec(),
+    }))
 }
 
 /// Width and height from a PNG's header.

@@ -155,6 +155,7 @@ impl Params {
 const NONE: u32 = u32::MAX;
 
 /// The growing state.
+#[derive(Clone)]
 struct State {
     points: Vec<Vec3>,
     alive: Vec<bool>,
@@ -184,6 +185,7 @@ struct State {
 
 /// Space colonization as an [`Algorithm`]: one step is one growth iteration; `finish` meshes
 /// the current skeleton with [`pge_tree::build_tree`].
+#[derive(Clone)]
 pub struct SpaceColonization {
     params: Params,
     location: Location,
@@ -663,6 +665,12 @@ impl Algorithm for SpaceColonization {
         Ok(Step::Continue)
     }
 
+    /// A copy for the preview's scrubber: the state holds no Lua, and a step never reads
+    /// `ctx.steps` (a run stopped by `--steps` goes on as the original would).
+    fn snapshot(&self) -> Option<Box<dyn Algorithm>> {
+        Some(Box::new(self.clone()))
+    }
+
     /// The skeleton with pipe-model radii and orders, as `finish` meshes it.
     fn skeleton(&self) -> Option<Skeleton> {
         let mut skeleton = SpaceColonization::skeleton(self)?;
@@ -720,6 +728,26 @@ mod tests {
         };
         let model = run(&mut sc, &ctx, &mut |_| {}).expect("grows");
         (sc, model)
+    }
+
+    #[test]
+    fn a_snapshot_goes_on_as_the_original() {
+        let ctx = RunContext::default();
+        let mut a = SpaceColonization::new(crown(300), Location::new("t.lua", 1)).expect("valid");
+        a.init(&ctx).expect("init");
+        for _ in 0..5 {
+            a.step(&ctx).expect("step");
+        }
+        let mut b = a.snapshot().expect("copyable");
+        while a.step(&ctx).expect("step") == Step::Continue {}
+        while b.step(&ctx).expect("step") == Step::Continue {}
+        let (sa, sb) = (
+            Algorithm::skeleton(&a).expect("grown"),
+            b.skeleton().expect("grown"),
+        );
+        assert!(sa.positions.len() > 10);
+        assert_eq!(sa.positions, sb.positions);
+        assert_eq!(sa.parents, sb.parents);
     }
 
     #[test]
