@@ -498,32 +498,28 @@ fn read_mesh(mesh: &gltf::Mesh, blob: Option<&[u8]>) -> anyhow::Result<(String, 
     Ok((name, parts))
 }
 
-/// A glTF material as PGE's, its base colour texture read back from the binary chunk.
+/// A glTF material as PGE's, its base colour, normal and metallic-roughness textures read
+/// back from the binary chunk.
 fn read_material(m: &gltf::Material, blob: Option<&[u8]>) -> anyhow::Result<Material> {
     let pbr = m.pbr_metallic_roughness();
-    let texture = match pbr.base_color_texture() {
-        None => None,
-        Some(info) => {
-            let image = info.texture().source();
-            let gltf::image::Source::View { view, .. } = image.source() else {
-                bail!("an image outside the .glb");
-            };
-            let png = blob
-                .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
-                .context("an image outside the binary chunk")?;
-            let (width, height) = png_size(png).context("an image that is not a PNG")?;
-            Some(Arc::new(Texture {
-                name: image.name().unwrap_or_default().to_string(),
-                width,
-                height,
-                png: png.to_vec(),
-            }))
-        }
-    };
+    let texture = pbr
+        .base_color_texture()
+        .map(|info| read_texture(&info.texture(), blob))
+        .transpose()?;
+    let normal_texture = m
+        .normal_texture()
+        .map(|info| read_texture(&info.texture(), blob))
+        .transpose()?;
+    let metallic_roughness_texture = pbr
+        .metallic_roughness_texture()
+        .map(|info| read_texture(&info.texture(), blob))
+        .transpose()?;
     Ok(Material {
         name: m.name().unwrap_or_default().to_string(),
         base_color: pbr.base_color_factor(),
         texture,
+        normal_texture,
+        metallic_roughness_texture,
         alpha: match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
@@ -533,6 +529,24 @@ fn read_material(m: &gltf::Material, blob: Option<&[u8]>) -> anyhow::Result<Mate
         metallic: pbr.metallic_factor(),
         roughness: pbr.roughness_factor(),
     })
+}
+
+/// A texture's PNG image, read from the binary chunk.
+fn read_texture(t: &gltf::Texture, blob: Option<&[u8]>) -> anyhow::Result<Arc<Texture>> {
+    let image = t.source();
+    let gltf::image::Source::View { view, .. } = image.source() else {
+        bail!("an image outside the .glb");
+    };
+    let png = blob
+        .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
+        .context("an image outside the binary chunk")?;
+    let (width, height) = png_size(png).context("an image that is not a PNG")?;
+    Ok(Arc::new(Texture {
+        name: image.name().unwrap_or_default().to_string(),
+        width,
+        height,
+        png: png.to_vec(),
+    }))
 }
 
 /// Width and height from a PNG's header.
