@@ -57,7 +57,7 @@ golden! {
     lsystems_hogeweg: "scripts/lsystems/hogeweg.lua" => 0x3348d1efc0fe102d,
     lsystems_ternary: "scripts/lsystems/ternary.lua" => 0xad8ec191ac750ac3,
     species_oak: "scripts/species/oak.lua" => 0x8e5761e976c7b2e1,
-    species_conifer: "scripts/species/conifer.lua" => 0xcc46533c0baa2334,
+    species_conifer: "scripts/species/conifer.lua" => 0x9aac99d57350a035,
     species_willow: "scripts/species/willow.lua" => 0x4fb0f3bfe92b657d,
     species_topiary: "scripts/species/topiary.lua" => 0x3df4a3c50de2211a,
     species_vase: "scripts/species/vase.lua" => 0xb061eecaab9d4008,

@@ -182,6 +182,65 @@ fn the_exported_skeleton_is_one_tree_with_pipe_radii() {
     }
 }
 
+/// Lua appended to conifer.lua (its `return pge.SpaceColonization{` made `local tree =`):
+/// grows the tree, walks its skeleton as it grew (a branch goes on through each node's first
+/// child, the lowest index; later children start side branches) and fails the run if a
+/// segment turns more than `LIMIT` degrees from its branch's first segment.
+const TURN_CHECK: &str = r#"
+local s = tree:skeleton()
+assert(s:count() > 1000, "a conifer of " .. s:count() .. " nodes")
+local start, continued, worst = {}, {}, 0
+for i = 1, s:count() do
+  local q = s:parent(i)
+  if q > 0 then
+    local d = (s:position(i) - s:position(q)):normalize()
+    start[i] = (continued[q] or start[q] == nil) and d or start[q]
+    continued[q] = true
+    local cos = math.max(-1, math.min(1, d:dot(start[i])))
+    worst = math.max(worst, math.deg(math.acos(cos)))
+  end
+end
+if worst > LIMIT then error(string.format("a branch turns %.1f degrees", worst)) end
+return tree
+"#;
+
+/// Runs conifer.lua with [`TURN_CHECK`] at `limit` degrees; returns the exit code and stderr.
+fn conifer_turn_check(limit: f64, dir: &Path) -> (Option<i32>, String) {
+    let source = std::fs::read_to_string("scripts/species/conifer.lua").expect("conifer.lua");
+    let head = "return pge.SpaceColonization{";
+    assert_eq!(
+        source.matches(head).count(),
+        1,
+        "conifer.lua returns one colonization"
+    );
+    let script = source.replace(head, "local tree = pge.SpaceColonization{")
+        + &TURN_CHECK.replace("LIMIT", &limit.to_string());
+    let path = dir.join("conifer_turns.lua");
+    std::fs::write(&path, script).expect("write");
+    let out = dir.join("tree.glb");
+    let o = pge(&[
+        "run",
+        &path.to_string_lossy(),
+        "-o",
+        &out.to_string_lossy(),
+        "-q",
+    ]);
+    (o.status.code(), text(&o.stderr))
+}
+
+/// The conifer's side branches never loop back (issue 17): no branch of its skeleton turns
+/// more than 120 degrees from its start. (The same walk at 30 degrees does fail: it sees
+/// the turns of the drooping side branches.)
+#[test]
+fn conifer_branches_never_turn_back() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (code, stderr) = conifer_turn_check(120.0, dir.path());
+    assert_eq!(code, Some(0), "{stderr}");
+    let (code, stderr) = conifer_turn_check(30.0, dir.path());
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("a branch turns"), "{stderr}");
+}
+
 /// The mesh envelope of topiary.lua in its three modes.
 #[test]
 fn mesh_envelope_modes() {

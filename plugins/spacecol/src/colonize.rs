@@ -7,6 +7,13 @@
 //! of a node are removed. Before a root's node is within reach of any point, that root grows
 //! a trunk toward the cloud (the sum of unit vectors to all points, seed 000).
 //!
+//! Free growth has no memory: a tip follows whatever pulls it, so a branch that has passed
+//! its points follows the points still beside or above it and can curl back (a conifer's
+//! lower branches follow the cone up toward the leader). Three options, all off by default,
+//! hold a branch's course: direction persistence (the tip's own direction added to the
+//! pull), an angle of perception (a tip sees only points ahead of it; Runions et al.), and a
+//! bound on how far a branch may turn from the direction it started in.
+//!
 //! Cost: a point's nearest node only changes when a node is added closer to it, so each
 //! point keeps its nearest node and its distance to it (its *reach*), and a new node visits
 //! only the points it changes: those within the influence radius and closer to it than to
@@ -55,6 +62,19 @@ pub struct Params {
     pub tropism: Vec3,
     /// Root positions (several for a bush).
     pub roots: Vec<Vec3>,
+    /// Direction persistence w: a node grows along `normalize(pull + w * d)`, where `pull`
+    /// is the unit mean of its attractions and `d` the direction of its own segment, before
+    /// tropism is added (0 by default: the pull alone, seed 000).
+    pub persistence: f32,
+    /// Angle of perception in degrees: a branch tip is pulled only by points within this
+    /// angle of its own direction, so it does not chase points beside or behind it (180 by
+    /// default: every point). Nodes that already have a child sprout side branches toward
+    /// any point.
+    pub perception: f32,
+    /// Largest turn in degrees of a branch from the direction it started in: a step that
+    /// would turn further is clamped to this angle (180 by default: unbounded). A branch
+    /// continues through a node's first child; later children start branches of their own.
+    pub max_turn: f32,
     /// Length of a straight vertical trunk each root grows before anything else may pull
     /// it (0 by default). Lower points meanwhile pull the trunk's nodes into side branches,
     /// so a long trunk through the crown gives a central leader (a conifer).
@@ -93,6 +113,9 @@ impl Params {
             kill: 2.0 * step,
             step,
             tropism: Vec3::ZERO,
+            persistence: 0.0,
+            perception: 180.0,
+            max_turn: 180.0,
             roots: vec![Vec3::ZERO],
             trunk: 0.0,
             max_iterations: 1000,
@@ -119,6 +142,19 @@ impl Params {
                 "kill ({}) must be smaller than influence ({}): points would be removed before they attract",
                 self.kill, self.influence
             ));
+        }
+        if !(self.persistence.is_finite() && self.persistence >= 0.0) {
+            return Err(format!(
+                "persistence must be a number >= 0, got {}",
+                self.persistence
+            ));
+        }
+        for (name, v) in [("perception", self.perception), ("maxTurn", self.max_turn)] {
+            if !(v.is_finite() && v > 0.0 && v <= 180.0) {
+                return Err(format!(
+                    "{name} must be an angle in degrees > 0 and <= 180, got {v}"
+                ));
+            }
         }
         if !(self.trunk.is_finite() && self.trunk >= 0.0) {
             return Err(format!("trunk must be a number >= 0, got {}", self.trunk));
@@ -168,6 +204,12 @@ struct State {
     dead_since_grid: usize,
     nodes: Vec<Vec3>,
     parents: Vec<Option<u32>>,
+    /// Unit direction of each node's segment (zero for a root).
+    dirs: Vec<Vec3>,
+    /// Unit direction each node's branch started in (zero for a root).
+    headings: Vec<Vec3>,
+    /// Whether a node has grown a child.
+    has_child: Vec<bool>,
     /// Nodes by cell of side `step`, for the duplicate-growth guard.
     node_cells: HashMap<[i32; 3], Vec<u32>, BuildHasherDefault<CellHasher>>,
     /// The iteration in which a node's growth was refused (its pullers are dropped next).
@@ -267,8 +309,22 @@ impl State {
     /// Appends a node (its per-node scratch and its cell) without touching the points.
     fn push_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
         let index = self.nodes.len() as u32;
+        let dir = parent.map_or(Vec3::ZERO, |q| {
+            (position - self.nodes[q as usize]).normalize_or_zero()
+        });
+        // The first child continues its parent's branch, later ones start their own.
+        let heading = match parent.map(|q| q as usize) {
+            Some(q) if !self.has_child[q] && self.headings[q] != Vec3::ZERO => self.headings[q],
+            _ => dir,
+        };
+        if let Some(q) = parent {
+            self.has_child[q as usize] = true;
+        }
         self.nodes.push(position);
         self.parents.push(parent);
+        self.dirs.push(dir);
+        self.headings.push(heading);
+        self.has_child.push(false);
         self.refused.push(NONE);
         self.sum.push(Vec3::ZERO);
         self.count.push(0);
@@ -432,6 +488,18 @@ impl Hasher for CellHasher {
     }
 }
 
+/// `d` turned toward `heading` until the angle between them is at most the one whose cosine
+/// and sine are given (both unit vectors; a zero heading bounds nothing).
+fn clamp_turn(d: Vec3, heading: Vec3, cos: f32, sin: f32) -> Vec3 {
+    if heading == Vec3::ZERO || d.dot(heading) >= cos {
+        return d;
+    }
+    let side = (d - heading * d.dot(heading))
+        .try_normalize()
+        .unwrap_or_else(|| heading.any_orthonormal_vector());
+    (heading * cos + side * sin).normalize_or_zero()
+}
+
 fn cell_of(p: Vec3, step: f32) -> [i32; 3] {
     let c = (p / step).floor();
     [c.x as i32, c.y as i32, c.z as i32]
@@ -467,6 +535,9 @@ impl Algorithm for SpaceColonization {
             dead_since_grid: 0,
             nodes: Vec::new(),
             parents: Vec::new(),
+            dirs: Vec::new(),
+            headings: Vec::new(),
+            has_child: Vec::new(),
             node_cells: HashMap::default(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
@@ -510,7 +581,9 @@ impl Algorithm for SpaceColonization {
         st.iteration += 1;
         let iteration = st.iteration;
 
-        // Pulls: each live point adds its unit direction to its nearest node.
+        // Pulls: each live point adds its unit direction to its nearest node (a tip only
+        // perceives the points within its angle of perception).
+        let perceive = (p.perception < 180.0).then(|| p.perception.to_radians().cos());
         let mut active = std::mem::take(&mut st.active);
         active.retain(|&i| st.alive[i as usize]);
         for &i in &active {
@@ -521,11 +594,19 @@ impl Algorithm for SpaceColonization {
                 st.kill(i);
                 continue;
             }
+            let d2 = st.nearest_d2[i];
+            let to = (st.points[i] - st.nodes[n]) / d2.sqrt();
+            if let Some(cos) = perceive
+                && !st.has_child[n]
+                && st.dirs[n] != Vec3::ZERO
+                && to.dot(st.dirs[n]) < cos
+            {
+                continue;
+            }
             if st.count[n] == 0 {
                 st.touched.push(n as u32);
             }
-            let d2 = st.nearest_d2[i];
-            st.sum[n] += (st.points[i] - st.nodes[n]) / d2.sqrt();
+            st.sum[n] += to;
             st.count[n] += 1;
             if d2 < st.closest[n].0 {
                 st.closest[n] = (d2, i as u32);
@@ -536,6 +617,7 @@ impl Algorithm for SpaceColonization {
 
         // Growth directions, all from the state before this iteration's new nodes.
         st.touched.sort_unstable();
+        let max_turn = (p.max_turn < 180.0).then(|| p.max_turn.to_radians().sin_cos());
         let mut growth: Vec<(u32, Option<Vec3>, Option<f32>)> =
             Vec::with_capacity(st.touched.len() + st.trunk_tips.len());
         for &n in &st.touched {
@@ -557,7 +639,17 @@ impl Algorithm for SpaceColonization {
             } else {
                 (st.points[st.closest[n].1 as usize] - st.nodes[n]).normalize_or_zero()
             };
-            growth.push((n as u32, (dir + p.tropism).try_normalize(), None));
+            let dir = if p.persistence > 0.0 {
+                (dir + p.persistence * st.dirs[n]).normalize_or_zero()
+            } else {
+                dir
+            };
+            let dir = (dir + p.tropism).try_normalize().map(|d| match max_turn {
+                // A later child starts a branch of its own: only a continuation is bounded.
+                Some((sin, cos)) if !st.has_child[n] => clamp_turn(d, st.headings[n], cos, sin),
+                _ => d,
+            });
+            growth.push((n as u32, dir, None));
             st.sum[n] = Vec3::ZERO;
             st.count[n] = 0;
             st.closest[n] = (f32::INFINITY, NONE);
@@ -891,6 +983,79 @@ mod tests {
         }
     }
 
+    /// The growth parameters of `scripts/species/conifer.lua` at its default parameters,
+    /// without the options that hold a branch's course: a cone crown, a leader grown first
+    /// through it, drooping side branches.
+    fn conifer() -> Params {
+        let mut p = Params::new(Shape::Cone {
+            base: Vec3::new(0.0, 1.5, 0.0),
+            apex: Vec3::new(0.0, 12.0, 0.0),
+            radius: 3.2,
+        });
+        p.points = Some(3500);
+        p.step = 0.22;
+        p.influence = 1.3;
+        p.kill = 0.35;
+        p.trunk = 12.0 - 1.5 - 0.5;
+        p.tropism = Vec3::new(0.0, -0.3, 0.0);
+        p
+    }
+
+    /// The largest angle in degrees between a segment and the first segment of its
+    /// branch: a branch goes on through each node's first-grown child (the apical bud, the
+    /// lowest index); later children start side branches.
+    fn largest_turn(s: &Skeleton) -> f32 {
+        let mut start = vec![Vec3::ZERO; s.len()];
+        let mut continued = vec![false; s.len()];
+        let mut worst = 0.0f32;
+        for i in 0..s.len() {
+            let Some(q) = s.parents[i] else { continue };
+            let q = q as usize;
+            let d = (s.positions[i] - s.positions[q]).normalize();
+            start[i] = if continued[q] || start[q] == Vec3::ZERO {
+                d
+            } else {
+                start[q]
+            };
+            continued[q] = true;
+            worst = worst.max(d.dot(start[i]).clamp(-1.0, 1.0).acos().to_degrees());
+        }
+        worst
+    }
+
+    #[test]
+    fn conifer_branches_never_turn_back() {
+        for seed in [1, 2, 3] {
+            // Each tip follows the mean of its pulls alone: the lower branches follow the
+            // cone up and back toward the leader, pulled by the points above them.
+            let (sc, _) = grow(conifer(), seed);
+            let free = largest_turn(&sc.skeleton().expect("skeleton"));
+            assert!(free > 140.0, "seed {seed}: the free growth turns {free}");
+            let mut p = conifer();
+            p.persistence = 0.5;
+            p.perception = 90.0;
+            p.max_turn = 100.0;
+            let (sc, model) = grow(p, seed);
+            let turn = largest_turn(&sc.skeleton().expect("skeleton"));
+            assert!(turn <= 100.01, "seed {seed}: a branch turns {turn} degrees");
+            assert!(sc.warnings().is_empty(), "{:?}", sc.warnings());
+            assert!(model.stats.nodes > 1500, "{}", model.stats.nodes);
+            model.validate().expect("valid model");
+        }
+    }
+
+    #[test]
+    fn persistence_and_perception_alone_straighten_branches() {
+        let (sc, _) = grow(conifer(), 1);
+        let free = largest_turn(&sc.skeleton().expect("skeleton"));
+        let mut p = conifer();
+        p.persistence = 1.0;
+        p.perception = 60.0;
+        let (sc, _) = grow(p, 1);
+        let held = largest_turn(&sc.skeleton().expect("skeleton"));
+        assert!(held < free - 20.0, "{free} -> {held}");
+    }
+
     #[test]
     fn bad_parameters_name_themselves() {
         let mut p = crown(10);
@@ -909,6 +1074,29 @@ mod tests {
             .err()
             .expect("negative step");
         assert_eq!(e.to_string(), "t.lua:4: step must be a number > 0, got -1");
+        for (name, set) in [
+            (
+                "perception",
+                (|p, v| p.perception = v) as fn(&mut Params, f32),
+            ),
+            ("maxTurn", |p, v| p.max_turn = v),
+        ] {
+            for bad in [0.0, 181.0, f32::NAN] {
+                let mut p = crown(10);
+                set(&mut p, bad);
+                let e = SpaceColonization::new(p, Location::new("t.lua", 2))
+                    .err()
+                    .expect("a bad angle");
+                assert!(
+                    e.to_string()
+                        .starts_with(&format!("t.lua:2: {name} must be")),
+                    "{e}"
+                );
+            }
+        }
+        let mut p = crown(10);
+        p.persistence = -1.0;
+        assert!(SpaceColonization::new(p, Location::new("t.lua", 4)).is_err());
         let mut p = crown(10);
         p.influence = f32::NAN;
         assert!(SpaceColonization::new(p, Location::new("t.lua", 4)).is_err());

@@ -220,6 +220,21 @@ fn bad_parameters_are_located_errors() {
         "tropism must be a vector",
     );
     assert_error(
+        &format!("return pge.SpaceColonization{{ {env}, persistence = -1 }}"),
+        1,
+        "persistence must be a number >= 0, got -1",
+    );
+    assert_error(
+        &format!("return pge.SpaceColonization{{ {env}, perception = 200 }}"),
+        1,
+        "perception must be a number between 0 and 180, got 200",
+    );
+    assert_error(
+        &format!("return pge.SpaceColonization{{ {env}, maxTurn = 0 }}"),
+        1,
+        "maxTurn must be an angle in degrees > 0 and <= 180, got 0",
+    );
+    assert_error(
         &format!("return pge.SpaceColonization{{ {env}, points = 0 }}"),
         1,
         "points must be an integer between 1 and 10000000, got 0",

@@ -48,6 +48,15 @@ pub(super) fn new_colonization(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHan
     if let Some(v) = o.vec3("tropism")? {
         p.tropism = v;
     }
+    if let Some(v) = o.number_f32("persistence", Bounds::AtLeast(0.0))? {
+        p.persistence = v;
+    }
+    if let Some(v) = o.number_f32("perception", Bounds::Between(0.0, 180.0))? {
+        p.perception = v;
+    }
+    if let Some(v) = o.number_f32("maxTurn", Bounds::Between(0.0, 180.0))? {
+        p.max_turn = v;
+    }
     if let Some(v) = o.vec3("root")? {
         p.roots = vec![v];
     }
