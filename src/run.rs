@@ -107,7 +107,9 @@ fn generate_tile(
     let mut algorithm = session.algorithm_from(value)?;
     let ctx = session.context();
     let planned = ctx.steps.or(algorithm.planned_steps());
-    let model = pge_engine::algorithm::run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
+    let mut model =
+        pge_engine::algorithm::run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
+    model.warn_if_empty(path);
     Ok(Generated {
         model,
         params: session.declared_params(),

@@ -85,7 +85,10 @@ fn generate_stages(args: &RunArgs, stages: &[u32], bar: &ProgressBar) -> anyhow:
             taken += 1;
             bar.set_position(u64::from(taken));
         }
-        models.push((format!("step {stage}"), algorithm.finish(&ctx)?));
+        let mut model = algorithm.finish(&ctx)?;
+        model.remove_unusable_triangles();
+        model.warn_if_empty(&args.script.script);
+        models.push((format!("step {stage}"), model));
     }
     Ok((models, session.declared_params()))
 }

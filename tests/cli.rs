@@ -370,7 +370,10 @@ fn an_empty_model_writes_a_glb_that_parses() {
     let out = dir.path().join("e.glb");
     run_to("tests/scripts/outside.lua", &out, &[]);
     let (doc, _, _) = gltf::import(&out).expect("imports");
-    assert_eq!(doc.nodes().count(), 0);
+    // Only the empty node the scene needs.
+    assert_eq!(doc.nodes().count(), 1);
+    assert!(doc.nodes().all(|n| n.mesh().is_none()));
+    assert_eq!(doc.meshes().count(), 0);
 }
 script_error!(
     a_failing_model_method_shows_its_own_error,
@@ -413,3 +416,49 @@ script_error!(
     &format!("{E}/turtle_nan.lua:2: "),
     "'angle' must be a finite number, got NaN"
 );
+
+#[test]
+fn a_model_with_nothing_in_it_gets_a_scene_and_a_warning() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("city.glb");
+    let out_s = out.to_string_lossy().to_string();
+    let o = pge(&[
+        "run",
+        "scripts/lsystems/city.lua",
+        "--set",
+        "size=400",
+        "--set",
+        "lot=4",
+        "-o",
+        &out_s,
+        "-q",
+        "--stats",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("city.lua: warning: the model is empty"),
+        "a warning on stderr: {err}"
+    );
+    let stats: serde_json::Value =
+        serde_json::from_slice(&o.stdout).expect("one JSON object on stdout");
+    assert_eq!(stats["triangles"], 0);
+    let warnings = stats["warnings"].as_array().expect("warnings");
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().is_some_and(|w| w.contains("the model is empty"))),
+        "the warning in --stats: {stats}"
+    );
+    let (doc, _, _) = gltf::import(&out).expect("the glb imports");
+    let scene = doc.default_scene().expect("a default scene");
+    assert_eq!(scene.nodes().count(), 1, "one empty node");
+    assert!(scene.nodes().all(|n| n.mesh().is_none()));
+    let extras = scene
+        .extras()
+        .as_ref()
+        .expect("the run's extras on the scene");
+    let extras: serde_json::Value = serde_json::from_str(extras.get()).expect("json");
+    assert_eq!(extras["pge"]["params"]["size"], 400.0);
+    assert_eq!(extras["pge"]["stats"]["triangles"], 0);
+}

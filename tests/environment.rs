@@ -25,7 +25,16 @@ fn set_environment_writes_a_sky_image_named_by_the_extras() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let glb = std::fs::read(&out).expect("glb written");
     let gltf = gltf::Gltf::from_slice(&glb).expect("valid glTF");
-    assert_eq!(gltf.meshes().count(), 1, "the model's mesh is still there");
+    let names: Vec<_> = gltf
+        .meshes()
+        .map(|m| m.name().map(str::to_string))
+        .collect();
+    assert_eq!(
+        names.len(),
+        2,
+        "the model's mesh and the sky dome: {names:?}"
+    );
+    assert!(names.contains(&Some("sky".into())), "{names:?}");
     let extras: serde_json::Value = serde_json::from_str(
         gltf.document
             .as_json()
@@ -138,5 +147,20 @@ fn the_sky_example_writes_its_environment() {
         .as_u64()
         .expect("an environment image") as usize;
     assert!(gltf.images().nth(index).is_some());
-    assert_eq!(gltf.nodes().count(), 9, "nine stones");
+    assert_eq!(gltf.nodes().count(), 10, "nine stones and the sky dome");
+    let scene = gltf.default_scene().expect("a scene");
+    let sky = scene
+        .nodes()
+        .find(|n| n.name() == Some("sky"))
+        .expect("the sky dome in the scene");
+    let texture = sky
+        .mesh()
+        .and_then(|m| m.primitives().next())
+        .and_then(|p| p.material().pbr_metallic_roughness().base_color_texture())
+        .expect("the dome is textured");
+    assert_eq!(
+        texture.texture().source().index(),
+        index,
+        "the dome shows the environment image"
+    );
 }

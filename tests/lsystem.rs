@@ -263,3 +263,39 @@ fn derive_needs_an_lsystem() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("needs a script that returns an L-system"));
 }
+
+#[test]
+fn a_turtle_with_a_palette_writes_one_bark_mesh_with_vertex_colours() {
+    // lsystems/bush.lua steps through four colours with `'`: one bark mesh (every colour's
+    // branches, the colour in the vertices, one bark texture) and one leaf mesh, not a mesh
+    // pair and a colour-baked texture per colour index.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("bush.glb");
+    let out_s = out.to_string_lossy().to_string();
+    stdout_of(&pge(&["run", &format!("{L}/bush.lua"), "-o", &out_s, "-q"]));
+    let (doc, buffers, _) = gltf::import(&out).expect("the glb imports");
+    let names: Vec<_> = doc.meshes().map(|m| m.name().map(str::to_string)).collect();
+    assert_eq!(names.len(), 2, "bark and leaves: {names:?}");
+    let bark_images: Vec<_> = doc.images().filter(|i| i.name() == Some("bark")).collect();
+    assert_eq!(bark_images.len(), 1, "one bark texture");
+    let bark = doc.meshes().next().expect("the bark mesh");
+    let prim = bark.primitives().next().expect("primitive");
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let colours: std::collections::BTreeSet<[u8; 4]> = reader
+        .read_colors(0)
+        .expect("bark vertex colours")
+        .into_rgba_u8()
+        .collect();
+    // The palette's four colours ("#5a3d26", "#4a6b2a", "#3f7f2a", "#5c9b33"), linear.
+    assert_eq!(colours.len(), 4, "{colours:?}");
+    let extras: serde_json::Value =
+        serde_json::from_str(bark.extras().as_ref().expect("bark extras").get()).expect("json");
+    let parents = extras["pge"]["skeleton"]["parents"]
+        .as_array()
+        .expect("one skeleton for every colour");
+    let roots = parents.iter().filter(|p| p.as_i64() == Some(-1)).count();
+    assert!(
+        roots > 1,
+        "every colour's skeleton keeps its roots: {roots}"
+    );
+}

@@ -87,7 +87,11 @@ script_test!(coral_metaballs, "coral_metaballs.lua", |m| {
     assert!(m.triangle_count() > 10_000);
 });
 script_test!(city, "city.lua", |m| assert!(m.triangle_count() > 10_000));
-script_test!(fireworks, "fireworks.lua", |m| assert!(lines(m) > 0));
+script_test!(fireworks, "fireworks.lua", |m| {
+    // Thin tubes by default: triangles every client renders, no line primitives.
+    assert_eq!(lines(m), 0);
+    assert!(m.triangle_count() > 1000);
+});
 script_test!(explorers, "explorers.lua", |m| {
     assert_eq!(m.meshes.len(), 3, "map, marks, plants");
     assert!(m.meshes.iter().any(|mesh| mesh.material.texture.is_some()));
@@ -116,11 +120,11 @@ fn sierpinski_depth_follows_the_formula() {
 fn fireworks_frames_differ_and_the_show_burns_out() {
     let counts: Vec<usize> = [1, 10, 25, 40]
         .iter()
-        .map(|&k| lines(&generate("fireworks.lua", &[], Some(k))))
+        .map(|&k| lines(&generate("fireworks.lua", &[("width", "0")], Some(k))))
         .collect();
     assert!(counts[0] < counts[1] && counts[1] < counts[2], "{counts:?}");
     // Long after the last burst every trail has faded and `B > B` has cleaned the string.
-    let end = generate("fireworks.lua", &[("frames", "200")], None);
+    let end = generate("fireworks.lua", &[("frames", "200"), ("width", "0")], None);
     assert_eq!(lines(&end), 0);
     assert!(
         end.stats.modules <= 8,

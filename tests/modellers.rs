@@ -83,7 +83,7 @@ writes_a_glb! {
 
 #[test]
 fn fireworks_writes_a_glb_of_lines() {
-    let (stats, glb, _dir) = run("fireworks.lua", &["--steps", "30"]);
+    let (stats, glb, _dir) = run("fireworks.lua", &["--steps", "30", "--set", "width=0"]);
     assert_eq!(count(&stats, "triangles"), 0);
     assert!(line_segments(&glb) > 100, "a burst at frame 30");
 }
@@ -120,13 +120,19 @@ fn fireworks_steps_are_frames() {
     // Lines only: two vertices per segment (an empty frame has no glb meshes to count).
     let frames: Vec<u64> = ["1", "10", "25", "40"]
         .iter()
-        .map(|k| count(&run("fireworks.lua", &["--steps", k]).0, "vertices") / 2)
+        .map(|k| {
+            let stats = run("fireworks.lua", &["--steps", k, "--set", "width=0"]).0;
+            count(&stats, "vertices") / 2
+        })
         .collect();
     assert!(
         frames[0] < frames[1] && frames[1] < frames[2],
         "rising then bursting: {frames:?}"
     );
-    let (stats, _, _dir) = run("fireworks.lua", &["--set", "frames=200"]);
+    let (stats, _, _dir) = run(
+        "fireworks.lua",
+        &["--set", "frames=200", "--set", "width=0"],
+    );
     assert_eq!(
         count(&stats, "vertices"),
         0,
@@ -219,4 +225,46 @@ fn bad_input_gives_located_errors() {
         "pixel (16, 2) is outside the 16x8 image",
     );
     assert_fails("missing_image.lua", &[], 1, "no_such_map.png");
+}
+
+/// Per segment of a tube mesh (8 vertices, all of the segment's colour): the brightest
+/// channel of its colour, 0 to 255.
+fn tube_brightness(glb: &[u8]) -> Vec<u8> {
+    let (doc, buffers, _) = gltf::import_slice(glb).expect("the glb imports");
+    let mut out = Vec::new();
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            assert_eq!(prim.mode(), gltf::mesh::Mode::Triangles, "tubes, not lines");
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let colours: Vec<[u8; 4]> = reader
+                .read_colors(0)
+                .expect("vertex colours")
+                .into_rgba_u8()
+                .collect();
+            out.extend(
+                colours
+                    .chunks_exact(8)
+                    .map(|c| c[0][0].max(c[0][1]).max(c[0][2])),
+            );
+        }
+    }
+    out
+}
+
+#[test]
+fn fireworks_default_frame_shows_lit_tubes() {
+    // The default frame shows bursts while they are bright; frame 60 (the old default) had
+    // faded to black.
+    let (stats, glb, _dir) = run("fireworks.lua", &[]);
+    let lit = |b: &[u8]| b.iter().filter(|&&v| v >= 128).count();
+    let default = tube_brightness(&glb);
+    assert_eq!(count(&stats, "triangles"), 8 * default.len() as u64);
+    assert!(lit(&default) >= 100, "lit segments: {}", lit(&default));
+    let (_, late, _dir) = run("fireworks.lua", &["--set", "frames=60"]);
+    let late = tube_brightness(&late);
+    assert!(
+        lit(&late) < lit(&default) / 4,
+        "frame 60 has faded: {}",
+        lit(&late)
+    );
 }

@@ -2,7 +2,8 @@
 //! software renderer (`.ci/preview-deps` installs both).
 //!
 //! Without an X server (no `Xvfb`, no `DISPLAY`) the tests print why and pass, unless the
-//! `CI` variable is set: in CI they must run.
+//! `CI` variable is set (`.ci/run` sets `CI=true`): in CI they must run, and fail loudly when
+//! they cannot.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -87,13 +88,20 @@ fn pge_with_display() -> Result<(Command, Option<Xvfb>), String> {
     Err("no X server: Xvfb is not installed and DISPLAY is not set (run .ci/preview-deps)".into())
 }
 
+/// Whether the tests run in CI (`CI` set to anything but empty, `0` or `false`, as CI
+/// services and `.ci/run` set it): there a missing display fails the test instead of
+/// skipping it.
+fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| !matches!(v.trim(), "" | "0" | "false"))
+}
+
 /// Runs `pge preview ARGS` with a display; `None` (after printing why) when the test must be
 /// skipped.
 fn preview(args: &[&str], dir: &Path) -> Option<Output> {
     let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let (mut cmd, _server) = match pge_with_display() {
         Ok(found) => found,
-        Err(why) if std::env::var_os("CI").is_none() => {
+        Err(why) if !in_ci() => {
             eprintln!("skipping the preview window test: {why}");
             return None;
         }

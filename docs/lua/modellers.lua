@@ -197,11 +197,12 @@ function MarchingCubes:mesh() end
 ---@return pge.Model
 function MarchingCubes:model() end
 
----Coloured 3D segments, exported as a glTF line mesh with vertex colours.
+---Coloured 3D segments, exported as a glTF line mesh with vertex colours, or with a
+---`width` as thin tubes (triangles) that every client renders.
 ---@class pge.Lines
 local Lines = {}
 
----@param options? {color?: pge.Colour} the default colour (white)
+---@param options? {color?: pge.Colour, width?: number} the default colour (white); the tube width in metres (0, the default: glTF lines)
 ---@return pge.Lines
 function pge.Lines(options) end
 ---The segment a-b.

@@ -129,7 +129,9 @@ impl Algorithm for Finished {
 }
 
 /// Runs an algorithm: `init`, then steps until done or until `ctx.steps` steps were taken,
-/// then `finish`. `progress` is called after every step with the number of steps taken.
+/// then `finish`, and removes the model's degenerate and repeated triangles
+/// ([`Model::remove_unusable_triangles`]). `progress` is called after every step with the
+/// number of steps taken.
 pub fn run(
     algorithm: &mut dyn Algorithm,
     ctx: &RunContext,
@@ -145,7 +147,9 @@ pub fn run(
             break;
         }
     }
-    algorithm.finish(ctx)
+    let mut model = algorithm.finish(ctx)?;
+    model.remove_unusable_triangles();
+    Ok(model)
 }
 
 /// Grows an algorithm without building its model: `init`, then steps until done or until

@@ -231,6 +231,7 @@ impl Session {
             .stats
             .phases
             .insert(0, ("script".into(), script_seconds));
+        model.warn_if_empty(path);
         Ok(Generated {
             model,
             params: self.declared_params(),

@@ -25,7 +25,7 @@ local world = { map = pge.Image.load(p.map), cells = {} }
 local W = world.map:width()
 local function cell(x, y) return y * W + x end
 function world:reset()
-  self.marks = pge.Lines{ color = "#ffffff" }
+  self.marks = pge.Lines{ color = "#ffffff", width = 0.08 }
   self.plants = pge.Extruder{ material = { roughness = 0.9 } }
 end
 function world:model()

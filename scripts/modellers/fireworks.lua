@@ -10,8 +10,12 @@
 local p = pge.params{
   rockets = {4, min = 1, max = 50, doc = "rockets"},
   arms = {24, min = 3, max = 200, doc = "arms per burst"},
-  frames = {60, min = 1, max = 1000, doc = "frames (derivation steps) of the whole show"},
+  frames = {42, min = 1, max = 1000,
+            doc = "derivation steps: the frame written (the default shows three bursts lit)"},
   fade = {0.82, min = 0.1, max = 0.99, doc = "brightness kept by a trail segment per frame"},
+  width = {0.15, min = 0, max = 2,
+           doc = "trail thickness in metres (thin tubes); 0 writes glTF lines, which some "
+              .. "clients (Blender) import as edges that do not render"},
 }
 
 local dt, gravity = 1 / 12, pge.vec3(0, -9.8, 0)
@@ -40,7 +44,7 @@ obj:axiom(axiom)
 
 obj:createInstance(function()
   local show = {}
-  function show:reset() self.lines = pge.Lines() end
+  function show:reset() self.lines = pge.Lines{ width = p.width } end
   function show:model() return self.lines:model() end
   show:reset()
   return show

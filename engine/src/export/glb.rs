@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
@@ -52,6 +52,10 @@ struct Builder {
     /// Nodes that need `EXT_mesh_gpu_instancing`, with their TRANSLATION/ROTATION/SCALE
     /// accessors.
     gpu_nodes: Vec<(usize, [usize; 3])>,
+    /// The sky dome's mesh, once written (models with an environment).
+    sky: Option<json::Index<json::Mesh>>,
+    /// Materials that need `KHR_materials_unlit` (the sky's).
+    unlit: Vec<usize>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -147,6 +151,28 @@ impl Builder {
             b,
             Some(json::buffer::Target::ArrayBuffer),
         )
+    }
+
+    /// A `COLOR_0` accessor: linear RGBA as normalized unsigned bytes (4 bytes a vertex
+    /// instead of 16), rounded to the nearest of the 256 steps.
+    fn colors(&mut self, colors: &[Vec4]) -> json::Index<json::Accessor> {
+        let bytes: Vec<u8> = colors
+            .iter()
+            .flat_map(|c| c.to_array())
+            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+            .collect();
+        let index = self.accessor(
+            &bytes,
+            colors.len(),
+            json::accessor::ComponentType::U8,
+            json::accessor::Type::Vec4,
+            None,
+            Some(json::buffer::Target::ArrayBuffer),
+        );
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.normalized = true;
+        }
+        index
     }
 
     /// A float accessor of per-instance data (no buffer view target: not a vertex attribute).
@@ -304,13 +330,13 @@ impl Builder {
             let n: Vec<f32> = mesh.normals.iter().flat_map(|p| p.to_array()).collect();
             attributes.insert(Valid(Semantic::Normals), self.floats(&n, 3, false));
         }
-        if !mesh.uvs.is_empty() {
+        // Texture coordinates only where a texture reads them.
+        if !mesh.uvs.is_empty() && mesh.material.texture.is_some() {
             let t: Vec<f32> = mesh.uvs.iter().flat_map(|p| p.to_array()).collect();
             attributes.insert(Valid(Semantic::TexCoords(0)), self.floats(&t, 2, false));
         }
         if !mesh.colors.is_empty() {
-            let c: Vec<f32> = mesh.colors.iter().flat_map(|p| p.to_array()).collect();
-            attributes.insert(Valid(Semantic::Colors(0)), self.floats(&c, 4, false));
+            attributes.insert(Valid(Semantic::Colors(0)), self.colors(&mesh.colors));
         }
         let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let indices = self.accessor(
@@ -381,9 +407,10 @@ fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
 }
 
 /// The `.glb` bytes of a model: one buffer, u32 indices, embedded PNG textures, one node per
-/// instance, and the root `extras.pge` with generator, seed, params and stats (and, when the
-/// model has an environment, `environment = {image = <image index>, mapping =
-/// "equirectangular"}`). Groups of instances are written with [`Instancing::Gpu`].
+/// instance, one scene (an empty model's holds one empty node), and on the root and the
+/// scene `extras.pge` with generator, seed, params and stats (and, when the model has an
+/// environment, `environment = {image = <image index>, mapping = "equirectangular"}`).
+/// Groups of instances are written with [`Instancing::Gpu`].
 pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
     glb_bytes_with(model, meta, Instancing::Gpu)
 }
@@ -395,11 +422,7 @@ pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) 
     model.validate()?;
     let mut b = Builder::new();
     b.instancing = instancing;
-    // A scene needs at least one node (and the gltf crate refuses one without), so an empty
-    // model is written without a scene: a valid, empty glTF.
-    if let Some(scene) = b.scene(model, "pge")? {
-        b.root.scene = Some(scene);
-    }
+    b.root.scene = Some(b.scene(model, "pge")?);
     b.finish(model, meta, None)
 }
 
@@ -416,9 +439,7 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
     let mut summary = Vec::with_capacity(stages.len());
     for (name, model) in stages {
         model.validate()?;
-        if let Some(scene) = b.scene(model, name)? {
-            b.root.scene = Some(scene);
-        }
+        b.root.scene = Some(b.scene(model, name)?);
         summary.push(json!({
             "name": name,
             "vertices": model.vertex_count(),
@@ -445,9 +466,10 @@ impl Builder {
     }
 
     /// Writes the model's meshes, one node per instance and its instance groups (as
-    /// `self.instancing` says), gathered in a scene named `name`; `None` (and nothing written
-    /// but the meshes) when the model places nothing.
-    fn scene(&mut self, model: &Model, name: &str) -> Result<Option<json::Index<json::Scene>>> {
+    /// `self.instancing` says), gathered in a scene named `name`. A model that places nothing
+    /// gets a scene holding one empty node named `empty`: clients expect a scene (three.js's
+    /// `gltf.scene`), and a glTF scene lists at least one node.
+    fn scene(&mut self, model: &Model, name: &str) -> Result<json::Index<json::Scene>> {
         // Meshes only groups use are written inside their group's mesh, not on their own.
         let mut meshes = Vec::with_capacity(model.meshes.len());
         for (i, m) in model.meshes.iter().enumerate() {
@@ -517,14 +539,58 @@ impl Builder {
             }
         }
         if nodes.is_empty() {
-            return Ok(None);
+            nodes.push(self.root.push(json::Node {
+                name: Some("empty".into()),
+                ..Default::default()
+            }));
         }
-        Ok(Some(self.root.push(json::Scene {
+        if let Some(env) = &model.environment {
+            let dome = self.sky_dome(env)?;
+            // Around the model, ten times as far as its farthest corner (50 m at least).
+            let (lo, hi) = model.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+            let radius = (10.0 * (hi - lo).length() / 2.0).max(SKY_MIN_RADIUS);
+            let centre = (lo + hi) / 2.0;
+            let mut n = node(
+                dome,
+                &Mat4::from_scale_rotation_translation(
+                    Vec3::splat(radius),
+                    glam::Quat::IDENTITY,
+                    centre,
+                ),
+            );
+            n.name = Some("sky".into());
+            nodes.push(self.root.push(n));
+        }
+        Ok(self.root.push(json::Scene {
             extensions: None,
             extras: None,
             name: Some(name.into()),
             nodes,
-        })))
+        }))
+    }
+
+    /// The sky dome's mesh (written once): a unit sphere seen from inside, its texture the
+    /// environment image mapped as the preview reads it (row 0 straight up, the middle
+    /// column along -Z, a quarter to its right +X), with an unlit material.
+    fn sky_dome(&mut self, env: &Arc<Texture>) -> Result<json::Index<json::Mesh>> {
+        if let Some(mesh) = self.sky {
+            return Ok(mesh);
+        }
+        let mut mesh = sky_sphere(SKY_SEGMENTS, SKY_RINGS);
+        mesh.material = Arc::new(Material {
+            name: "sky".into(),
+            base_color: [1.0; 4],
+            texture: Some(env.clone()),
+            metallic: 0.0,
+            roughness: 1.0,
+            ..Material::default()
+        });
+        let index = self.mesh(&mesh)?;
+        if let Some(material) = written(&self.materials, &mesh.material) {
+            self.unlit.push(material.value());
+        }
+        self.sky = Some(index);
+        Ok(index)
     }
 
     /// The root extras (describing `model`), the buffer and the GLB container.
@@ -563,7 +629,13 @@ impl Builder {
         if let Some(stages) = stages {
             pge.insert("stages".into(), stages);
         }
-        b.root.extras = raw(&json!({ "pge": pge }))?;
+        // Blender keeps a scene's extras but drops the root's, three.js shows a scene's as
+        // `userData`: every scene carries the run's extras too.
+        let extras = raw(&json!({ "pge": pge }))?;
+        for scene in &mut b.root.scenes {
+            scene.extras.clone_from(&extras);
+        }
+        b.root.extras = extras;
         while !b.bin.len().is_multiple_of(4) {
             b.bin.push(0);
         }
@@ -576,10 +648,10 @@ impl Builder {
                 extras: None,
             });
         }
-        let mut text = if b.gpu_nodes.is_empty() {
+        let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() {
             b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
         } else {
-            with_gpu_instancing(&b.root, &b.gpu_nodes)?
+            with_extensions(&b.root, &b.gpu_nodes, &b.unlit)?
         };
         while !text.len().is_multiple_of(4) {
             text.push(b' ');
@@ -601,12 +673,77 @@ impl Builder {
     }
 }
 
+/// The name of the glTF extension the sky dome's material uses.
+pub const UNLIT: &str = "KHR_materials_unlit";
+
+/// The sky dome's radius for a model smaller than a few metres.
+const SKY_MIN_RADIUS: f32 = 50.0;
+/// Columns of the sky dome's mesh.
+const SKY_SEGMENTS: u32 = 48;
+/// Rows of the sky dome's mesh.
+const SKY_RINGS: u32 = 24;
+
+/// A unit sphere seen from inside: `segments` columns and `rings` rows, texture coordinates
+/// of an equirectangular image (v = 0 straight up; u = 0.5 along -Z, u = 0.75 along +X),
+/// inward normals and counter-clockwise triangles as seen from the centre. The seam column
+/// is doubled; each pole is one triangle per column (no zero-area triangles).
+fn sky_sphere(segments: u32, rings: u32) -> Mesh {
+    use std::f32::consts::{PI, TAU};
+    let mut mesh = Mesh {
+        name: "sky".into(),
+        ..Mesh::default()
+    };
+    for r in 0..=rings {
+        let v = r as f32 / rings as f32;
+        let polar = v * PI;
+        for k in 0..=segments {
+            let u = k as f32 / segments as f32;
+            let azimuth = (u - 0.5) * TAU;
+            let dir = Vec3::new(
+                polar.sin() * azimuth.sin(),
+                polar.cos(),
+                -polar.sin() * azimuth.cos(),
+            );
+            mesh.positions.push(dir);
+            mesh.normals.push(-dir);
+            mesh.uvs.push(glam::Vec2::new(u, v));
+        }
+    }
+    let at = |r: u32, k: u32| r * (segments + 1) + k;
+    for r in 0..rings {
+        for k in 0..segments {
+            let (a, b, c, d) = (at(r, k), at(r, k + 1), at(r + 1, k), at(r + 1, k + 1));
+            // Seen from the centre, u grows to the right and v downwards.
+            if r > 0 {
+                mesh.indices.extend([a, c, b]);
+            }
+            if r + 1 < rings {
+                mesh.indices.extend([b, c, d]);
+            }
+        }
+    }
+    mesh
+}
+
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
-/// ROTATION, SCALE] accessors) and the extension declared in `extensionsUsed` (gltf-json
-/// has no field for it without its `extensions` feature).
-fn with_gpu_instancing(root: &json::Root, nodes: &[(usize, [usize; 3])]) -> Result<Vec<u8>> {
+/// ROTATION, SCALE] accessors), `KHR_materials_unlit` on the given materials, and the
+/// extensions used declared in `extensionsUsed` (gltf-json has no fields for them without
+/// its extension features).
+fn with_extensions(
+    root: &json::Root,
+    nodes: &[(usize, [usize; 3])],
+    unlit: &[usize],
+) -> Result<Vec<u8>> {
     let export = |e: serde_json::Error| Error::Export(e.to_string());
     let mut value = serde_json::to_value(root).map_err(export)?;
+    for &index in unlit {
+        let material = value
+            .get_mut("materials")
+            .and_then(|m| m.get_mut(index))
+            .and_then(JsonValue::as_object_mut)
+            .ok_or_else(|| Error::Export("an unlit material is missing".into()))?;
+        material.insert("extensions".into(), json!({ UNLIT: {} }));
+    }
     for &(index, [t, r, s]) in nodes {
         let node = value
             .get_mut("nodes")
@@ -619,8 +756,15 @@ fn with_gpu_instancing(root: &json::Root, nodes: &[(usize, [usize; 3])]) -> Resu
                 "TRANSLATION": t, "ROTATION": r, "SCALE": s } } }),
         );
     }
+    let mut used = Vec::new();
+    if !nodes.is_empty() {
+        used.push(GPU_INSTANCING);
+    }
+    if !unlit.is_empty() {
+        used.push(UNLIT);
+    }
     if let Some(root) = value.as_object_mut() {
-        root.insert("extensionsUsed".into(), json!([GPU_INSTANCING]));
+        root.insert("extensionsUsed".into(), json!(used));
     }
     serde_json::to_vec(&value).map_err(export)
 }
@@ -710,6 +854,58 @@ mod tests {
     }
 
     #[test]
+    fn colours_are_normalized_bytes_and_untextured_meshes_have_no_uvs() {
+        let mut mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+        mesh.colors = vec![
+            glam::Vec4::new(1.0, 0.0, 0.5, 1.0),
+            glam::Vec4::new(0.2, 0.4, 0.6, 0.8),
+            glam::Vec4::new(0.0, 1.0, 0.0, 0.0),
+        ];
+        let bytes = glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default()).expect("glb");
+        let (doc, buffers, _) = gltf::import_slice(&bytes).expect("parses");
+        let prim = doc
+            .meshes()
+            .next()
+            .and_then(|m| m.primitives().next())
+            .expect("primitive");
+        let colour = prim
+            .get(&gltf::Semantic::Colors(0))
+            .expect("a colour accessor");
+        assert_eq!(colour.data_type(), gltf::accessor::DataType::U8);
+        assert!(colour.normalized());
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let read: Vec<[u8; 4]> = reader
+            .read_colors(0)
+            .expect("colours")
+            .into_rgba_u8()
+            .collect();
+        assert_eq!(
+            read,
+            [[255, 0, 128, 255], [51, 102, 153, 204], [0, 255, 0, 0]]
+        );
+        assert!(
+            reader.read_tex_coords(0).is_none(),
+            "no texture, so no texture coordinates"
+        );
+        // A textured mesh keeps its coordinates.
+        let (doc, buffers, _) =
+            gltf::import_slice(glb_bytes(&textured_model(), &ExportMeta::default()).expect("glb"))
+                .expect("parses");
+        let prim = doc
+            .meshes()
+            .next()
+            .and_then(|m| m.primitives().next())
+            .expect("primitive");
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        assert_eq!(
+            reader.read_tex_coords(0).expect("uvs").into_f32().count(),
+            3
+        );
+    }
+
+    #[test]
     fn export_is_byte_identical() {
         let a = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
         let b = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
@@ -782,6 +978,87 @@ mod environment_tests {
     }
 
     #[test]
+    fn the_environment_is_a_sky_dome_around_the_model() {
+        let sky = Arc::new(
+            Texture::from_rgba("sky", 2, 1, &[0, 0, 255, 255, 9, 9, 9, 255]).expect("png"),
+        );
+        let mesh = Mesh::from_triangles(
+            vec![
+                Vec3::ZERO,
+                Vec3::new(20.0, 0.0, 0.0),
+                Vec3::new(0.0, 20.0, 0.0),
+            ],
+            vec![0, 1, 2],
+        )
+        .expect("valid");
+        let mut model = Model::from_mesh(mesh);
+        model.environment = Some(sky.clone());
+        let bytes = glb_bytes(&model, &ExportMeta::default()).expect("exports");
+        let (doc, buffers, images) = gltf::import_slice(&bytes).expect("parses");
+        assert_eq!(
+            images.len(),
+            1,
+            "the dome shows the environment image itself"
+        );
+        let text = String::from_utf8_lossy(&bytes);
+        assert!(text.contains("\"extensionsUsed\":[\"KHR_materials_unlit\"]"));
+        let scene = doc.default_scene().expect("scene");
+        let dome = scene
+            .nodes()
+            .find(|n| n.name() == Some("sky"))
+            .expect("a node named sky");
+        let (t, _, s) = dome.transform().decomposed();
+        // Centred on the model, ten times as far as its farthest corner.
+        assert_eq!(t, [10.0, 10.0, 0.0]);
+        let radius = 10.0 * (800.0f32).sqrt() / 2.0;
+        assert!((s[0] - radius).abs() < 1e-3, "{s:?}");
+        let mesh = dome.mesh().expect("the dome's mesh");
+        assert_eq!(mesh.name(), Some("sky"));
+        let prim = mesh.primitives().next().expect("primitive");
+        let material = prim.material();
+        let json: JsonValue = serde_json::from_slice(
+            &bytes[20..20
+                + u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize],
+        )
+        .expect("json chunk");
+        let index = material.index().expect("a material");
+        assert_eq!(json["materials"][index]["extensions"], json!({ UNLIT: {} }));
+        let texture = material
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .expect("textured");
+        assert_eq!(texture.texture().source().index(), 0);
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let p: Vec<Vec3> = reader
+            .read_positions()
+            .expect("positions")
+            .map(Vec3::from)
+            .collect();
+        let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).expect("uvs").into_f32().collect();
+        let idx: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+        for (q, [u, v]) in p.iter().zip(&uv) {
+            assert!((q.length() - 1.0).abs() < 1e-5);
+            // Row 0 straight up; the middle column along -Z, a quarter to its right +X.
+            if *v == 0.0 {
+                assert!(q.y > 0.999);
+            }
+            if *v == 0.5 && *u == 0.5 {
+                assert!(q.z < -0.999, "{q}");
+            }
+            if *v == 0.5 && *u == 0.75 {
+                assert!(q.x > 0.999, "{q}");
+            }
+        }
+        // Every triangle has an area and faces the centre.
+        for t in idx.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| p[i as usize]);
+            let face = (b - a).cross(c - a);
+            assert!(face.length() > 1e-5);
+            assert!(face.dot(a + b + c) < 0.0, "faces inward");
+        }
+    }
+
+    #[test]
     fn without_an_environment_nothing_is_written() {
         let bytes = glb_bytes(&Model::new(), &ExportMeta::default()).expect("exports");
         let text = String::from_utf8_lossy(&bytes);
@@ -825,9 +1102,42 @@ mod empty_tests {
     }
 
     #[test]
-    fn an_empty_model_is_a_valid_glb() {
+    fn an_empty_model_has_a_scene_with_one_empty_node() {
         let bytes = glb_bytes(&Model::new(), &ExportMeta::default()).expect("exports");
         let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
-        assert_eq!(gltf.nodes().count(), 0);
+        let scene = gltf.default_scene().expect("a default scene");
+        let nodes: Vec<_> = scene.nodes().collect();
+        assert_eq!(nodes.len(), 1);
+        assert_eq!(nodes[0].name(), Some("empty"));
+        assert!(nodes[0].mesh().is_none());
+        assert_eq!(gltf.meshes().count(), 0);
+    }
+
+    #[test]
+    fn every_scene_carries_the_runs_extras() {
+        let meta = ExportMeta {
+            seed: 11,
+            params: vec![("h".into(), json!(3))],
+        };
+        let stages = vec![
+            ("step 1".to_string(), super::tests::textured_model()),
+            ("step 2".to_string(), super::tests::textured_model()),
+        ];
+        for bytes in [
+            glb_bytes(&super::tests::textured_model(), &meta).expect("glb"),
+            glb_stages_bytes(&stages, &meta).expect("glb"),
+        ] {
+            let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+            let root = gltf.document.as_json().extras.as_ref().expect("root").get();
+            for scene in gltf.scenes() {
+                let extras = scene.extras().as_ref().expect("scene extras").get();
+                assert_eq!(extras, root);
+                let value: JsonValue = serde_json::from_str(extras).expect("json");
+                assert_eq!(value["pge"]["generator"], GENERATOR);
+                assert_eq!(value["pge"]["seed"], 11);
+                assert_eq!(value["pge"]["params"]["h"], 3);
+                assert_eq!(value["pge"]["stats"]["triangles"], 2);
+            }
+        }
     }
 }

@@ -231,6 +231,44 @@ impl Mesh {
         self.indices.extend(other.indices.iter().map(|i| i + base));
     }
 
+    /// Removes the triangles no client can use: degenerate ones (two corners at the same
+    /// place, or all three on a line: zero area, such as those closing a pointed tip) and
+    /// repeats of an earlier triangle (the same three corner positions in the same turning
+    /// order; a back face, the same corners turned the other way, is kept). Returns how many
+    /// were removed. Vertices are left as they are, and so are line meshes and meshes whose
+    /// `extras` describe their index buffer (foliage LOD tables count indices).
+    pub fn remove_unusable_triangles(&mut self) -> usize {
+        if !self.may_drop_triangles() {
+            return 0;
+        }
+        let before = self.indices.len() / 3;
+        let mut seen = std::collections::HashSet::with_capacity(before);
+        let mut kept = Vec::with_capacity(self.indices.len());
+        for tri in self.indices.chunks_exact(3) {
+            if triangle_key(&self.positions, tri).is_some_and(|key| seen.insert(key)) {
+                kept.extend_from_slice(tri);
+            }
+        }
+        self.indices = kept;
+        before - self.indices.len() / 3
+    }
+
+    /// Whether [`Mesh::remove_unusable_triangles`] would remove anything.
+    #[must_use]
+    pub fn has_unusable_triangles(&self) -> bool {
+        if !self.may_drop_triangles() {
+            return false;
+        }
+        let mut seen = std::collections::HashSet::with_capacity(self.indices.len() / 3);
+        self.indices
+            .chunks_exact(3)
+            .any(|tri| !triangle_key(&self.positions, tri).is_some_and(|key| seen.insert(key)))
+    }
+
+    fn may_drop_triangles(&self) -> bool {
+        self.primitive == Primitive::Triangles && self.extras.is_empty()
+    }
+
     /// The axis-aligned bounds `(min, max)`, or `None` for an empty mesh.
     #[must_use]
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
@@ -241,6 +279,26 @@ impl Mesh {
                 .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
         )
     }
+}
+
+/// A triangle's corner positions as bits, rotated to start at the smallest (the same for
+/// the same triangle whichever corner its indices start at), or `None` when it is degenerate:
+/// its area is below a millionth of its longest edge squared (coincident or collinear
+/// corners). Indices must be in range (validated meshes).
+fn triangle_key(positions: &[Vec3], tri: &[u32]) -> Option<[[u32; 3]; 3]> {
+    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| positions[i as usize]);
+    let twice_area = (b - a).cross(c - a).length();
+    let longest = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    if twice_area <= 1e-6 * longest {
+        return None;
+    }
+    // `+ 0.0` turns -0.0 into 0.0, so both spell the same position.
+    let keys = [a, b, c].map(|p| (p + Vec3::ZERO).to_array().map(f32::to_bits));
+    let first = (0..3).min_by_key(|&k| keys[k]).unwrap_or(0);
+    Some([keys[first], keys[(first + 1) % 3], keys[(first + 2) % 3]])
 }
 
 fn fill_attribute<T: Copy>(
@@ -323,6 +381,36 @@ mod tests {
                 at: 1
             })
         ));
+    }
+
+    #[test]
+    fn degenerate_and_repeated_triangles_are_removed_back_faces_kept() {
+        let mut m = quad();
+        let n = m.positions.len() as u32;
+        // A tip: two corners at the same place (a copy of vertex 1).
+        m.positions.push(Vec3::X);
+        // A sliver with all three corners on a line.
+        m.positions.push(Vec3::new(2.0, 0.0, 0.0));
+        m.normals.extend([Vec3::Y; 2]);
+        m.indices.extend([0, 1, n]); // coincident corners
+        m.indices.extend([0, 1, n + 1]); // collinear
+        m.indices.extend([1, 1, 2]); // a repeated index
+        m.indices.extend([2, 0, 1]); // the first triangle, rotated
+        m.indices.extend([2, 3, 0]); // the second, rotated, through another start
+        m.indices.extend([0, 2, 1]); // the first one's back face: kept
+        m.validate().expect("valid");
+        assert!(m.has_unusable_triangles());
+        assert_eq!(m.remove_unusable_triangles(), 5);
+        assert_eq!(m.indices, [0, 1, 2, 0, 2, 3, 0, 2, 1]);
+        assert!(!m.has_unusable_triangles());
+        assert_eq!(m.remove_unusable_triangles(), 0);
+        // A mesh whose extras count indices is left alone.
+        let mut lod = quad();
+        lod.indices.extend([0, 1, 2]);
+        lod.extras.insert("lod".into(), serde_json::json!({}));
+        assert!(!lod.has_unusable_triangles());
+        assert_eq!(lod.remove_unusable_triangles(), 0);
+        assert_eq!(lod.indices.len(), 9);
     }
 
     #[test]

@@ -187,6 +187,31 @@ impl Model {
         }
     }
 
+    /// Adds a warning (`SCRIPT: warning: the model is empty: ...`) to the stats when the
+    /// model draws no vertex: the file written for it holds an empty scene, which is rarely
+    /// what the script meant.
+    pub fn warn_if_empty(&mut self, script: &std::path::Path) {
+        if self.vertex_count() == 0 {
+            self.stats.warnings.push(format!(
+                "{}: warning: the model is empty: the script generated nothing to draw",
+                script.display()
+            ));
+        }
+    }
+
+    /// Removes degenerate and repeated triangles from every mesh
+    /// ([`Mesh::remove_unusable_triangles`]); a mesh with none is left as it is (still
+    /// shared), one with some is replaced by a cleaned copy. Returns how many were removed.
+    pub fn remove_unusable_triangles(&mut self) -> usize {
+        let mut removed = 0;
+        for mesh in &mut self.meshes {
+            if mesh.has_unusable_triangles() {
+                removed += Arc::make_mut(mesh).remove_unusable_triangles();
+            }
+        }
+        removed
+    }
+
     /// Vertices drawn, counting every instance (of groups too).
     #[must_use]
     pub fn vertex_count(&self) -> usize {

@@ -1,4 +1,4 @@
-//! [`Lines`]: coloured 3D segments, exported as a glTF line mesh.
+//! [`Lines`]: coloured 3D segments, exported as a glTF line mesh or as thin tubes.
 
 use std::sync::Arc;
 
@@ -39,6 +39,7 @@ pub struct Lines {
     colors: Vec<Vec4>,
     color: Vec4,
     max_segments: usize,
+    width: f32,
 }
 
 impl Lines {
@@ -57,11 +58,32 @@ impl Lines {
             colors: Vec::new(),
             color,
             max_segments: max.min(MAX_SEGMENTS),
+            width: 0.0,
         }
     }
 
-    /// Bytes of mesh per segment (two vertices of position and colour, two indices).
+    /// Draws every segment as a thin four-sided tube `width` across (triangles, which every
+    /// client renders) instead of a line (which Blender imports as edges that do not
+    /// render); `0` (the default) keeps lines. `width` must be finite and not negative.
+    #[must_use]
+    pub fn with_width(mut self, width: f32) -> Lines {
+        self.width = width.max(0.0);
+        self
+    }
+
+    /// The tube width, `0` for lines.
+    #[must_use]
+    pub fn width(&self) -> f32 {
+        self.width
+    }
+
+    /// Bytes of mesh per segment drawn as a line (two vertices of position and colour, two
+    /// indices).
     pub const BYTES_PER_SEGMENT: usize = 2 * (12 + 16) + 2 * 4;
+
+    /// Bytes of mesh per segment drawn as a tube (eight vertices of position, normal and
+    /// colour, eight triangles).
+    pub const BYTES_PER_TUBE: usize = 8 * (12 + 12 + 16) + 24 * 4;
 
     /// Adds the segment `a`-`b` in `color` (the default colour when `None`).
     pub fn add(&mut self, a: Vec3, b: Vec3, color: Option<Vec4>) -> Result<(), LinesError> {
@@ -98,15 +120,76 @@ impl Lines {
         self.colors.clear();
     }
 
-    /// A [`Primitive::Lines`] mesh with one vertex per segment end and vertex colours.
+    /// The mesh: with a width, [`Lines::tubes`]; else a [`Primitive::Lines`] mesh with one
+    /// vertex per segment end and vertex colours.
     #[must_use]
     pub fn mesh(&self) -> Mesh {
+        if self.width > 0.0 {
+            return self.tubes();
+        }
         Mesh {
             name: "lines".into(),
             primitive: Primitive::Lines,
             positions: self.positions.clone(),
             colors: self.colors.clone(),
             indices: (0..self.positions.len() as u32).collect(),
+            material: Arc::new(Material {
+                name: "lines".into(),
+                base_color: [1.0; 4],
+                ..Material::default()
+            }),
+            ..Mesh::default()
+        }
+    }
+}
+
+impl Lines {
+    /// Every segment as an open four-sided tube `width` across around it, in the segment's
+    /// colour, with outward normals (the four corners of each end share a radial normal, so
+    /// tubes look round). Segments shorter than a millionth of the width are left out: they
+    /// would only make zero-area triangles.
+    fn tubes(&self) -> Mesh {
+        let r = self.width / 2.0;
+        let n = self.positions.len() / 2;
+        let mut positions = Vec::with_capacity(8 * n);
+        let mut normals = Vec::with_capacity(8 * n);
+        let mut colors = Vec::with_capacity(8 * n);
+        let mut indices = Vec::with_capacity(24 * n);
+        for (ends, color) in self
+            .positions
+            .chunks_exact(2)
+            .zip(self.colors.chunks_exact(2))
+        {
+            let (a, b) = (ends[0], ends[1]);
+            let Some(d) = (b - a).try_normalize() else {
+                continue;
+            };
+            if (b - a).length() < self.width * 1e-6 {
+                continue;
+            }
+            // (u, v, d) is a right-handed frame: corner k sits at angle k * 90 degrees.
+            let u = d.any_orthonormal_vector();
+            let v = d.cross(u);
+            let base = positions.len() as u32;
+            for end in [a, b] {
+                for radial in [u, v, -u, -v] {
+                    positions.push(end + radial * r);
+                    normals.push(radial);
+                    colors.push(color[0]);
+                }
+            }
+            for k in 0..4u32 {
+                let (a0, a1) = (base + k, base + (k + 1) % 4);
+                let (b0, b1) = (a0 + 4, a1 + 4);
+                indices.extend([a0, a1, b0, a1, b1, b0]);
+            }
+        }
+        Mesh {
+            name: "lines".into(),
+            positions,
+            normals,
+            colors,
+            indices,
             material: Arc::new(Material {
                 name: "lines".into(),
                 base_color: [1.0; 4],
@@ -159,5 +242,45 @@ mod tests {
             l.add(Vec3::ZERO, Vec3::Z, None),
             Err(LinesError::TooManySegments(2))
         );
+    }
+
+    #[test]
+    fn with_a_width_segments_become_outward_facing_tubes() {
+        let red = Vec4::new(1.0, 0.0, 0.0, 1.0);
+        let mut l = Lines::new(Vec4::ONE).with_width(0.2);
+        l.add(Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0), Some(red))
+            .expect("ok");
+        l.add(Vec3::ONE, Vec3::new(3.0, 1.0, 2.0), None)
+            .expect("ok");
+        // A segment of no length makes nothing.
+        l.add(Vec3::X, Vec3::X, None).expect("ok");
+        let m = l.mesh();
+        m.validate().expect("valid");
+        assert_eq!(m.primitive, Primitive::Triangles);
+        assert_eq!(m.vertex_count(), 16);
+        assert_eq!(m.triangle_count(), 16);
+        assert!(m.colors[..8].iter().all(|c| *c == red));
+        assert!(m.colors[8..].iter().all(|c| *c == Vec4::ONE));
+        // Every corner is half the width from its segment's axis.
+        for p in &m.positions[..8] {
+            assert!((Vec3::new(p.x, 0.0, p.z).length() - 0.1).abs() < 1e-6);
+        }
+        // Every triangle faces away from the axis of its segment, and has an area.
+        for (seg, tris) in m.indices.chunks_exact(24).enumerate() {
+            let (a, b) = if seg == 0 {
+                (Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0))
+            } else {
+                (Vec3::ONE, Vec3::new(3.0, 1.0, 2.0))
+            };
+            for t in tris.chunks_exact(3) {
+                let [p, q, r] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+                let face = (q - p).cross(r - p);
+                assert!(face.length() > 1e-4, "zero-area triangle");
+                let centre = (p + q + r) / 3.0;
+                let d = (b - a).normalize();
+                let radial = (centre - a) - d * (centre - a).dot(d);
+                assert!(face.dot(radial) > 0.0, "triangle {t:?} faces inward");
+            }
+        }
     }
 }

@@ -8,8 +8,8 @@ use glam::Vec4;
 use mlua::{Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
-    LuaMesh, LuaModel, Options, finite_number, resolve_path, script_error, to_model, vec3_arg,
-    writable_path,
+    Bounds, LuaMesh, LuaModel, Options, finite_number, resolve_path, script_error, to_model,
+    vec3_arg, writable_path,
 };
 
 use crate::{Image, Lines};
@@ -324,11 +324,17 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                 Value::Nil => Vec4::ONE,
                 c => linear(lua, &c, "pge.Lines: color")?,
             };
+            let width = o.number_f32("width", Bounds::AtLeast(0.0))?.unwrap_or(0.0);
             o.finish()?;
-            let max = memory_budget(lua) / Lines::BYTES_PER_SEGMENT;
-            Ok(LuaLines(Rc::new(RefCell::new(Lines::with_max_segments(
-                color, max,
-            )))))
+            let per = if width > 0.0 {
+                Lines::BYTES_PER_TUBE
+            } else {
+                Lines::BYTES_PER_SEGMENT
+            };
+            let max = memory_budget(lua) / per;
+            Ok(LuaLines(Rc::new(RefCell::new(
+                Lines::with_max_segments(color, max).with_width(width),
+            ))))
         })?,
     )?;
     let image = lua.create_table()?;

@@ -1,9 +1,11 @@
 //! `pge.turtle{...}`: the turtle as a Lua object and as the L-systems' default interpretation.
 
-use glam::Mat4;
+use std::sync::Arc;
+
+use glam::{Mat4, Vec4};
 use mlua::{AnyUserData, Lua, UserData, UserDataMethods, Value};
 use pge_engine::RunContext;
-use pge_engine::geometry::{Material, Model};
+use pge_engine::geometry::{Material, Mesh, Model, Skeleton};
 use pge_engine::lua::{
     Bounds, KeyStyle, LuaModel, LuaVec3, Options, check_mutable, run_context, script_error,
 };
@@ -110,13 +112,19 @@ impl LuaTurtle {
         })
     }
 
-    /// Meshes every skeleton drawn (one per colour index) with the tree mesher.
+    /// Meshes every skeleton drawn (one per colour index) with the tree mesher, then joins
+    /// them: one bark mesh, its colour index's palette colour in the vertices (times a
+    /// white-shaded bark texture, so one texture serves every colour) and every colour's
+    /// skeleton in one, and one leaf mesh. With `lod`, whose leaf tables count each tree's
+    /// own index buffer, every colour keeps its own meshes (colour-baked bark textures).
     pub fn model(&self, seed: u64) -> Result<Model, pge_tree::TreeError> {
-        let mut model = Model::new();
+        let mut parts = Vec::with_capacity(self.turtle.skeletons().len());
         for (color, skeleton) in self.turtle.skeletons() {
             let mut mesh = self.mesh.clone();
-            if !self.palette.is_empty() {
-                mesh.color = self.palette[*color as usize % self.palette.len()];
+            let tint = (!self.palette.is_empty())
+                .then(|| self.palette[*color as usize % self.palette.len()]);
+            if let Some(tint) = tint {
+                mesh.color = if self.lod.is_some() { tint } else { [1.0; 4] };
             }
             let options = TreeOptions {
                 mesh,
@@ -124,7 +132,43 @@ impl LuaTurtle {
                 lod: self.lod.clone(),
             };
             let part = build_tree(skeleton, &options, seed.wrapping_add(u64::from(*color)))?;
-            model.add_model(&part, Mat4::IDENTITY);
+            parts.push((part, tint));
+        }
+        let mut model = Model::new();
+        if self.lod.is_some() {
+            for (part, _) in &parts {
+                model.add_model(part, Mat4::IDENTITY);
+            }
+            return Ok(model);
+        }
+        let (mut bark, mut leaves): (Option<Mesh>, Option<Mesh>) = (None, None);
+        let mut skeleton = Skeleton::new();
+        for (part, tint) in &parts {
+            for mesh in &part.meshes {
+                let mut mesh = (**mesh).clone();
+                let joined = match mesh.skeleton.take() {
+                    Some(s) => {
+                        skeleton.append(&s, &Mat4::IDENTITY);
+                        if let Some(tint) = tint {
+                            mesh.colors = vec![Vec4::from_array(*tint); mesh.positions.len()];
+                        }
+                        &mut bark
+                    }
+                    None => &mut leaves,
+                };
+                match joined {
+                    Some(all) => all.append(&mesh),
+                    None => *joined = Some(mesh),
+                }
+            }
+            model.stats.merge(&part.stats);
+        }
+        if let Some(mut bark) = bark {
+            bark.skeleton = Some(Arc::new(skeleton));
+            model.add_mesh(bark, Mat4::IDENTITY);
+        }
+        if let Some(leaves) = leaves {
+            model.add_mesh(leaves, Mat4::IDENTITY);
         }
         Ok(model)
     }
