@@ -2,10 +2,11 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
+use serde::ser::{Serialize, SerializeMap, Serializer};
 use serde_json::{Map, Value as JsonValue, json};
 
 use crate::geometry::{
@@ -77,14 +78,23 @@ impl Builder {
         bytes: &[u8],
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::buffer::View> {
-        while !self.bin.len().is_multiple_of(4) {
-            self.bin.push(0);
-        }
-        let offset = self.bin.len();
-        self.bin.extend_from_slice(bytes);
+        self.view_with(bytes.len(), target, |dst| dst.copy_from_slice(bytes))
+    }
+
+    /// A buffer view of `len` bytes at the next 4-byte boundary of the buffer, written in
+    /// place by `fill` (no intermediate copy).
+    fn view_with(
+        &mut self,
+        len: usize,
+        target: Option<json::buffer::Target>,
+        fill: impl FnOnce(&mut [u8]),
+    ) -> json::Index<json::buffer::View> {
+        let offset = self.bin.len().next_multiple_of(4);
+        self.bin.resize(offset + len, 0);
+        fill(&mut self.bin[offset..]);
         self.root.push(json::buffer::View {
             buffer: json::Index::new(0),
-            byte_length: USize64(bytes.len() as u64),
+            byte_length: USize64(len as u64),
             byte_offset: Some(USize64(offset as u64)),
             byte_stride: None,
             name: None,
@@ -94,16 +104,23 @@ impl Builder {
         })
     }
 
-    fn accessor(
+    /// An accessor of `count` elements of `N` bytes, each written in place from its item of
+    /// `items` by `bytes`.
+    fn accessor<T, const N: usize>(
         &mut self,
-        bytes: &[u8],
-        count: usize,
+        items: &[T],
+        bytes: impl Fn(&T) -> [u8; N],
         component: json::accessor::ComponentType,
         type_: json::accessor::Type,
         bounds: Option<(JsonValue, JsonValue)>,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::Accessor> {
-        let view = self.view(bytes, target);
+        let count = items.len();
+        let view = self.view_with(count * N, target, |dst| {
+            for (d, item) in dst.chunks_exact_mut(N).zip(items) {
+                d.copy_from_slice(&bytes(item));
+            }
+        });
         let (min, max) = match bounds {
             Some((a, b)) => (Some(a), Some(b)),
             None => (None, None),
@@ -124,31 +141,37 @@ impl Builder {
         })
     }
 
-    fn floats(&mut self, data: &[f32], per: usize, bounds: bool) -> json::Index<json::Accessor> {
-        use json::accessor::Type;
-        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
-        let type_ = match per {
-            2 => Type::Vec2,
-            3 => Type::Vec3,
-            _ => Type::Vec4,
-        };
+    /// A VEC3 float vertex attribute, with its `min`/`max` when `bounds`.
+    fn vec3s(&mut self, data: &[Vec3], bounds: bool) -> json::Index<json::Accessor> {
         let b = bounds.then(|| {
-            let mut lo = vec![f32::INFINITY; per];
-            let mut hi = vec![f32::NEG_INFINITY; per];
-            for c in data.chunks_exact(per) {
-                for k in 0..per {
-                    lo[k] = lo[k].min(c[k]);
-                    hi[k] = hi[k].max(c[k]);
+            let mut lo = [f32::INFINITY; 3];
+            let mut hi = [f32::NEG_INFINITY; 3];
+            for p in data {
+                for (k, c) in p.to_array().into_iter().enumerate() {
+                    lo[k] = lo[k].min(c);
+                    hi[k] = hi[k].max(c);
                 }
             }
-            (json!(lo), json!(hi))
+            (json!(lo.to_vec()), json!(hi.to_vec()))
         });
         self.accessor(
-            &bytes,
-            data.len() / per,
+            data,
+            |p| le_bytes::<3, 12>(p.to_array()),
             json::accessor::ComponentType::F32,
-            type_,
+            json::accessor::Type::Vec3,
             b,
+            Some(json::buffer::Target::ArrayBuffer),
+        )
+    }
+
+    /// A VEC2 float vertex attribute (texture coordinates).
+    fn vec2s(&mut self, data: &[Vec2]) -> json::Index<json::Accessor> {
+        self.accessor(
+            data,
+            |p| le_bytes::<2, 8>(p.to_array()),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Vec2,
+            None,
             Some(json::buffer::Target::ArrayBuffer),
         )
     }
@@ -156,14 +179,12 @@ impl Builder {
     /// A `COLOR_0` accessor: linear RGBA as normalized unsigned bytes (4 bytes a vertex
     /// instead of 16), rounded to the nearest of the 256 steps.
     fn colors(&mut self, colors: &[Vec4]) -> json::Index<json::Accessor> {
-        let bytes: Vec<u8> = colors
-            .iter()
-            .flat_map(|c| c.to_array())
-            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            .collect();
         let index = self.accessor(
-            &bytes,
-            colors.len(),
+            colors,
+            |c| {
+                c.to_array()
+                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+            },
             json::accessor::ComponentType::U8,
             json::accessor::Type::Vec4,
             None,
@@ -178,16 +199,19 @@ impl Builder {
     /// A float accessor of per-instance data (no buffer view target: not a vertex attribute).
     fn instance_floats(&mut self, data: &[f32], per: usize) -> json::Index<json::Accessor> {
         use json::accessor::Type;
-        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
         let type_ = if per == 3 { Type::Vec3 } else { Type::Vec4 };
-        self.accessor(
-            &bytes,
-            data.len() / per,
+        let index = self.accessor(
+            data,
+            |f| f.to_le_bytes(),
             json::accessor::ComponentType::F32,
             type_,
             None,
             None,
-        )
+        );
+        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
+            accessor.count = USize64((data.len() / per) as u64);
+        }
+        index
     }
 
     /// The embedded PNG image of `tex`, written once however many textures (and the
@@ -293,10 +317,10 @@ impl Builder {
 
     fn mesh(&mut self, mesh: &Mesh) -> Result<json::Index<json::Mesh>> {
         let (primitive, pge) = self.primitive(mesh)?;
-        let extras = if pge.is_empty() {
+        let extras = if pge.0.is_empty() {
             None
         } else {
-            raw(&json!({ "pge": pge }))?
+            pge.extras()?
         };
         Ok(self.root.push(json::Mesh {
             extensions: None,
@@ -315,18 +339,20 @@ impl Builder {
         meshes: &[std::sync::Arc<Mesh>],
     ) -> Result<json::Index<json::Mesh>> {
         let mut primitives = Vec::with_capacity(group.meshes.len());
-        let mut merged = Map::new();
+        let mut merged = MeshExtras::default();
         for &m in &group.meshes {
             let (primitive, pge) = self.primitive(&meshes[m])?;
             primitives.push(primitive);
-            for (k, v) in pge {
-                merged.entry(k).or_insert(v);
+            for (k, v) in pge.0 {
+                if !merged.0.iter().any(|(key, _)| *key == k) {
+                    merged.0.push((k, v));
+                }
             }
         }
-        let extras = if merged.is_empty() {
+        let extras = if merged.0.is_empty() {
             None
         } else {
-            raw(&json!({ "pge": merged }))?
+            merged.extras()?
         };
         Ok(self.root.push(json::Mesh {
             extensions: None,
@@ -337,44 +363,45 @@ impl Builder {
         }))
     }
 
-    fn primitive(
-        &mut self,
-        mesh: &Mesh,
-    ) -> Result<(json::mesh::Primitive, Map<String, JsonValue>)> {
+    fn primitive<'m>(&mut self, mesh: &'m Mesh) -> Result<(json::mesh::Primitive, MeshExtras<'m>)> {
         use json::accessor::{ComponentType, Type};
         use json::mesh::Semantic;
-        mesh.validate()?;
+        // The callers validated the model (and the sky dome is built here, valid).
         let mut attributes = std::collections::BTreeMap::new();
-        let positions: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
-        attributes.insert(Valid(Semantic::Positions), self.floats(&positions, 3, true));
+        attributes.insert(
+            Valid(Semantic::Positions),
+            self.vec3s(&mesh.positions, true),
+        );
         if !mesh.normals.is_empty() {
-            let n: Vec<f32> = mesh.normals.iter().flat_map(|p| p.to_array()).collect();
-            attributes.insert(Valid(Semantic::Normals), self.floats(&n, 3, false));
+            attributes.insert(Valid(Semantic::Normals), self.vec3s(&mesh.normals, false));
         }
         // Texture coordinates only where a texture reads them.
         if !mesh.uvs.is_empty() && mesh.material.texture.is_some() {
-            let t: Vec<f32> = mesh.uvs.iter().flat_map(|p| p.to_array()).collect();
-            attributes.insert(Valid(Semantic::TexCoords(0)), self.floats(&t, 2, false));
+            attributes.insert(Valid(Semantic::TexCoords(0)), self.vec2s(&mesh.uvs));
         }
         if !mesh.colors.is_empty() {
             attributes.insert(Valid(Semantic::Colors(0)), self.colors(&mesh.colors));
         }
-        let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let indices = self.accessor(
-            &index_bytes,
-            mesh.indices.len(),
+            &mesh.indices,
+            |i| i.to_le_bytes(),
             ComponentType::U32,
             Type::Scalar,
             None,
             Some(json::buffer::Target::ElementArrayBuffer),
         );
         let material = self.material(&mesh.material);
-        let mut pge = Map::new();
+        // The skeleton first, the mesh's own extras after it (one named `skeleton` replaces
+        // it in place), as a map of them would keep them.
+        let mut pge = MeshExtras::default();
         if let Some(s) = &mesh.skeleton {
-            pge.insert("skeleton".into(), skeleton_json(s));
+            pge.0.push(("skeleton", Extra::Skeleton(s)));
         }
         for (k, v) in &mesh.extras {
-            pge.insert(k.clone(), v.clone());
+            match pge.0.iter_mut().find(|(key, _)| key == k) {
+                Some(entry) => entry.1 = Extra::Value(v),
+                None => pge.0.push((k, Extra::Value(v))),
+            }
         }
         let mode = match mesh.primitive {
             Primitive::Triangles => json::mesh::Mode::Triangles,
@@ -393,11 +420,97 @@ impl Builder {
     }
 }
 
-/// The skeleton as `{parents, positions, radii, orders}` (API.md §7).
-fn skeleton_json(s: &Skeleton) -> JsonValue {
-    let parents: Vec<i64> = s.parents.iter().map(|p| p.map_or(-1, i64::from)).collect();
-    let positions: Vec<f32> = s.positions.iter().flat_map(|p| p.to_array()).collect();
-    json!({ "parents": parents, "positions": positions, "radii": s.radii, "orders": s.orders })
+/// Four little-endian `f32`s or fewer, as one array of bytes.
+fn le_bytes<const K: usize, const N: usize>(floats: [f32; K]) -> [u8; N] {
+    let mut out = [0; N];
+    for (d, f) in out.chunks_exact_mut(4).zip(floats) {
+        d.copy_from_slice(&f.to_le_bytes());
+    }
+    out
+}
+
+/// One value of a mesh's `extras.pge`: its skeleton, written straight from the model, or one
+/// of the mesh's own extras.
+#[derive(Clone, Copy)]
+enum Extra<'m> {
+    Skeleton(&'m Skeleton),
+    Value(&'m JsonValue),
+}
+
+/// A mesh's `extras.pge` in order, borrowed from the model and serialized in one pass.
+#[derive(Default)]
+struct MeshExtras<'m>(Vec<(&'m str, Extra<'m>)>);
+
+impl MeshExtras<'_> {
+    /// `{"pge": {...}}` as the mesh's extras, serialized in one pass (no `Value` tree).
+    fn extras(&self) -> Result<json::Extras> {
+        serde_json::value::to_raw_value(&Entries([("pge", self)]))
+            .map(Some)
+            .map_err(|e| Error::Export(e.to_string()))
+    }
+}
+
+impl Serialize for MeshExtras<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (key, value) in &self.0 {
+            match value {
+                Extra::Skeleton(skeleton) => map.serialize_entry(key, &SkeletonJson(skeleton))?,
+                Extra::Value(value) => map.serialize_entry(key, value)?,
+            }
+        }
+        map.end()
+    }
+}
+
+/// A JSON object of the given entries, in order.
+struct Entries<const N: usize, T>([(&'static str, T); N]);
+
+impl<const N: usize, T: Serialize> Serialize for Entries<N, T> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(N))?;
+        for (key, value) in &self.0 {
+            map.serialize_entry(key, value)?;
+        }
+        map.end()
+    }
+}
+
+/// The skeleton as `{parents, positions, radii, orders}` (API.md §7), serialized straight
+/// from its arrays: a root's parent is -1; floats are written as the `f64` they widen to
+/// (`null` when not finite), as a `serde_json::Value` of them would be.
+struct SkeletonJson<'m>(&'m Skeleton);
+
+/// The items of an iterator, serialized as one JSON array.
+struct Items<F>(F);
+
+impl<I: Iterator<Item: Serialize>, F: Fn() -> I> Serialize for Items<F> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_seq((self.0)())
+    }
+}
+
+impl Serialize for SkeletonJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let sk = self.0;
+        let mut map = s.serialize_map(Some(4))?;
+        map.serialize_entry(
+            "parents",
+            &Items(|| sk.parents.iter().map(|p| p.map_or(-1, i64::from))),
+        )?;
+        map.serialize_entry(
+            "positions",
+            &Items(|| {
+                sk.positions
+                    .iter()
+                    .flat_map(|p| p.to_array())
+                    .map(f64::from)
+            }),
+        )?;
+        map.serialize_entry("radii", &Items(|| sk.radii.iter().map(|&r| f64::from(r))))?;
+        map.serialize_entry("orders", &sk.orders)?;
+        map.end()
+    }
 }
 
 /// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
@@ -442,6 +555,7 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
 pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<Vec<u8>> {
     model.validate()?;
     let mut b = Builder::new();
+    b.reserve(model);
     b.instancing = instancing;
     b.root.scene = Some(b.scene(model, "pge")?);
     b.finish(model, meta, None)
@@ -458,6 +572,9 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
     };
     let mut b = Builder::new();
     let mut summary = Vec::with_capacity(stages.len());
+    for (_, model) in stages {
+        b.reserve(model);
+    }
     for (name, model) in stages {
         model.validate()?;
         b.root.scene = Some(b.scene(model, name)?);
@@ -473,6 +590,25 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
 }
 
 impl Builder {
+    /// Reserves the buffer for the vertex and index data of `model`'s meshes and the JSON
+    /// (skeletons), so that it is allocated once rather than grown (and copied) as meshes
+    /// are written.
+    fn reserve(&mut self, model: &Model) {
+        let bytes: usize = model
+            .meshes
+            .iter()
+            .map(|m| {
+                (m.positions.len() + m.normals.len()) * 12
+                    + m.uvs.len() * 8
+                    + (m.colors.len() + m.indices.len()) * 4
+                    + 16
+                    + m.skeleton.as_ref().map_or(0, |s| s.positions.len() * 80)
+            })
+            .sum();
+        // The JSON goes in front of the buffer at the end (see `finish`): room for it too.
+        self.bin.reserve(bytes + (1 << 16));
+    }
+
     fn new() -> Builder {
         let mut b = Builder::default();
         b.root.asset = json::Asset {
@@ -678,18 +814,25 @@ impl Builder {
             text.push(b' ');
         }
         let total = 12 + 8 + text.len() + if b.bin.is_empty() { 0 } else { 8 + b.bin.len() };
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&text);
-        if !b.bin.is_empty() {
-            out.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&b.bin);
+        let mut head = Vec::with_capacity(total - b.bin.len());
+        head.extend_from_slice(b"glTF");
+        head.extend_from_slice(&2u32.to_le_bytes());
+        head.extend_from_slice(&(total as u32).to_le_bytes());
+        head.extend_from_slice(&(text.len() as u32).to_le_bytes());
+        head.extend_from_slice(b"JSON");
+        head.extend_from_slice(&text);
+        if b.bin.is_empty() {
+            return Ok(head);
         }
+        head.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
+        head.extend_from_slice(b"BIN\0");
+        // The buffer becomes the output, moved up behind the header and the JSON in place,
+        // rather than copied into a second allocation of the whole file.
+        let mut out = b.bin;
+        let bin = out.len();
+        out.resize(total, 0);
+        out.copy_within(..bin, head.len());
+        out[..head.len()].copy_from_slice(&head);
         Ok(out)
     }
 }
@@ -1186,5 +1329,56 @@ mod empty_tests {
                 assert_eq!(value["pge"]["stats"]["triangles"], 2);
             }
         }
+    }
+
+    /// The mesh extras as a `serde_json::Value` map would write them (the skeleton first,
+    /// the mesh's extras after it, floats widened to f64): the streamed extras must match.
+    #[test]
+    fn streamed_mesh_extras_match_a_value_tree() {
+        let mut s = Skeleton::new();
+        let root = s.push(Vec3::new(0.1, -0.0, 1e-7), None, 0.3, 0);
+        let a = s.push(Vec3::new(f32::NAN, 2.5, f32::INFINITY), Some(root), -0.0, 1);
+        s.push(Vec3::new(1e30, -3.75, 0.2), Some(a), f32::NAN, 7);
+        let mut mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        mesh.skeleton = Some(Arc::new(s.clone()));
+        mesh.extras
+            .insert("zz".into(), json!({ "a": [0.1, 2, "b"] }));
+        mesh.extras.insert("aa".into(), json!(null));
+        let expected = |mesh: &Mesh| {
+            let mut pge = Map::new();
+            if let Some(s) = &mesh.skeleton {
+                let parents: Vec<i64> = s.parents.iter().map(|p| p.map_or(-1, i64::from)).collect();
+                let positions: Vec<f32> = s.positions.iter().flat_map(|p| p.to_array()).collect();
+                pge.insert(
+                    "skeleton".into(),
+                    json!({ "parents": parents, "positions": positions,
+                        "radii": s.radii, "orders": s.orders }),
+                );
+            }
+            for (k, v) in &mesh.extras {
+                pge.insert(k.clone(), v.clone());
+            }
+            serde_json::to_string(&json!({ "pge": pge })).expect("json")
+        };
+        let streamed = |mesh: &Mesh| {
+            let mut b = Builder::new();
+            let (_, pge) = b.primitive(mesh).expect("primitive");
+            pge.extras()
+                .expect("extras")
+                .expect("some")
+                .get()
+                .to_string()
+        };
+        assert_eq!(streamed(&mesh), expected(&mesh));
+        assert!(streamed(&mesh).contains("[-1,0,1]"), "{}", streamed(&mesh));
+        // A mesh extra named `skeleton` replaces the skeleton where it stands.
+        mesh.extras.insert("skeleton".into(), json!(1));
+        assert_eq!(streamed(&mesh), expected(&mesh));
+        // No skeleton, no extras: nothing written.
+        let empty =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+        let mut b = Builder::new();
+        assert!(b.primitive(&empty).expect("primitive").1.0.is_empty());
     }
 }

@@ -163,11 +163,17 @@ impl Mesh {
                 primitive: self.primitive.name(),
             });
         }
-        if let Some((at, &index)) = self
-            .indices
-            .iter()
-            .enumerate()
-            .find(|(_, i)| **i as usize >= n)
+        // The largest index first (a loop without early exit, vectorized), the culprit only
+        // when there is one.
+        let largest = self.indices.iter().copied().max().unwrap_or(0);
+        if let Some((at, &index)) = (largest as usize >= n)
+            .then(|| {
+                self.indices
+                    .iter()
+                    .enumerate()
+                    .find(|(_, i)| **i as usize >= n)
+            })
+            .flatten()
         {
             return Err(GeometryError::IndexOutOfRange {
                 index,
@@ -175,9 +181,13 @@ impl Mesh {
                 vertices: n,
             });
         }
-        let finite3 = |attribute, v: &[Vec3]| match v.iter().position(|p| !p.is_finite()) {
-            Some(at) => Err(GeometryError::NotFinite { attribute, at }),
-            None => Ok(()),
+        // All finite first (without early exit, vectorized), the culprit only when not.
+        let finite3 = |attribute, v: &[Vec3]| {
+            if v.iter().fold(true, |all, p| all & p.is_finite()) {
+                return Ok(());
+            }
+            let at = v.iter().position(|p| !p.is_finite()).unwrap_or_default();
+            Err(GeometryError::NotFinite { attribute, at })
         };
         finite3("positions", &self.positions)?;
         finite3("normals", &self.normals)?;
