@@ -108,7 +108,7 @@ impl Derivation {
                         if k > 0 {
                             out.push(',');
                         }
-                        number(out, *v);
+                        crate::module_string::write_param(out, *v);
                     }
                     out.push(')');
                 }
