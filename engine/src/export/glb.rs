@@ -584,21 +584,47 @@ impl Builder {
         while !text.len().is_multiple_of(4) {
             text.push(b' ');
         }
-        let total = 12 + 8 + text.len() + if b.bin.is_empty() { 0 } else { 8 + b.bin.len() };
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&text);
-        if !b.bin.is_empty() {
-            out.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&b.bin);
-        }
-        Ok(out)
+        glb_container(&text, &b.bin, GLB_LIMIT)
     }
+}
+
+/// The largest GLB file: its header stores lengths as 32-bit numbers.
+pub const GLB_LIMIT: u64 = u32::MAX as u64;
+
+/// The GLB container around a glTF JSON text (padded to 4 bytes) and a binary chunk (empty:
+/// none): an [`Error::Export`] naming the limit when the file would pass `limit` bytes
+/// ([`GLB_LIMIT`] when exporting; a smaller one in tests), never a truncated length.
+pub fn glb_container(text: &[u8], bin: &[u8], limit: u64) -> Result<Vec<u8>> {
+    let total = 12
+        + 8
+        + text.len() as u64
+        + if bin.is_empty() {
+            0
+        } else {
+            8 + bin.len() as u64
+        };
+    let limit = limit.min(GLB_LIMIT);
+    if total > limit {
+        return Err(Error::Export(format!(
+            "the model needs a glb of {total} bytes, past the limit of {limit} bytes (a glb \
+             holds at most 4 GiB): lower the detail or split the model"
+        )));
+    }
+    let len32 =
+        |n: u64| u32::try_from(n).map_err(|_| Error::Export(format!("a glb length of {n} bytes")));
+    let mut out = Vec::with_capacity(total as usize);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&len32(total)?.to_le_bytes());
+    out.extend_from_slice(&len32(text.len() as u64)?.to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(text);
+    if !bin.is_empty() {
+        out.extend_from_slice(&len32(bin.len() as u64)?.to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+    }
+    Ok(out)
 }
 
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
