@@ -17,12 +17,29 @@ pub struct ScriptArgs {
     /// Override a parameter declared with pge.params (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
     pub set: Vec<(String, String)>,
-    /// Wall-clock limit of the script and its algorithm, in seconds.
-    #[arg(long, value_name = "SECONDS", default_value_t = 300.0)]
+    /// Wall-clock limit of the script and its algorithm, in seconds (> 0).
+    #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = parse_seconds)]
     pub time_limit: f64,
-    /// Memory limit of the Lua state, in MiB.
-    #[arg(long, value_name = "MIB", default_value_t = 4096)]
+    /// Memory limit of the Lua state and of the plugins' buffers, in MiB (>= 1).
+    #[arg(long, value_name = "MIB", default_value_t = 4096, value_parser = parse_mib)]
     pub memory_limit: usize,
+}
+
+/// `--time-limit`: a positive, finite number of seconds (otherwise a usage error, exit 2).
+pub fn parse_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 => Ok(s),
+        _ => Err(format!("'{text}' is not a positive number of seconds")),
+    }
+}
+
+/// `--memory-limit`: a whole number of MiB, at least 1 (0 would mean "unlimited" to Lua
+/// and "nothing" to the plugins, so it is a usage error, exit 2).
+pub fn parse_mib(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(mib) if mib >= 1 => Ok(mib),
+        _ => Err(format!("'{text}' is not a whole number of MiB, at least 1")),
+    }
 }
 
 fn parse_set(s: &str) -> Result<(String, String), String> {
@@ -40,13 +57,9 @@ impl ScriptArgs {
 
     /// The engine with these limits and `forest` as its forest plugin.
     pub fn engine_with_forest(&self, forest: pge_forest::ForestPlugin) -> anyhow::Result<Engine> {
-        let time = if self.time_limit > 0.0 && self.time_limit.is_finite() {
-            Some(Duration::from_secs_f64(self.time_limit))
-        } else {
-            anyhow::bail!("--time-limit must be a positive number of seconds");
-        };
+        // `--time-limit` is checked positive and finite when the arguments are parsed.
         Ok(pge::engine_with_forest(forest)
-            .time_limit(time)
+            .time_limit(Some(Duration::from_secs_f64(self.time_limit)))
             .memory_limit_mib(self.memory_limit)
             .build()?)
     }
@@ -61,6 +74,27 @@ impl ScriptArgs {
         }
     }
 }
+
+/// A usage problem found after the arguments parsed (an impossible combination, an output
+/// name the command cannot write): `pge` exits with 2 for it, as for clap's own errors.
+#[derive(Debug)]
+pub struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// Returns early with a [`Usage`] error.
+macro_rules! usage {
+    ($($arg:tt)*) => {
+        return Err(anyhow::Error::new($crate::common::Usage(format!($($arg)*))))
+    };
+}
+pub(crate) use usage;
 
 /// One line for the terminal: script errors are already `FILE:LINE: message`.
 pub fn describe_error(e: &anyhow::Error) -> String {

@@ -75,7 +75,7 @@ fn parse_tile(s: &str) -> Result<(usize, usize), String> {
 pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     if let Some(n) = threads {
         if n == 0 {
-            anyhow::bail!("--threads must be at least 1");
+            crate::common::usage!("--threads must be at least 1");
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -149,11 +149,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("glb" | "obj")) {
-        anyhow::bail!("{}: the output must end in .glb or .obj", output.display());
+        crate::common::usage!("{}: the output must end in .glb or .obj", output.display());
     }
     if let Some(stages) = &args.stages {
         if ext.as_deref() != Some("glb") {
-            anyhow::bail!(
+            crate::common::usage!(
                 "{}: --stages writes one scene per stage, which needs a .glb output",
                 output.display()
             );
@@ -166,6 +166,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     };
     let engine = args.script.engine_with_forest(forest)?;
     let session = engine.session(args.script.session_options(args.steps))?;
+    // Files a script writes (`img:save`) go beside the output.
+    session.set_output_folder(output.parent().unwrap_or(std::path::Path::new("")))?;
     let bar = progress_bar(args.quiet);
     bar.set_message(args.script.script.display().to_string());
     let mut progress = |taken: u32, planned: Option<u32>| {

@@ -46,10 +46,11 @@ impl EngineBuilder {
         self
     }
 
-    /// The memory limit of each Lua state, in MiB (default 4096).
+    /// The memory limit of each Lua state and of the plugins' buffers, in MiB (default
+    /// 4096). At least 1 MiB: 0 counts as 1 (for Lua, 0 bytes would mean "unlimited").
     #[must_use]
     pub fn memory_limit_mib(mut self, mib: usize) -> Self {
-        self.limits.memory = mib.saturating_mul(1 << 20);
+        self.limits.memory = mib.max(1).saturating_mul(1 << 20);
         self
     }
 

@@ -35,8 +35,10 @@ pub fn uniform24(rng: &mut Mt64) -> f32 {
 /// An integer in `[a, b]` (inclusive), from [`uniform`]. `a` must not exceed `b`.
 #[must_use]
 pub fn int_in(rng: &mut Mt, a: i64, b: i64) -> i64 {
-    let span = (b - a) as f64 + 1.0;
-    (a + (uniform(rng) * span).floor() as i64).min(b)
+    // In 128 bits: `b - a` of the widest interval (mininteger..maxinteger) passes i64.
+    let span = (i128::from(b) - i128::from(a)) as f64 + 1.0;
+    let offset = (uniform(rng) * span).floor() as i128;
+    (i128::from(a) + offset).min(i128::from(b)) as i64
 }
 
 /// A normally distributed number (Box-Muller, one cosine branch) from two [`uniform`] draws.
@@ -94,5 +96,18 @@ mod tests {
             seen[(v - 1) as usize] = true;
         }
         assert_eq!(seen, [true; 3]);
+    }
+
+    #[test]
+    fn int_spans_the_whole_integer_range() {
+        let mut r = mt_from_seed(1);
+        let draws: Vec<i64> = (0..200)
+            .map(|_| int_in(&mut r, i64::MIN, i64::MAX))
+            .collect();
+        let negative = draws.iter().filter(|v| **v < 0).count();
+        assert!((50..150).contains(&negative), "{negative} of 200 negative");
+        assert!(draws.iter().all(|v| *v != i64::MIN));
+        assert_eq!(int_in(&mut r, i64::MAX, i64::MAX), i64::MAX);
+        assert_eq!(int_in(&mut r, i64::MIN, i64::MIN), i64::MIN);
     }
 }

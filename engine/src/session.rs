@@ -160,6 +160,22 @@ impl Session {
         }
     }
 
+    /// The folder the run's output goes to: files a script writes (`img:save`) go there
+    /// instead of the main script's folder (it is created when a script first writes).
+    pub fn set_output_folder(&self, dir: &Path) -> Result<()> {
+        let absolute = std::env::current_dir()
+            .map(|cwd| cwd.join(dir))
+            .map_err(|e| Error::Plugin {
+                plugin: "output".into(),
+                message: format!("{}: {e}", dir.display()),
+            })?;
+        let folder = absolute.canonicalize().unwrap_or(absolute);
+        if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
+            st.output_dir = Some(folder);
+        }
+        Ok(())
+    }
+
     /// Runs the main script and returns its value. The script's folder becomes readable by
     /// `require` and `pge.load`; a `--set` override it does not declare is an error.
     pub fn run_script(&self, path: &Path) -> Result<Value> {

@@ -61,10 +61,10 @@ pub struct PreviewArgs {
     #[arg(long, value_name = "D,H[,TX,TY,TZ]", value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<CameraSpec>,
     /// Seconds one generation may take.
-    #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = parse_seconds)]
+    #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = crate::common::parse_seconds)]
     pub time_limit: f64,
     /// MiB of memory the Lua state may use.
-    #[arg(long, value_name = "MIB", default_value_t = 4096)]
+    #[arg(long, value_name = "MIB", default_value_t = 4096, value_parser = crate::common::parse_mib)]
     pub memory_limit: usize,
 }
 
@@ -108,13 +108,6 @@ fn parse_camera(text: &str) -> Result<CameraSpec, String> {
         height: numbers[1],
         target,
     })
-}
-
-fn parse_seconds(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(s) if s.is_finite() && s > 0.0 => Ok(s),
-        _ => Err(format!("'{text}' is not a positive number of seconds")),
-    }
 }
 
 /// Opens the preview window for `args.script` with every plugin of the `pge` command.
@@ -222,9 +215,13 @@ mod tests {
         assert_eq!(parse_set("name=a=b"), Ok(("name".into(), "a=b".into())));
         assert!(parse_set("height").is_err());
         assert!(parse_set("=3").is_err());
+        use crate::common::{parse_mib, parse_seconds};
         assert_eq!(parse_seconds("2.5"), Ok(2.5));
         assert!(parse_seconds("0").is_err());
         assert!(parse_seconds("inf").is_err());
         assert!(parse_seconds("x").is_err());
+        assert_eq!(parse_mib("64"), Ok(64));
+        assert!(parse_mib("0").is_err());
+        assert!(parse_mib("-1").is_err());
     }
 }

@@ -4,6 +4,7 @@ mod glb;
 mod obj;
 
 pub use glb::{
-    ExportMeta, GPU_INSTANCING, Instancing, glb_bytes, glb_bytes_with, glb_stages_bytes,
+    ExportMeta, GLB_LIMIT, GPU_INSTANCING, Instancing, glb_bytes, glb_bytes_with, glb_container,
+    glb_stages_bytes,
 };
 pub use obj::{ObjFiles, obj_files};

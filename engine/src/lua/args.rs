@@ -55,3 +55,25 @@ pub fn conversion_message(e: &mlua::Error) -> String {
         other => other.to_string(),
     }
 }
+
+/// Makes assigning a field of a userdata type that has none (`this.size = 2` on a turtle) a
+/// script error naming the field and the type, instead of Lua's "attempt to index a userdata
+/// value". Call it from the type's `add_methods`; `what` names the type (`turtle`).
+pub fn no_new_fields<T, M: mlua::UserDataMethods<T>>(m: &mut M, what: &'static str) {
+    m.add_meta_method(
+        mlua::MetaMethod::NewIndex,
+        move |lua, _, (key, _): (Value, Value)| -> mlua::Result<()> {
+            let key = match &key {
+                Value::String(s) => format!("'{}'", s.to_string_lossy()),
+                other => format!("a {} key", other.type_name()),
+            };
+            Err(script_error(
+                lua,
+                format!(
+                    "cannot set {key} on a {what}: it has no fields to set (call its methods, \
+                     or keep your own values in a Lua table)"
+                ),
+            ))
+        },
+    );
+}

@@ -22,7 +22,7 @@ mod skeleton;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
-pub use args::{conversion_message, finite_f32, finite_number, vec3_arg};
+pub use args::{conversion_message, finite_f32, finite_number, no_new_fields, vec3_arg};
 pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};

@@ -16,15 +16,48 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     let globals = lua.globals();
     globals.set("dofile", Value::Nil)?;
     globals.set("loadfile", Value::Nil)?;
-    // `load` of text only: binary chunks can break the VM's invariants.
+    // `load` of text only: binary chunks can break the VM's invariants. Without a chunk
+    // name the chunk is named after the calling line (`main.lua:12: in load()`), so its
+    // errors point at the script; without an `env` argument it sees the globals, as in
+    // standard Lua.
     let load: mlua::Function = globals.get("load")?;
-    let text_load = lua
+    globals.set(
+        "load",
+        lua.create_function(move |lua, args: mlua::MultiValue| {
+            let mut args: Vec<Value> = args.into_iter().collect();
+            if args.len() < 3 {
+                args.resize(3, Value::Nil);
+            }
+            if args[1].is_nil() {
+                let name = format!("={}: in load()", caller_location(lua));
+                args[1] = Value::String(lua.create_string(name)?);
+            }
+            args[2] = Value::String(lua.create_string("t")?);
+            load.call::<mlua::MultiValue>(mlua::MultiValue::from_iter(args))
+        })?,
+    )?;
+    // Finalizers run with the instruction hook off, so a `__gc` that loops would escape the
+    // time limit: metatables with a `__gc` field are refused. (Lua only marks a table for
+    // finalization when its metatable has `__gc` as it is set.)
+    let setmetatable: mlua::Function = globals.get("setmetatable")?;
+    let guarded = lua
         .load(
-            "local load = ...; return function(c, name, _, env) return load(c, name, 't', env) end",
+            r#"local setmetatable, rawget, type, error = ...
+return function(t, mt, ...)
+  if type(mt) == "table" and rawget(mt, "__gc") ~= nil then
+    error("setmetatable: __gc finalizers are not allowed (Lua runs them outside the time limit)", 2)
+  end
+  return setmetatable(t, mt, ...)
+end"#,
         )
         .set_name("=pge")
-        .call::<mlua::Function>(load)?;
-    globals.set("load", text_load)?;
+        .call::<mlua::Function>((
+            setmetatable,
+            globals.get::<mlua::Function>("rawget")?,
+            globals.get::<mlua::Function>("type")?,
+            globals.get::<mlua::Function>("error")?,
+        ))?;
+    globals.set("setmetatable", guarded)?;
     // `print` writes to stderr so that stdout stays clean for `--stats` and `derive`.
     globals.set(
         "print",
@@ -180,7 +213,10 @@ pub fn resolve_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
     Ok(canonical)
 }
 
-/// A path a script may write to: relative, without `..`, taken from the working directory.
+/// Where a script may write `relative`: a relative path without `..`, taken from the
+/// output's folder when the session has one ([`crate::Session::set_output_folder`], `pge
+/// run -o`), else from the main script's folder; missing folders on the way are created by
+/// the caller. Never outside those folders (a symbolic link that leads out is refused).
 pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
     let p = Path::new(relative);
     if relative.is_empty()
@@ -193,7 +229,38 @@ pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
             format!("cannot write '{relative}': give a relative path without '..'"),
         ));
     }
-    Ok(p.to_path_buf())
+    let base = lua
+        .app_data_ref::<SessionState>()
+        .and_then(|s| s.output_dir.clone().or_else(|| s.main_dir.clone()));
+    let Some(base) = base else {
+        return Err(script_error(
+            lua,
+            format!("cannot write '{relative}': no script or output folder to write into"),
+        ));
+    };
+    std::fs::create_dir_all(&base)
+        .map_err(|e| script_error(lua, format!("cannot write '{relative}': {e}")))?;
+    let target = base.join(p);
+    // An existing folder or file on the way must not lead out through a link.
+    let mut existing = target.as_path();
+    while !existing.exists() {
+        match existing.parent() {
+            Some(parent) => existing = parent,
+            None => break,
+        }
+    }
+    let inside = existing
+        .canonicalize()
+        .ok()
+        .zip(base.canonicalize().ok())
+        .is_some_and(|(e, b)| e.starts_with(b));
+    if !inside {
+        return Err(script_error(
+            lua,
+            format!("cannot write '{relative}': it leads outside the folder scripts write into"),
+        ));
+    }
+    Ok(target)
 }
 
 fn require(lua: &Lua, name: String) -> mlua::Result<Value> {

@@ -23,6 +23,8 @@ pub(crate) struct SessionState {
     pub main_dir: Option<PathBuf>,
     /// The library folder (canonical), if any.
     pub library: Option<PathBuf>,
+    /// The folder the output goes to (canonical), where scripts write their files.
+    pub output_dir: Option<PathBuf>,
     pub chunks: Vec<Chunk>,
     /// Every file read: scripts, modules, meshes, textures (for live reload).
     pub loaded_files: Vec<PathBuf>,

@@ -8,7 +8,7 @@
 //! lines:add({0, 0, 0}, {0, 1, 0}, "#ff4000")       -- a, b [, colour]
 //! local map = pge.Image.load("map.png")            -- or pge.Image.new(w, h [, fill])
 //! if map:getHex(3, 4) == "#00ff00" then map:set(3, 4, "#ffffff") end
-//! map:save("out/map.png")                          -- relative to the working folder
+//! map:save("out/map.png")                          -- beside the output (or the script)
 //! local m = pge.model()
 //! m:add(lines) m:add(map)                          -- the image as a textured plane
 //! m:add(map:applyTo(pge.Extruder()))               -- or as the texture of any model

@@ -89,6 +89,7 @@ pub struct LuaLines(pub Rc<RefCell<Lines>>);
 
 impl UserData for LuaLines {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "line set");
         m.add_method("add", |lua, me, (a, b, c): (Value, Value, Value)| {
             pge_engine::lua::check_mutable(lua, "lines:add")?;
             let a = vec3_arg(lua, a, "add(a, b [, colour])")?;
@@ -152,6 +153,7 @@ fn coord(lua: &Lua, v: &Value, what: &str) -> mlua::Result<i64> {
 
 impl UserData for LuaImage {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "image");
         m.add_method("width", |_, me, ()| Ok(me.0.borrow().width()));
         m.add_method("height", |_, me, ()| Ok(me.0.borrow().height()));
         m.add_method("inside", |lua, me, (x, y): (Value, Value)| {
@@ -220,6 +222,15 @@ impl UserData for LuaImage {
                 return Err(script_error(lua, "save(path): expected a file name"));
             };
             let p = p.to_str()?.to_string();
+            let is_png = std::path::Path::new(&p)
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+            if !is_png {
+                return Err(script_error(
+                    lua,
+                    format!("save('{p}'): the file name must end in .png"),
+                ));
+            }
             let target = writable_path(lua, &p)?;
             let png =
                 me.0.borrow()
@@ -473,6 +484,14 @@ mod tests {
             (
                 "local img = pge.Image.new(4, 4)\nimg:save('/tmp/x.png')",
                 "eval:2: cannot write '/tmp/x.png'",
+            ),
+            (
+                "local img = pge.Image.new(4, 4)\nimg:save('notes.txt')",
+                "eval:2: save('notes.txt'): the file name must end in .png",
+            ),
+            (
+                "local img = pge.Image.new(4, 4)\nimg:save('../x.png')",
+                "eval:2: cannot write '../x.png'",
             ),
         ];
         for (code, expected) in cases {

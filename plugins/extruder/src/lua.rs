@@ -103,6 +103,7 @@ fn matrix_op(
 
 impl UserData for LuaMatrixManipulator {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "matrix manipulator");
         m.add_method("push", |lua, me, ()| {
             matrix_op(lua, me, "push", |m| m.push())
         });
@@ -197,6 +198,7 @@ fn extruder_op(
 
 impl UserData for LuaExtruder {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "extruder");
         m.add_method("clearShape", |lua, me, ()| {
             guard(lua, "extruder:clearShape")?;
             me.0.borrow_mut().clear_shape();

@@ -143,10 +143,27 @@ fn tokenize(src: &str) -> Result<Vec<Tok>, ExprError> {
     Ok(out)
 }
 
+/// How deeply an expression may nest (parentheses, unary operators, calls, and chains of
+/// binary operators): the parser, the compiler and dropping the tree recurse this deep.
+pub const MAX_NESTING: usize = 100;
+
 struct Parser<'a> {
     toks: Vec<Tok>,
     pos: usize,
     src: &'a str,
+    /// How many nested calls of the parser are running.
+    level: usize,
+}
+
+/// A syntax tree and its depth.
+type Node = (Ast, usize);
+
+fn unary_node(op: UnOp, (a, d): Node) -> Node {
+    (Ast::Unary(op, Box::new(a)), d + 1)
+}
+
+fn binary_node(op: BinOp, (a, da): Node, (b, db): Node) -> Node {
+    (Ast::Binary(op, Box::new(a), Box::new(b)), da.max(db) + 1)
 }
 
 impl Parser<'_> {
@@ -172,27 +189,55 @@ impl Parser<'_> {
     fn err(&self, what: &str) -> ExprError {
         ExprError(format!("{what} in expression '{}'", self.src.trim()))
     }
-    fn or(&mut self) -> Result<Ast, ExprError> {
+    fn too_deep(&self) -> ExprError {
+        let src = self.src.trim();
+        let shown: String = src.chars().take(40).collect();
+        let more = if shown.len() < src.len() { "..." } else { "" };
+        ExprError(format!(
+            "expression nested deeper than the limit of {MAX_NESTING} levels in '{shown}{more}'"
+        ))
+    }
+    /// Checks a node's depth against [`MAX_NESTING`].
+    fn checked(&self, node: Node) -> Result<Node, ExprError> {
+        if node.1 > MAX_NESTING {
+            return Err(self.too_deep());
+        }
+        Ok(node)
+    }
+    /// Runs a nested parse, refusing to recurse past [`MAX_NESTING`].
+    fn nested(&mut self, f: fn(&mut Self) -> Result<Node, ExprError>) -> Result<Node, ExprError> {
+        if self.level >= MAX_NESTING {
+            return Err(self.too_deep());
+        }
+        self.level += 1;
+        let node = f(self);
+        self.level -= 1;
+        node
+    }
+    fn or(&mut self) -> Result<Node, ExprError> {
         let mut a = self.and()?;
         while self.eat_word("or") || self.eat_op("||") {
-            a = Ast::Binary(BinOp::Or, Box::new(a), Box::new(self.and()?));
+            let b = self.and()?;
+            a = self.checked(binary_node(BinOp::Or, a, b))?;
         }
         Ok(a)
     }
-    fn and(&mut self) -> Result<Ast, ExprError> {
+    fn and(&mut self) -> Result<Node, ExprError> {
         let mut a = self.not()?;
         while self.eat_word("and") || self.eat_op("&&") {
-            a = Ast::Binary(BinOp::And, Box::new(a), Box::new(self.not()?));
+            let b = self.not()?;
+            a = self.checked(binary_node(BinOp::And, a, b))?;
         }
         Ok(a)
     }
-    fn not(&mut self) -> Result<Ast, ExprError> {
+    fn not(&mut self) -> Result<Node, ExprError> {
         if self.eat_word("not") || self.eat_op("!") {
-            return Ok(Ast::Unary(UnOp::Not, Box::new(self.not()?)));
+            let a = self.nested(Self::not)?;
+            return self.checked(unary_node(UnOp::Not, a));
         }
         self.cmp()
     }
-    fn cmp(&mut self) -> Result<Ast, ExprError> {
+    fn cmp(&mut self) -> Result<Node, ExprError> {
         let mut a = self.add()?;
         loop {
             let op = match self.peek() {
@@ -205,10 +250,11 @@ impl Parser<'_> {
                 _ => return Ok(a),
             };
             self.pos += 1;
-            a = Ast::Binary(op, Box::new(a), Box::new(self.add()?));
+            let b = self.add()?;
+            a = self.checked(binary_node(op, a, b))?;
         }
     }
-    fn add(&mut self) -> Result<Ast, ExprError> {
+    fn add(&mut self) -> Result<Node, ExprError> {
         let mut a = self.mul()?;
         loop {
             let op = match self.peek() {
@@ -217,10 +263,11 @@ impl Parser<'_> {
                 _ => return Ok(a),
             };
             self.pos += 1;
-            a = Ast::Binary(op, Box::new(a), Box::new(self.mul()?));
+            let b = self.mul()?;
+            a = self.checked(binary_node(op, a, b))?;
         }
     }
-    fn mul(&mut self) -> Result<Ast, ExprError> {
+    fn mul(&mut self) -> Result<Node, ExprError> {
         let mut a = self.unary()?;
         loop {
             let op = match self.peek() {
@@ -230,35 +277,34 @@ impl Parser<'_> {
                 _ => return Ok(a),
             };
             self.pos += 1;
-            a = Ast::Binary(op, Box::new(a), Box::new(self.unary()?));
+            let b = self.unary()?;
+            a = self.checked(binary_node(op, a, b))?;
         }
     }
-    fn unary(&mut self) -> Result<Ast, ExprError> {
+    fn unary(&mut self) -> Result<Node, ExprError> {
         if self.eat_op("-") {
-            return Ok(Ast::Unary(UnOp::Neg, Box::new(self.unary()?)));
+            let a = self.nested(Self::unary)?;
+            return self.checked(unary_node(UnOp::Neg, a));
         }
         if self.eat_op("+") {
-            return self.unary();
+            return self.nested(Self::unary);
         }
         self.pow()
     }
-    fn pow(&mut self) -> Result<Ast, ExprError> {
+    fn pow(&mut self) -> Result<Node, ExprError> {
         let base = self.primary()?;
         if self.eat_op("^") {
             // Right associative, and binds tighter than a unary minus on its left.
-            return Ok(Ast::Binary(
-                BinOp::Pow,
-                Box::new(base),
-                Box::new(self.unary()?),
-            ));
+            let exponent = self.nested(Self::unary)?;
+            return self.checked(binary_node(BinOp::Pow, base, exponent));
         }
         Ok(base)
     }
-    fn primary(&mut self) -> Result<Ast, ExprError> {
+    fn primary(&mut self) -> Result<Node, ExprError> {
         match self.toks.get(self.pos).cloned() {
             Some(Tok::Num(v)) => {
                 self.pos += 1;
-                Ok(Ast::Num(v))
+                Ok((Ast::Num(v), 1))
             }
             Some(Tok::Name(n)) => {
                 if matches!(n.as_str(), "and" | "or" | "not") {
@@ -267,9 +313,12 @@ impl Parser<'_> {
                 self.pos += 1;
                 if self.eat_op("(") {
                     let mut args = Vec::new();
+                    let mut depth = 1;
                     if !self.eat_op(")") {
                         loop {
-                            args.push(self.or()?);
+                            let (arg, d) = self.nested(Self::or)?;
+                            args.push(arg);
+                            depth = depth.max(d + 1);
                             if self.eat_op(")") {
                                 break;
                             }
@@ -278,14 +327,14 @@ impl Parser<'_> {
                             }
                         }
                     }
-                    Ok(Ast::Call(n, args))
+                    self.checked((Ast::Call(n, args), depth))
                 } else {
-                    Ok(Ast::Name(n))
+                    Ok((Ast::Name(n), 1))
                 }
             }
             Some(Tok::Op("(")) => {
                 self.pos += 1;
-                let e = self.or()?;
+                let e = self.nested(Self::or)?;
                 if !self.eat_op(")") {
                     return Err(self.err("missing ')'"));
                 }
@@ -300,11 +349,16 @@ impl Parser<'_> {
 /// Parses one expression.
 pub fn parse(src: &str) -> Result<Ast, ExprError> {
     let toks = tokenize(src)?;
-    let mut p = Parser { toks, pos: 0, src };
+    let mut p = Parser {
+        toks,
+        pos: 0,
+        src,
+        level: 0,
+    };
     if p.toks.is_empty() {
         return Err(ExprError("empty expression".into()));
     }
-    let ast = p.or()?;
+    let (ast, _) = p.or()?;
     if p.pos != p.toks.len() {
         return Err(p.err("unexpected text after the end"));
     }
@@ -585,7 +639,9 @@ impl Expr {
         };
         c.emit(ast)?;
         if c.max > MAX_DEPTH {
-            return Err(ExprError("expression nested too deeply".into()));
+            return Err(ExprError(format!(
+                "expression nested too deeply: it needs more than the limit of {MAX_DEPTH} pending values"
+            )));
         }
         Ok(Expr(match c.ops.as_slice() {
             [Op::Const(v)] => Repr::Const(*v),
@@ -760,6 +816,36 @@ mod tests {
         assert_eq!(e.constant(), Some(7.0));
         let e = Expr::compile(&parse("rand()").expect("ok"), &mut |_| None).expect("ok");
         assert!(e.is_random());
+    }
+
+    #[test]
+    fn nesting_past_the_limit_is_an_error_not_a_stack_overflow() {
+        let deep = |open: &str, mid: &str, close: &str, n: usize| {
+            format!("{}{mid}{}", open.repeat(n), close.repeat(n))
+        };
+        for src in [
+            deep("(", "1", ")", 10_000),
+            deep("-", "1", "", 10_000),
+            deep("not ", "1", "", 10_000),
+            deep("sin(", "1", ")", 10_000),
+            deep("", "1", " + 1", 10_000),
+            deep("2 ^ ", "1", "", 10_000),
+            deep("1 < ", "1", "", 10_000),
+        ] {
+            let e = parse(&src).expect_err("too deep");
+            assert!(
+                e.0.contains(&format!("the limit of {MAX_NESTING} levels")),
+                "{}",
+                e.0
+            );
+        }
+        assert_eq!(eval(&deep("(", "1 + 1", ")", 50)), 2.0);
+        let e = Expr::compile(
+            &parse(&deep("1 + (", "1", ")", 40)).expect("parses"),
+            &mut |_| None,
+        )
+        .expect_err("too many pending values");
+        assert!(e.0.contains("the limit of 32 pending values"), "{}", e.0);
     }
 
     #[test]

@@ -227,8 +227,8 @@ impl ModuleString {
         }
     }
 
-    /// Writes module `i` as `Name` or `Name(p1,p2)` (numbers in shortest round-trip form);
-    /// an external module is written with its name only.
+    /// Writes module `i` as `Name` or `Name(p1,p2)` (numbers in shortest round-trip form,
+    /// see [`write_param`]); an external module is written with its name only.
     pub fn write_module(&self, i: usize, symbols: &SymbolTable, out: &mut String) {
         out.push_str(symbols.name(self.sym(i)));
         let params = self.params(i);
@@ -238,7 +238,7 @@ impl ModuleString {
                 if k > 0 {
                     out.push(',');
                 }
-                let _ = write!(out, "{p}");
+                write_param(out, *p);
             }
             out.push(')');
         }
@@ -274,6 +274,19 @@ impl ModuleString {
             }
         }
         matches
+    }
+}
+
+/// Writes a parameter so that the classic notation reads it back to the same value: the
+/// shortest round-trip form, and the non-finite values as the expressions that give them
+/// (`(1/0)`, `(-1/0)`, `(0/0)`).
+pub(crate) fn write_param(out: &mut String, p: f64) {
+    if p.is_nan() {
+        out.push_str("(0/0)");
+    } else if p.is_infinite() {
+        out.push_str(if p > 0.0 { "(1/0)" } else { "(-1/0)" });
+    } else {
+        let _ = write!(out, "{p}");
     }
 }
 

@@ -20,6 +20,7 @@ pub struct LuaMetaballs(pub Rc<RefCell<Metaballs>>);
 
 impl UserData for LuaMetaballs {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "metaball field");
         m.add_method(
             "addParticle",
             |lua, me, (pos, charge, radius): (Value, Value, Value)| {
@@ -149,6 +150,7 @@ fn memory_budget(lua: &Lua) -> usize {
 
 impl UserData for LuaMarchingCubes {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "marching cubes object");
         m.add_method("mesh", |lua, me, ()| {
             Ok(LuaMesh(me.mesh(lua, &run_context(lua))?))
         });

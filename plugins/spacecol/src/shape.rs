@@ -11,6 +11,13 @@ use glam::{Vec2, Vec3};
 
 use crate::trimesh::TriMesh;
 
+/// How deeply unions and differences may nest: every query walks the shape recursively.
+pub const MAX_NESTING: usize = 64;
+
+/// How many parts a combined shape may hold, counting a shared part once per use: every
+/// query may visit them all.
+pub const MAX_PARTS: usize = 100_000;
+
 /// A Rust predicate: inside or not, or an error (a Lua predicate that failed).
 pub type PredicateFn = dyn Fn(Vec3) -> Result<bool, pge_engine::Error>;
 
@@ -113,6 +120,41 @@ impl Shape {
             Shape::Difference(..) => "difference",
             Shape::Predicate { .. } => "predicate",
         }
+    }
+
+    /// Checks a combined shape against [`MAX_NESTING`] and [`MAX_PARTS`], visiting at most
+    /// that many parts; the error names the limit. The Lua constructors check every union
+    /// and difference they build, so the queries' recursion stays bounded.
+    pub fn check_size(&self) -> Result<(), String> {
+        let mut budget = MAX_PARTS;
+        self.visit_parts(0, &mut budget)
+    }
+
+    fn visit_parts(&self, depth: usize, budget: &mut usize) -> Result<(), String> {
+        if depth > MAX_NESTING {
+            return Err(format!(
+                "unions and differences nest deeper than the limit of {MAX_NESTING} levels"
+            ));
+        }
+        if *budget == 0 {
+            return Err(format!(
+                "the shape holds more than the limit of {MAX_PARTS} parts (a shared part counts once per use)"
+            ));
+        }
+        *budget -= 1;
+        match self {
+            Shape::Union(parts) => {
+                for part in parts.iter() {
+                    part.visit_parts(depth + 1, budget)?;
+                }
+            }
+            Shape::Difference(a, b) => {
+                a.visit_parts(depth + 1, budget)?;
+                b.visit_parts(depth + 1, budget)?;
+            }
+            _ => {}
+        }
+        Ok(())
     }
 
     /// Whether `p` is inside.
@@ -322,6 +364,29 @@ mod tests {
 
     fn inside(s: &Shape, p: Vec3) -> bool {
         s.contains(p).expect("no predicate error")
+    }
+
+    #[test]
+    fn combinations_past_the_limits_are_refused() {
+        let sphere = Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let mut nested = sphere.clone();
+        for _ in 0..MAX_NESTING {
+            nested = Shape::Union(vec![nested].into());
+        }
+        assert_eq!(nested.check_size(), Ok(()));
+        let deeper = Shape::Union(vec![nested].into());
+        let e = deeper.check_size().expect_err("too deep");
+        assert!(e.contains("the limit of 64 levels"), "{e}");
+        // A shared part counts once per use: 2^20 visits.
+        let mut shared = sphere;
+        for _ in 0..20 {
+            shared = Shape::Union(vec![shared.clone(), shared].into());
+        }
+        let e = shared.check_size().expect_err("too many parts");
+        assert!(e.contains("the limit of 100000 parts"), "{e}");
     }
 
     #[test]

@@ -321,6 +321,7 @@ impl TriMesh {
     /// Reads the triangles of every mesh node of a `.glb` (or `.gltf` with embedded data)
     /// in its default scene, placed by the node transforms.
     pub fn parse_gltf(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), MeshError> {
+        check_accessor_indices(bytes)?;
         let (doc, buffers, _) =
             gltf::import_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
         let mut positions = Vec::new();
@@ -385,6 +386,28 @@ impl TriMesh {
 }
 
 /// Every undirected edge must border an even number of triangles.
+/// Refuses a primitive attribute naming an accessor that does not exist: the gltf crate's
+/// validation indexes the POSITION accessor before checking it (a panic, found by fuzzing).
+fn check_accessor_indices(bytes: &[u8]) -> Result<(), MeshError> {
+    let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| MeshError::Gltf(e.to_string()))?;
+    let root = unchecked.document.as_json();
+    let count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for index in primitive.attributes.values() {
+                if index.value() >= count {
+                    return Err(MeshError::Gltf(format!(
+                        "meshes[{m}].primitives[{p}] names accessor {} of {count}",
+                        index.value()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_closed(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Result<(), MeshError> {
     let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 3);
     for t in triangles {
@@ -446,6 +469,16 @@ fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_gltf_naming_a_missing_accessor_is_an_error_not_a_panic() {
+        // Found by the mesh_gltf fuzz target: the gltf crate's validation indexed it.
+        let text = br#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}"#;
+        let e = TriMesh::parse_gltf(text).expect_err("no accessor 0");
+        assert!(e.to_string().contains("names accessor 0 of 0"), "{e}");
+    }
 
     /// A unit cube from 0 to 1 as an .obj with quads (vertices repeated per face would weld).
     pub(crate) const CUBE_OBJ: &str = "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\

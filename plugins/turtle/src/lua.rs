@@ -180,6 +180,7 @@ fn turtle_error(lua: &Lua, e: TurtleError) -> mlua::Error {
 
 impl UserData for LuaTurtle {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
+        pge_engine::lua::no_new_fields(m, "turtle");
         type Cmd = fn(&mut Turtle, Option<f64>) -> Result<(), TurtleError>;
         let commands: [(&str, Cmd); 8] = [
             ("forward", Turtle::forward),

@@ -139,7 +139,8 @@ fn positional(v: &Value, out: &mut String) {
             _ => break,
         };
         out.push(if k == 0 { '(' } else { ',' });
-        number(out, x);
+        // Text parses back: non-finite values as (1/0), (-1/0), (0/0).
+        crate::module_string::write_param(out, x);
         k += 1;
     }
     if k > 0 {

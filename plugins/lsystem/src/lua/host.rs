@@ -15,6 +15,9 @@ use super::symbols::SymbolTags;
 use crate::{Host, LsError, ModuleString, Sym, SymbolTable, System};
 use pge_engine::random::uniform;
 
+/// How deeply a successor's arrays may nest (each level is a branch).
+const MAX_SUCCESSOR_NESTING: u32 = 100;
+
 /// Why a step stopped: a Lua error, an engine error, or a rewriting error.
 #[derive(Debug)]
 pub(crate) enum HostError {
@@ -186,8 +189,13 @@ impl LuaHost<'_> {
         what: &dyn std::fmt::Display,
         depth: u32,
     ) -> Result<(), HostError> {
-        if depth > 100 {
-            return Err(self.rule_error(origin, format!("{what} nests arrays too deeply")));
+        if depth > MAX_SUCCESSOR_NESTING {
+            return Err(self.rule_error(
+                origin,
+                format!(
+                    "{what} nests arrays deeper than the limit of {MAX_SUCCESSOR_NESTING} levels"
+                ),
+            ));
         }
         match v {
             Value::Table(t) => {

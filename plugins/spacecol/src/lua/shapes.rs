@@ -340,14 +340,20 @@ fn union(o: &Options) -> mlua::Result<LuaShape> {
             "pge.shape.union needs at least one shape: pge.shape.union{a, b, ...}",
         ));
     }
-    Ok(LuaShape(Shape::Union(parts.into())))
+    checked(o, Shape::Union(parts.into()))
+}
+
+/// A union or difference, refused past the nesting and size limits.
+fn checked(o: &Options, shape: Shape) -> mlua::Result<LuaShape> {
+    shape.check_size().map_err(|e| o.error(e))?;
+    Ok(LuaShape(shape))
 }
 
 fn difference(o: &Options) -> mlua::Result<LuaShape> {
     let a = shape_of(o, "a", o.value("a")?)?;
     let b = shape_of(o, "b", o.value("b")?)?;
     o.finish()?;
-    Ok(LuaShape(Shape::Difference(Rc::new(a), Rc::new(b))))
+    checked(o, Shape::Difference(Rc::new(a), Rc::new(b)))
 }
 
 fn predicate(lua: &Lua, f: Value, bounds: Value) -> mlua::Result<LuaShape> {
