@@ -462,7 +462,11 @@ fn write_model(w: &mut Writer, model: &Model) {
         table.f32s(base_color);
         write_texture_ref(&mut table, &mut textures, texture.as_ref());
         write_texture_ref(&mut table, &mut textures, normal_texture.as_ref());
-        write_texture_ref(&mut table, &mut textures, metallic_roughness_texture.as_ref());
+        write_texture_ref(
+            &mut table,
+            &mut textures,
+            metallic_roughness_texture.as_ref(),
+        );
         match alpha {
             AlphaMode::Opaque => table.u8(0),
             AlphaMode::Mask(cutoff) => {
