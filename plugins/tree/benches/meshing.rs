@@ -4,10 +4,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
-use pge_tree::{
-    BarkParams, BarkStyle, LeafOptions, LeafParams, LeafShape, MeshOptions, TreeOptions,
-    append_bark, bark_set, build_tree, leaf_set, pipe_radii,
-};
+use pge_tree::{LeafOptions, MeshOptions, TreeOptions, append_bark, build_tree, pipe_radii};
 use std::hint::black_box;
 
 /// A deterministic branching skeleton: each node continues, and every `fork_every`-th node
@@ -84,35 +81,5 @@ fn bench_tree(c: &mut Criterion) {
     });
 }
 
-/// One species' full texture set at 512 px, generated and PNG-encoded (no cache): the bark
-/// maps (colour, normal, roughness) and the leaf maps. Budget: 40 ms.
-fn bench_textures(c: &mut Criterion) {
-    let mut group = c.benchmark_group("textures");
-    group.sample_size(10);
-    for style in [BarkStyle::Furrowed, BarkStyle::Plated] {
-        let bark = BarkParams {
-            style,
-            color: [0.2, 0.12, 0.07, 1.0],
-            size: 512,
-            depth: 1.0,
-        };
-        let leaf = LeafParams {
-            shape: LeafShape::Lobed,
-            size: 512,
-        };
-        group.bench_function(
-            format!("species set 512 px ({style:?} bark, lobed leaf)"),
-            |b| {
-                b.iter(|| {
-                    let bark = bark_set(black_box(&bark)).expect("bark");
-                    let leaf = leaf_set(black_box(&leaf)).expect("leaf");
-                    (bark, leaf)
-                })
-            },
-        );
-    }
-    group.finish();
-}
-
-criterion_group!(benches, bench_meshing, bench_tree, bench_textures);
+criterion_group!(benches, bench_meshing, bench_tree);
 criterion_main!(benches);

@@ -60,8 +60,8 @@ pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{
-    BarkParams, LeafParams, TextureCache, TextureSet, bark_set, bark_textures, leaf_set,
-    leaf_textures, load_png,
+    BarkParams, LeafParams, Maps, TextureCache, TextureSet, bark_maps, bark_set, bark_textures,
+    encode_maps, leaf_maps, leaf_set, leaf_textures, load_png,
 };
 #[cfg(feature = "lua")]
 pub use tree_lua::TreePlugin;

@@ -1,0 +1,69 @@
+//! The texture budget: one species' full set at 512 px (bark colour, normal and roughness
+//! maps, leaf colour, normal and roughness maps) under 40 ms, generated and PNG-encoded.
+//! Generation and encoding are timed apart, and together as the budget counts them.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use pge_tree::{
+    BarkParams, BarkStyle, LeafParams, LeafShape, bark_maps, bark_set, encode_maps, leaf_maps,
+    leaf_set,
+};
+use std::hint::black_box;
+
+fn bark(style: BarkStyle) -> BarkParams {
+    BarkParams {
+        style,
+        color: [0.2, 0.12, 0.07, 1.0],
+        size: 512,
+        depth: 1.0,
+    }
+}
+
+const LEAF: LeafParams = LeafParams {
+    shape: LeafShape::Lobed,
+    size: 512,
+};
+
+fn bench_textures(c: &mut Criterion) {
+    let mut group = c.benchmark_group("textures");
+    group.sample_size(10);
+    for style in [
+        BarkStyle::Furrowed,
+        BarkStyle::Plated,
+        BarkStyle::Smooth,
+        BarkStyle::Fibrous,
+    ] {
+        group.bench_function(format!("generate bark {style:?} 512"), |b| {
+            b.iter(|| bark_maps(black_box(&bark(style))))
+        });
+    }
+    for shape in [LeafShape::Lobed, LeafShape::Palmate, LeafShape::Needles] {
+        let leaf = LeafParams { shape, size: 512 };
+        group.bench_function(format!("generate leaf {shape:?} 512"), |b| {
+            b.iter(|| leaf_maps(black_box(&leaf)))
+        });
+    }
+    let bark_px = bark_maps(&bark(BarkStyle::Furrowed));
+    let leaf_px = leaf_maps(&LEAF);
+    group.bench_function("encode bark 512", |b| {
+        b.iter(|| encode_maps("bark", black_box(bark_px.clone())).expect("encodes"))
+    });
+    group.bench_function("encode leaf 512", |b| {
+        b.iter(|| encode_maps("leaf", black_box(leaf_px.clone())).expect("encodes"))
+    });
+    for style in [BarkStyle::Furrowed, BarkStyle::Plated] {
+        group.bench_function(
+            format!("species set 512 ({style:?} bark, lobed leaf)"),
+            |b| {
+                b.iter(|| {
+                    let bark = bark_set(black_box(&bark(style))).expect("bark");
+                    let leaf = leaf_set(black_box(&LEAF)).expect("leaf");
+                    (bark, leaf)
+                })
+            },
+        );
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_textures);
+criterion_main!(benches);
