@@ -276,8 +276,16 @@ fn a_turtle_with_a_palette_writes_one_bark_mesh_with_vertex_colours() {
     let (doc, buffers, _) = gltf::import(&out).expect("the glb imports");
     let names: Vec<_> = doc.meshes().map(|m| m.name().map(str::to_string)).collect();
     assert_eq!(names.len(), 2, "bark and leaves: {names:?}");
-    let bark_images: Vec<_> = doc.images().filter(|i| i.name() == Some("bark")).collect();
-    assert_eq!(bark_images.len(), 1, "one bark texture");
+    // One bark texture set (colour, normal, roughness), not one per colour index.
+    let bark_images: Vec<_> = doc
+        .images()
+        .filter_map(|i| i.name().filter(|n| n.starts_with("bark")))
+        .collect();
+    assert_eq!(
+        bark_images,
+        ["bark color", "bark normal", "bark roughness"],
+        "one bark texture set"
+    );
     let bark = doc.meshes().next().expect("the bark mesh");
     let prim = bark.primitives().next().expect("primitive");
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
