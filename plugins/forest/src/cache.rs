@@ -927,7 +927,7 @@ mod tests {
         assert_eq!(grown.get(), 2);
         for e in std::fs::read_dir(cache.dir()).expect("entries") {
             let path = e.expect("entry").path();
-            std::fs::write(&path, b"PGEVAR\x00\x01 not an entry at all").expect("damage");
+            std::fs::write(&path, [&MAGIC[..], b" not an entry at all"].concat()).expect("damage");
         }
         let again = cache.variant(&key, "f.lua:2", grow).expect("grows");
         assert_eq!(grown.get(), 3);
