@@ -462,27 +462,33 @@ mod tests {
         assert!(g.finished);
     }
 
-    #[test]
-    fn the_step_scrubber_stops_step_wise_algorithms_early() {
-        let dir = tempfile::tempdir().expect("tempdir");
-        let script = dir.path().join("grow.lua");
-        std::fs::write(
-            &script,
+    /// A scripted `pge.Algorithm` that adds one triangle per step and is done after `steps`
+    /// steps, written to `dir/name`.
+    fn counting_algorithm(dir: &Path, name: &str, steps: u32) -> PathBuf {
+        let script = dir.join(name);
+        let text = format!(
             r#"
             local n = 0
-            local tri = pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }
-            return pge.Algorithm{
+            local tri = pge.mesh{{ positions = {{0,0,0, 1,0,0, 0,1,0}}, indices = {{0,1,2}} }}
+            return pge.Algorithm{{
                 init = function() n = 0 end,
-                step = function() n = n + 1; return n < 5 end,
+                step = function() n = n + 1; return n < {steps} end,
                 finish = function()
                     local m = pge.model()
                     for i = 1, n do m:add(tri) end
                     return m
                 end,
-            }
-            "#,
-        )
-        .expect("write");
+            }}
+            "#
+        );
+        std::fs::write(&script, text).expect("write");
+        script
+    }
+
+    #[test]
+    fn the_step_scrubber_stops_step_wise_algorithms_early() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let script = counting_algorithm(dir.path(), "grow.lua", 5);
         let engine = Engine::builder().build().expect("engine");
         let Outcome::Generated(full) = generate(&engine, &request(1, &script, Settings::default()))
         else {
@@ -587,24 +593,7 @@ mod tests {
     #[test]
     fn algorithms_that_cannot_be_copied_re_run_the_script() {
         let dir = tempfile::tempdir().expect("tempdir");
-        let script = dir.path().join("count.lua");
-        std::fs::write(
-            &script,
-            r#"
-            local n = 0
-            local tri = pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }
-            return pge.Algorithm{
-                init = function() n = 0 end,
-                step = function() n = n + 1; return n < 9 end,
-                finish = function()
-                    local m = pge.model()
-                    for i = 1, n do m:add(tri) end
-                    return m
-                end,
-            }
-            "#,
-        )
-        .expect("write");
+        let script = counting_algorithm(dir.path(), "count.lua", 9);
         let engine = Engine::builder().build().expect("engine");
         let mut kept = Kept::default();
         for (k, steps) in [Some(6), Some(3), None].into_iter().enumerate() {
