@@ -1,0 +1,125 @@
+//! Tests of stages as scenes and of empty models.
+
+use super::*;
+
+#[test]
+fn stages_are_named_scenes_sharing_their_textures() {
+    let one = super::tests::textured_model();
+    let mut two = super::tests::textured_model();
+    two.add_model(
+        &super::tests::textured_model(),
+        Mat4::from_translation(Vec3::X),
+    );
+    let stages = vec![("step 1".to_string(), one), ("step 2".to_string(), two)];
+    let bytes = glb_stages_bytes(&stages, &ExportMeta::default()).expect("glb");
+    let (doc, _, _) = gltf::import_slice(&bytes).expect("parses");
+    let names: Vec<_> = doc.scenes().map(|s| s.name().map(str::to_string)).collect();
+    assert_eq!(names, [Some("step 1".into()), Some("step 2".into())]);
+    assert_eq!(doc.default_scene().map(|s| s.index()), Some(1));
+    let nodes: Vec<usize> = doc.scenes().map(|s| s.nodes().count()).collect();
+    assert_eq!(nodes[1], 2 * nodes[0]);
+    assert_eq!(doc.images().count(), 1, "one texture for every stage");
+    let extras = doc
+        .as_json()
+        .extras
+        .as_ref()
+        .expect("extras")
+        .get()
+        .to_string();
+    assert!(
+        extras.contains("\"stages\":[{\"name\":\"step 1\""),
+        "{extras}"
+    );
+    assert!(glb_stages_bytes(&[], &ExportMeta::default()).is_err());
+}
+
+#[test]
+fn an_empty_model_has_a_scene_with_one_empty_node() {
+    let bytes = glb_bytes(&Model::new(), &ExportMeta::default()).expect("exports");
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+    let scene = gltf.default_scene().expect("a default scene");
+    let nodes: Vec<_> = scene.nodes().collect();
+    assert_eq!(nodes.len(), 1);
+    assert_eq!(nodes[0].name(), Some("empty"));
+    assert!(nodes[0].mesh().is_none());
+    assert_eq!(gltf.meshes().count(), 0);
+}
+
+#[test]
+fn every_scene_carries_the_runs_extras() {
+    let meta = ExportMeta {
+        seed: 11,
+        params: vec![("h".into(), json!(3))],
+    };
+    let stages = vec![
+        ("step 1".to_string(), super::tests::textured_model()),
+        ("step 2".to_string(), super::tests::textured_model()),
+    ];
+    for bytes in [
+        glb_bytes(&super::tests::textured_model(), &meta).expect("glb"),
+        glb_stages_bytes(&stages, &meta).expect("glb"),
+    ] {
+        let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+        let root = gltf.document.as_json().extras.as_ref().expect("root").get();
+        for scene in gltf.scenes() {
+            let extras = scene.extras().as_ref().expect("scene extras").get();
+            assert_eq!(extras, root);
+            let value: JsonValue = serde_json::from_str(extras).expect("json");
+            assert_eq!(value["pge"]["generator"], GENERATOR);
+            assert_eq!(value["pge"]["seed"], 11);
+            assert_eq!(value["pge"]["params"]["h"], 3);
+            assert_eq!(value["pge"]["stats"]["triangles"], 2);
+        }
+    }
+}
+
+/// The mesh extras as a `serde_json::Value` map would write them (the skeleton first,
+/// the mesh's extras after it, floats widened to f64): the streamed extras must match.
+#[test]
+fn streamed_mesh_extras_match_a_value_tree() {
+    let mut s = Skeleton::new();
+    let root = s.push(Vec3::new(0.1, -0.0, 1e-7), None, 0.3, 0);
+    let a = s.push(Vec3::new(f32::NAN, 2.5, f32::INFINITY), Some(root), -0.0, 1);
+    s.push(Vec3::new(1e30, -3.75, 0.2), Some(a), f32::NAN, 7);
+    let mut mesh =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    mesh.skeleton = Some(Arc::new(s.clone()));
+    mesh.extras
+        .insert("zz".into(), json!({ "a": [0.1, 2, "b"] }));
+    mesh.extras.insert("aa".into(), json!(null));
+    let expected = |mesh: &Mesh| {
+        let mut pge = Map::new();
+        if let Some(s) = &mesh.skeleton {
+            let parents: Vec<i64> = s.parents.iter().map(|p| p.map_or(-1, i64::from)).collect();
+            let positions: Vec<f32> = s.positions.iter().flat_map(|p| p.to_array()).collect();
+            pge.insert(
+                "skeleton".into(),
+                json!({ "parents": parents, "positions": positions,
+                    "radii": s.radii, "orders": s.orders }),
+            );
+        }
+        for (k, v) in &mesh.extras {
+            pge.insert(k.clone(), v.clone());
+        }
+        serde_json::to_string(&json!({ "pge": pge })).expect("json")
+    };
+    let streamed = |mesh: &Mesh| {
+        let mut b = Builder::new();
+        let (_, pge) = b.primitive(mesh).expect("primitive");
+        pge.extras()
+            .expect("extras")
+            .expect("some")
+            .get()
+            .to_string()
+    };
+    assert_eq!(streamed(&mesh), expected(&mesh));
+    assert!(streamed(&mesh).contains("[-1,0,1]"), "{}", streamed(&mesh));
+    // A mesh extra named `skeleton` replaces the skeleton where it stands.
+    mesh.extras.insert("skeleton".into(), json!(1));
+    assert_eq!(streamed(&mesh), expected(&mesh));
+    // No skeleton, no extras: nothing written.
+    let empty =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    let mut b = Builder::new();
+    assert!(b.primitive(&empty).expect("primitive").1.0.is_empty());
+}

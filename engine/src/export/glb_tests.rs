@@ -1,0 +1,169 @@
+//! Tests of the glb writer: meshes, materials, extras, instancing.
+
+use super::*;
+use crate::geometry::{Material, Mesh};
+use glam::{Quat, Vec2};
+
+pub(super) fn textured_model() -> Model {
+    let mut mesh =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+    let tex = Texture::from_rgba("leaf", 2, 2, &[255; 16]).expect("png");
+    mesh.material = Arc::new(Material {
+        texture: Some(Arc::new(tex)),
+        alpha: AlphaMode::Mask(0.5),
+        double_sided: true,
+        ..Material::default()
+    });
+    let mut s = Skeleton::new();
+    let r = s.push(Vec3::ZERO, None, 0.1, 0);
+    s.push(Vec3::Y, Some(r), 0.05, 0);
+    mesh.skeleton = Some(Arc::new(s));
+    let mesh = Arc::new(mesh);
+    let mut model = Model::new();
+    model.add_mesh(mesh.clone(), Mat4::IDENTITY);
+    model.add_mesh(
+        mesh,
+        Mat4::from_rotation_translation(Quat::from_rotation_y(1.0), Vec3::X),
+    );
+    model
+}
+
+#[test]
+fn normal_and_roughness_maps_are_written_once_each() {
+    let mut model = textured_model();
+    let png = |name: &str| Arc::new(Texture::from_rgba(name, 2, 2, &[128; 16]).expect("png"));
+    let (normal, rough) = (png("bark normal"), png("bark roughness"));
+    let mut mesh = (*model.meshes[0]).clone();
+    mesh.material = Arc::new(Material {
+        normal_texture: Some(normal),
+        metallic_roughness_texture: Some(rough),
+        ..(*mesh.material).clone()
+    });
+    model.meshes[0] = Arc::new(mesh);
+    let bytes = glb_bytes(&model, &ExportMeta::default()).expect("exports");
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+    assert_eq!(gltf.images().count(), 3);
+    let m = gltf.materials().next().expect("material");
+    let n = m.normal_texture().expect("normal texture");
+    assert_eq!(n.texture().source().name(), Some("bark normal"));
+    assert_eq!(n.scale(), 1.0);
+    let mr = m
+        .pbr_metallic_roughness()
+        .metallic_roughness_texture()
+        .expect("metallic-roughness texture");
+    assert_eq!(mr.texture().source().name(), Some("bark roughness"));
+}
+
+#[test]
+fn glb_parses_back_with_the_gltf_crate() {
+    let model = textured_model();
+    let bytes = glb_bytes(
+        &model,
+        &ExportMeta {
+            seed: 7,
+            params: vec![("h".into(), json!(2))],
+        },
+    )
+    .expect("exports");
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("parses");
+    assert_eq!(gltf.meshes().count(), 1);
+    assert_eq!(gltf.nodes().count(), 2);
+    assert_eq!(gltf.images().count(), 1);
+    let prim = gltf
+        .meshes()
+        .next()
+        .and_then(|m| m.primitives().next())
+        .expect("primitive");
+    assert_eq!(
+        prim.indices().map(|a| a.data_type()),
+        Some(gltf::accessor::DataType::U32)
+    );
+    assert_eq!(
+        prim.material().alpha_mode(),
+        gltf::material::AlphaMode::Mask
+    );
+    let extras: JsonValue = serde_json::from_str(
+        gltf.document
+            .as_json()
+            .extras
+            .as_ref()
+            .expect("extras")
+            .get(),
+    )
+    .expect("json");
+    assert_eq!(extras["pge"]["seed"], 7);
+    assert_eq!(extras["pge"]["params"]["h"], 2);
+    assert_eq!(extras["pge"]["stats"]["triangles"], 2);
+    let mesh_extras: JsonValue = serde_json::from_str(
+        gltf.meshes()
+            .next()
+            .expect("mesh")
+            .extras()
+            .as_ref()
+            .expect("extras")
+            .get(),
+    )
+    .expect("json");
+    assert_eq!(mesh_extras["pge"]["skeleton"]["parents"], json!([-1, 0]));
+}
+
+#[test]
+fn colours_are_normalized_bytes_and_untextured_meshes_have_no_uvs() {
+    let mut mesh =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    mesh.uvs = vec![Vec2::ZERO, Vec2::X, Vec2::Y];
+    mesh.colors = vec![
+        glam::Vec4::new(1.0, 0.0, 0.5, 1.0),
+        glam::Vec4::new(0.2, 0.4, 0.6, 0.8),
+        glam::Vec4::new(0.0, 1.0, 0.0, 0.0),
+    ];
+    let bytes = glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default()).expect("glb");
+    let (doc, buffers, _) = gltf::import_slice(&bytes).expect("parses");
+    let prim = doc
+        .meshes()
+        .next()
+        .and_then(|m| m.primitives().next())
+        .expect("primitive");
+    let colour = prim
+        .get(&gltf::Semantic::Colors(0))
+        .expect("a colour accessor");
+    assert_eq!(colour.data_type(), gltf::accessor::DataType::U8);
+    assert!(colour.normalized());
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let read: Vec<[u8; 4]> = reader
+        .read_colors(0)
+        .expect("colours")
+        .into_rgba_u8()
+        .collect();
+    assert_eq!(
+        read,
+        [[255, 0, 128, 255], [51, 102, 153, 204], [0, 255, 0, 0]]
+    );
+    assert!(
+        reader.read_tex_coords(0).is_none(),
+        "no texture, so no texture coordinates"
+    );
+    // A textured mesh keeps its coordinates.
+    let (doc, buffers, _) =
+        gltf::import_slice(glb_bytes(&textured_model(), &ExportMeta::default()).expect("glb"))
+            .expect("parses");
+    let prim = doc
+        .meshes()
+        .next()
+        .and_then(|m| m.primitives().next())
+        .expect("primitive");
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    assert_eq!(
+        reader.read_tex_coords(0).expect("uvs").into_f32().count(),
+        3
+    );
+}
+
+#[test]
+fn export_is_byte_identical() {
+    let a = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
+    let b = glb_bytes(&textured_model(), &ExportMeta::default()).expect("exports");
+    assert_eq!(a, b);
+    assert_eq!(a.len() % 4, 0);
+}
