@@ -327,17 +327,28 @@ impl TriMesh {
         let mut positions = Vec::new();
         let mut triangles = Vec::new();
         let scene = doc.default_scene().or_else(|| doc.scenes().next());
-        let mut stack: Vec<(gltf::Node, Mat4)> = match &scene {
-            Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY)).collect(),
+        let mut stack: Vec<(gltf::Node, Mat4, usize)> = match &scene {
+            Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect(),
             None => Vec::new(),
         };
-        while let Some((node, parent)) = stack.pop() {
+        // A valid node graph is a forest: no path is longer than the node count, and no node
+        // is visited twice. Invalid files (cycles, shared children) must not loop or explode.
+        let nodes = doc.nodes().len();
+        let mut visits = 0usize;
+        while let Some((node, parent, depth)) = stack.pop() {
+            visits += 1;
+            if depth > nodes || visits > nodes {
+                return Err(MeshError::Gltf(
+                    "the node hierarchy is not a tree (a cycle or a shared child)".into(),
+                ));
+            }
             let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
             if let Some(mesh) = node.mesh() {
                 for prim in mesh.primitives() {
                     if prim.mode() != gltf::mesh::Mode::Triangles {
                         continue;
                     }
+                    check_primitive_types(&prim)?;
                     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
                     let Some(ps) = reader.read_positions() else {
                         continue;
@@ -356,7 +367,7 @@ impl TriMesh {
                     }
                 }
             }
-            stack.extend(node.children().map(|c| (c, world)));
+            stack.extend(node.children().map(|c| (c, world, depth + 1)));
         }
         Ok((positions, triangles))
     }
@@ -388,6 +399,30 @@ impl TriMesh {
 /// Every undirected edge must border an even number of triangles.
 /// Refuses a primitive attribute naming an accessor that does not exist: the gltf crate's
 /// validation indexes the POSITION accessor before checking it (a panic, found by fuzzing).
+/// POSITION must be float VEC3 and indices unsigned integer SCALAR, as glTF requires: the
+/// gltf crate's readers assume it (other types reach an `unreachable!`).
+fn check_primitive_types(prim: &gltf::Primitive) -> Result<(), MeshError> {
+    use gltf::accessor::{DataType, Dimensions};
+    if let Some(a) = prim.get(&gltf::Semantic::Positions)
+        && (a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3)
+    {
+        return Err(MeshError::Gltf(format!(
+            "accessor {} (POSITION) must be FLOAT VEC3",
+            a.index()
+        )));
+    }
+    if let Some(a) = prim.indices() {
+        let integer = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
+        if !integer || a.dimensions() != Dimensions::Scalar {
+            return Err(MeshError::Gltf(format!(
+                "accessor {} (indices) must be an unsigned integer SCALAR",
+                a.index()
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn check_accessor_indices(bytes: &[u8]) -> Result<(), MeshError> {
     let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| MeshError::Gltf(e.to_string()))?;
@@ -478,6 +513,87 @@ mod tests {
             "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}"#;
         let e = TriMesh::parse_gltf(text).expect_err("no accessor 0");
         assert!(e.to_string().contains("names accessor 0 of 0"), "{e}");
+    }
+
+    /// A .gltf with one triangle whose data is embedded; `indices` and `position` are the
+    /// componentType and type of the two accessors, `children` the first node's children.
+    fn triangle_gltf(indices: (u32, &str), position: (u32, &str), children: &str) -> String {
+        // Three float VEC3 positions (36 bytes) then three u32 indices (12 bytes), base64.
+        let mut bytes = Vec::new();
+        for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+            bytes.extend(v.to_le_bytes());
+        }
+        for i in [0u32, 1, 2] {
+            bytes.extend(i.to_le_bytes());
+        }
+        const B64: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let data: String = bytes
+            .chunks(3)
+            .flat_map(|c| {
+                let n = (u32::from(c[0]) << 16)
+                    | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+                    | u32::from(*c.get(2).unwrap_or(&0));
+                let k = c.len() + 1;
+                (0..4).map(move |j| {
+                    if j < k {
+                        B64[(n >> (18 - 6 * j)) as usize & 63] as char
+                    } else {
+                        '='
+                    }
+                })
+            })
+            .collect();
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0]}}],
+            "nodes": [{{"mesh": 0, "children": {children}}}, {{"children": [0]}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+            "buffers": [{{"byteLength": 48, "uri": "data:application/octet-stream;base64,{data}"}}],
+            "bufferViews": [{{"buffer": 0, "byteLength": 36}},
+                            {{"buffer": 0, "byteOffset": 36, "byteLength": 12}}],
+            "accessors": [{{"bufferView": 0, "componentType": {}, "count": 3, "type": "{}",
+                            "min": [0, 0, 0], "max": [1, 1, 0]}},
+                          {{"bufferView": 1, "componentType": {}, "count": 3, "type": "{}"}}]}}"#,
+            position.0, position.1, indices.0, indices.1
+        )
+    }
+
+    #[test]
+    fn a_well_typed_embedded_gltf_reads_back_its_triangle() {
+        let text = triangle_gltf((5125, "SCALAR"), (5126, "VEC3"), "[]");
+        let (positions, triangles) = TriMesh::parse_gltf(text.as_bytes()).expect("valid");
+        assert_eq!((positions.len(), triangles), (3, vec![[0, 1, 2]]));
+    }
+
+    #[test]
+    fn float_indices_are_an_error_not_a_panic() {
+        // Found by the mesh_gltf fuzz target: the gltf crate's index reader reached
+        // `unreachable!()` for an indices accessor of floats.
+        let text = triangle_gltf((5126, "SCALAR"), (5126, "VEC3"), "[]");
+        let e = TriMesh::parse_gltf(text.as_bytes()).expect_err("float indices");
+        assert!(
+            e.to_string()
+                .contains("(indices) must be an unsigned integer"),
+            "{e}"
+        );
+        let text = triangle_gltf((5125, "VEC2"), (5126, "VEC3"), "[]");
+        assert!(TriMesh::parse_gltf(text.as_bytes()).is_err());
+    }
+
+    #[test]
+    fn integer_positions_are_an_error_not_a_panic() {
+        let text = triangle_gltf((5125, "SCALAR"), (5125, "VEC3"), "[]");
+        let e = TriMesh::parse_gltf(text.as_bytes()).expect_err("integer positions");
+        assert!(
+            e.to_string().contains("(POSITION) must be FLOAT VEC3"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_node_cycle_is_an_error_not_a_hang() {
+        let text = triangle_gltf((5125, "SCALAR"), (5126, "VEC3"), "[1]");
+        let e = TriMesh::parse_gltf(text.as_bytes()).expect_err("a cycle");
+        assert!(e.to_string().contains("not a tree"), "{e}");
     }
 
     /// A unit cube from 0 to 1 as an .obj with quads (vertices repeated per face would weld).
