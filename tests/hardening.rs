@@ -423,3 +423,27 @@ fn turtle_texture_paths_are_relative_to_the_script() {
     assert!(err.starts_with("scripts/main.lua:4: "), "{err}");
     assert!(err.contains("mesh.texture"), "{err}");
 }
+
+// Found by the lua_api fuzz target: noise at coordinates past what the `noise` crate's lattice
+// index holds (a huge frequency, lacunarity or coordinate) panicked inside the crate.
+#[test]
+fn noise_past_its_reach_is_a_located_error_not_a_panic() {
+    let case = Case::new(
+        "local a = pge.noise.fbm(1, 2, {frequency = 1e300})\n\
+         return pge.Lines()\n",
+    );
+    case.fails_at(1, &["pge.noise.fbm", "frequency", "1e12"]);
+    let case = Case::new("local a = pge.noise.fbm(3, 4, {octaves = 32, lacunarity = 1e30})\n");
+    case.fails_at(1, &["pge.noise.fbm", "lacunarity"]);
+    let case = Case::new("local a = pge.noise.perlin(1e300, 0)\n");
+    case.fails_at(1, &["pge.noise.perlin", "1e12"]);
+    let case = Case::new("local a = pge.noise.fbm(1, 2, {persistence = 0/0})\n");
+    case.fails_at(1, &["persistence must be a finite number"]);
+    // The forest's terrain: a tiny `scale` reaches as far.
+    let case = Case::new(
+        "local f = pge.Forest{size = {100, 100}, seed = 1}\n\
+         f:terrain{height = 10, scale = 1e-300}\n\
+         return f\n",
+    );
+    case.fails_at(2, &["forest:terrain", "scale", "1e12"]);
+}

@@ -56,13 +56,49 @@ fn sample<N: NoiseFn<f64, 2> + NoiseFn<f64, 3>>(n: &N, x: f64, y: f64, z: Option
     }
 }
 
+/// The largest coordinate the noise generators take (after an fBm's frequency and
+/// lacunarity): beyond it their lattice index no longer fits an integer (the `noise` crate
+/// panics), and doubles have no fractional digits left anyway.
+const REACH: f64 = 1e12;
+
 fn check(lua: &Lua, what: &str, x: f64, y: f64, z: Option<f64>) -> mlua::Result<()> {
-    if x.is_finite() && y.is_finite() && z.is_none_or(f64::is_finite) {
+    let within = |c: f64| c.is_finite() && c.abs() <= REACH;
+    if within(x) && within(y) && z.is_none_or(within) {
         Ok(())
     } else {
         Err(script_error(
             lua,
-            format!("pge.noise.{what}: coordinates must be finite numbers"),
+            format!("pge.noise.{what}: coordinates must be finite numbers within ±1e12"),
+        ))
+    }
+}
+
+/// Checks an fBm's options: finite, and the finest octave's coordinates within [`REACH`].
+fn check_fbm(lua: &Lua, key: &FbmKey, x: f64, y: f64, z: Option<f64>) -> mlua::Result<()> {
+    for (name, v) in [
+        ("frequency", key.frequency),
+        ("lacunarity", key.lacunarity),
+        ("persistence", key.persistence),
+    ] {
+        if !v.is_finite() {
+            return Err(script_error(
+                lua,
+                format!("pge.noise.fbm: {name} must be a finite number, got {v}"),
+            ));
+        }
+    }
+    let largest = x.abs().max(y.abs()).max(z.map_or(0.0, f64::abs));
+    let finest = key.frequency.abs() * key.lacunarity.abs().max(1.0).powi(key.octaves as i32 - 1);
+    let reach = largest * finest;
+    if reach.is_finite() && reach <= REACH {
+        Ok(())
+    } else {
+        Err(script_error(
+            lua,
+            format!(
+                "pge.noise.fbm: the finest octave samples at {reach:e} (coordinates x frequency x \
+                 lacunarity^(octaves-1)), beyond ±1e12: lower frequency, lacunarity or octaves"
+            ),
         ))
     }
 }
@@ -134,6 +170,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                 lacunarity: get("lacunarity", 2.0)?,
                 persistence: get("persistence", 0.5)?,
             };
+            check_fbm(lua, &key, x, y, z)?;
             Ok(with_cache(lua, |c| {
                 if c.fbm.as_ref().is_none_or(|(k, _)| *k != key) {
                     let f = Fbm::<Perlin>::new(key.seed)

@@ -168,6 +168,21 @@ fn terrain(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
     }
     let path = o.string("image")?;
     o.finish()?;
+    // The noise crate's lattice index must fit an integer: the finest octave's coordinates
+    // (half the world over `scale`, times lacunarity^(octaves-1)) stay within 1e12.
+    let half = size[0].abs().max(size[1].abs()) / 2.0;
+    let reach = half / fbm.scale * fbm.lacunarity.max(1.0).powi(fbm.octaves as i32 - 1);
+    let within = reach.is_finite() && reach <= 1e12;
+    if path.is_none() && !within {
+        return Err(o.problem(
+            "scale",
+            format!(
+                "is too small for this world: the finest octave samples at {reach:e} (size / 2 / \
+                 scale x lacunarity^(octaves-1)), beyond 1e12; raise scale or lower lacunarity or \
+                 octaves"
+            ),
+        ));
+    }
     let terrain = match path {
         None => Terrain::fbm(size, fbm, spec.forest.seed),
         Some(path) => {
