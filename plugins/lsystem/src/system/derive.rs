@@ -1,6 +1,6 @@
 //! The derivation step: every module of a string rewritten by the first rule that applies.
 
-use super::compile::{CKind, Dispatch, Tables};
+use super::compile::{CKind, Dispatch, FixedRule, Tables};
 use super::context::{match_left, match_right};
 use super::host::Host;
 use super::rule::RuleDef;
@@ -64,11 +64,30 @@ fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usi
     None
 }
 
-/// Reused buffers of a step: the modules a rule matched and their gathered parameters.
-#[derive(Default)]
+/// No symbol (in [`Scratch::left`]).
+const NONE: u32 = u32::MAX;
+
+/// Reused buffers of a step: the modules a rule matched and their gathered parameters; and,
+/// for the pass over a string without parameters, the left neighbour of the next module.
 struct Scratch {
     matched: Vec<usize>,
     gathered: Vec<f64>,
+    /// The symbol a one-symbol left context of the next module matches ([`NONE`]: none),
+    /// kept as the modules go by rather than found by walking back.
+    left: u32,
+    /// `left` as each enclosing `[` found it, restored at its `]`.
+    left_stack: Vec<u32>,
+}
+
+impl Default for Scratch {
+    fn default() -> Scratch {
+        Scratch {
+            matched: Vec::new(),
+            gathered: Vec::new(),
+            left: NONE,
+            left_stack: Vec::new(),
+        }
+    }
 }
 
 /// A compiled system's rules, ready to derive.
@@ -220,7 +239,8 @@ impl Deriver<'_> {
     }
 
     /// Rewrites the modules `range` of `src`, appending to `out`; `before` modules were
-    /// produced earlier in this step (for the module cap).
+    /// produced earlier in this step (for the module cap). The ranges of one step follow
+    /// each other from the start of `src`.
     #[allow(clippy::too_many_arguments)]
     fn step_range<H: Host>(
         &self,
@@ -233,6 +253,9 @@ impl Deriver<'_> {
         opts: &StepOptions,
         scratch: &mut Scratch,
     ) -> Result<(), H::Error> {
+        if self.tables.all_fixed && src.is_flat() && !opts.stream {
+            return self.step_fixed(src, range, matches, before, out, host, opts, scratch);
+        }
         let max = opts.max_modules as u64;
         let base = out.len() as u64;
         let end = range.end;
@@ -298,6 +321,79 @@ impl Deriver<'_> {
                 host.interpret(out, from)?;
             }
         }
+        Ok(())
+    }
+
+    /// [`Deriver::step_range`] for a string without parameters whose rules all have fixed
+    /// successors (see [`Tables::all_fixed`]): one-symbol left contexts are compared with the
+    /// left neighbour kept in `scratch` as the modules go by (one linear pass, no walking
+    /// back), right contexts looked up through the bracket pairs.
+    #[allow(clippy::too_many_arguments)]
+    fn step_fixed<H: Host>(
+        &self,
+        src: &ModuleString,
+        range: std::ops::Range<usize>,
+        matches: &[u32],
+        before: u64,
+        out: &mut ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+        scratch: &mut Scratch,
+    ) -> Result<(), H::Error> {
+        let tables = self.tables;
+        let syms = src.raw_syms();
+        let max = (opts.max_modules as u64).saturating_sub(before);
+        let base = out.len();
+        let mut left = scratch.left;
+        let stack = &mut scratch.left_stack;
+        let mut next_check = range.start;
+        for i in range {
+            if i >= next_check {
+                host.check()?;
+                next_check = (i | 0xFFFF) + 1;
+            }
+            let s = syms[i];
+            match tables.dispatch.get(s as usize) {
+                Some(Dispatch::Plain { start, len }) => {
+                    out.extend_plain(&tables.plain_pool[*start as usize..(*start + *len) as usize])
+                }
+                Some(Dispatch::Rules { start, len }) => {
+                    let list = &tables.fixed_lists[*start as usize..(*start + *len) as usize];
+                    let mut applied = false;
+                    for rule in list {
+                        if (rule.left == FixedRule::ANY || rule.left == left)
+                            && (rule.right == FixedRule::ANY
+                                || right_neighbour(&tables.ignored, src, matches, i)
+                                    == Some(Sym(rule.right)))
+                        {
+                            out.extend_plain(
+                                &tables.plain_pool
+                                    [rule.start as usize..(rule.start + rule.len) as usize],
+                            );
+                            applied = true;
+                            break;
+                        }
+                    }
+                    if !applied {
+                        out.push_raw(s);
+                    }
+                }
+                _ => out.push_raw(s),
+            }
+            if (out.len() - base) as u64 > max {
+                return Err(self
+                    .too_many(opts, before + (out.len() - base) as u64)
+                    .into());
+            }
+            if s == Sym::PUSH.0 {
+                stack.push(left);
+            } else if s == Sym::POP.0 {
+                left = stack.pop().unwrap_or(NONE);
+            } else if !tables.ignored.get(s as usize).copied().unwrap_or(false) {
+                left = s;
+            }
+        }
+        scratch.left = left;
         Ok(())
     }
 
@@ -470,5 +566,62 @@ impl Deriver<'_> {
             return Err(self.arity_error(def, src, m, k));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+    use rand_mt::Mt;
+
+    /// One step of `text` by `rules` (with `+ -` ignored), and the modules produced.
+    fn step(rules: &[&str], text: &str) -> String {
+        let mut symbols = SymbolTable::new();
+        let mut system = System::new();
+        system.ignore("+ -", &mut symbols);
+        for r in rules {
+            system
+                .add_production(r, None, 0, &mut symbols)
+                .expect("rule");
+        }
+        system.prepare(&symbols).expect("prepare");
+        let src = system
+            .parse_string(text, &mut symbols, &mut || 0.0)
+            .expect("string");
+        let mut out = ModuleString::new();
+        let opts = StepOptions {
+            step: 1,
+            max_modules: 1_000_000,
+            stream: false,
+        };
+        let mut rng = Mt::new(1);
+        system
+            .step(&src, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+            .expect("step");
+        out.to_text(&symbols, "")
+    }
+
+    #[test]
+    fn the_pass_for_fixed_successors_matches_contexts_as_the_general_one() {
+        let rules = [
+            "b < a -> b",
+            "b -> a",
+            "a > b -> c",
+            "c < c > a -> d",
+            "+ -> -",
+        ];
+        // A rule with a condition (on a symbol the strings lack) sends the same rules down
+        // the general path.
+        let general: Vec<&str> = rules.iter().copied().chain(["Z : 1 > 0 -> Z"]).collect();
+        let mut rng = Mt::new(5);
+        let alphabet = ['a', 'b', 'c', '+', '[', ']'];
+        for _ in 0..300 {
+            let len = 1 + rng.next_u32() as usize % 40;
+            let text: String = (0..len)
+                .map(|_| alphabet[rng.next_u32() as usize % alphabet.len()])
+                .collect();
+            assert_eq!(step(&rules, &text), step(&general, &text), "{text}");
+        }
+        assert_eq!(step(&rules, "ba[b]a]a[+a"), "ab[a]a]a[-a");
     }
 }
