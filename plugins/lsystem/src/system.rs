@@ -255,18 +255,24 @@ impl System {
                 if a.trim().is_empty() {
                     return Err(err(format!("empty argument of '{name}'")));
                 }
-                let ast = crate::expr::parse(a).map_err(|e| err(e.0))?;
-                let e = Expr::compile(&ast, &mut |n| {
-                    constant = false;
-                    self.global(n).map(Operand::Const)
-                })
-                .map_err(|e| err(e.0))?;
-                let mut drew = false;
-                let v = e.eval(&[], &[], &mut || {
-                    drew = true;
-                    rand()
-                });
-                constant &= !drew;
+                let v = match literal(a) {
+                    Some(v) => v,
+                    None => {
+                        let ast = crate::expr::parse(a).map_err(|e| err(e.0))?;
+                        let e = Expr::compile(&ast, &mut |n| {
+                            constant = false;
+                            self.global(n).map(Operand::Const)
+                        })
+                        .map_err(|e| err(e.0))?;
+                        let mut drew = false;
+                        let v = e.eval(&[], &[], &mut || {
+                            drew = true;
+                            rand()
+                        });
+                        constant &= !drew;
+                        v
+                    }
+                };
                 if !v.is_finite() {
                     return Err(err(format!("an argument of '{name}' is {v}")));
                 }
@@ -380,6 +386,17 @@ impl System {
             tables: &self.tables,
         }
     }
+}
+
+/// The value of an argument that is one unsigned decimal number (`1`, `0.25`, `.5`), read
+/// as the expression parser reads a number token; `None` for any other argument.
+fn literal(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let bytes = t.as_bytes();
+    let numeric = bytes.iter().any(u8::is_ascii_digit)
+        && bytes.iter().all(|b| b.is_ascii_digit() || *b == b'.')
+        && bytes.iter().filter(|b| **b == b'.').count() <= 1;
+    if numeric { t.parse().ok() } else { None }
 }
 
 #[cfg(test)]

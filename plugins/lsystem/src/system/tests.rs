@@ -622,3 +622,31 @@ fn external_rules_fall_through_on_nil_and_stream_interpretation() {
     assert_eq!(out.external(2), Some(4));
     assert_eq!(host.interpreted, vec![1, 2, 1]);
 }
+
+#[test]
+fn number_arguments_read_without_the_parser_equal_parsed_ones() {
+    for text in [
+        "1", "0.25", ".5", "5.", "007", "1.5e3", "2 ", "1.2.3", "-1", "1e400", "x",
+    ] {
+        if let Some(v) = super::literal(text) {
+            let ast = crate::expr::parse(text).expect("a number parses");
+            let e = Expr::compile(&ast, &mut |_| None).expect("compiles");
+            assert_eq!(
+                v.to_bits(),
+                e.eval(&[], &[], &mut || 0.0).to_bits(),
+                "{text}"
+            );
+        }
+    }
+    assert_eq!(super::literal("1.5e3"), None);
+    assert_eq!(super::literal("1.2.3"), None);
+    assert_eq!(super::literal("-1"), None);
+    assert_eq!(super::literal(" 0.25 "), Some(0.25));
+    let mut symbols = SymbolTable::new();
+    let system = System::new();
+    let s = system
+        .parse_string("A(1, .5)B(2)", &mut symbols, &mut || 0.0)
+        .expect("parses");
+    assert_eq!(s.params(0), &[1.0, 0.5]);
+    assert_eq!(s.params(1), &[2.0]);
+}
