@@ -42,10 +42,9 @@ fn setup(axiom: &str, rules: &[&str], globals: &[(&str, f64)], ignore: &str) -> 
 }
 
 /// Derives `steps` steps; returns the final string and the modules produced over all steps.
+/// The first step reads the axiom in place (as the hand-written peers read their input).
 fn derive(s: &Setup, steps: u32, a: &mut ModuleString, b: &mut ModuleString) -> u64 {
     let mut rng = Mt::new(1);
-    a.clear();
-    a.append(&s.axiom);
     let mut produced = 0u64;
     for step in 1..=steps {
         let opts = StepOptions {
@@ -53,8 +52,9 @@ fn derive(s: &Setup, steps: u32, a: &mut ModuleString, b: &mut ModuleString) -> 
             max_modules: 100_000_000,
             stream: false,
         };
+        let src = if step == 1 { &s.axiom } else { &*a };
         s.system
-            .step(a, b, &mut NativeHost { rng: &mut rng }, &opts)
+            .step(src, b, &mut NativeHost { rng: &mut rng }, &opts)
             .expect("derive");
         produced += b.len() as u64;
         std::mem::swap(a, b);

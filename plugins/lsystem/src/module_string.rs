@@ -158,6 +158,15 @@ impl ModuleString {
         self.starts.push(self.params.len() as u32);
     }
 
+    /// Appends one parameterless module given as a raw symbol word.
+    #[inline]
+    pub fn push_raw(&mut self, raw: u32) {
+        self.syms.push(raw);
+        if !self.starts.is_empty() {
+            self.starts.push(self.params.len() as u32);
+        }
+    }
+
     /// Appends parameterless modules given as raw symbol words.
     #[inline]
     pub fn extend_plain(&mut self, syms: &[u32]) {

@@ -325,14 +325,20 @@ impl LSystemAlgorithm {
 
     fn init_inner(&mut self, lua: &Lua, ctx: &RunContext) -> Result<(), HostError> {
         self.interpreters = interpreters(lua);
+        // Functions with fixed parameters: a vararg chunk would copy its arguments on
+        // every call.
         self.callers = [
-            "local f = ... return f({})",
-            "local f, a = ... return f({a})",
-            "local f, a, b = ... return f({a, b})",
-            "local f, a, b, c = ... return f({a, b, c})",
+            "return function(f) return f({}) end",
+            "return function(f, a) return f({a}) end",
+            "return function(f, a, b) return f({a, b}) end",
+            "return function(f, a, b, c) return f({a, b, c}) end",
         ]
         .iter()
-        .map(|code| lua.load(*code).set_name("=pge.lsystem").into_function())
+        .map(|code| {
+            lua.load(*code)
+                .set_name("=pge.lsystem")
+                .call::<Function>(())
+        })
         .collect::<mlua::Result<_>>()?;
         // Numeric globals become names classic expressions can read.
         for pair in self.cfg.globals.pairs::<Value, Value>() {

@@ -34,6 +34,10 @@ pub(super) struct Compiled {
     pub(super) left1: Option<Sym>,
     /// The symbol of a one-symbol right context (not a bracket), tested likewise.
     pub(super) right1: Option<Sym>,
+    /// For a rule whose whole left side is `left1`, the predecessor and `right1` (no
+    /// parameters, condition or alternatives) and whose successor is fixed symbols: that
+    /// successor's place in [`Tables::plain_pool`] (start, length).
+    pub(super) fixed: Option<(u32, u32)>,
 }
 
 /// What a symbol turns into: itself, a fixed string of symbols (`plain_pool[start..]`), or
@@ -55,6 +59,28 @@ pub(super) struct Tables {
     pub(super) ignored: Vec<bool>,
     pub(super) uses_context: bool,
     pub(super) all_plain: bool,
+    /// Every rule reached through [`Dispatch::Rules`] has a `fixed` successor: a step of a
+    /// string without parameters needs no rule matching beyond one-symbol contexts.
+    pub(super) all_fixed: bool,
+    /// When `all_fixed`: `rule_lists` as [`FixedRule`]s, entry for entry.
+    pub(super) fixed_lists: Vec<FixedRule>,
+}
+
+/// A rule with a fixed successor, as the pass over a string without parameters reads it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct FixedRule {
+    /// The one-symbol left context ([`FixedRule::ANY`]: none).
+    pub(super) left: u32,
+    /// The one-symbol right context ([`FixedRule::ANY`]: none).
+    pub(super) right: u32,
+    /// The successor: `plain_pool[start..start + len]`.
+    pub(super) start: u32,
+    pub(super) len: u32,
+}
+
+impl FixedRule {
+    /// No context on this side.
+    pub(super) const ANY: u32 = u32::MAX;
 }
 
 impl Tables {
@@ -105,6 +131,29 @@ impl Tables {
                 *c = Some(choices);
             }
         }
+        let mut plain_pool = Vec::new();
+        for (rule, def) in rules.iter_mut().zip(defs) {
+            let lhs = &def.lhs;
+            let bare = |items: &[super::rule::PatternItem]| items.iter().all(|p| p.arity.is_none());
+            let simple_lhs = lhs.pred.arity.is_none()
+                && bare(&lhs.left)
+                && bare(&lhs.right)
+                && (lhs.left.is_empty() || rule.left1.is_some())
+                && (lhs.right.is_empty() || rule.right1.is_some());
+            if let CKind::Classic {
+                condition: None,
+                successor,
+                choices: None,
+            } = &rule.kind
+                && simple_lhs
+                && !rule.skip
+                && successor.iter().all(|s| s.args.is_empty())
+            {
+                let start = plain_pool.len() as u32;
+                plain_pool.extend(successor.iter().map(|s| s.sym.0));
+                rule.fixed = Some((start, successor.len() as u32));
+            }
+        }
         let mut ignored = vec![false; n];
         for s in ignore_syms {
             ignored[s.index()] = true;
@@ -114,7 +163,6 @@ impl Tables {
             .any(|d| !d.lhs.left.is_empty() || !d.lhs.right.is_empty());
         let mut dispatch = vec![Dispatch::Copy; n];
         let mut rule_lists = Vec::new();
-        let mut plain_pool = Vec::new();
         for (s, slot) in dispatch.iter_mut().enumerate() {
             let list: Vec<u32> = (0..defs.len())
                 .filter(|&r| defs[r].lhs.pred.sym.index() == s && !rules[r].skip)
@@ -153,6 +201,26 @@ impl Tables {
         let all_plain = dispatch
             .iter()
             .all(|d| !matches!(d, Dispatch::Rules { .. }));
+        let all_fixed = rule_lists
+            .iter()
+            .all(|&r| rules[r as usize].fixed.is_some());
+        let fixed_lists = if all_fixed {
+            rule_lists
+                .iter()
+                .filter_map(|&r| {
+                    let rule = &rules[r as usize];
+                    let (start, len) = rule.fixed?;
+                    Some(FixedRule {
+                        left: rule.left1.map_or(FixedRule::ANY, |s| s.0),
+                        right: rule.right1.map_or(FixedRule::ANY, |s| s.0),
+                        start,
+                        len,
+                    })
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         Ok(Tables {
             rules,
             dispatch,
@@ -161,6 +229,8 @@ impl Tables {
             ignored,
             uses_context,
             all_plain,
+            all_fixed,
+            fixed_lists,
         })
     }
 }
@@ -234,5 +304,6 @@ fn compile(
         skip: false,
         left1,
         right1,
+        fixed: None,
     })
 }
