@@ -26,6 +26,8 @@ pub type ScreenshotResult = Arc<Mutex<Option<anyhow::Result<()>>>>;
 pub struct AppOptions {
     /// Percent of the leaves drawn of trees with levels of detail (`--lod-level`).
     pub lod_percent: u8,
+    /// A forest's leaf budget (`--leaf-budget`).
+    pub leaf_budget: u64,
     /// Write the first complete frame here and close.
     pub screenshot: Option<PathBuf>,
     /// Where the screenshot run's result goes.
@@ -110,6 +112,7 @@ impl PreviewApp {
             framed: false,
             toggles: Toggles {
                 lod_percent: options.lod_percent,
+                leaf_budget: options.leaf_budget,
                 ..Toggles::default()
             },
             turntable: options.turntable,
@@ -265,7 +268,14 @@ impl PreviewApp {
                 let vp = self
                     .camera
                     .view_projection(rect.width() / rect.height().max(1.0));
-                let id = renderer.render(&mut rs.renderer.write(), vp, size, self.toggles, moving);
+                let id = renderer.render(
+                    &mut rs.renderer.write(),
+                    vp,
+                    self.camera.eye(),
+                    size,
+                    self.toggles,
+                    moving,
+                );
                 self.texture = Some(id);
                 self.render_ms = t0.elapsed().as_secs_f64() * 1000.0;
             }
@@ -387,6 +397,16 @@ impl PreviewApp {
                             }
                             _ => {}
                         }
+                    }
+                    if result.is_ok()
+                        && let Some(r) = &self.renderer
+                    {
+                        println!(
+                            "{}: {} triangles drawn ({} forest leaves)",
+                            path.display(),
+                            r.triangles(),
+                            r.forest_leaves()
+                        );
                     }
                     if let Ok(mut slot) = self.shot_result.lock() {
                         *slot = Some(result);

@@ -254,13 +254,23 @@ impl PreviewApp {
     /// The leaf level slider, for a model with levels of detail: redraws through the two
     /// ranges of V of each sector, the geometry stays on the GPU.
     fn lod_ui(&mut self, ui: &mut egui::Ui) {
+        let forest = self
+            .live
+            .reloader()
+            .current()
+            .is_some_and(|g| g.scene.meshes.iter().any(|m| m.forest));
+        if forest {
+            self.forest_ui(ui);
+        }
         let Some(g) = self.live.reloader().current() else {
             return;
         };
+
         let lods: Vec<_> = g
             .scene
             .meshes
             .iter()
+            .filter(|m| !m.forest)
             .filter_map(|m| m.lod.as_ref())
             .collect();
         if lods.is_empty() {
@@ -273,6 +283,28 @@ impl PreviewApp {
         );
         let drawn: u32 = lods.iter().map(|l| l.drawn(self.toggles.lod_percent)).sum();
         ui.label(RichText::new(format!("{drawn} leaves drawn")).small());
+        ui.checkbox(&mut self.toggles.lod_colors, "colour leaves by level");
+    }
+
+    /// The leaf budget slider of a forest: the most leaves its trees draw in a frame (as
+    /// many triangles again go to bark); redraws through the bands of V, the geometry stays
+    /// on the GPU.
+    fn forest_ui(&mut self, ui: &mut egui::Ui) {
+        ui.add(
+            egui::Slider::new(
+                &mut self.toggles.leaf_budget,
+                crate::preview::forest::LEAF_BUDGETS,
+            )
+            .logarithmic(true)
+            .text("leaf budget"),
+        )
+        .on_hover_text(
+            "forest: the most leaves drawn in a frame, nearer trees finer; \
+             as many triangles again for bark; an eighth while the camera moves",
+        );
+        if let Some(r) = &self.renderer {
+            ui.label(RichText::new(format!("{} leaves drawn", r.forest_leaves())).small());
+        }
         ui.checkbox(&mut self.toggles.lod_colors, "colour leaves by level");
     }
 
@@ -290,6 +322,9 @@ impl PreviewApp {
             };
             row("vertices", s.vertices.to_string());
             row("triangles", s.triangles.to_string());
+            if let Some(r) = &self.renderer {
+                row("drawn now", format!("{} triangles", r.triangles()));
+            }
             row("nodes", s.nodes.to_string());
             row("leaves", s.leaves.to_string());
             if s.modules > 0 {
