@@ -22,6 +22,7 @@ use std::ops::Range;
 
 use glam::{Mat4, Vec3, Vec4};
 use pge_lod::{Budget, assign};
+use rayon::prelude::*;
 
 use super::lod::LeafLod;
 
@@ -40,7 +41,7 @@ pub const SUB_ROOTS: u32 = 8;
 pub const GROWN: f32 = 2.83;
 
 /// While the camera moves, frames draw this share of the budget.
-pub const MOVING_SHARE: u64 = 8;
+pub const MOVING_SHARE: u64 = 32;
 
 /// The leaf budgets `--leaf-budget` and the side panel's slider allow.
 pub const LEAF_BUDGETS: std::ops::RangeInclusive<u64> = 100..=100_000_000;
@@ -236,7 +237,10 @@ fn in_view(mesh: &ForestMesh, view: &View, planes: &[Vec4; 6]) -> Vec<(u32, f32)
 #[must_use]
 pub fn plan(meshes: &[ForestMesh], view: &View, leaf_budget: u64) -> Plan {
     let planes = frustum(view.view_proj);
-    let visible: Vec<Vec<(u32, f32)>> = meshes.iter().map(|m| in_view(m, view, &planes)).collect();
+    let visible: Vec<Vec<(u32, f32)>> = meshes
+        .par_iter()
+        .map(|m| in_view(m, view, &planes))
+        .collect();
     let mut out = Plan {
         meshes: vec![MeshPlan::default(); meshes.len()],
         ..Plan::default()
@@ -284,66 +288,87 @@ fn plan_leaves(
         })
         .unzip();
     let shares = share(total, &asked, &least);
-    for (k, (mesh, seen)) in meshes.iter().zip(visible).enumerate() {
-        let Detail::Leaves {
-            bands,
-            leaves,
-            least,
-        } = mesh.detail
-        else {
-            continue;
-        };
-        let share = shares[k];
-        let distances: Vec<f32> = seen.iter().map(|&(_, d)| d).collect();
-        let budget = Budget {
-            total: share,
-            ..budget
-        };
-        // Distances are finite and non-negative and near <= far, so this cannot fail; if
-        // it did, the mesh would simply not be drawn.
-        let counts = assign(&distances, *leaves, *least, &budget).unwrap_or_default();
-        // The finest band not above each instance's count (`bands.len()`: none).
-        let none = bands.len();
-        let mut chosen: Vec<usize> = counts
-            .iter()
-            .map(|&c| {
-                if c == 0 {
-                    none
-                } else {
-                    bands.iter().position(|b| b.leaves <= c).unwrap_or(none)
-                }
-            })
-            .collect();
-        let drawn: u64 = chosen
-            .iter()
-            .filter_map(|&b| bands.get(b))
-            .map(|b| u64::from(b.leaves))
-            .sum();
-        upgrade(seen, &mut chosen, bands, share.saturating_sub(drawn));
-        let chosen: Vec<Option<usize>> = chosen.iter().map(|&b| (b < none).then_some(b)).collect();
-        let runs = group(seen, &chosen, bands.len());
-        let plan = &mut out.meshes[k];
-        for (band, instances) in bands.iter().zip(runs.ranges) {
-            if instances.is_empty() {
-                continue;
-            }
-            let n = u64::from(instances.len() as u32);
-            out.leaves += u64::from(band.leaves) * n;
-            out.triangles += 2 * u64::from(band.leaves) * n;
-            for r in &band.ranges {
-                plan.draws.push(Draw {
-                    source: if band.grown {
-                        Source::Grown
-                    } else {
-                        Source::Quads
-                    },
-                    indices: r.clone(),
-                    instances: instances.clone(),
-                });
-            }
+    // Each mesh on its own (in parallel, merged in order).
+    let planned: Vec<Option<(MeshPlan, u64)>> = meshes
+        .par_iter()
+        .zip(visible)
+        .zip(&shares)
+        .map(|((mesh, seen), &share)| plan_leaf_mesh(mesh, seen, budget, share))
+        .collect();
+    for (k, planned) in planned.into_iter().enumerate() {
+        if let Some((plan, leaves)) = planned {
+            out.leaves += leaves;
+            out.triangles += 2 * leaves;
+            out.meshes[k] = plan;
         }
-        plan.order = runs.order;
     }
+}
+
+/// One leaf mesh's plan for its `share` of the leaves and the leaves it draws; `None` for a
+/// mesh without levels.
+fn plan_leaf_mesh(
+    mesh: &ForestMesh,
+    seen: &[(u32, f32)],
+    budget: Budget,
+    share: u64,
+) -> Option<(MeshPlan, u64)> {
+    let Detail::Leaves {
+        bands,
+        leaves,
+        least,
+    } = mesh.detail
+    else {
+        return None;
+    };
+    let distances: Vec<f32> = seen.iter().map(|&(_, d)| d).collect();
+    let budget = Budget {
+        total: share,
+        ..budget
+    };
+    // Distances are finite and non-negative and near <= far, so this cannot fail; if it
+    // did, the mesh would simply not be drawn.
+    let counts = assign(&distances, *leaves, *least, &budget).unwrap_or_default();
+    // The finest band not above each instance's count (`bands.len()`: none).
+    let none = bands.len();
+    let mut chosen: Vec<usize> = counts
+        .iter()
+        .map(|&c| {
+            if c == 0 {
+                none
+            } else {
+                bands.iter().position(|b| b.leaves <= c).unwrap_or(none)
+            }
+        })
+        .collect();
+    let drawn: u64 = chosen
+        .iter()
+        .filter_map(|&b| bands.get(b))
+        .map(|b| u64::from(b.leaves))
+        .sum();
+    upgrade(seen, &mut chosen, bands, share.saturating_sub(drawn));
+    let chosen: Vec<Option<usize>> = chosen.iter().map(|&b| (b < none).then_some(b)).collect();
+    let runs = group(seen, &chosen, bands.len());
+    let mut plan = MeshPlan::default();
+    let mut total = 0;
+    for (band, instances) in bands.iter().zip(runs.ranges) {
+        if instances.is_empty() {
+            continue;
+        }
+        total += u64::from(band.leaves) * u64::from(instances.len() as u32);
+        for r in &band.ranges {
+            plan.draws.push(Draw {
+                source: if band.grown {
+                    Source::Grown
+                } else {
+                    Source::Quads
+                },
+                indices: r.clone(),
+                instances: instances.clone(),
+            });
+        }
+    }
+    plan.order = runs.order;
+    Some((plan, total))
 }
 
 /// Shares `total` leaves between meshes that ask for `asked` and need `least` (every
