@@ -41,7 +41,7 @@ pub struct Toggles {
     /// Leaves of meshes with levels of detail coloured by the level that created them.
     pub lod_colors: bool,
     /// A forest's leaf budget T: the most leaves its instances draw in a frame at rest (and
-    /// as many triangles of bark); a moving frame draws an eighth of it.
+    /// as many triangles of bark); a moving frame draws a 32nd of it ([`forest::MOVING_SHARE`]).
     pub leaf_budget: u64,
 }
 
@@ -490,7 +490,7 @@ impl Renderer {
     /// the egui texture showing it. A forest's instances are drawn within its leaf budget
     /// ([`forest::plan`]). While the camera is `moving`, an eighth of the leaves and of a big
     /// bark mesh are drawn (software renderers cannot turn a 100 000-leaf tree smoothly
-    /// otherwise), and a forest an eighth of its budget.
+    /// otherwise), and a forest a 32nd of its budget.
     pub fn render(
         &mut self,
         egui_renderer: &mut egui_wgpu::Renderer,
