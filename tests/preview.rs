@@ -308,3 +308,78 @@ fn an_environment_is_the_viewport_background() {
         ground * 100.0
     );
 }
+
+/// The triangles and forest leaves a screenshot run reports drawing.
+fn drawn(stdout: &[u8]) -> (u64, u64) {
+    let text = String::from_utf8_lossy(stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("triangles drawn"))
+        .unwrap_or_else(|| panic!("no 'triangles drawn' line in: {text}"));
+    let numbers: Vec<u64> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    match numbers[..] {
+        [.., triangles, leaves] => (triangles, leaves),
+        _ => panic!("no counts in {line:?}"),
+    }
+}
+
+#[test]
+fn a_forest_is_drawn_within_its_leaf_budget() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::copy(
+        root().join("scripts/species/bush.lua"),
+        dir.path().join("bush.lua"),
+    )
+    .expect("copy the species");
+    std::fs::write(
+        dir.path().join("small.lua"),
+        "local f = pge.Forest{ size = {40, 40}, seed = 3 }\n\
+         f:terrain{ height = 2, scale = 30, octaves = 2 }\n\
+         f:scatter{ species = \"bush.lua\", minDistance = 3, variants = 2,\n\
+                    params = { points = 300 } }\n\
+         return f\n",
+    )
+    .expect("write");
+    let shot = |budget: &str, png: &str| {
+        let out = preview(
+            &[
+                "small.lua",
+                "--leaf-budget",
+                budget,
+                "--camera",
+                "30,12",
+                "--screenshot",
+                png,
+            ],
+            dir.path(),
+        )?;
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "pge preview failed: {stderr}");
+        Some((drawn(&out.stdout), look_at(&dir.path().join(png))))
+    };
+    let Some(((all_triangles, all_leaves), all)) = shot("100000000", "all.png") else {
+        return;
+    };
+    let Some(((triangles, leaves), tight)) = shot("3000", "tight.png") else {
+        return;
+    };
+    // About 170 bushes of 400 to 500 leaves: a generous budget draws them all whole, a
+    // tight one at most its 3000 leaves (and as many triangles of bark), yet every bush in
+    // view still has some.
+    assert!(all_leaves > 20_000, "all the leaves: {all_leaves}");
+    assert!(
+        (1_000..=3_000).contains(&leaves),
+        "{leaves} leaves drawn for a budget of 3000"
+    );
+    assert!(
+        triangles < all_triangles / 5,
+        "{triangles} of {all_triangles} triangles"
+    );
+    assert!(
+        all.colours > 50 && tight.colours > 50,
+        "lit leaves and bark"
+    );
+}

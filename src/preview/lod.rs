@@ -134,6 +134,85 @@ impl LeafLod {
         out
     }
 
+    /// All original leaves (|O| over every sector).
+    #[must_use]
+    pub fn leaves(&self) -> u32 {
+        self.sectors.iter().map(|s| s.leaves).sum()
+    }
+
+    /// The leaves of the coarsest level (|R| over every sector).
+    #[must_use]
+    pub fn roots(&self) -> u32 {
+        self.sectors.iter().map(|s| s.roots).sum()
+    }
+
+    /// The ranges of [`LeafLod::quad_indices`] that draw about `leaves` leaves in all, and
+    /// how many they draw (never more than `leaves`, unless `leaves` is 0). From
+    /// [`LeafLod::roots`] up, each sector draws its share of `leaves` (rounded down), at
+    /// least its coarsest level and at most its original leaves; asked for exactly the
+    /// roots it draws the coarsest level. Below the roots, the coarsest level's leaves are
+    /// dropped: each sector draws its share of `leaves` as the first leaves of each of its
+    /// two ranges, in proportion to their lengths (a far tree's impostor-like minimum).
+    #[must_use]
+    pub fn leaf_ranges(&self, leaves: u32) -> (Vec<Range<u32>>, u32) {
+        let (all, roots) = (u64::from(self.leaves().max(1)), self.roots());
+        let mut out = Vec::with_capacity(2 * self.sectors.len());
+        let mut drawn = 0;
+        for s in &self.sectors {
+            let o = s.offset;
+            let [a, b, c] = if leaves >= roots {
+                let share = if leaves == roots {
+                    u64::from(s.roots)
+                } else {
+                    u64::from(leaves) * u64::from(s.leaves) / all
+                };
+                let want = share.clamp(u64::from(s.roots), u64::from(s.leaves.max(s.roots)));
+                let level = (want - u64::from(s.roots)) as usize;
+                s.rows[level.min(s.rows.len() - 1)]
+            } else {
+                // Fewer than the roots: a share of the coarsest level's two ranges.
+                let [a, b, c] = s.rows[0];
+                let share = (u64::from(leaves) * u64::from(s.roots) / u64::from(roots.max(1)))
+                    .min(u64::from(a + c)) as u32;
+                let from_a = if a + c == 0 {
+                    0
+                } else {
+                    (u64::from(share) * u64::from(a) / u64::from(a + c)) as u32
+                };
+                [from_a, b, (share - from_a).min(c)]
+            };
+            drawn += a + c;
+            for r in [o..o + a, o + b..o + b + c] {
+                if !r.is_empty() {
+                    out.push(6 * r.start..6 * r.end);
+                }
+            }
+        }
+        (out, drawn)
+    }
+
+    /// A copy of a leaf mesh's interleaved vertices ([`VERTEX_FLOATS`] floats each) with
+    /// every leaf of V grown by `factor` about its centre: drawn for far instances that show
+    /// only part of the coarsest level, so their crowns keep their size and cover.
+    #[must_use]
+    pub fn grown(&self, vertices: &[f32], factor: f32) -> Vec<f32> {
+        let mut out = vertices.to_vec();
+        for quad in out.chunks_exact_mut(4 * VERTEX_FLOATS) {
+            let mut centre = [0.0f32; 3];
+            for v in quad.chunks_exact(VERTEX_FLOATS) {
+                for k in 0..3 {
+                    centre[k] += v[k] / 4.0;
+                }
+            }
+            for v in quad.chunks_exact_mut(VERTEX_FLOATS) {
+                for k in 0..3 {
+                    v[k] = centre[k] + (v[k] - centre[k]) * factor;
+                }
+            }
+        }
+        out
+    }
+
     /// The leaves drawn by [`LeafLod::index_ranges`].
     #[must_use]
     pub fn drawn(&self, percent: u8) -> u32 {
@@ -161,6 +240,16 @@ mod tests {
         assert_eq!(lod.index_ranges(1), vec![24..36]);
         assert_eq!(lod.drawn(75), 3);
         assert_eq!(lod.index_ranges(75), vec![0..12, 30..36]);
+        // By leaf count: the coarsest level at the roots, part of it below them.
+        assert_eq!((lod.leaves(), lod.roots()), (4, 2));
+        assert_eq!(lod.leaf_ranges(4).0, vec![0..24]);
+        assert_eq!(lod.leaf_ranges(4).1, 4);
+        assert_eq!(lod.leaf_ranges(3), (vec![0..12, 30..36], 3));
+        assert_eq!(lod.leaf_ranges(2).0, vec![24..36]);
+        assert_eq!(lod.leaf_ranges(2).1, 2);
+        assert_eq!(lod.leaf_ranges(1).0, vec![24..30]);
+        assert_eq!(lod.leaf_ranges(1).1, 1);
+        assert_eq!(lod.leaf_ranges(0), (vec![], 0));
         // Two sectors, one after the other.
         let extras = json!({"lod": {"leaves": 4, "roots": 2, "sectors": [
             {"offset": 0, "leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]},
@@ -183,5 +272,28 @@ mod tests {
         assert!(near(2, [0.0, 0.35, 1.0, 1.0]));
         // Positions are untouched.
         assert_eq!(&colored[..8], &[0.5; 8]);
+        // Grown leaves: each quad twice as wide about its centre.
+        let quad: Vec<f32> = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ]
+        .iter()
+        .flat_map(|p| {
+            let mut v = vec![0.25; VERTEX_FLOATS];
+            v[..3].copy_from_slice(p);
+            v
+        })
+        .collect();
+        let grown = lod.grown(&quad, 2.0);
+        let corners: Vec<&[f32]> = grown.chunks(VERTEX_FLOATS).map(|v| &v[..3]).collect();
+        assert_eq!(corners[0], &[-0.5, -0.5, 0.0]);
+        assert_eq!(corners[2], &[1.5, 1.5, 0.0]);
+        assert_eq!(
+            &grown[3..VERTEX_FLOATS],
+            &quad[3..VERTEX_FLOATS],
+            "only positions"
+        );
     }
 }

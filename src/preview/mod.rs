@@ -17,6 +17,7 @@
 
 mod app;
 pub mod camera;
+pub mod forest;
 pub mod live;
 pub mod lod;
 mod pipeline;
@@ -46,6 +47,10 @@ pub struct PreviewArgs {
     /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
     #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = lod::parse_fraction)]
     pub lod_level: f64,
+    /// A forest's leaf budget: the most leaves its trees draw in a frame at rest, nearer
+    /// trees finer (as many triangles again go to bark and other meshes).
+    #[arg(long, value_name = "N", default_value_t = forest::DEFAULT_LEAF_BUDGET, value_parser = forest::parse_budget)]
+    pub leaf_budget: u64,
     /// Seed of every random draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -132,6 +137,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
     let options = AppOptions {
         screenshot: args.screenshot.clone(),
         lod_percent: (args.lod_level * 100.0).round().clamp(1.0, 100.0) as u8,
+        leaf_budget: args.leaf_budget,
         screenshot_result: screenshot_result.clone(),
         camera: args.camera,
         log_fps: measuring,

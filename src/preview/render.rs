@@ -11,6 +11,7 @@ use eframe::egui_wgpu::{self, wgpu};
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
+use super::forest::{self, Detail, Draw, ForestMesh, Source, View};
 use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines};
 use super::scene::{Environment, Scene, SceneMesh, TextureData};
 use super::texture::{Samplers, upload_texture};
@@ -39,6 +40,9 @@ pub struct Toggles {
     pub lod_percent: u8,
     /// Leaves of meshes with levels of detail coloured by the level that created them.
     pub lod_colors: bool,
+    /// A forest's leaf budget T: the most leaves its instances draw in a frame at rest (and
+    /// as many triangles of bark); a moving frame draws a 32nd of it ([`forest::MOVING_SHARE`]).
+    pub leaf_budget: u64,
 }
 
 impl Default for Toggles {
@@ -50,6 +54,7 @@ impl Default for Toggles {
             grid: true,
             lod_percent: 100,
             lod_colors: false,
+            leaf_budget: forest::DEFAULT_LEAF_BUDGET,
         }
     }
 }
@@ -78,6 +83,17 @@ struct GpuMesh {
     /// Sequential quads over all of V, the vertices coloured by level and the LOD tables,
     /// for a leaf mesh with levels.
     lod: Option<(wgpu::Buffer, wgpu::Buffer, super::lod::LeafLod)>,
+    /// For a mesh placed by a forest: what it can draw, the instances of this frame's plan
+    /// (rewritten each frame, in band order) and the plan's draws.
+    forest: Option<ForestGpu>,
+}
+
+struct ForestGpu {
+    detail: Detail,
+    /// A leaf mesh's vertices with grown leaves ([`forest::GROWN`]), for far instances.
+    grown: Option<wgpu::Buffer>,
+    instances: wgpu::Buffer,
+    draws: Vec<Draw>,
 }
 
 struct Target {
@@ -110,6 +126,10 @@ pub struct Renderer {
     skeleton: Option<(wgpu::Buffer, u32)>,
     target: Option<Target>,
     texture_id: Option<egui::TextureId>,
+    /// Triangles drawn by the last frame (lines not counted).
+    triangles: u64,
+    /// Leaves a forest's leaf meshes with levels drew in the last frame.
+    forest_leaves: u64,
 }
 
 /// The buffer of the shader's `Globals` and its bind group (group 0).
@@ -185,6 +205,8 @@ impl Renderer {
             skeleton: None,
             target: None,
             texture_id: None,
+            triangles: 0,
+            forest_leaves: 0,
         }
     }
 
@@ -303,15 +325,44 @@ impl Renderer {
                             c.len() as u32,
                         )
                     }),
-                near: (mesh.is_leaf && mesh.instances.len() >= FAR_LEAVES_MIN).then(|| {
-                    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("near instances"),
-                        size: std::mem::size_of_val(mesh.instances.as_slice()) as u64,
+                forest: mesh.forest.then(|| ForestGpu {
+                    grown: mesh.lod.as_ref().map(|lod| {
+                        buffer_init(
+                            device,
+                            "grown leaves",
+                            bytemuck::cast_slice(&lod.grown(&mesh.vertices, forest::GROWN)),
+                            wgpu::BufferUsages::VERTEX,
+                        )
+                    }),
+                    detail: match &mesh.lod {
+                        Some(lod) => Detail::leaves(lod),
+                        None => Detail::Rigid {
+                            full: mesh.indices.len() as u32,
+                            coarse: mesh
+                                .coarse
+                                .as_ref()
+                                .map(|(_, c)| c.len() as u32)
+                                .filter(|&c| c > 0),
+                        },
+                    },
+                    instances: device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("forest instances"),
+                        size: std::mem::size_of_val(mesh.instances.as_slice()).max(64) as u64,
                         usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                         mapped_at_creation: false,
-                    });
-                    (buffer, 0)
+                    }),
+                    draws: Vec::new(),
                 }),
+                near: (mesh.is_leaf && !mesh.forest && mesh.instances.len() >= FAR_LEAVES_MIN)
+                    .then(|| {
+                        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("near instances"),
+                            size: std::mem::size_of_val(mesh.instances.as_slice()) as u64,
+                            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                            mapped_at_creation: false,
+                        });
+                        (buffer, 0)
+                    }),
                 source: scene.clone(),
                 index_in_scene: index,
             });
@@ -379,14 +430,72 @@ impl Renderer {
         }
     }
 
-    /// Draws the model seen by `view_proj` into a `size` pixel texture and returns the egui
-    /// texture showing it. While the camera is `moving`, an eighth of the leaves and of a big
+    /// Plans the forest meshes' draws for `view` within `leaf_budget`
+    /// ([`forest::plan`]) and writes each one's instances in band order.
+    fn plan_forest(&mut self, view: &View, leaf_budget: u64) {
+        let (meshes, sources): (Vec<ForestMesh>, Vec<usize>) = self
+            .meshes
+            .iter()
+            .enumerate()
+            .filter_map(|(k, m)| {
+                let f = m.forest.as_ref()?;
+                let scene = m.source.meshes.get(m.index_in_scene)?;
+                Some((
+                    ForestMesh {
+                        instances: &scene.instances,
+                        centre: scene.sphere.0,
+                        radius: scene.sphere.1,
+                        detail: &f.detail,
+                    },
+                    k,
+                ))
+            })
+            .unzip();
+        if meshes.is_empty() {
+            return;
+        }
+        let plan = forest::plan(&meshes, view, leaf_budget);
+        self.forest_leaves = plan.leaves;
+        let matrices: Vec<Vec<[f32; 16]>> = meshes
+            .iter()
+            .zip(&plan.meshes)
+            .map(|(m, p)| p.order.iter().map(|&i| m.instances[i as usize]).collect())
+            .collect();
+        drop(meshes);
+        for ((k, p), matrices) in sources.into_iter().zip(plan.meshes).zip(matrices) {
+            let mesh = &mut self.meshes[k];
+            if let Some(f) = &mut mesh.forest {
+                if !matrices.is_empty() {
+                    self.queue
+                        .write_buffer(&f.instances, 0, bytemuck::cast_slice(&matrices));
+                }
+                f.draws = p.draws;
+            }
+        }
+    }
+
+    /// Triangles drawn by the last frame, over every mesh and instance (lines not counted).
+    #[must_use]
+    pub fn triangles(&self) -> u64 {
+        self.triangles
+    }
+
+    /// Leaves drawn by a forest's leaf meshes with levels in the last frame.
+    #[must_use]
+    pub fn forest_leaves(&self) -> u64 {
+        self.forest_leaves
+    }
+
+    /// Draws the model seen by `view_proj` from `eye` into a `size` pixel texture and returns
+    /// the egui texture showing it. A forest's instances are drawn within its leaf budget
+    /// ([`forest::plan`]). While the camera is `moving`, an eighth of the leaves and of a big
     /// bark mesh are drawn (software renderers cannot turn a 100 000-leaf tree smoothly
-    /// otherwise), and a forest's far trees show their bark only.
+    /// otherwise), and a forest a 32nd of its budget.
     pub fn render(
         &mut self,
         egui_renderer: &mut egui_wgpu::Renderer,
         view_proj: Mat4,
+        eye: Vec3,
         size: [u32; 2],
         toggles: Toggles,
         moving: bool,
@@ -422,6 +531,13 @@ impl Renderer {
         if moving {
             self.pick_near(view_proj);
         }
+        let budget = if moving {
+            toggles.leaf_budget / forest::MOVING_SHARE
+        } else {
+            toggles.leaf_budget
+        };
+        self.plan_forest(&View { eye, view_proj }, budget);
+        let mut triangles = 0u64;
         let sun = Vec3::new(0.45, 0.8, 0.35).normalize();
         let ambient = self.environment.as_ref().map_or([1.0; 3], |(_, a)| *a);
         let mut globals = view_proj.to_cols_array().to_vec();
@@ -471,6 +587,13 @@ impl Renderer {
                     if mesh.is_leaf && !toggles.leaves {
                         continue;
                     }
+                    if let Some(f) = &mesh.forest
+                        && !mesh.lines
+                    {
+                        let pipelines = (&self.mesh_culled, &self.mesh_double, &self.mesh_lines);
+                        triangles += draw_forest(&mut pass, mesh, f, pipelines, toggles);
+                        continue;
+                    }
                     let mut vertices = &mesh.vertices;
                     let (pipeline, indices, count) = if mesh.lines {
                         (&self.mesh_lines, &mesh.indices, mesh.index_count)
@@ -514,6 +637,8 @@ impl Renderer {
                         pass.set_vertex_buffer(1, mesh.instances.slice(..));
                         pass.set_index_buffer(quads.slice(..), wgpu::IndexFormat::Uint32);
                         for range in lod.index_ranges(toggles.lod_percent) {
+                            triangles +=
+                                u64::from(range.len() as u32 / 3) * u64::from(mesh.instance_count);
                             pass.draw_indexed(range, 0, 0..mesh.instance_count);
                         }
                         continue;
@@ -530,6 +655,9 @@ impl Renderer {
                     }
                     pass.set_vertex_buffer(1, instances.slice(..));
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    if !mesh.lines && !toggles.wireframe {
+                        triangles += u64::from(count / 3) * u64::from(instance_count);
+                    }
                     pass.draw_indexed(0..count, 0, 0..instance_count);
                 }
             }
@@ -549,6 +677,7 @@ impl Renderer {
             }
         }
         self.queue.submit([encoder.finish()]);
+        self.triangles = triangles;
         self.texture_id.unwrap_or_default()
     }
 
@@ -632,7 +761,59 @@ impl Renderer {
     }
 }
 
-/// Bytes of the shader's `Globals`: view_proj, sun, inv_view_proj, ambient.
+/// Issues the draws of a forest mesh's plan (the instances were written by
+/// [`Renderer::plan_forest`]) and returns the triangles drawn. In wireframe, only the
+/// instances drawn whole show their edges.
+fn draw_forest(
+    pass: &mut wgpu::RenderPass<'_>,
+    mesh: &GpuMesh,
+    f: &ForestGpu,
+    (culled, double, lines): (
+        &wgpu::RenderPipeline,
+        &wgpu::RenderPipeline,
+        &wgpu::RenderPipeline,
+    ),
+    toggles: Toggles,
+) -> u64 {
+    let pipeline = if mesh.double_sided { double } else { culled };
+    pass.set_bind_group(1, &mesh.material, &[]);
+    pass.set_vertex_buffer(1, f.instances.slice(..));
+    let mut triangles = 0;
+    for d in &f.draws {
+        let (pipeline, vertices, indices, range) = match d.source {
+            Source::Full if toggles.wireframe => match &mesh.edges {
+                Some((edges, n)) => (lines, &mesh.vertices, edges, 0..*n),
+                None => continue,
+            },
+            _ if toggles.wireframe => continue,
+            Source::Full => (pipeline, &mesh.vertices, &mesh.indices, d.indices.clone()),
+            Source::Coarse => match &mesh.coarse {
+                Some((v, i, _)) => (pipeline, v, i, d.indices.clone()),
+                None => continue,
+            },
+            Source::Quads | Source::Grown => match (&mesh.lod, &f.grown) {
+                (Some((quads, colored, _)), grown) => {
+                    let v = match (toggles.lod_colors, d.source, grown) {
+                        (true, _, _) => colored,
+                        (false, Source::Grown, Some(grown)) => grown,
+                        _ => &mesh.vertices,
+                    };
+                    (pipeline, v, quads, d.indices.clone())
+                }
+                _ => continue,
+            },
+        };
+        pass.set_pipeline(pipeline);
+        pass.set_vertex_buffer(0, vertices.slice(..));
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        if !toggles.wireframe {
+            triangles += d.triangles();
+        }
+        pass.draw_indexed(range, 0, d.instances.clone());
+    }
+    triangles
+}
+
 /// Leaves instanced at least this many times (a forest's) are drawn for near trees only
 /// while the camera moves.
 const FAR_LEAVES_MIN: usize = 256;
@@ -641,6 +822,7 @@ const FAR_LEAVES_MIN: usize = 256;
 /// camera moves.
 const NEAR_FRACTION: f32 = 0.3;
 
+/// Bytes of the shader's `Globals`: view_proj, sun, inv_view_proj, ambient.
 const GLOBALS_BYTES: u64 = (16 + 4 + 16 + 4) * 4;
 
 /// The ambient light's factor under a sky of linear average colour `average`: half neutral,

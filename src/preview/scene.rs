@@ -3,7 +3,7 @@
 //!
 //! Built on the worker thread right after generation, so the window only uploads buffers.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
@@ -49,8 +49,13 @@ pub struct SceneMesh {
     /// indices), drawn while the camera moves. Compact, because a
     /// software renderer shades every vertex in the index range, used or not.
     pub coarse: Option<(Vec<f32>, Vec<u32>)>,
-    /// A leaf mesh's levels of detail (`extras.pge.lod`).
+    /// A leaf mesh's levels of detail (`extras.pge.lod`, or computed for a forest's leaves).
     pub lod: Option<super::lod::LeafLod>,
+    /// Placed by a forest (an instance group) only: drawn within the forest's budget
+    /// ([`super::forest`]).
+    pub forest: bool,
+    /// A sphere around the mesh in its own frame: centre and radius.
+    pub sphere: (Vec3, f32),
 }
 
 /// The model's environment: an equirectangular sky drawn behind everything, whose average
@@ -122,12 +127,27 @@ impl Scene {
                 }
             }
         }
+        let in_groups: HashSet<usize> = model
+            .groups
+            .iter()
+            .flat_map(|g| g.meshes.iter().copied())
+            .collect();
+        let forest: Vec<bool> = (0..model.meshes.len())
+            .map(|m| plain[m] == 0 && in_groups.contains(&m))
+            .collect();
+        let lods = forest_lods(model, &forest);
         let mut meshes = Vec::new();
         let mut skeleton = Vec::new();
-        for ((mesh, instances), plain) in model.meshes.iter().zip(per_mesh).zip(plain) {
+        for (index, ((mesh, instances), plain)) in
+            model.meshes.iter().zip(per_mesh).zip(plain).enumerate()
+        {
             if instances.is_empty() || mesh.positions.is_empty() {
                 continue;
             }
+            let forest = forest[index];
+            // A forest's leaves without levels get them here (the draw reads them in V's
+            // order; the model itself is not changed).
+            let mesh: &Mesh = lods.get(&index).unwrap_or(&**mesh);
             if let Some(sk) = &mesh.skeleton {
                 for m in &instances[..plain] {
                     let m = Mat4::from_cols_array(m);
@@ -148,7 +168,8 @@ impl Scene {
                     .clone()
             });
             let vertices = interleave(mesh);
-            let coarse = if mesh.primitive != Primitive::Triangles {
+            let lod = super::lod::LeafLod::from_extras(&mesh.extras, mesh.positions.len());
+            let coarse = if mesh.primitive != Primitive::Triangles || (forest && lod.is_some()) {
                 None
             } else if is_leaf(mesh) {
                 Some(coarse_leaves(&vertices, &mesh.indices))
@@ -169,7 +190,9 @@ impl Scene {
                 double_sided: mesh.material.double_sided,
                 is_leaf: is_leaf(mesh),
                 coarse,
-                lod: super::lod::LeafLod::from_extras(&mesh.extras, mesh.positions.len()),
+                lod,
+                forest,
+                sphere: sphere(mesh),
             });
         }
         let stats = SceneStats {
@@ -191,11 +214,75 @@ impl Scene {
         Scene {
             meshes,
             skeleton,
-            bounds: model.bounds(),
+            bounds: bounds(model),
             stats,
             environment,
         }
     }
+}
+
+/// The leaf meshes of a forest (`forest[m]`) that have no levels of detail, given them by
+/// the same simplification as `lod = {}` ([`pge_lod::lod_mesh`]), on every core. Meshes
+/// that are not quads (or have degenerate leaves) are left out: they are drawn whole or by
+/// their coarse eighth.
+fn forest_lods(model: &Model, forest: &[bool]) -> HashMap<usize, Mesh> {
+    use rayon::prelude::*;
+    let wanted: Vec<usize> = (0..model.meshes.len())
+        .filter(|&m| {
+            let mesh = &model.meshes[m];
+            forest[m]
+                && is_leaf(mesh)
+                && mesh.primitive == Primitive::Triangles
+                && !mesh.extras.contains_key("lod")
+        })
+        .collect();
+    wanted
+        .into_par_iter()
+        .filter_map(|m| {
+            let options = pge_lod::LodOptions::default();
+            let (mesh, _) = pge_lod::lod_mesh(&model.meshes[m], &options).ok()?;
+            Some((m, mesh))
+        })
+        .collect()
+}
+
+/// The model's world-space bounds, as [`Model::bounds`] finds them but with each mesh's own
+/// bounds found once rather than once per instance (a forest places a mesh 10,000 times).
+fn bounds(model: &Model) -> Option<(Vec3, Vec3)> {
+    let own: Vec<Option<(Vec3, Vec3)>> = model.meshes.iter().map(|m| m.bounds()).collect();
+    let grouped = model.groups.iter().flat_map(|g| {
+        g.transforms.iter().flat_map(move |t| {
+            let m = t.matrix();
+            g.meshes.iter().map(move |&mesh| (mesh, m))
+        })
+    });
+    let plain = model.instances.iter().map(|i| (i.mesh, i.transform));
+    let mut out: Option<(Vec3, Vec3)> = None;
+    for (mesh, transform) in plain.chain(grouped) {
+        let Some(Some((lo, hi))) = own.get(mesh) else {
+            continue;
+        };
+        for corner in 0..8 {
+            let c = Vec3::new(
+                if corner & 1 == 0 { lo.x } else { hi.x },
+                if corner & 2 == 0 { lo.y } else { hi.y },
+                if corner & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = transform.transform_point3(c);
+            out = Some(match out {
+                None => (p, p),
+                Some((a, b)) => (a.min(p), b.max(p)),
+            });
+        }
+    }
+    out
+}
+
+/// The sphere around the bounding box of `mesh`'s positions.
+fn sphere(mesh: &Mesh) -> (Vec3, f32) {
+    mesh.bounds().map_or((Vec3::ZERO, 0.0), |(lo, hi)| {
+        ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+    })
 }
 
 /// Whether a mesh is foliage: an alpha-masked material, or "leaf"/"foliage" in the mesh's or
@@ -520,6 +607,85 @@ mod tests {
         assert_eq!(coarse_bark(&vertices, small, 1), None);
         let (_, i) = coarse_bark(&vertices, small, 5000).expect("drawn often enough");
         assert_eq!(i.len() / 3, 1000 / 8);
+    }
+
+    #[test]
+    fn a_forests_leaves_get_levels_and_its_meshes_are_marked() {
+        use pge_engine::geometry::{InstanceGroup, InstanceTransform};
+        // A crown of 40 small square leaves on a ring, and a trunk.
+        let mut leaves = Mesh::default();
+        for i in 0..40u32 {
+            let t = i as f32 / 40.0 * std::f32::consts::TAU;
+            let (c, n) = (
+                Vec3::new(t.cos(), 2.0 + 0.1 * (i % 3) as f32, t.sin()),
+                Vec3::new(t.cos(), 0.0, t.sin()),
+            );
+            let side = n.cross(Vec3::Y) * 0.2;
+            let up = Vec3::Y * 0.2;
+            leaves.positions.extend_from_slice(&[
+                c - side - up,
+                c + side - up,
+                c + side + up,
+                c - side + up,
+            ]);
+            leaves.normals.extend_from_slice(&[n; 4]);
+            let b = 4 * i;
+            leaves
+                .indices
+                .extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
+        }
+        leaves.material = Arc::new(Material {
+            alpha: AlphaMode::Mask(0.5),
+            ..Material::default()
+        });
+        let trunk = triangle();
+        let mut model = Model::new();
+        model.meshes.push(Arc::new(trunk));
+        model.meshes.push(Arc::new(leaves));
+        let at = |x: f32| InstanceTransform {
+            translation: [x, 0.0, 0.0],
+            rotation: [0.0, 0.0, 0.0, 1.0],
+            scale: 2.0,
+        };
+        model.groups.push(InstanceGroup {
+            name: "tree/1".into(),
+            meshes: vec![0, 1],
+            transforms: vec![at(0.0), at(10.0), at(-30.0)],
+        });
+        assert!(!model.meshes[1].extras.contains_key("lod"));
+        let scene = Scene::new(&model);
+        assert!(
+            scene
+                .meshes
+                .iter()
+                .all(|m| m.forest && m.instances.len() == 3)
+        );
+        assert!(scene.meshes[0].lod.is_none(), "bark has no levels");
+        let lod = scene.meshes[1]
+            .lod
+            .as_ref()
+            .expect("levels computed for the forest");
+        assert_eq!(lod.leaves(), 40);
+        assert!(lod.roots() < 40, "{} roots", lod.roots());
+        // The finest level draws the original leaves; V holds them and the collapsed ones.
+        assert_eq!(scene.meshes[1].indices.len(), 6 * 40);
+        assert_eq!(
+            scene.meshes[1].vertices.len(),
+            4 * (80 - lod.roots() as usize) * VERTEX_FLOATS
+        );
+        // The bounds are the model's, found without visiting every vertex per instance.
+        assert_eq!(scene.bounds, model.bounds());
+        // The sphere holds every vertex.
+        let (centre, radius) = scene.meshes[1].sphere;
+        assert!(
+            model.meshes[1]
+                .positions
+                .iter()
+                .all(|p| p.distance(centre) <= radius + 1e-5)
+        );
+        // Placed on its own, the same mesh is a plain mesh.
+        let plain = Scene::new(&Model::from_mesh(model.meshes[1].clone()));
+        assert!(!plain.meshes[0].forest && plain.meshes[0].lod.is_none());
     }
 
     #[test]
