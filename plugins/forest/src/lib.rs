@@ -21,6 +21,7 @@
 
 mod assemble;
 mod cache;
+mod codec;
 mod layout;
 #[cfg(feature = "lua")]
 pub mod lua;
