@@ -304,6 +304,7 @@ impl World {
                     name: name.to_string(),
                     meshes: (first..first + parts.len()).collect(),
                     transforms: Vec::new(),
+                    leaves: None,
                 });
                 self.variants.push((name.to_string(), parts.to_vec()));
                 self.model.groups.len() - 1

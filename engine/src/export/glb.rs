@@ -513,6 +513,27 @@ impl Serialize for SkeletonJson<'_> {
     }
 }
 
+/// The `extras.pge.lod = {leaves = [...], level = [...]}` of a group's instancing node: the
+/// leaves and level of every placement, in the order of the instancing accessors (`None`
+/// when the group has no leaf counts).
+fn group_leaves_extras(group: &InstanceGroup) -> Result<json::Extras> {
+    let Some(leaves) = &group.leaves else {
+        return Ok(None);
+    };
+    let levels: Vec<i64> = (0..leaves.counts.len()).map(|k| leaves.level(k)).collect();
+    raw(&json!({ "pge": { "lod": { "leaves": leaves.counts, "level": levels } } }))
+}
+
+/// The `extras.pge.lod = {leaves, level}` of the node of placement `k` of a group written
+/// one node per placement (`None` when the group has no leaf counts).
+fn placement_leaves_extras(group: &InstanceGroup, k: usize) -> Result<json::Extras> {
+    let Some(leaves) = &group.leaves else {
+        return Ok(None);
+    };
+    let count = leaves.counts.get(k).copied().unwrap_or(0);
+    raw(&json!({ "pge": { "lod": { "leaves": count, "level": leaves.level(k) } } }))
+}
+
 /// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
 /// the matrix otherwise.
 fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
@@ -669,6 +690,7 @@ impl Builder {
                     let index = self.root.push(json::Node {
                         mesh: Some(mesh),
                         name: Some(group.name.clone()),
+                        extras: group_leaves_extras(group)?,
                         ..Default::default()
                     });
                     self.gpu_nodes
@@ -676,9 +698,10 @@ impl Builder {
                     nodes.push(index);
                 }
                 Instancing::Nodes => {
-                    for x in &group.transforms {
+                    for (k, x) in group.transforms.iter().enumerate() {
                         let mut n = json::Node {
                             mesh: Some(mesh),
+                            extras: placement_leaves_extras(group, k)?,
                             ..Default::default()
                         };
                         if x.translation != [0.0; 3] {
@@ -970,3 +993,7 @@ mod environment_tests;
 #[cfg(test)]
 #[path = "glb_stage_tests.rs"]
 mod empty_tests;
+
+#[cfg(test)]
+#[path = "glb_lod_tests.rs"]
+mod lod_tests;

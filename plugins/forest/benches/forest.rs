@@ -80,6 +80,7 @@ fn export(c: &mut Criterion) {
         transforms: (0..100_000)
             .map(|i| transform([i as f32 * 0.01, 0.0, (i % 317) as f32], i as f32, 1.0))
             .collect(),
+        leaves: None,
     });
     let mut g = c.benchmark_group("export");
     g.sample_size(10);

@@ -101,6 +101,7 @@ fn build(
                 name: format!("{name}/{}", ids.get(v).copied().unwrap_or(v as u32)),
                 meshes,
                 transforms: Vec::new(),
+                leaves: None,
             });
             model
                 .stats

@@ -22,7 +22,7 @@ use crate::codec::{Reader, Writer, read_model, write_model};
 use crate::rng::splitmix;
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x02";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x03";
 
 /// A folder of grown variants shared by runs (and by processes: entries appear atomically).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -249,8 +249,8 @@ mod tests {
 
     use glam::{Mat4, Vec2, Vec3, Vec4};
     use pge_engine::geometry::{
-        AlphaMode, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, Primitive,
-        Skeleton, Texture,
+        AlphaMode, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, PlacementLeaves,
+        Primitive, Skeleton, Texture,
     };
 
     fn sample() -> Model {
@@ -298,6 +298,10 @@ mod tests {
                 rotation: [0.0, 0.0, 0.0, 1.0],
                 scale: 2.0,
             }],
+            leaves: Some(PlacementLeaves {
+                roots: 3,
+                counts: vec![7],
+            }),
         });
         model
             .extras

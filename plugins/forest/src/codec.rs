@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use pge_engine::geometry::{
     AlphaMode, Instance, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, Model,
-    Primitive, Skeleton, Stats, Texture,
+    PlacementLeaves, Primitive, Skeleton, Stats, Texture,
 };
 use serde_json::{Map, Number, Value};
 
@@ -363,6 +363,7 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
         name,
         meshes,
         transforms,
+        leaves,
     } in groups
     {
         w.str(name);
@@ -375,6 +376,17 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
             w.f32s(&t.translation);
             w.f32s(&t.rotation);
             w.f32(t.scale);
+        }
+        match leaves {
+            None => w.u8(0),
+            Some(PlacementLeaves { roots, counts }) => {
+                w.u8(1);
+                w.u32(*roots);
+                w.len(counts.len());
+                for &c in counts {
+                    w.u32(c);
+                }
+            }
         }
     }
     w.map(extras);
@@ -534,10 +546,19 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
                     })
                 })
                 .collect::<Option<_>>()?;
+            let leaves = match r.u8()? {
+                0 => None,
+                1 => Some(PlacementLeaves {
+                    roots: r.u32()?,
+                    counts: (0..r.len(4)?).map(|_| r.u32()).collect::<Option<_>>()?,
+                }),
+                _ => return None,
+            };
             Some(InstanceGroup {
                 name,
                 meshes: members,
                 transforms,
+                leaves,
             })
         })
         .collect::<Option<_>>()?;
