@@ -23,17 +23,21 @@ mod assemble;
 mod cache;
 mod codec;
 mod layout;
+mod lod;
 #[cfg(feature = "lua")]
 pub mod lua;
 mod poisson;
 mod rng;
 mod terrain;
 
-pub use assemble::{Grown, assemble, layout_model, transform};
+pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
 pub use cache::{GrownVariant, VariantCache, VariantKey};
 pub use layout::{
     Density, Forest, Instance, Layer, Layout, MAX_INSTANCES, Method, Tile, Variants, unique_seed,
     variant_seed,
+};
+pub use lod::{
+    Camera, ForestLod, VariantLod, instance_leaves, variant_extras, variant_lod, with_lod,
 };
 #[cfg(feature = "lua")]
 pub use lua::ForestPlugin;
