@@ -37,7 +37,8 @@ pub use layout::{
     variant_seed,
 };
 pub use lod::{
-    Camera, ForestLod, VariantLod, instance_leaves, variant_extras, variant_lod, with_lod,
+    Camera, ForestLod, VariantLod, check_budget, instance_leaves, variant_extras, variant_lod,
+    with_lod,
 };
 #[cfg(feature = "lua")]
 pub use lua::ForestPlugin;

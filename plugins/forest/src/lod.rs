@@ -153,6 +153,29 @@ pub fn instance_leaves(
     lods: &[Vec<Option<VariantLod>>],
     camera: &Camera,
 ) -> Result<Vec<Option<u32>>, ForestError> {
+    check_budget(forest, camera)?;
+    if tile.is_none() {
+        return Ok(budget(layout, lods, camera));
+    }
+    let whole = forest.layout(None)?;
+    let leaves = budget(&whole, lods, camera);
+    let key = |i: &crate::Instance| (i.layer, i.position[0].to_bits(), i.position[2].to_bits());
+    let at: HashMap<_, usize> = whole
+        .instances
+        .iter()
+        .enumerate()
+        .map(|(k, i)| (key(i), k))
+        .collect();
+    Ok(layout
+        .instances
+        .iter()
+        .map(|i| at.get(&key(i)).and_then(|&k| leaves[k]))
+        .collect())
+}
+
+/// Checks that `camera`'s budget can be computed for `forest`: `near` and `far` finite,
+/// non-negative and ordered, and no layer of `"unique"` trees (see [`instance_leaves`]).
+pub fn check_budget(forest: &Forest, camera: &Camera) -> Result<(), ForestError> {
     camera.budget.check().map_err(|e| ForestError::Option {
         option: "lod",
         message: e.to_string(),
@@ -173,23 +196,7 @@ pub fn instance_leaves(
             ),
         });
     }
-    if tile.is_none() {
-        return Ok(budget(layout, lods, camera));
-    }
-    let whole = forest.layout(None)?;
-    let leaves = budget(&whole, lods, camera);
-    let key = |i: &crate::Instance| (i.layer, i.position[0].to_bits(), i.position[2].to_bits());
-    let at: HashMap<_, usize> = whole
-        .instances
-        .iter()
-        .enumerate()
-        .map(|(k, i)| (key(i), k))
-        .collect();
-    Ok(layout
-        .instances
-        .iter()
-        .map(|i| at.get(&key(i)).and_then(|&k| leaves[k]))
-        .collect())
+    Ok(())
 }
 
 /// The budget over the instances of a whole forest's `layout` (see [`instance_leaves`]).
