@@ -3,7 +3,8 @@
 //! back. Every variant keeps its vector V and LOD table; each instance's leaves for the
 //! forest's camera, in the node extras, equal `pge_lod::assign` on the instances'
 //! distances, never exceed the budget, never give a nearer shrub fewer leaves, agree between
-//! tiles and the whole forest, with one or two threads, and match `forest:instances()`.
+//! tiles and the whole forest (and `pge merge` of the tiles), with one or two threads, and
+//! match `forest:instances()`.
 //! Bad options are `FILE:LINE:` errors naming the option.
 
 mod common;
@@ -312,14 +313,49 @@ fn tiles_and_thread_counts_agree_with_the_whole_forest() {
         .map(|p| (p.at.map(f32::to_bits), p))
         .collect();
     let mut union = BTreeMap::new();
+    let world = dir.path().join("world");
+    std::fs::create_dir_all(world.join("tiles")).expect("world folder");
+    let mut entries = Vec::new();
     for (i, j) in [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)] {
         let tile = format!("{i},{j}");
-        let glb = run(FOREST, dir.path(), &format!("{i}_{j}"), &["--tile", &tile]);
+        let glb = run(
+            FOREST,
+            &world.join("tiles"),
+            &format!("{i}_{j}"),
+            &["--tile", &tile],
+        );
         for p in placed(&glb).into_values().flatten() {
             union.insert(p.at.map(f32::to_bits), p);
         }
+        let file = format!("tiles/{i}_{j}.glb");
+        entries.push(serde_json::json!({ "i": i, "j": j, "file": file,
+            "sha256": sha256(&world.join(&file)) }));
     }
     assert_eq!(union, whole);
+    // `pge merge` keeps the variants' tables and every instance's leaves.
+    let manifest = serde_json::json!({ "format": "pge-world/1", "seed": 9, "params": {},
+        "complete": true, "tiles": entries });
+    std::fs::write(world.join("world.json"), manifest.to_string()).expect("manifest");
+    let merged = world.join("world.glb").to_string_lossy().to_string();
+    let o = pge(&["merge", &world.to_string_lossy(), "-o", &merged]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let merged = std::fs::read(&merged).expect("merged");
+    assert_eq!(variant_tables(&merged), variant_tables(&one));
+    let merged: BTreeMap<[u32; 3], Placed> = placed(&merged)
+        .into_values()
+        .flatten()
+        .map(|p| (p.at.map(f32::to_bits), p))
+        .collect();
+    assert_eq!(merged, whole);
+}
+
+fn sha256(path: &Path) -> String {
+    let o = std::process::Command::new("sha256sum")
+        .arg(path)
+        .output()
+        .expect("sha256sum runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    text.split_whitespace().next().expect("a hash").to_string()
 }
 
 #[test]
