@@ -349,6 +349,35 @@ fn tiles_and_thread_counts_agree_with_the_whole_forest() {
     assert_eq!(merged, whole);
 }
 
+#[test]
+fn the_glb_is_valid_and_a_variant_cache_changes_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let gpu = run(FOREST, dir.path(), "gpu", &[]);
+    let nodes = run(FOREST, dir.path(), "nodes", &["--instancing", "nodes"]);
+    assert!(!gpu.is_empty() && !nodes.is_empty());
+    let outputs = [dir.path().join("gpu.glb"), dir.path().join("nodes.glb")];
+    let (passed, report) = common::run_validator(&outputs);
+    assert!(passed, "the glTF validator found errors:\n{report}");
+    // Cold and warm variant caches give the same bytes, for the species' own levels and the
+    // forest's.
+    let cache = dir.path().join("cache").to_string_lossy().to_string();
+    for (script, set) in [(FOREST, "own=1"), (PLAIN, "own=0")] {
+        let plain = run(script, dir.path(), "plain", &["--set", set]);
+        for name in ["cold", "warm"] {
+            let cached = run(
+                script,
+                dir.path(),
+                name,
+                &["--set", set, "--variant-cache", &cache],
+            );
+            assert!(
+                cached == plain,
+                "{script} {set}: the {name} cache changed the glb"
+            );
+        }
+    }
+}
+
 fn sha256(path: &Path) -> String {
     let o = std::process::Command::new("sha256sum")
         .arg(path)
