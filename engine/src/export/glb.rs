@@ -520,8 +520,20 @@ fn group_leaves_extras(group: &InstanceGroup) -> Result<json::Extras> {
     let Some(leaves) = &group.leaves else {
         return Ok(None);
     };
+    // Written straight as text (serde_json's number formatting, no `Value` tree): a forest's
+    // nodes hold millions of these numbers.
     let levels: Vec<i64> = (0..leaves.counts.len()).map(|k| leaves.level(k)).collect();
-    raw(&json!({ "pge": { "lod": { "leaves": leaves.counts, "level": levels } } }))
+    let mut text = Vec::with_capacity(48 + 10 * levels.len());
+    text.extend_from_slice(br#"{"pge":{"lod":{"leaves":"#);
+    let export = |e: serde_json::Error| Error::Export(e.to_string());
+    serde_json::to_writer(&mut text, &leaves.counts).map_err(export)?;
+    text.extend_from_slice(br#","level":"#);
+    serde_json::to_writer(&mut text, &levels).map_err(export)?;
+    text.extend_from_slice(b"}}}");
+    let text = String::from_utf8(text).map_err(|e| Error::Export(e.to_string()))?;
+    serde_json::value::RawValue::from_string(text)
+        .map(Some)
+        .map_err(export)
 }
 
 /// The `extras.pge.lod = {leaves, level}` of the node of placement `k` of a group written

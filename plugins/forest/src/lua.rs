@@ -468,13 +468,10 @@ impl UserData for LuaForest {
             let (leaves, lods) = if let Some(camera) = &spec.lod.camera {
                 check_budget(&spec.forest, camera)
                     .map_err(|e| script_error(lua, format!("forest:instances: {e}")))?;
-                let grown = grow(
-                    &spec,
-                    &lua.weak(),
-                    &layout,
-                    &pge_engine::lua::run_context(lua),
-                )
-                .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
+                let grower = ForestAlgorithm::new(me.0.clone(), lua.weak());
+                let grown = grower
+                    .grow(&layout, &pge_engine::lua::run_context(lua))
+                    .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
                 let leaves = budgeted_leaves(&spec, &layout, &grown)
                     .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
                 (leaves.unwrap_or_default(), levels(&grown))
@@ -511,14 +508,10 @@ impl UserData for LuaForest {
             Ok(out)
         });
         m.add_method("algorithm", |lua, me, ()| {
-            Ok(AlgorithmHandle::new(Box::new(ForestAlgorithm {
-                spec: me.0.clone(),
-                lua: lua.weak(),
-                layout: None,
-                grown: None,
-                model: None,
-                phases: Vec::new(),
-            })))
+            Ok(AlgorithmHandle::new(Box::new(ForestAlgorithm::new(
+                me.0.clone(),
+                lua.weak(),
+            ))))
         });
     }
 }
@@ -532,6 +525,20 @@ struct ForestAlgorithm {
     model: Option<Model>,
     /// Seconds of each step, reported as phases of the run.
     phases: Vec<(&'static str, f64)>,
+}
+
+impl ForestAlgorithm {
+    /// The forest of `spec`, not yet run.
+    fn new(spec: Rc<RefCell<Spec>>, lua: WeakLua) -> ForestAlgorithm {
+        ForestAlgorithm {
+            spec,
+            lua,
+            layout: None,
+            grown: None,
+            model: None,
+            phases: Vec::new(),
+        }
+    }
 }
 
 /// A species script: its shown path and `params` overrides.
@@ -580,127 +587,122 @@ fn grow_cached(
     }
 }
 
-/// Grows the variants of every layer of `spec` (a script species in parallel, one session
-/// per variant; a function species in the forest's session), then gives them the forest's
-/// levels of detail when it has `lod`.
-fn grow(
-    spec: &Spec,
-    weak: &WeakLua,
-    layout: &Layout,
-    ctx: &RunContext,
-) -> pge_engine::Result<Vec<Grown>> {
-    let seed = spec.forest.seed;
-    // (layer, variant, seed) of every tree to grow, in a fixed order.
-    let mut jobs: Vec<Vec<u64>> = Vec::new();
-    for (l, layer) in spec.forest.layers.iter().enumerate() {
-        jobs.push(match layer.variants {
-            Variants::Count(n) => (0..n).map(|v| variant_seed(seed, l, v)).collect(),
-            Variants::Unique => layout
-                .instances
-                .iter()
-                .filter(|i| i.layer as usize == l)
-                .map(|i| unique_seed(seed, i))
-                .collect(),
-        });
-    }
-    let mut scripts: Vec<(usize, usize, u64)> = Vec::new();
-    for (l, (species, _)) in spec.species.iter().enumerate() {
-        if matches!(species, Species::Path { .. }) {
-            scripts.extend(jobs[l].iter().enumerate().map(|(v, &s)| (l, v, s)));
+impl ForestAlgorithm {
+    fn grow(&self, layout: &Layout, ctx: &RunContext) -> pge_engine::Result<Vec<Grown>> {
+        let spec = self.spec.borrow();
+        let seed = spec.forest.seed;
+        // (layer, variant, seed) of every tree to grow, in a fixed order.
+        let mut jobs: Vec<Vec<u64>> = Vec::new();
+        for (l, layer) in spec.forest.layers.iter().enumerate() {
+            jobs.push(match layer.variants {
+                Variants::Count(n) => (0..n).map(|v| variant_seed(seed, l, v)).collect(),
+                Variants::Unique => layout
+                    .instances
+                    .iter()
+                    .filter(|i| i.layer as usize == l)
+                    .map(|i| unique_seed(seed, i))
+                    .collect(),
+            });
         }
-    }
-    let engine = match weak.try_upgrade() {
-        Some(lua) => pge_engine::lua::engine(&lua),
-        None => None,
-    };
-    let mut grown: Vec<Grown> = jobs
-        .iter()
-        .map(|j| Grown {
-            variants: Vec::with_capacity(j.len()),
-        })
-        .collect();
-    if !scripts.is_empty() {
-        let Some(engine) = engine else {
-            return Err(Error::script(
-                spec.location.clone(),
-                "pge.Forest: species scripts need a session created by an engine",
-            ));
-        };
-        let paths: Vec<Option<ScriptSpecies>> = spec
-            .species
-            .iter()
-            .map(|(s, _)| match s {
-                Species::Path { shown, params } => Some((shown.clone(), params.clone())),
-                Species::Function { .. } => None,
-            })
-            .collect();
-        let ctx_send = ctx.clone();
-        // Layers of a few variants shared by every tile go through the cache; "unique"
-        // trees are grown where they stand.
-        let cache = weak.try_upgrade().and_then(|lua| {
-            lua.app_data_ref::<VariantCache>()
-                .map(|c| VariantCache::clone(&c))
-        });
-        let cached: Vec<Option<&VariantCache>> = spec
-            .forest
-            .layers
-            .iter()
-            .map(|layer| match layer.variants {
-                Variants::Count(_) => cache.as_ref(),
-                Variants::Unique => None,
-            })
-            .collect();
-        let locations: Vec<Location> = spec.species.iter().map(|(_, l)| l.clone()).collect();
-        let results: Vec<pge_engine::Result<Model>> = scripts
-            .par_iter()
-            .map(|&(l, _, s)| match &paths[l] {
-                Some(species) => {
-                    grow_cached(&engine, cached[l], species, s, &ctx_send, &locations[l])
-                }
-                None => Err(Error::Export("not a script species".into())),
-            })
-            .collect();
-        for (&(l, _, _), r) in scripts.iter().zip(results) {
-            let model = r.map_err(|e| {
-                let shown = match &spec.species[l].0 {
-                    Species::Path { shown, .. } => shown.as_str(),
-                    Species::Function { .. } => "",
-                };
-                Error::script(
-                    spec.species[l].1.clone(),
-                    format!("forest:scatter: species '{shown}' failed: {e}"),
-                )
-            })?;
-            grown[l].variants.push(model);
+        let mut scripts: Vec<(usize, usize, u64)> = Vec::new();
+        for (l, (species, _)) in spec.species.iter().enumerate() {
+            if matches!(species, Species::Path { .. }) {
+                scripts.extend(jobs[l].iter().enumerate().map(|(v, &s)| (l, v, s)));
+            }
         }
-    }
-    for (l, (species, location)) in spec.species.iter().enumerate() {
-        let Species::Function { f, params } = species else {
-            continue;
+        let engine = match self.lua.try_upgrade() {
+            Some(lua) => pge_engine::lua::engine(&lua),
+            None => None,
         };
-        let Some(lua) = weak.try_upgrade() else {
-            return Err(Error::script(location.clone(), "the Lua state is gone"));
-        };
-        for &s in &jobs[l] {
-            ctx.check_deadline(location)?;
-            let value: Value = f
-                .call((params.clone(), s))
-                .map_err(|e| to_engine_error(&lua, e))?;
-            let mut algorithm = algorithm_from(&lua, value, location)?;
-            let inner = RunContext {
-                seed: s,
-                steps: None,
-                ..ctx.clone()
+        let mut grown: Vec<Grown> = jobs
+            .iter()
+            .map(|j| Grown {
+                variants: Vec::with_capacity(j.len()),
+            })
+            .collect();
+        if !scripts.is_empty() {
+            let Some(engine) = engine else {
+                return Err(Error::script(
+                    spec.location.clone(),
+                    "pge.Forest: species scripts need a session created by an engine",
+                ));
             };
-            grown[l]
-                .variants
-                .push(run(&mut *algorithm, &inner, &mut |_| {})?);
+            let paths: Vec<Option<ScriptSpecies>> = spec
+                .species
+                .iter()
+                .map(|(s, _)| match s {
+                    Species::Path { shown, params } => Some((shown.clone(), params.clone())),
+                    Species::Function { .. } => None,
+                })
+                .collect();
+            let ctx_send = ctx.clone();
+            // Layers of a few variants shared by every tile go through the cache; "unique"
+            // trees are grown where they stand.
+            let cache = self.lua.try_upgrade().and_then(|lua| {
+                lua.app_data_ref::<VariantCache>()
+                    .map(|c| VariantCache::clone(&c))
+            });
+            let cached: Vec<Option<&VariantCache>> = spec
+                .forest
+                .layers
+                .iter()
+                .map(|layer| match layer.variants {
+                    Variants::Count(_) => cache.as_ref(),
+                    Variants::Unique => None,
+                })
+                .collect();
+            let locations: Vec<Location> = spec.species.iter().map(|(_, l)| l.clone()).collect();
+            let results: Vec<pge_engine::Result<Model>> = scripts
+                .par_iter()
+                .map(|&(l, _, s)| match &paths[l] {
+                    Some(species) => {
+                        grow_cached(&engine, cached[l], species, s, &ctx_send, &locations[l])
+                    }
+                    None => Err(Error::Export("not a script species".into())),
+                })
+                .collect();
+            for (&(l, _, _), r) in scripts.iter().zip(results) {
+                let model = r.map_err(|e| {
+                    let shown = match &spec.species[l].0 {
+                        Species::Path { shown, .. } => shown.as_str(),
+                        Species::Function { .. } => "",
+                    };
+                    Error::script(
+                        spec.species[l].1.clone(),
+                        format!("forest:scatter: species '{shown}' failed: {e}"),
+                    )
+                })?;
+                grown[l].variants.push(model);
+            }
         }
+        for (l, (species, location)) in spec.species.iter().enumerate() {
+            let Species::Function { f, params } = species else {
+                continue;
+            };
+            let Some(lua) = self.lua.try_upgrade() else {
+                return Err(Error::script(location.clone(), "the Lua state is gone"));
+            };
+            for &s in &jobs[l] {
+                ctx.check_deadline(location)?;
+                let value: Value = f
+                    .call((params.clone(), s))
+                    .map_err(|e| to_engine_error(&lua, e))?;
+                let mut algorithm = algorithm_from(&lua, value, location)?;
+                let inner = RunContext {
+                    seed: s,
+                    steps: None,
+                    ..ctx.clone()
+                };
+                grown[l]
+                    .variants
+                    .push(run(&mut *algorithm, &inner, &mut |_| {})?);
+            }
+        }
+        if let Some(options) = &spec.lod.variants {
+            give_levels(&spec, &mut grown, options)?;
+        }
+        Ok(grown)
     }
-    if let Some(options) = &spec.lod.variants {
-        give_levels(spec, &mut grown, options)?;
-    }
-    Ok(grown)
 }
 
 /// The levels of every grown variant, by layer and variant.
@@ -833,12 +835,10 @@ impl ForestAlgorithm {
             return Ok(("layout", Step::Continue));
         }
         if self.grown.is_none() {
-            let spec = self.spec.borrow();
             let grown = match &self.layout {
-                Some(layout) => grow(&spec, &self.lua, layout, ctx)?,
-                None => grow(&spec, &self.lua, &Layout::default(), ctx)?,
+                Some(layout) => self.grow(layout, ctx)?,
+                None => self.grow(&Layout::default(), ctx)?,
             };
-            drop(spec);
             self.grown = Some(grown);
             return Ok(("variants", Step::Continue));
         }
