@@ -1,6 +1,7 @@
 //! A host program that builds a forest from Rust, without a script: a terrain, two layers,
 //! the layout read back instance by instance, then each variant given a mesh the host made
-//! itself (a cone) and the whole written as an instanced `.glb`.
+//! itself (a cone with a crown of leaf quads), levels of detail for its leaves, each tree's
+//! leaves for a camera within a budget, and the whole written as an instanced `.glb`.
 //!
 //! Run with `cargo run --example forest_host [OUT.glb]`. `tests/forest.rs` runs [`run`].
 
@@ -10,8 +11,10 @@ use glam::Vec3;
 use pge_engine::export::{ExportMeta, glb_bytes};
 use pge_engine::geometry::{Mesh, Model};
 use pge_forest::{
-    Density, FbmOptions, Forest, Grown, Instance, Layer, Terrain, Variants, assemble,
+    Camera, Density, FbmOptions, Forest, Grown, Instance, Layer, Terrain, Variants,
+    assemble_budgeted, instance_leaves, variant_lod, with_lod,
 };
+use pge_lod::{Budget, LodOptions};
 
 /// A cone of `height` metres: the host's stand-in for a tree.
 fn cone(height: f32, radius: f32) -> Result<Mesh, Box<dyn std::error::Error>> {
@@ -28,9 +31,59 @@ fn cone(height: f32, radius: f32) -> Result<Mesh, Box<dyn std::error::Error>> {
     Ok(Mesh::from_triangles(positions, indices)?)
 }
 
+/// A crown of `n` square leaves (four vertices each, named `leaves` as a tree's) on a
+/// sphere of `radius` around `centre`, facing outwards.
+fn crown(n: u32, centre: Vec3, radius: f32) -> Result<Mesh, Box<dyn std::error::Error>> {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut indices = Vec::new();
+    for k in 0..n {
+        // Points spread by the golden angle, from the top down.
+        let y = 1.0 - 2.0 * (k as f32 + 0.5) / n as f32;
+        let a = k as f32 * 2.399_963;
+        let out = Vec3::new(
+            (1.0 - y * y).sqrt() * a.cos(),
+            y,
+            (1.0 - y * y).sqrt() * a.sin(),
+        );
+        let (u, v) = out.any_orthonormal_pair();
+        let c = centre + out * radius;
+        let base = positions.len() as u32;
+        for (du, dv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            positions.push(c + (u * du + v * dv) * 0.25);
+            normals.push(out);
+        }
+        indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    let mut mesh = Mesh::from_triangles(positions, indices)?;
+    mesh.normals = normals;
+    mesh.name = "leaves".into();
+    Ok(mesh)
+}
+
+/// A tree of the host: a cone of `height` metres and a crown of leaves at its top.
+fn tree(height: f32, radius: f32, leaves: u32) -> Result<Model, Box<dyn std::error::Error>> {
+    let mut model = Model::from_mesh(cone(height, radius)?);
+    let top = Vec3::new(0.0, 0.8 * height, 0.0);
+    model.add_mesh(crown(leaves, top, 1.2 * radius)?, glam::Mat4::IDENTITY);
+    Ok(model)
+}
+
+/// The camera of the host: at the forest's south edge, 2 m up, with a budget of 20,000
+/// leaves, full trees within 20 m and none beyond 150 m.
+pub const CAMERA: Camera = Camera {
+    position: [0.0, 2.0, 150.0],
+    budget: Budget {
+        near: 20.0,
+        far: 150.0,
+        total: 20_000,
+    },
+};
+
 /// Lays out a 300 m forest of firs (3 variants) and birches (2 variants), prints what it
-/// placed, writes the instanced `.glb` to `out` and returns the layout's instances.
-pub fn run(out: &Path) -> Result<Vec<Instance>, Box<dyn std::error::Error>> {
+/// placed, writes the instanced `.glb` to `out` and returns the layout's instances with the
+/// leaves each draws for [`CAMERA`].
+pub fn run(out: &Path) -> Result<Vec<(Instance, u32)>, Box<dyn std::error::Error>> {
     let mut forest = Forest::new([300.0, 300.0], 42, Some(100.0))?;
     let relief = FbmOptions {
         height: 25.0,
@@ -61,27 +114,44 @@ pub fn run(out: &Path) -> Result<Vec<Instance>, Box<dyn std::error::Error>> {
         );
     }
 
-    // One model per variant; a real host would grow trees here.
-    let grown = vec![
-        Grown {
-            variants: (0..3)
-                .map(|v| cone(6.0 + v as f32, 1.5).map(Model::from_mesh))
-                .collect::<Result<_, _>>()?,
-        },
-        Grown {
-            variants: (0..2)
-                .map(|v| cone(4.0 + v as f32, 1.0).map(Model::from_mesh))
-                .collect::<Result<_, _>>()?,
-        },
-    ];
-    let model = assemble(&forest, &layout, &grown, None);
+    // One model per variant; a real host would grow trees here. Their leaves get levels of
+    // detail (the vector V and its table), as a tree generator's `lod` would give them.
+    let lod = LodOptions::default();
+    let mut grown = Vec::new();
+    for (count, height, radius, leaves) in [(3, 6.0, 1.5, 120), (2, 4.0, 1.0, 60)] {
+        let mut variants = Vec::new();
+        for v in 0..count {
+            let model = tree(height + v as f32, radius, leaves + 10 * v)?;
+            variants.push(with_lod(&model, &lod)?);
+        }
+        grown.push(Grown { variants });
+    }
+    // How many leaves each tree draws, seen from the camera.
+    let lods: Vec<Vec<_>> = grown
+        .iter()
+        .map(|g| g.variants.iter().map(variant_lod).collect())
+        .collect();
+    let leaves = instance_leaves(&forest, &layout, None, &lods, &CAMERA)?;
+    if let Some(Some(n)) = leaves.first() {
+        let total: u32 = leaves.iter().flatten().sum();
+        println!(
+            "seen from {:?}: the first tree draws {n} leaves, the forest {total} of at most {}",
+            CAMERA.position, CAMERA.budget.total
+        );
+    }
+    let model = assemble_budgeted(&forest, &layout, &grown, None, Some(&leaves));
     std::fs::write(out, glb_bytes(&model, &ExportMeta::default())?)?;
     println!(
         "{} instances written to {}",
         model.instance_count() - 1,
         out.display()
     );
-    Ok(layout.instances)
+    Ok(layout
+        .instances
+        .into_iter()
+        .zip(leaves)
+        .map(|(i, n)| (i, n.unwrap_or(0)))
+        .collect())
 }
 
 #[allow(dead_code, reason = "the test includes this file for run() alone")]

@@ -10,7 +10,8 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf::Gltf;
 use pge_engine::export::{ExportMeta, Instancing};
 use pge_engine::geometry::{
-    AlphaMode, InstanceGroup, InstanceTransform, Material, Mesh, Model, Primitive, Texture,
+    AlphaMode, InstanceGroup, InstanceTransform, Material, Mesh, Model, PlacementLeaves, Primitive,
+    Texture,
 };
 use serde_json::{Map, Value};
 
@@ -265,9 +266,14 @@ impl World {
                 .get("nodes")
                 .and_then(|n| n.get(node.index()))
                 .and_then(|n| n.pointer("/extensions/EXT_mesh_gpu_instancing/attributes"));
+            // Each placement's leaves for the forest's camera, when the tile has them.
+            let leaves = json
+                .get("nodes")
+                .and_then(|n| n.get(node.index()))
+                .and_then(|n| n.pointer("/extras/pge/lod/leaves"));
             let transforms = match instancing {
                 Some(attributes) => read_instances(&gltf, attributes, &buffer)?,
-                None if parts.len() == 1 => {
+                None if parts.len() == 1 && leaves.is_none() => {
                     let m = Mat4::from_cols_array_2d(&node.transform().matrix());
                     self.model.add_mesh(parts[0].clone(), m);
                     continue;
@@ -281,14 +287,22 @@ impl World {
                     }]
                 }
             };
-            self.place(name, parts, transforms);
+            let counts = leaf_counts(leaves, transforms.len())?;
+            self.place(name, parts, transforms, counts);
         }
         self.add_extras(&json, index)
     }
 
     /// Adds placements of the variant `name` made of `parts`, sharing an equal variant
-    /// already written.
-    fn place(&mut self, name: &str, parts: &[Mesh], transforms: Vec<InstanceTransform>) {
+    /// already written, with their leaf counts: the group keeps counts only while every
+    /// batch of its placements has them.
+    fn place(
+        &mut self,
+        name: &str,
+        parts: &[Mesh],
+        transforms: Vec<InstanceTransform>,
+        counts: Option<Vec<u32>>,
+    ) {
         let found = self
             .variants
             .iter()
@@ -300,16 +314,30 @@ impl World {
                 for m in parts {
                     self.model.meshes.push(Arc::new(m.clone()));
                 }
+                let roots = parts
+                    .first()
+                    .and_then(|p| p.extras.get("lod")?.get("roots")?.as_u64())
+                    .and_then(|r| u32::try_from(r).ok())
+                    .unwrap_or(0);
                 self.model.groups.push(InstanceGroup {
                     name: name.to_string(),
                     meshes: (first..first + parts.len()).collect(),
                     transforms: Vec::new(),
+                    leaves: counts.is_some().then(|| PlacementLeaves {
+                        roots,
+                        counts: Vec::new(),
+                    }),
                 });
                 self.variants.push((name.to_string(), parts.to_vec()));
                 self.model.groups.len() - 1
             }
         };
-        self.model.groups[group].transforms.extend(transforms);
+        let group = &mut self.model.groups[group];
+        match (&mut group.leaves, counts) {
+            (Some(leaves), Some(counts)) => leaves.counts.extend(counts),
+            (leaves, _) => *leaves = None,
+        }
+        group.transforms.extend(transforms);
     }
 
     /// Sums the tile's stats and forest counts into the world's.
@@ -394,6 +422,21 @@ fn check_bounds(doc: &gltf::Document, blob: Option<&[u8]>) -> anyhow::Result<()>
         }
     }
     Ok(())
+}
+
+/// A node's leaf counts (`extras.pge.lod.leaves`: an array for an instancing node, a number
+/// for a node per placement), checked against its `placements`.
+fn leaf_counts(leaves: Option<&Value>, placements: usize) -> anyhow::Result<Option<Vec<u32>>> {
+    let count = |v: &Value| v.as_u64().and_then(|n| u32::try_from(n).ok());
+    let counts: Option<Vec<u32>> = match leaves {
+        None => return Ok(None),
+        Some(Value::Array(list)) => list.iter().map(count).collect(),
+        Some(one) => count(one).map(|n| vec![n]),
+    };
+    match counts {
+        Some(c) if c.len() == placements => Ok(Some(c)),
+        _ => bail!("a node's extras.pge.lod.leaves do not match its {placements} placements"),
+    }
 }
 
 /// The placements of an `EXT_mesh_gpu_instancing` node.

@@ -432,12 +432,18 @@ fn the_host_example_writes_the_instances_it_laid_out() {
     let out = dir.path().join("host.glb");
     let instances = forest_host::run(&out).expect("the example runs");
     assert!(instances.len() > 1000, "{}", instances.len());
-    let placed = placements(&std::fs::read(&out).expect("written"));
+    let glb = std::fs::read(&out).expect("written");
+    let placed = placements(&glb);
     let names = ["fir", "birch"];
     let mut expected: BTreeMap<String, Vec<[f32; 3]>> = BTreeMap::new();
-    for i in &instances {
+    let mut expected_leaves: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    for (i, leaves) in &instances {
         let name = format!("{}/{}", names[i.layer as usize], i.variant);
-        expected.entry(name).or_default().push(i.position);
+        expected.entry(name.clone()).or_default().push(i.position);
+        expected_leaves
+            .entry(name)
+            .or_default()
+            .push(u64::from(*leaves));
     }
     let got: BTreeMap<String, Vec<[f32; 3]>> = placed
         .into_iter()
@@ -445,6 +451,32 @@ fn the_host_example_writes_the_instances_it_laid_out() {
         .map(|(name, list)| (name, list.into_iter().map(|p| p.0).collect()))
         .collect();
     assert_eq!(got, expected);
+    // Each tree's leaves for the host's camera are in its node's extras, within the budget.
+    assert_eq!(node_leaves(&glb), expected_leaves);
+    let total: u64 = expected_leaves.values().flatten().sum();
+    let budget = forest_host::CAMERA.budget.total;
+    assert!(total <= budget && total > budget / 2, "{total}");
+    assert!(instances.iter().any(|(_, n)| *n == 0), "trees beyond far");
+}
+
+/// The leaves of every instance of every variant node, from its `extras.pge.lod.leaves`.
+fn node_leaves(glb: &[u8]) -> BTreeMap<String, Vec<u64>> {
+    let gltf = gltf::Gltf::from_slice(glb).expect("a glb");
+    let json = gltf.document.as_json();
+    let mut out = BTreeMap::new();
+    for node in &json.nodes {
+        let (Some(mesh), Some(extras)) = (node.mesh, &node.extras) else {
+            continue;
+        };
+        let name = json.meshes[mesh.value()].name.clone().unwrap_or_default();
+        let extras: serde_json::Value = serde_json::from_str(extras.get()).expect("json");
+        let leaves = extras["pge"]["lod"]["leaves"].as_array().expect("leaves");
+        out.insert(
+            name,
+            leaves.iter().map(|n| n.as_u64().expect("count")).collect(),
+        );
+    }
+    out
 }
 
 #[test]

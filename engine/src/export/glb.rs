@@ -513,6 +513,39 @@ impl Serialize for SkeletonJson<'_> {
     }
 }
 
+/// The `extras.pge.lod = {leaves = [...], level = [...]}` of a group's instancing node: the
+/// leaves and level of every placement, in the order of the instancing accessors (`None`
+/// when the group has no leaf counts).
+fn group_leaves_extras(group: &InstanceGroup) -> Result<json::Extras> {
+    let Some(leaves) = &group.leaves else {
+        return Ok(None);
+    };
+    // Written straight as text (serde_json's number formatting, no `Value` tree): a forest's
+    // nodes hold millions of these numbers.
+    let levels: Vec<i64> = (0..leaves.counts.len()).map(|k| leaves.level(k)).collect();
+    let mut text = Vec::with_capacity(48 + 10 * levels.len());
+    text.extend_from_slice(br#"{"pge":{"lod":{"leaves":"#);
+    let export = |e: serde_json::Error| Error::Export(e.to_string());
+    serde_json::to_writer(&mut text, &leaves.counts).map_err(export)?;
+    text.extend_from_slice(br#","level":"#);
+    serde_json::to_writer(&mut text, &levels).map_err(export)?;
+    text.extend_from_slice(b"}}}");
+    let text = String::from_utf8(text).map_err(|e| Error::Export(e.to_string()))?;
+    serde_json::value::RawValue::from_string(text)
+        .map(Some)
+        .map_err(export)
+}
+
+/// The `extras.pge.lod = {leaves, level}` of the node of placement `k` of a group written
+/// one node per placement (`None` when the group has no leaf counts).
+fn placement_leaves_extras(group: &InstanceGroup, k: usize) -> Result<json::Extras> {
+    let Some(leaves) = &group.leaves else {
+        return Ok(None);
+    };
+    let count = leaves.counts.get(k).copied().unwrap_or(0);
+    raw(&json!({ "pge": { "lod": { "leaves": count, "level": leaves.level(k) } } }))
+}
+
 /// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
 /// the matrix otherwise.
 fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
@@ -669,6 +702,7 @@ impl Builder {
                     let index = self.root.push(json::Node {
                         mesh: Some(mesh),
                         name: Some(group.name.clone()),
+                        extras: group_leaves_extras(group)?,
                         ..Default::default()
                     });
                     self.gpu_nodes
@@ -676,9 +710,10 @@ impl Builder {
                     nodes.push(index);
                 }
                 Instancing::Nodes => {
-                    for x in &group.transforms {
+                    for (k, x) in group.transforms.iter().enumerate() {
                         let mut n = json::Node {
                             mesh: Some(mesh),
+                            extras: placement_leaves_extras(group, k)?,
                             ..Default::default()
                         };
                         if x.translation != [0.0; 3] {
@@ -970,3 +1005,7 @@ mod environment_tests;
 #[cfg(test)]
 #[path = "glb_stage_tests.rs"]
 mod empty_tests;
+
+#[cfg(test)]
+#[path = "glb_lod_tests.rs"]
+mod lod_tests;

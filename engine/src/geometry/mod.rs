@@ -11,5 +11,5 @@ mod skeleton;
 
 pub use material::{AlphaMode, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};
-pub use model::{Instance, InstanceGroup, InstanceTransform, Model, Stats};
+pub use model::{Instance, InstanceGroup, InstanceTransform, Model, PlacementLeaves, Stats};
 pub use skeleton::{LeafPoint, Skeleton};

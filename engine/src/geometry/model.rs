@@ -48,6 +48,34 @@ pub struct InstanceGroup {
     pub meshes: Vec<usize>,
     /// The placements.
     pub transforms: Vec<InstanceTransform>,
+    /// How many leaves each placement draws of the object's foliage levels of detail (a
+    /// forest's leaf budget for a camera), written in the node extras; `None` when not
+    /// budgeted.
+    pub leaves: Option<PlacementLeaves>,
+}
+
+/// The leaves each placement of an [`InstanceGroup`] draws: counts aligned with
+/// [`InstanceGroup::transforms`], exported as the node's `extras.pge.lod = {leaves, level}`
+/// (arrays with `EXT_mesh_gpu_instancing`, one number per node otherwise).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PlacementLeaves {
+    /// The coarsest level's leaf count |R| of the object (a drawn placement's level is its
+    /// count minus this).
+    pub roots: u32,
+    /// Leaves drawn by each placement, 0 for one not drawn.
+    pub counts: Vec<u32>,
+}
+
+impl PlacementLeaves {
+    /// The level of placement `k`: its count minus [`roots`](Self::roots), -1 when it is not
+    /// drawn.
+    #[must_use]
+    pub fn level(&self, k: usize) -> i64 {
+        match self.counts.get(k) {
+            Some(&c) if c > 0 => i64::from(c) - i64::from(self.roots),
+            _ => -1,
+        }
+    }
 }
 
 /// Counts and timings of a generation, reported by `pge run --stats`.
@@ -166,6 +194,7 @@ impl Model {
                 name: group.name.clone(),
                 meshes: group.meshes.iter().map(|&m| map[m]).collect(),
                 transforms,
+                leaves: group.leaves.clone(),
             });
         }
         self.stats.merge(&other.stats);
@@ -293,6 +322,15 @@ impl Model {
                         at,
                     });
                 }
+            }
+            if let Some(leaves) = &group.leaves
+                && leaves.counts.len() != group.transforms.len()
+            {
+                return Err(GeometryError::AttributeLength {
+                    attribute: "group leaf counts",
+                    got: leaves.counts.len(),
+                    vertices: group.transforms.len(),
+                });
             }
         }
         Ok(())

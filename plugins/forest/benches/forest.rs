@@ -1,14 +1,19 @@
 //! Forest benchmarks: Poisson-disk sampling (points per second), the layout of the 1 km²
-//! benchmark forest (about 100,000 trees), one 250 m tile of it, and writing 100,000
-//! instances to a `.glb`.
+//! benchmark forest (about 100,000 trees), one 250 m tile of it, each tree's leaf budget
+//! for a camera (whole and tile), and writing 100,000 instances to a `.glb` (with and
+//! without their leaf counts).
 
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use pge_engine::export::{ExportMeta, Instancing, glb_bytes_with};
-use pge_engine::geometry::{InstanceGroup, Mesh, Model};
-use pge_forest::{Density, FbmOptions, Forest, Layer, Rect, Terrain, poisson, transform};
+use pge_engine::geometry::{InstanceGroup, Mesh, Model, PlacementLeaves};
+use pge_forest::{
+    Camera, Density, FbmOptions, Forest, Layer, Rect, Terrain, VariantLod, instance_leaves,
+    poisson, transform,
+};
+use pge_tree::lod::Budget;
 
 fn big_forest() -> Forest {
     let mut f = Forest::new([1000.0, 1000.0], 7, Some(250.0)).expect("forest");
@@ -70,6 +75,43 @@ fn layout(c: &mut Criterion) {
     g.finish();
 }
 
+fn budget(c: &mut Criterion) {
+    let f = big_forest();
+    let whole = f.layout(None).expect("layout");
+    let tile = f.layout(Some((1, 2))).expect("tile");
+    // Eight variants per layer (the default), 2000 to 2700 leaves, 60 at the coarsest.
+    let lods: Vec<Vec<Option<VariantLod>>> = (0..3)
+        .map(|_| {
+            (0..8)
+                .map(|v| {
+                    Some(VariantLod {
+                        leaves: 2000 + 100 * v,
+                        roots: 60,
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    let camera = Camera {
+        position: [0.0, 2.0, -500.0],
+        budget: Budget {
+            near: 10.0,
+            far: 300.0,
+            total: 2_000_000,
+        },
+    };
+    let mut g = c.benchmark_group("budget");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(whole.instances.len() as u64));
+    g.bench_function("1km2_whole", |b| {
+        b.iter(|| instance_leaves(&f, black_box(&whole), None, &lods, &camera))
+    });
+    g.bench_function("250m_tile", |b| {
+        b.iter(|| instance_leaves(&f, black_box(&tile), Some((1, 2)), &lods, &camera))
+    });
+    g.finish();
+}
+
 fn export(c: &mut Criterion) {
     let tri =
         Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
@@ -80,6 +122,7 @@ fn export(c: &mut Criterion) {
         transforms: (0..100_000)
             .map(|i| transform([i as f32 * 0.01, 0.0, (i % 317) as f32], i as f32, 1.0))
             .collect(),
+        leaves: None,
     });
     let mut g = c.benchmark_group("export");
     g.sample_size(10);
@@ -90,8 +133,15 @@ fn export(c: &mut Criterion) {
     g.bench_function("100k_nodes", |b| {
         b.iter(|| glb_bytes_with(&model, &ExportMeta::default(), Instancing::Nodes))
     });
+    model.groups[0].leaves = Some(PlacementLeaves {
+        roots: 60,
+        counts: (0..100_000).map(|i| 60 + i % 2000).collect(),
+    });
+    g.bench_function("100k_gpu_leaves", |b| {
+        b.iter(|| glb_bytes_with(&model, &ExportMeta::default(), Instancing::Gpu))
+    });
     g.finish();
 }
 
-criterion_group!(benches, sampling, layout, export);
+criterion_group!(benches, sampling, layout, budget, export);
 criterion_main!(benches);

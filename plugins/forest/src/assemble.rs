@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Quat, Vec3};
-use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model};
+use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model, PlacementLeaves};
 use serde_json::json;
 
 use crate::layout::{Forest, Layout, Variants};
@@ -40,7 +40,9 @@ fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
 }
 
 /// The model of a forest (or of tile `tile`): the terrain patch, then one instance group per
-/// variant named `SPECIES/VARIANT`, and `extras.pge.forest`.
+/// variant named `SPECIES/VARIANT`, and `extras.pge.forest`. A variant with levels of detail
+/// keeps its leaves in the order of V, and its group's mesh carries the
+/// [`variant_extras`](crate::variant_extras) as `extras.pge.lod`.
 #[must_use]
 pub fn assemble(
     forest: &Forest,
@@ -48,12 +50,76 @@ pub fn assemble(
     grown: &[Grown],
     tile: Option<(usize, usize)>,
 ) -> Model {
+    assemble_budgeted(forest, layout, grown, tile, None)
+}
+
+/// [`assemble`], with how many leaves each instance of `layout` draws (`leaves[k]` for
+/// instance k, from [`instance_leaves`](crate::instance_leaves)): each group of a variant
+/// with levels gets its placements' counts ([`PlacementLeaves`]), written in the node
+/// extras.
+#[must_use]
+pub fn assemble_budgeted(
+    forest: &Forest,
+    layout: &Layout,
+    grown: &[Grown],
+    tile: Option<(usize, usize)>,
+    leaves: Option<&[Option<u32>]>,
+) -> Model {
     let unique: Vec<bool> = forest
         .layers
         .iter()
         .map(|l| l.variants == Variants::Unique)
         .collect();
-    build(forest, layout, grown, tile, &unique)
+    let mut model = build(forest, layout, grown, tile, &unique);
+    if let Some(leaves) = leaves {
+        place_leaves(&mut model, layout, grown, leaves, &unique);
+    }
+    model
+}
+
+/// Gives every group of a variant with levels the leaf counts of its placements, in the
+/// order [`build`] placed them.
+fn place_leaves(
+    model: &mut Model,
+    layout: &Layout,
+    grown: &[Grown],
+    leaves: &[Option<u32>],
+    unique: &[bool],
+) {
+    let mut first_group = Vec::with_capacity(grown.len());
+    let mut next = 0;
+    for g in grown {
+        first_group.push(next);
+        next += g.variants.len();
+    }
+    let mut rank = vec![0usize; grown.len()];
+    for (inst, count) in layout.instances.iter().zip(leaves) {
+        let l = inst.layer as usize;
+        let Some(&first) = first_group.get(l) else {
+            continue;
+        };
+        let v = if unique.get(l).copied().unwrap_or(false) {
+            rank[l] += 1;
+            rank[l] - 1
+        } else {
+            inst.variant as usize
+        };
+        let (Some(count), Some(lod)) =
+            (count, grown[l].variants.get(v).and_then(crate::variant_lod))
+        else {
+            continue;
+        };
+        if let Some(group) = model.groups.get_mut(first + v) {
+            group
+                .leaves
+                .get_or_insert_with(|| PlacementLeaves {
+                    roots: lod.roots,
+                    counts: Vec::new(),
+                })
+                .counts
+                .push(*count);
+        }
+    }
 }
 
 /// [`assemble`], with the layers whose trees are grown one per instance (`unique[l]`): their
@@ -87,13 +153,21 @@ fn build(
         };
         for (v, variant) in g.variants.iter().enumerate() {
             let mut meshes = Vec::new();
+            let mut lod = crate::variant_extras(variant);
             for inst in &variant.instances {
                 let mesh = &variant.meshes[inst.mesh];
-                let mesh = if inst.transform == Mat4::IDENTITY {
+                let mut mesh = if inst.transform == Mat4::IDENTITY {
                     mesh.clone()
                 } else {
                     Arc::new(baked(mesh, &inst.transform))
                 };
+                // The group's mesh takes the first `lod` of its parts: the first leaf part
+                // carries the variant's.
+                if mesh.extras.contains_key("lod")
+                    && let Some(lod) = lod.take()
+                {
+                    Arc::make_mut(&mut mesh).extras.insert("lod".into(), lod);
+                }
                 model.meshes.push(mesh);
                 meshes.push(model.meshes.len() - 1);
             }
@@ -101,6 +175,7 @@ fn build(
                 name: format!("{name}/{}", ids.get(v).copied().unwrap_or(v as u32)),
                 meshes,
                 transforms: Vec::new(),
+                leaves: None,
             });
             model
                 .stats
@@ -210,6 +285,48 @@ pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize
 mod tests {
     use super::*;
     use crate::layout::Layer;
+
+    #[test]
+    fn variants_with_levels_carry_their_table_and_their_instances_counts() {
+        let mut f = Forest::new([60.0, 60.0], 5, None).expect("forest");
+        let mut l = Layer::new("oak", 5.0);
+        l.variants = Variants::Count(2);
+        f.layers.push(l);
+        let layout = f.layout(None).expect("layout");
+        let tri =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let mut leaves = tri.clone();
+        leaves.extras.insert(
+            "lod".into(),
+            json!({ "leaves": 1, "roots": 1, "table": [[1, 1, 0]] }),
+        );
+        let mut with_lod = Model::from_mesh(tri.clone());
+        with_lod.add_mesh(leaves, Mat4::IDENTITY);
+        let grown = vec![Grown {
+            variants: vec![with_lod, Model::from_mesh(tri)],
+        }];
+        // Instance k of variant 0 draws k leaves; variant 1 has no levels.
+        let counts: Vec<Option<u32>> = layout
+            .instances
+            .iter()
+            .enumerate()
+            .map(|(k, i)| (i.variant == 0).then_some(k as u32))
+            .collect();
+        let model = assemble_budgeted(&f, &layout, &grown, None, Some(&counts));
+        model.validate().expect("valid");
+        let placed = model.groups[0].leaves.as_ref().expect("counts");
+        assert_eq!(placed.roots, 1);
+        let want: Vec<u32> = counts.iter().flatten().copied().collect();
+        assert_eq!(placed.counts, want);
+        assert!(model.groups[1].leaves.is_none());
+        let lod = &model.meshes[model.groups[0].meshes[1]].extras["lod"];
+        assert_eq!(lod["primitives"][0]["primitive"], 1);
+        assert_eq!(lod["primitives"][0]["table"], json!([[1, 1, 0]]));
+        // Without counts the table is there, the placements have none.
+        let plain = assemble(&f, &layout, &grown, None);
+        assert!(plain.groups.iter().all(|g| g.leaves.is_none()));
+        assert_eq!(plain.meshes[plain.groups[0].meshes[1]].extras["lod"], *lod);
+    }
 
     #[test]
     fn each_variant_is_a_group_placed_by_the_layout() {

@@ -4,8 +4,11 @@
 //! The algorithm is plain Rust: a [`Forest`] holds the [`Terrain`] and the [`Layer`]s;
 //! [`Forest::layout`] places the trees of the whole world or of one tile (tiles agree with
 //! the whole, instance for instance); [`assemble`] turns a layout and the grown variants into
-//! a [`Model`](pge_engine::geometry::Model) with one instance group per variant. The Lua
-//! side, `pge.Forest{...}`, lives in [`lua`] and grows the variants of a species script in
+//! a [`Model`](pge_engine::geometry::Model) with one instance group per variant. Variants
+//! with foliage levels of detail keep their LOD tables ([`variant_extras`]; [`with_lod`]
+//! gives them levels), and [`instance_leaves`] budgets each instance's leaves for a
+//! [`Camera`] ([`assemble_budgeted`] writes them per placement). The Lua side,
+//! `pge.Forest{...}`, lives in [`lua`] and grows the variants of a species script in
 //! parallel, one session per variant.
 //!
 //! ```
@@ -21,18 +24,24 @@
 
 mod assemble;
 mod cache;
+mod codec;
 mod layout;
+mod lod;
 #[cfg(feature = "lua")]
 pub mod lua;
 mod poisson;
 mod rng;
 mod terrain;
 
-pub use assemble::{Grown, assemble, layout_model, transform};
+pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
 pub use cache::{GrownVariant, VariantCache, VariantKey};
 pub use layout::{
     Density, Forest, Instance, Layer, Layout, MAX_INSTANCES, Method, Tile, Variants, unique_seed,
     variant_seed,
+};
+pub use lod::{
+    Camera, ForestLod, VariantLod, check_budget, instance_leaves, variant_extras, variant_lod,
+    with_lod,
 };
 #[cfg(feature = "lua")]
 pub use lua::ForestPlugin;

@@ -19,9 +19,13 @@ use pge_engine::lua::{
 use pge_engine::{Algorithm, Engine, Error, Location, Plugin, RunContext, SessionOptions, Step};
 use rayon::prelude::*;
 
+use pge_tree::lod::{Budget, LodOptions, MAX_SECTORS};
+
 use crate::{
-    Density, FbmOptions, Forest, ForestError, Grown, GrownVariant, Layer, Layout, Method, Raster,
-    Terrain, VariantCache, VariantKey, Variants, assemble, layout_model, unique_seed, variant_seed,
+    Camera, Density, FbmOptions, Forest, ForestError, ForestLod, Grown, GrownVariant, Layer,
+    Layout, Method, Raster, Terrain, VariantCache, VariantKey, VariantLod, Variants,
+    assemble_budgeted, check_budget, instance_leaves, layout_model, unique_seed, variant_lod,
+    variant_seed, with_lod,
 };
 
 /// Adds `pge.Forest` to every session.
@@ -73,6 +77,8 @@ struct Spec {
     species: Vec<(Species, Location)>,
     location: Location,
     selected: Option<(usize, usize)>,
+    /// The forest's `lod` option.
+    lod: ForestLod,
 }
 
 /// A forest being described by a script (`pge.Forest{...}`); returning it runs it.
@@ -112,6 +118,7 @@ fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
         None => pge_engine::lua::run_context(lua).seed,
     };
     let tile = o.number("tile", Bounds::Above(0.0))?;
+    let lod = forest_lod(&o)?;
     o.finish()?;
     let forest = Forest::new(size, seed, tile).map_err(|e| o.error(e))?;
     Ok(LuaForest(Rc::new(RefCell::new(Spec {
@@ -119,7 +126,88 @@ fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
         species: Vec::new(),
         location: caller_location(lua),
         selected: None,
+        lod,
     }))))
+}
+
+/// Reads `pge.Forest{ lod = ... }`: absent or `false` for none, `true` for levels of detail
+/// on every variant with the defaults, or `{sectors = n, atlas = bool, camera = {x, y, z},
+/// total = T, near = d, far = d}`: levels on every variant (`sectors`, `atlas` as a tree
+/// generator's `lod`) and, with `camera`, each instance's leaves for that camera (`camera`,
+/// `total`, `near` and `far` go together).
+fn forest_lod(o: &Options) -> mlua::Result<ForestLod> {
+    let source = caller_location(o.lua()).to_string();
+    let variants = LodOptions {
+        source,
+        ..LodOptions::default()
+    };
+    let t = match o.value("lod")? {
+        Value::Nil | Value::Boolean(false) => return Ok(ForestLod::default()),
+        Value::Boolean(true) => {
+            return Ok(ForestLod {
+                variants: Some(variants),
+                camera: None,
+            });
+        }
+        Value::Table(t) => t,
+        other => {
+            return Err(o.wrong_type(
+                "lod",
+                "a table {sectors, atlas, camera, total, near, far} or a boolean",
+                &other,
+            ));
+        }
+    };
+    let lod = o.child("lod", t);
+    let mut variants = variants;
+    if let Some(n) = lod.integer("sectors", 1..=i64::from(MAX_SECTORS))? {
+        variants.sectors = n as u32;
+    }
+    if let Some(atlas) = lod.boolean("atlas")? {
+        variants.atlas = atlas;
+    }
+    let camera = lod.vec3("camera")?;
+    let total = lod.integer("total", 0..=(1i64 << 53))?;
+    let near = lod.number_f32("near", Bounds::AtLeast(0.0))?;
+    let far = lod.number_f32("far", Bounds::AtLeast(0.0))?;
+    lod.finish()?;
+    let camera = match (camera, total, near, far) {
+        (None, None, None, None) => None,
+        (Some(position), Some(total), Some(near), Some(far)) => {
+            if near > far {
+                return Err(lod.problem(
+                    "near",
+                    format!("must be at most lod.far, got near = {near} and far = {far}"),
+                ));
+            }
+            Some(Camera {
+                position: position.to_array(),
+                budget: Budget {
+                    near,
+                    far,
+                    total: total as u64,
+                },
+            })
+        }
+        (camera, total, near, far) => {
+            let need = "camera, total, near and far go together";
+            let absent = [
+                ("camera", camera.is_none()),
+                ("total", total.is_none()),
+                ("near", near.is_none()),
+                ("far", far.is_none()),
+            ];
+            let key = absent
+                .iter()
+                .find(|(_, a)| *a)
+                .map_or("camera", |(k, _)| *k);
+            return Err(lod.missing(key, need));
+        }
+    };
+    Ok(ForestLod {
+        variants: Some(variants),
+        camera,
+    })
 }
 
 /// The path a session is given for `canonical`: relative to the working directory when it
@@ -391,9 +479,37 @@ impl UserData for LuaForest {
                 ForestError::Script(e) => mlua::Error::RuntimeError(e.to_string()),
                 other => script_error(lua, format!("forest:instances: {other}")),
             })?;
+            // With a camera, each instance's leaves: the variants are grown to know theirs.
+            let (leaves, lods) = if let Some(camera) = &spec.lod.camera {
+                check_budget(&spec.forest, camera)
+                    .map_err(|e| script_error(lua, format!("forest:instances: {e}")))?;
+                let grower = ForestAlgorithm::new(me.0.clone(), lua.weak());
+                let grown = grower
+                    .grow(&layout, &pge_engine::lua::run_context(lua))
+                    .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
+                let leaves = budgeted_leaves(&spec, &layout, &grown)
+                    .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
+                (leaves.unwrap_or_default(), levels(&grown))
+            } else {
+                (Vec::new(), Vec::new())
+            };
             let out = lua.create_table_with_capacity(layout.instances.len(), 0)?;
-            for i in &layout.instances {
-                let e = lua.create_table_with_capacity(0, 5)?;
+            for (k, i) in layout.instances.iter().enumerate() {
+                let e = lua.create_table_with_capacity(0, 7)?;
+                let lod = lods
+                    .get(i.layer as usize)
+                    .and_then(|l| l.get(i.variant as usize))
+                    .copied()
+                    .flatten();
+                if let (Some(Some(count)), Some(lod)) = (leaves.get(k), lod) {
+                    e.set("leaves", *count)?;
+                    let level = if *count > 0 {
+                        i64::from(*count) - i64::from(lod.roots)
+                    } else {
+                        -1
+                    };
+                    e.set("level", level)?;
+                }
                 e.set(
                     "species",
                     spec.forest.layers[i.layer as usize].name.as_str(),
@@ -407,14 +523,10 @@ impl UserData for LuaForest {
             Ok(out)
         });
         m.add_method("algorithm", |lua, me, ()| {
-            Ok(AlgorithmHandle::new(Box::new(ForestAlgorithm {
-                spec: me.0.clone(),
-                lua: lua.weak(),
-                layout: None,
-                grown: None,
-                model: None,
-                phases: Vec::new(),
-            })))
+            Ok(AlgorithmHandle::new(Box::new(ForestAlgorithm::new(
+                me.0.clone(),
+                lua.weak(),
+            ))))
         });
     }
 }
@@ -428,6 +540,20 @@ struct ForestAlgorithm {
     model: Option<Model>,
     /// Seconds of each step, reported as phases of the run.
     phases: Vec<(&'static str, f64)>,
+}
+
+impl ForestAlgorithm {
+    /// The forest of `spec`, not yet run.
+    fn new(spec: Rc<RefCell<Spec>>, lua: WeakLua) -> ForestAlgorithm {
+        ForestAlgorithm {
+            spec,
+            lua,
+            layout: None,
+            grown: None,
+            model: None,
+            phases: Vec::new(),
+        }
+    }
 }
 
 /// A species script: its shown path and `params` overrides.
@@ -587,7 +713,76 @@ impl ForestAlgorithm {
                     .push(run(&mut *algorithm, &inner, &mut |_| {})?);
             }
         }
+        if let Some(options) = &spec.lod.variants {
+            give_levels(&spec, &mut grown, options)?;
+        }
         Ok(grown)
+    }
+}
+
+/// The levels of every grown variant, by layer and variant.
+fn levels(grown: &[Grown]) -> Vec<Vec<Option<VariantLod>>> {
+    grown
+        .iter()
+        .map(|g| g.variants.iter().map(variant_lod).collect())
+        .collect()
+}
+
+/// How many leaves each instance of `layout` draws for the forest's camera, `None` without
+/// one; errors at the `pge.Forest` line.
+fn budgeted_leaves(
+    spec: &Spec,
+    layout: &Layout,
+    grown: &[Grown],
+) -> pge_engine::Result<Option<Vec<Option<u32>>>> {
+    let Some(camera) = &spec.lod.camera else {
+        return Ok(None);
+    };
+    instance_leaves(&spec.forest, layout, spec.selected, &levels(grown), camera)
+        .map(Some)
+        .map_err(|e| forest_error(&spec.location, e))
+}
+
+/// The forest's model: the layout's instances of the grown variants, with each instance's
+/// leaves when the forest has a camera.
+fn assembled(spec: &Spec, layout: &Layout, grown: &[Grown]) -> pge_engine::Result<Model> {
+    let leaves = budgeted_leaves(spec, layout, grown)?;
+    Ok(assemble_budgeted(
+        &spec.forest,
+        layout,
+        grown,
+        spec.selected,
+        leaves.as_deref(),
+    ))
+}
+
+/// Gives every grown variant the forest's levels of detail ([`with_lod`]), in parallel; the
+/// first failure in (layer, variant) order is the error, at the `pge.Forest` line.
+fn give_levels(spec: &Spec, grown: &mut [Grown], options: &LodOptions) -> pge_engine::Result<()> {
+    let mut models: Vec<(usize, usize, &mut Model)> = Vec::new();
+    for (l, g) in grown.iter_mut().enumerate() {
+        for (v, model) in g.variants.iter_mut().enumerate() {
+            models.push((l, v, model));
+        }
+    }
+    let names: Vec<&str> = spec.forest.layers.iter().map(|x| x.name.as_str()).collect();
+    let results: Vec<Result<(), String>> = models
+        .par_iter_mut()
+        .map(|(l, v, model)| {
+            let given = with_lod(model, options).map_err(|e| {
+                let name = names.get(*l).copied().unwrap_or("");
+                format!(
+                    "pge.Forest: lod: variant {v} of layer {} ({name}): {e}",
+                    *l + 1
+                )
+            })?;
+            **model = given;
+            Ok(())
+        })
+        .collect();
+    match results.into_iter().find_map(Result::err) {
+        Some(message) => Err(Error::script(spec.location.clone(), message)),
+        None => Ok(()),
     }
 }
 
@@ -614,9 +809,7 @@ impl Algorithm for ForestAlgorithm {
         let spec = self.spec.borrow();
         let mut model = match (&self.model, &self.layout, &self.grown) {
             (Some(model), _, _) => model.clone(),
-            (None, Some(layout), Some(grown)) => {
-                assemble(&spec.forest, layout, grown, spec.selected)
-            }
+            (None, Some(layout), Some(grown)) => assembled(&spec, layout, grown)?,
             (None, Some(layout), None) => layout_model(&spec.forest, layout, spec.selected),
             _ => layout_model(&spec.forest, &Layout::default(), spec.selected),
         };
@@ -636,6 +829,11 @@ impl ForestAlgorithm {
     fn step_timed(&mut self, ctx: &RunContext) -> pge_engine::Result<(&'static str, Step)> {
         if self.layout.is_none() {
             let spec = self.spec.borrow();
+            if let Some(camera) = &spec.lod.camera {
+                check_budget(&spec.forest, camera).map_err(|e| {
+                    Error::script(spec.location.clone(), format!("pge.Forest: {e}"))
+                })?;
+            }
             let mut layout = spec
                 .forest
                 .layout(spec.selected)
@@ -662,7 +860,7 @@ impl ForestAlgorithm {
         if self.model.is_none() {
             let spec = self.spec.borrow();
             if let (Some(layout), Some(grown)) = (&self.layout, &self.grown) {
-                self.model = Some(assemble(&spec.forest, layout, grown, spec.selected));
+                self.model = Some(assembled(&spec, layout, grown)?);
             }
         }
         Ok(("assembly", Step::Done))

@@ -55,6 +55,9 @@ pub use merge::merge_straight;
 pub use options::{
     BarkStyle, Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TextureSource, TreeOptions,
 };
+/// The foliage levels of detail crate itself, for plugins that may depend on pge-tree but
+/// not on pge-lod (forests give their variants levels and budget their leaves with it).
+pub use pge_lod as lod;
 /// Foliage levels of detail options (`lod = {...}`), from `pge_lod`.
 pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
