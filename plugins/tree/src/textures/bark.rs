@@ -4,7 +4,7 @@ use std::f32::consts::TAU;
 
 use rayon::prelude::*;
 
-use super::maps::{Maps, encode_maps, linear_to_srgb8, normal_map};
+use super::maps::{Maps, Srgb, encode_maps, normal_map};
 use super::noise::{Cells, Fractal, Lattice, floor, hash, smoothstep, unit, wrap};
 use super::{BarkParams, TextureSet};
 use crate::TreeError;
@@ -32,6 +32,7 @@ where
     let mut heights = vec![0.0f32; n * n];
     let mut color = vec![0u8; n * n * 3];
     let mut rough = vec![0u8; n * n * 3];
+    let srgb = Srgb::table();
     heights
         .par_chunks_mut(n)
         .zip(color.par_chunks_mut(n * 3))
@@ -43,7 +44,7 @@ where
                 let s = sample((x as f32 + 0.5) / n as f32);
                 h[x] = s.height;
                 for i in 0..3 {
-                    c[x * 3 + i] = linear_to_srgb8(s.shade[i]);
+                    c[x * 3 + i] = srgb.byte(s.shade[i]);
                 }
                 r[x * 3 + 1] = (s.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
             }
@@ -67,12 +68,12 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let light = grey(1.5);
             fill_bark(n, |v| {
                 let (warp, fibre) = (warp.row(v), fibre.row(v));
-                let (ridges, cracks) = (&ridges, &cracks);
+                let (ridges, cracks) = (ridges.row(v), cracks.row(v));
                 move |u| {
                     let wu = u + 0.05 * (warp.at(u) - 0.5);
-                    let (f1, f2, id) = ridges.at(wu, v);
+                    let (f1, f2, id) = ridges.at(wu);
                     let ridge = smoothstep(0.02, 0.6, f2 - f1);
-                    let (g1, g2, _) = cracks.at(u, v);
+                    let (g1, g2, _) = cracks.at(u);
                     let crack = smoothstep(0.0, 0.1, g2 - g1);
                     let height =
                         (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre.at(u))
@@ -167,12 +168,12 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let fibres = Fractal::new(96, 4, 3, 43);
             let light = grey(1.4);
             fill_bark(n, |v| {
-                let (warp, fibres, ridges) = (warp.row(v), fibres.row(v), &ridges);
+                let (warp, fibres, ridges) = (warp.row(v), fibres.row(v), ridges.row(v));
                 let sway = 0.03 * (v * TAU * 2.0).sin();
                 let wave = 0.01 * (v * 40.0).sin();
                 move |u| {
                     let wu = u + 0.06 * (warp.at(u) - 0.5) + sway;
-                    let (f1, f2, id) = ridges.at(wu, v);
+                    let (f1, f2, id) = ridges.at(wu);
                     let ridge = smoothstep(0.0, 0.35, f2 - f1);
                     let fibres = fibres.at(u + wave);
                     let height =

@@ -1,10 +1,10 @@
 //! Leaves: silhouettes per shape, veins in the colour and normal maps.
 
-use std::f32::consts::{PI, TAU};
+use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use rayon::prelude::*;
 
-use super::maps::{Maps, encode_maps, linear_to_srgb8, normal_map};
+use super::maps::{Maps, Srgb, encode_maps, normal_map};
 use super::needles::Needles;
 use super::noise::{Fractal, floor, smoothstep};
 use super::{LeafParams, TextureSet};
@@ -61,25 +61,28 @@ fn leaf_pixel(shape: LeafShape, x: f32, v: f32, w: f32, needles: &Needles) -> Le
         LeafShape::Palmate => {
             // Maple: five pointed lobes around the top of the stalk, main veins radiating
             // to their tips.
-            let (cx, cy) = (0.0, 0.4);
-            let (dx, dy) = (x, v - cy);
+            let (dx, dy) = (x, v - 0.4);
             let r = (dx * dx + dy * dy).sqrt();
-            let phi = dy.atan2(dx); // pi/2 is up the card.
+            // No lobe reaches 0.58 from the centre and the blade starts above 0.12: the rest
+            // of the card is clear without finding the angle.
+            if !stalk && (r >= 0.58 || v <= 0.12) {
+                return outside;
+            }
+            let phi = atan2(dy, dx); // pi/2 is up the card.
             let lobe_axes = [PI / 2.0, PI / 2.0 - 0.95, PI / 2.0 + 0.95, -0.25, PI + 0.25];
             let lobe_len = [0.58, 0.5, 0.5, 0.36, 0.36];
             let (mut reach, mut vein) = (0.0f32, f32::MAX);
             for (axis, len) in lobe_axes.iter().zip(lobe_len) {
-                let off = angle_diff(phi, *axis);
+                let off = angle_diff(phi, *axis).abs();
                 // Only the lobes within 0.62 rad reach this far round (the others are 0).
-                if off.abs() < 0.62 {
-                    let lobe = len * (1.0 - off.abs() / 0.62).powf(0.8);
+                if off < 0.62 {
+                    let lobe = len * (1.0 - off / 0.62).powf(0.8);
                     let teeth = 1.0 - 0.06 * (0.5 + 0.5 * (off * 28.0).cos());
                     reach = reach.max(lobe * teeth);
                 }
-                vein = vein.min(off.abs() * r);
+                vein = vein.min(off * r);
             }
             let reach = reach.max(0.12);
-            let _ = cx;
             let inside = stalk || (r < reach && v > 0.12);
             if !inside {
                 return outside;
@@ -141,10 +144,47 @@ fn side_veins(along: f32, out: f32, spacing: f32) -> f32 {
     (1.0 - smoothstep(0.002, 0.006, d)) * (1.0 - smoothstep(0.25, 0.5, out))
 }
 
-/// `a - b` wrapped to `[-pi, pi]`.
+/// `a - b` wrapped to `[-pi, pi]`, for angles `a` in `[-pi, pi]` and `b` within `pi / 2`
+/// of that range (the lobe axes).
 fn angle_diff(a: f32, b: f32) -> f32 {
-    let d = (a - b + PI) / TAU;
-    (d - floor(d) as f32) * TAU - PI
+    let d = a - b;
+    if d > PI {
+        d - TAU
+    } else if d < -PI {
+        d + TAU
+    } else {
+        d
+    }
+}
+
+/// The angle of `(x, y)` in `[-pi, pi]`, as `f32::atan2` within 1e-6 rad, from the
+/// arctangent polynomial of Abramowitz and Stegun (4.4.49) on `[0, 1]` and the octant's
+/// symmetries: a few multiply-adds where the library call costs as much as the rest of a
+/// maple pixel.
+fn atan2(y: f32, x: f32) -> f32 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = if ax < ay { (ax, ay) } else { (ay, ax) };
+    if hi == 0.0 {
+        return 0.0;
+    }
+    let z = lo / hi;
+    let z2 = z * z;
+    let poly = 0.002_866_225_7f32;
+    let poly = poly * z2 - 0.016_165_737;
+    let poly = poly * z2 + 0.042_909_614;
+    let poly = poly * z2 - 0.075_289_64;
+    let poly = poly * z2 + 0.106_562_64;
+    let poly = poly * z2 - 0.142_089;
+    let poly = poly * z2 + 0.199_935_51;
+    let poly = poly * z2 - 0.333_331_45;
+    let mut a = z + z * z2 * poly;
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = PI - a;
+    }
+    if y < 0.0 { -a } else { a }
 }
 
 /// The leaf set of `params`: its maps generated ([`leaf_maps`]) and PNG-encoded.
@@ -162,6 +202,7 @@ pub fn leaf_maps(params: &LeafParams) -> Maps {
     let mut heights = vec![0.0f32; n * n];
     let mut color = vec![0u8; n * n * 4];
     let mut rough = vec![0u8; n * n * 3];
+    let srgb = Srgb::table();
     heights
         .par_chunks_mut(n)
         .zip(color.par_chunks_mut(n * 4))
@@ -175,7 +216,7 @@ pub fn leaf_maps(params: &LeafParams) -> Maps {
                 let u = (xi as f32 + 0.5) / n as f32;
                 let p = leaf_pixel(params.shape, u - 0.5, v, w, &needles);
                 let mottle = 0.05 * (mottle.at(u) - 0.5);
-                let g = linear_to_srgb8(p.shade + mottle);
+                let g = srgb.byte(p.shade + mottle);
                 c[xi * 4..xi * 4 + 4].copy_from_slice(&[g, g, g, if p.inside { 255 } else { 0 }]);
                 h[xi] = p.height;
                 r[xi * 3 + 1] = (p.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
@@ -239,6 +280,31 @@ mod tests {
         assert!(sinuses >= 3, "{sinuses} sinuses");
         assert_eq!(blade_half_width(LeafShape::Ovate, -0.1), 0.0);
         assert!(blade_half_width(LeafShape::Ovate, 1.0) < 0.01);
+    }
+
+    #[test]
+    fn the_polynomial_arctangent_is_the_library_one() {
+        for i in -60..=60 {
+            for j in -60..=60 {
+                let (y, x) = (i as f32 / 37.0, j as f32 / 41.0);
+                let want = if (x, y) == (0.0, 0.0) {
+                    0.0
+                } else {
+                    y.atan2(x)
+                };
+                assert!((atan2(y, x) - want).abs() < 1e-6, "{y} {x}");
+            }
+        }
+        for (a, b) in [
+            (3.0f32, -0.25f32),
+            (-3.0, PI + 0.25),
+            (0.5, PI / 2.0),
+            (-PI, PI),
+        ] {
+            let want = a - b - TAU * ((a - b) / TAU).round();
+            assert!((angle_diff(a, b) - want).abs() < 1e-5, "{a} {b}");
+            assert!(angle_diff(a, b).abs() <= PI + 1e-6);
+        }
     }
 
     #[test]

@@ -100,13 +100,17 @@ pub fn load_png(path: &Path, name: &str) -> Result<Arc<Texture>, TreeError> {
         })
 }
 
-/// Linear [0, 1] to an sRGB byte, from a table of 4096 steps (a `powf` per channel and
-/// pixel would cost more than the noise).
-pub(super) fn linear_to_srgb8(c: f32) -> u8 {
-    static TABLE: OnceLock<Vec<u8>> = OnceLock::new();
-    let table = TABLE.get_or_init(|| {
-        (0..=4096)
-            .map(|i| {
+/// Linear [0, 1] to sRGB bytes through a table of 4096 steps (a `powf` per channel and
+/// pixel would cost more than the noise): the table is found once per map, not per pixel.
+#[derive(Clone, Copy)]
+pub(super) struct Srgb(&'static [u8; 4097]);
+
+impl Srgb {
+    /// The process's table.
+    pub(super) fn table() -> Srgb {
+        static TABLE: OnceLock<[u8; 4097]> = OnceLock::new();
+        Srgb(TABLE.get_or_init(|| {
+            std::array::from_fn(|i| {
                 let c = i as f32 / 4096.0;
                 let s = if c <= 0.003_130_8 {
                     c * 12.92
@@ -115,9 +119,15 @@ pub(super) fn linear_to_srgb8(c: f32) -> u8 {
                 };
                 (s * 255.0 + 0.5) as u8
             })
-            .collect()
-    });
-    table[(c.clamp(0.0, 1.0) * 4096.0 + 0.5) as usize]
+        }))
+    }
+
+    /// The sRGB byte of linear `c` (clamped to [0, 1]).
+    #[inline]
+    pub(super) fn byte(self, c: f32) -> u8 {
+        let i = (c.clamp(0.0, 1.0) * 4096.0 + 0.5) as usize;
+        self.0[i.min(4096)]
+    }
 }
 
 #[cfg(test)]
@@ -126,9 +136,12 @@ mod tests {
 
     #[test]
     fn srgb_bytes() {
-        assert_eq!(linear_to_srgb8(0.0), 0);
-        assert_eq!(linear_to_srgb8(1.0), 255);
-        assert_eq!(linear_to_srgb8(0.214_041_14), 128);
+        let srgb = Srgb::table();
+        assert_eq!(srgb.byte(0.0), 0);
+        assert_eq!(srgb.byte(1.0), 255);
+        assert_eq!(srgb.byte(0.214_041_14), 128);
+        assert_eq!(srgb.byte(-3.0), 0);
+        assert_eq!(srgb.byte(f32::NAN), 0);
     }
 
     #[test]

@@ -194,24 +194,104 @@ impl Cells {
         let cy = (y as u32).min(self.ny - 1);
         let (rx, ry) = (x - cx as f32, y - cy as f32);
         let stride = self.nx as usize + 2;
-        let (mut f1, mut f2, mut id) = (f32::MAX, f32::MAX, 0);
+        let mut nearest = Nearest::new();
         for dy in 0..3 {
             let row = &self.points[(cy as usize + dy) * stride + cx as usize..][..3];
             let oy = dy as f32 - 1.0 - ry;
             for (dx, &(px, py, h)) in row.iter().enumerate() {
                 let ex = dx as f32 - 1.0 - rx + px;
                 let ey = oy + py;
-                let d = ex * ex + ey * ey;
-                if d < f1 {
-                    f2 = f1;
-                    f1 = d;
-                    id = h;
-                } else if d < f2 {
-                    f2 = d;
-                }
+                nearest.add(ex * ex + ey * ey, h);
             }
         }
-        (f1.sqrt(), f2.sqrt(), id)
+        nearest.distances()
+    }
+
+    /// The noise along the row at `v`: the squared `v` distances from the row to the
+    /// feature points of its three lattice rows found once, so a lookup ([`CellsRow::at`])
+    /// is nine multiply-adds (the same numbers as [`Cells::at`]).
+    pub(super) fn row(&self, v: f32) -> CellsRow {
+        let y = v.rem_euclid_unit() * self.ny as f32;
+        let cy = (y as u32).min(self.ny - 1) as usize;
+        let ry = y - cy as f32;
+        let stride = self.nx as usize + 2;
+        let mut points = Vec::with_capacity(3 * stride);
+        for dy in 0..3 {
+            let oy = dy as f32 - 1.0 - ry;
+            points.extend(self.points[(cy + dy) * stride..][..stride].iter().map(
+                |&(px, py, h)| {
+                    let ey = oy + py;
+                    (px, ey * ey, h)
+                },
+            ));
+        }
+        CellsRow {
+            nx: self.nx,
+            points,
+        }
+    }
+}
+
+/// One row of [`Cells`] (see [`Cells::row`]).
+pub(super) struct CellsRow {
+    nx: u32,
+    /// Three lattice rows of `nx + 2` points: feature `u` inside its cell, squared `v`
+    /// distance from the row, the cell's hash.
+    points: Vec<(f32, f32, u32)>,
+}
+
+impl CellsRow {
+    /// The nearest and second-nearest feature distances at `u` and the nearest cell's hash.
+    #[inline]
+    pub(super) fn at(&self, u: f32) -> (f32, f32, u32) {
+        let x = u.rem_euclid_unit() * self.nx as f32;
+        let cx = (x as u32).min(self.nx - 1) as usize;
+        let rx = x - cx as f32;
+        let stride = self.nx as usize + 2;
+        let mut nearest = Nearest::new();
+        for dy in 0..3 {
+            let row = &self.points[dy * stride + cx..][..3];
+            for (dx, &(px, ey2, h)) in row.iter().enumerate() {
+                let ex = dx as f32 - 1.0 - rx + px;
+                nearest.add(ex * ex + ey2, h);
+            }
+        }
+        nearest.distances()
+    }
+}
+
+/// The two smallest squared distances seen and the hash of the nearest, kept without
+/// branches (a feature point's order among its neighbours is unpredictable).
+struct Nearest {
+    f1: f32,
+    f2: f32,
+    id: u32,
+}
+
+impl Nearest {
+    #[inline]
+    fn new() -> Nearest {
+        Nearest {
+            f1: f32::MAX,
+            f2: f32::MAX,
+            id: 0,
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, d: f32, h: u32) {
+        let closer = d < self.f1;
+        // min(f2, max(f1, d)): the old nearest when `d` is nearer, else `d` if nearer than
+        // the second.
+        let second = if self.f1 > d { self.f1 } else { d };
+        self.f2 = if second < self.f2 { second } else { self.f2 };
+        self.f1 = if closer { d } else { self.f1 };
+        self.id = if closer { h } else { self.id };
+    }
+
+    #[inline]
+    fn distances(&self) -> (f32, f32, u32) {
+        (self.f1.sqrt(), self.f2.sqrt(), self.id)
     }
 }
 
@@ -271,6 +351,21 @@ mod tests {
                 assert!((f1 - r1).abs() < 1e-4 && (f2 - r2).abs() < 1e-4, "{u} {v}");
                 assert_eq!(id, rid, "{u} {v}");
                 assert!(f1 <= f2);
+            }
+        }
+    }
+
+    #[test]
+    fn cell_rows_give_the_same_numbers_as_lookups() {
+        for (nx, ny, seed) in [(8, 2, 12), (16, 6, 13), (11, 2, 42), (1, 1, 3)] {
+            let cells = Cells::new(nx, ny, seed);
+            for j in 0..40 {
+                let v = j as f32 / 39.0 - 0.02;
+                let row = cells.row(v);
+                for i in 0..100 {
+                    let u = i as f32 / 97.0 - 0.01;
+                    assert_eq!(row.at(u), cells.at(u, v), "{u} {v}");
+                }
             }
         }
     }
