@@ -18,15 +18,15 @@ use std::sync::{Arc, OnceLock};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use pge_engine::geometry::{
-    AlphaMode, Instance, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, Model,
-    Primitive, Skeleton, Stats, Texture,
+    AlphaMode, DiffuseTransmission, Instance, InstanceGroup, InstanceTransform, LeafPoint,
+    Material, Mesh, Model, Primitive, Skeleton, Stats, Texture,
 };
 use serde_json::{Map, Number, Value};
 
 use crate::rng::splitmix;
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x02";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x03";
 
 /// A folder of grown variants shared by runs (and by processes: entries appear atomically).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -457,6 +457,7 @@ fn write_model(w: &mut Writer, model: &Model) {
             double_sided,
             metallic,
             roughness,
+            transmission,
         } = &**m;
         table.str(name);
         table.f32s(base_color);
@@ -478,6 +479,14 @@ fn write_model(w: &mut Writer, model: &Model) {
         table.u8(u8::from(*double_sided));
         table.f32(*metallic);
         table.f32(*roughness);
+        match transmission {
+            None => table.u8(0),
+            Some(t) => {
+                table.u8(1);
+                table.f32(t.factor);
+                table.f32s(&t.color);
+            }
+        }
     }
     if let Some(t) = environment {
         shared(&mut textures, t);
@@ -682,6 +691,14 @@ fn read_model(r: &mut Reader) -> Option<Model> {
                 double_sided: r.u8()? != 0,
                 metallic: r.f32()?,
                 roughness: r.f32()?,
+                transmission: match r.u8()? {
+                    0 => None,
+                    1 => Some(DiffuseTransmission {
+                        factor: r.f32()?,
+                        color: [r.f32()?, r.f32()?, r.f32()?],
+                    }),
+                    _ => return None,
+                },
             }))
         })
         .collect::<Option<_>>()?;
