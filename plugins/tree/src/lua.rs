@@ -13,7 +13,8 @@
 //!            textureSize = 512, textureScale = 0.6, light = {0.45, 0.8, 0.35},
 //!            flare = { roots = 5, spread = 1, height = 1 } },   -- or flare = true
 //!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
-//!              texture = "leaf.png", shape = "lobed", textureSize = 512 },
+//!              texture = "leaf.png", shape = "lobed", textureSize = 512,
+//!              backColor = "#c8dc64", translucency = 0.3 },
 //!   lod = { sectors = 1, atlas = false },      -- foliage levels of detail (pge_lod)
 //! }
 //! ```
