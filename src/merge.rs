@@ -10,8 +10,8 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf::Gltf;
 use pge_engine::export::{ExportMeta, Instancing};
 use pge_engine::geometry::{
-    AlphaMode, InstanceGroup, InstanceTransform, Material, Mesh, Model, PlacementLeaves, Primitive,
-    Texture,
+    AlphaMode, DiffuseTransmission, InstanceGroup, InstanceTransform, Material, Mesh, Model,
+    PlacementLeaves, Primitive, Texture,
 };
 use serde_json::{Map, Value};
 
@@ -257,7 +257,7 @@ impl World {
             .or_else(|| gltf.document.scenes().next());
         let mut meshes = Vec::new();
         for mesh in gltf.document.meshes() {
-            meshes.push(read_mesh(&mesh, blob)?);
+            meshes.push(read_mesh(&mesh, blob, &json)?);
         }
         for node in scene.iter().flat_map(|s| s.nodes()) {
             let Some(mesh) = node.mesh() else { continue };
@@ -488,7 +488,11 @@ fn read_instances<'a>(
 
 /// A glTF mesh as its name and one [`Mesh`] per primitive; the mesh's `extras.pge` goes to
 /// the first (where the exporter, which lets the first member's keys win, puts it back).
-fn read_mesh(mesh: &gltf::Mesh, blob: Option<&[u8]>) -> anyhow::Result<(String, Vec<Mesh>)> {
+fn read_mesh(
+    mesh: &gltf::Mesh,
+    blob: Option<&[u8]>,
+    json: &Value,
+) -> anyhow::Result<(String, Vec<Mesh>)> {
     let name = mesh.name().unwrap_or_default().to_string();
     let extras: Map<String, Value> = match mesh.extras() {
         Some(raw) => match serde_json::from_str::<Value>(raw.get())?.get("pge") {
@@ -530,7 +534,7 @@ fn read_mesh(mesh: &gltf::Mesh, blob: Option<&[u8]>) -> anyhow::Result<(String, 
                 .with_context(|| format!("mesh {name}: no indices"))?
                 .into_u32()
                 .collect(),
-            material: Arc::new(read_material(&prim.material(), blob)?),
+            material: Arc::new(read_material(&prim.material(), blob, json)?),
             ..Mesh::default()
         };
         if parts.is_empty() {
@@ -542,8 +546,13 @@ fn read_mesh(mesh: &gltf::Mesh, blob: Option<&[u8]>) -> anyhow::Result<(String, 
 }
 
 /// A glTF material as PGE's, its textures (base colour, normal, metallic-roughness) read
-/// back from the binary chunk.
-fn read_material(m: &gltf::Material, blob: Option<&[u8]>) -> anyhow::Result<Material> {
+/// back from the binary chunk, its `KHR_materials_diffuse_transmission` from the file's
+/// JSON (`json`: the gltf crate reads no such extension).
+fn read_material(
+    m: &gltf::Material,
+    blob: Option<&[u8]>,
+    json: &Value,
+) -> anyhow::Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let read = |texture: Option<gltf::Texture>| -> anyhow::Result<Option<Arc<Texture>>> {
         texture.map(|t| read_texture(&t, blob)).transpose()
@@ -562,6 +571,22 @@ fn read_material(m: &gltf::Material, blob: Option<&[u8]>) -> anyhow::Result<Mate
         double_sided: m.double_sided(),
         metallic: pbr.metallic_factor(),
         roughness: pbr.roughness_factor(),
+        transmission: m.index().and_then(|i| read_transmission(json, i)),
+    })
+}
+
+/// The `KHR_materials_diffuse_transmission` of material `index` in a glTF JSON, with the
+/// extension's defaults (factor 0, white) for what it leaves out.
+fn read_transmission(json: &Value, index: usize) -> Option<DiffuseTransmission> {
+    let ext = json.pointer(&format!(
+        "/materials/{index}/extensions/KHR_materials_diffuse_transmission"
+    ))?;
+    let number =
+        |v: Option<&Value>, default: f32| v.and_then(Value::as_f64).map_or(default, |x| x as f32);
+    let color = ext.get("diffuseTransmissionColorFactor");
+    Some(DiffuseTransmission {
+        factor: number(ext.get("diffuseTransmissionFactor"), 0.0),
+        color: [0, 1, 2].map(|i| number(color.and_then(|c| c.get(i)), 1.0)),
     })
 }
 

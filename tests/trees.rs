@@ -365,3 +365,57 @@ fn an_unreachable_crown_stops_at_the_cap_with_a_warning() {
     );
     assert!(out.exists());
 }
+
+/// The oak's leaves are lit on both faces: their material lets light through with the
+/// translucency and back colour oak.lua gives (`KHR_materials_diffuse_transmission`,
+/// declared used, not required), the bark's does not, and the file validates.
+#[test]
+fn oak_leaves_carry_the_species_diffuse_transmission() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (_, glb) = run_tree("scripts/species/oak.lua", dir.path(), &[]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&gltf::binary::Glb::from_slice(&glb).expect("glb").json)
+            .expect("json");
+    let ext = "KHR_materials_diffuse_transmission";
+    let used = json["extensionsUsed"].as_array().expect("extensionsUsed");
+    assert!(used.iter().any(|e| e == ext), "{used:?}");
+    let required = json["extensionsRequired"].as_array();
+    assert!(!required.is_some_and(|r| r.iter().any(|e| e == ext)));
+    let material = |name: &str| {
+        json["materials"]
+            .as_array()
+            .expect("materials")
+            .iter()
+            .find(|m| m["name"] == name)
+            .unwrap_or_else(|| panic!("a {name} material"))
+            .clone()
+    };
+    assert!(material("bark")["extensions"].get(ext).is_none());
+    let leaves = &material("leaves")["extensions"][ext];
+    // oak.lua: backColor = "#b4c86e", translucency = 0.25.
+    let source =
+        std::fs::read_to_string(common::root().join("scripts/species/oak.lua")).expect("oak.lua");
+    assert!(source.contains("backColor = \"#b4c86e\", translucency = 0.25"));
+    let factor = leaves["diffuseTransmissionFactor"]
+        .as_f64()
+        .expect("factor");
+    assert!((factor - 0.25).abs() < 1e-6, "{leaves}");
+    let linear = |byte: u8| {
+        let c = f64::from(byte) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let color = leaves["diffuseTransmissionColorFactor"]
+        .as_array()
+        .expect("colour");
+    for (got, byte) in color.iter().zip([0xb4u8, 0xc8, 0x6e]) {
+        let got = got.as_f64().expect("number");
+        assert!((got - linear(byte)).abs() < 1e-5, "{leaves}");
+    }
+    let path = dir.path().join("tree.glb");
+    let (ok, report) = common::run_validator(&[path]);
+    assert!(ok, "{report}");
+}

@@ -25,5 +25,5 @@ return pge.SpaceColonization{
   radius = { tip = 0.015, exponent = 2.6 },
   mesh = { sides = 7, mergeStraight = 5, color = "#5a4032", bark = "plated" },
   leaves = { perTip = {6, 9}, size = 0.4, width = 0.8, maxDepth = 3, colors = {"#163b22", "#2c5a30"},
-             shape = "needles" },
+             shape = "needles", backColor = "#8caa78", translucency = 0.1 },
 }

@@ -17,5 +17,6 @@ return pge.SpaceColonization{
   mesh = { sides = 10, mergeStraight = 6, color = "#5a4636",
            bark = { style = "furrowed", depth = 1.3 }, flare = { roots = 5, spread = 0.9 } },
   leaves = { perTip = {math.max(0, p.leaves - 3), p.leaves}, size = 0.38, maxDepth = 3,
-             colors = {"#2c5418", "#4e7a26"}, shape = "lobed" },
+             colors = {"#2c5418", "#4e7a26"}, shape = "lobed",
+             backColor = "#b4c86e", translucency = 0.25 },
 }

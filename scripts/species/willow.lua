@@ -21,5 +21,5 @@ return pge.SpaceColonization{
   smoothing = 0.3,
   mesh = { sides = 8, mergeStraight = 4, color = "#6a5a48", bark = "fibrous", flare = { roots = 4, spread = 0.6 } },
   leaves = { perTip = {6, 9}, size = 0.3, maxDepth = 4, colors = {"#7f9f3a", "#b5c95a"},
-             shape = "lanceolate" },
+             shape = "lanceolate", backColor = "#d2dcbe", translucency = 0.35 },
 }

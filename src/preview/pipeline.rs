@@ -2,6 +2,7 @@
 //! points per pipeline and the probe of the device's front-face winding.
 
 use eframe::egui_wgpu::wgpu;
+use pge_engine::geometry::DiffuseTransmission;
 
 use super::scene::VERTEX_FLOATS;
 
@@ -10,6 +11,41 @@ use super::scene::VERTEX_FLOATS;
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// The viewport's depth buffer.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The material uniform of the mesh shader (`Material` in shader.wgsl), three vec4s: the
+/// base colour factor; the alpha cutoff (negative: none) and 1 when double-sided; the tint of
+/// back faces (rgb) and the share of the sun behind a face that shines through it (w), from
+/// the material's diffuse transmission (leaves), white and 0 without one. The shader
+/// multiplies a back face's colour by the tint, so a leaf's underside is told from its top
+/// in the preview as in a client that reads `KHR_materials_diffuse_transmission`.
+#[must_use]
+pub fn material_uniform(
+    base_color: [f32; 4],
+    alpha_cutoff: Option<f32>,
+    double_sided: bool,
+    transmission: Option<DiffuseTransmission>,
+) -> [f32; 12] {
+    let [r, g, b, a] = base_color;
+    let sided = if double_sided { 1.0 } else { 0.0 };
+    let (tint, through) = match transmission {
+        Some(t) => (t.color, t.factor.clamp(0.0, 1.0)),
+        None => ([1.0; 3], 0.0),
+    };
+    [
+        r,
+        g,
+        b,
+        a,
+        alpha_cutoff.unwrap_or(-1.0),
+        sided,
+        0.0,
+        0.0,
+        tint[0],
+        tint[1],
+        tint[2],
+        through,
+    ]
+}
 
 /// The bind group layouts: group 0 the globals, group 1 a material (uniform, base colour
 /// texture, sampler).
@@ -365,5 +401,49 @@ fn probe_front_face(
     match front {
         Some(0) => wgpu::FrontFace::Cw,
         _ => wgpu::FrontFace::Ccw,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The colour factor the shader applies to a face: the back tint on back faces (see
+    /// `fs_mesh` in shader.wgsl), white on front faces.
+    fn face_factor(uniform: &[f32; 12], front: bool) -> [f32; 3] {
+        if front {
+            [1.0; 3]
+        } else {
+            [uniform[8], uniform[9], uniform[10]]
+        }
+    }
+
+    #[test]
+    fn back_faces_of_leaves_are_tinted_and_lit_through() {
+        let leaf = DiffuseTransmission {
+            factor: 0.4,
+            color: [0.6, 0.8, 0.2],
+        };
+        let u = material_uniform([1.0, 0.5, 0.25, 1.0], Some(0.5), true, Some(leaf));
+        assert_eq!(&u[..6], &[1.0, 0.5, 0.25, 1.0, 0.5, 1.0]);
+        assert_eq!(face_factor(&u, true), [1.0; 3]);
+        assert_eq!(
+            face_factor(&u, false),
+            [0.6, 0.8, 0.2],
+            "the back face's own tint"
+        );
+        assert_eq!(u[11], 0.4, "sunlight through the leaf");
+        // Without transmission both faces shade alike and nothing shines through.
+        let plain = material_uniform([1.0; 4], None, true, None);
+        assert_eq!(face_factor(&plain, false), face_factor(&plain, true));
+        assert_eq!((plain[4], plain[11]), (-1.0, 0.0));
+        // The shader reads the tint and the transmitted light from this uniform.
+        let shader = include_str!("shader.wgsl");
+        assert!(
+            shader.contains("back: vec4<f32>"),
+            "the uniform's third vec4"
+        );
+        assert!(shader.contains("select(m.back.rgb, vec3<f32>(1.0), front)"));
+        assert!(shader.contains("m.back.w"));
     }
 }

@@ -12,7 +12,7 @@ use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
 use super::forest::{self, Detail, Draw, ForestMesh, Source, View};
-use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines};
+use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines, material_uniform};
 use super::scene::{Environment, Scene, SceneMesh, TextureData};
 use super::texture::{Samplers, upload_texture};
 
@@ -231,10 +231,12 @@ impl Renderer {
                 },
                 None => self.white.clone(),
             };
-            let cutoff = mesh.alpha_cutoff.unwrap_or(-1.0);
-            let params = [cutoff, if mesh.double_sided { 1.0 } else { 0.0 }, 0.0, 0.0];
-            let mut uniform = mesh.base_color.to_vec();
-            uniform.extend_from_slice(&params);
+            let uniform = material_uniform(
+                mesh.base_color,
+                mesh.alpha_cutoff,
+                mesh.double_sided,
+                mesh.transmission,
+            );
             let uniform = buffer_init(
                 device,
                 "material",
@@ -688,7 +690,7 @@ impl Renderer {
         let uniform = buffer_init(
             &self.device,
             "sky",
-            bytemuck::cast_slice(&[1.0f32, 1.0, 1.0, 1.0, -1.0, 0.0, 0.0, 0.0]),
+            bytemuck::cast_slice(&material_uniform([1.0; 4], None, false, None)),
             wgpu::BufferUsages::UNIFORM,
         );
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -7,7 +7,7 @@ use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
-use pge_engine::geometry::{AlphaMode, Mesh, Model, Primitive, Texture};
+use pge_engine::geometry::{AlphaMode, DiffuseTransmission, Mesh, Model, Primitive, Texture};
 
 /// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4).
 pub const VERTEX_FLOATS: usize = 12;
@@ -42,6 +42,8 @@ pub struct SceneMesh {
     pub alpha_cutoff: Option<f32>,
     /// Back faces drawn (lit from the side they face).
     pub double_sided: bool,
+    /// Light through the surface (leaves): back faces tinted by its colour.
+    pub transmission: Option<DiffuseTransmission>,
     /// Foliage, hidden by the "leaves" toggle: a masked material or a name saying so.
     pub is_leaf: bool,
     /// For foliage: an eighth of the leaves (triangle pairs); for a big bark mesh: its
@@ -188,6 +190,7 @@ impl Scene {
                     _ => None,
                 },
                 double_sided: mesh.material.double_sided,
+                transmission: mesh.material.transmission,
                 is_leaf: is_leaf(mesh),
                 coarse,
                 lod,
@@ -651,6 +654,7 @@ mod tests {
             name: "tree/1".into(),
             meshes: vec![0, 1],
             transforms: vec![at(0.0), at(10.0), at(-30.0)],
+            leaves: None,
         });
         assert!(!model.meshes[1].extras.contains_key("lod"));
         let scene = Scene::new(&model);

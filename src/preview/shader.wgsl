@@ -17,6 +17,10 @@ struct Material {
     base_color: vec4<f32>,
     // x: alpha cutoff (negative: none), y: 1 when double-sided.
     params: vec4<f32>,
+    // Light through the surface (leaves' diffuse transmission): rgb the tint of back faces
+    // and of the light passing through, w the share of the sun behind a face that shines
+    // through it. White and 0 for opaque surfaces.
+    back: vec4<f32>,
 };
 @group(1) @binding(0) var<uniform> m: Material;
 @group(1) @binding(1) var base_tex: texture_2d<f32>;
@@ -67,11 +71,16 @@ fn fs_mesh(in: MeshOut, @builtin(front_facing) front: bool) -> @location(0) vec4
         n = -n;
     }
     let sun = max(dot(n, g.sun.xyz), 0.0);
+    // The sun behind the face, seen through it (translucent leaves).
+    let behind = max(-dot(n, g.sun.xyz), 0.0) * m.back.w;
     // Hemisphere ambient: warm ground below, cool sky above.
     let ambient = mix(vec3<f32>(0.16, 0.14, 0.12), vec3<f32>(0.38, 0.42, 0.50), n.y * 0.5 + 0.5)
         * g.ambient.xyz;
-    let light = ambient + vec3<f32>(1.0, 0.95, 0.85) * sun * 0.85;
-    return vec4<f32>(srgb(c.rgb * light), 1.0);
+    let sun_color = vec3<f32>(1.0, 0.95, 0.85);
+    let light = ambient + sun_color * (sun * 0.85 + behind * 0.85 * m.back.rgb);
+    // A back face (a leaf's underside) in its own tint.
+    let tint = select(m.back.rgb, vec3<f32>(1.0), front);
+    return vec4<f32>(srgb(c.rgb * tint * light), 1.0);
 }
 
 // Linear to sRGB encoding (the viewport texture is read by egui as encoded colour).

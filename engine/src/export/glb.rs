@@ -10,7 +10,8 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 use serde_json::{Map, Value as JsonValue, json};
 
 use crate::geometry::{
-    AlphaMode, InstanceGroup, Material, Mesh, Model, Primitive, Skeleton, Texture,
+    AlphaMode, DiffuseTransmission, InstanceGroup, Material, Mesh, Model, Primitive, Skeleton,
+    Texture,
 };
 use crate::{Error, Result};
 
@@ -57,6 +58,9 @@ struct Builder {
     sky: Option<json::Index<json::Mesh>>,
     /// Materials that need `KHR_materials_unlit` (the sky's).
     unlit: Vec<usize>,
+    /// Materials with `KHR_materials_diffuse_transmission` (leaves), and what they let
+    /// through.
+    transmissive: Vec<(usize, DiffuseTransmission)>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -311,6 +315,9 @@ impl Builder {
             normal_texture,
             ..Default::default()
         });
+        if let Some(t) = m.transmission {
+            self.transmissive.push((index.value(), t));
+        }
         self.materials.push((m.clone(), index));
         index
     }
@@ -840,10 +847,11 @@ impl Builder {
                 extras: None,
             });
         }
-        let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() {
+        let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty()
+        {
             b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
         } else {
-            with_extensions(&b.root, &b.gpu_nodes, &b.unlit)?
+            with_extensions(&b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
         };
         while !text.len().is_multiple_of(4) {
             text.push(b' ');
@@ -901,6 +909,11 @@ pub fn glb_container(text: &[u8], bin: Vec<u8>, limit: u64) -> Result<Vec<u8>> {
 /// The name of the glTF extension the sky dome's material uses.
 pub const UNLIT: &str = "KHR_materials_unlit";
 
+/// The name of the glTF extension of materials that let light through (leaves): declared in
+/// `extensionsUsed`, not required (a client without it draws the material as it would
+/// without the extension).
+pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+
 /// The sky dome's radius for a model smaller than a few metres.
 const SKY_MIN_RADIUS: f32 = 50.0;
 /// Columns of the sky dome's mesh.
@@ -951,23 +964,44 @@ fn sky_sphere(segments: u32, rings: u32) -> Mesh {
 }
 
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
-/// ROTATION, SCALE] accessors), `KHR_materials_unlit` on the given materials, and the
-/// extensions used declared in `extensionsUsed` (gltf-json has no fields for them without
-/// its extension features).
+/// ROTATION, SCALE] accessors), `KHR_materials_unlit` and
+/// `KHR_materials_diffuse_transmission` on the given materials, and the extensions used
+/// declared in `extensionsUsed` (gltf-json has no fields for them without its extension
+/// features).
 fn with_extensions(
     root: &json::Root,
     nodes: &[(usize, [usize; 3])],
     unlit: &[usize],
+    transmissive: &[(usize, DiffuseTransmission)],
 ) -> Result<Vec<u8>> {
     let export = |e: serde_json::Error| Error::Export(e.to_string());
     let mut value = serde_json::to_value(root).map_err(export)?;
-    for &index in unlit {
+    let mut material_extension = |index: usize, name: &str, ext: JsonValue| -> Result<()> {
         let material = value
             .get_mut("materials")
             .and_then(|m| m.get_mut(index))
             .and_then(JsonValue::as_object_mut)
-            .ok_or_else(|| Error::Export("an unlit material is missing".into()))?;
-        material.insert("extensions".into(), json!({ UNLIT: {} }));
+            .ok_or_else(|| Error::Export(format!("a material with {name} is missing")))?;
+        let extensions = material
+            .entry("extensions")
+            .or_insert_with(|| json!({}))
+            .as_object_mut()
+            .ok_or_else(|| Error::Export("a material's extensions are not an object".into()))?;
+        extensions.insert(name.into(), ext);
+        Ok(())
+    };
+    for &index in unlit {
+        material_extension(index, UNLIT, json!({}))?;
+    }
+    for &(index, t) in transmissive {
+        material_extension(
+            index,
+            DIFFUSE_TRANSMISSION,
+            json!({
+                "diffuseTransmissionFactor": t.factor,
+                "diffuseTransmissionColorFactor": t.color,
+            }),
+        )?;
     }
     for &(index, [t, r, s]) in nodes {
         let node = value
@@ -987,6 +1021,9 @@ fn with_extensions(
     }
     if !unlit.is_empty() {
         used.push(UNLIT);
+    }
+    if !transmissive.is_empty() {
+        used.push(DIFFUSE_TRANSMISSION);
     }
     if let Some(root) = value.as_object_mut() {
         root.insert("extensionsUsed".into(), json!(used));

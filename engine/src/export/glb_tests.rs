@@ -167,3 +167,47 @@ fn export_is_byte_identical() {
     assert_eq!(a, b);
     assert_eq!(a.len() % 4, 0);
 }
+
+#[test]
+fn translucent_materials_carry_diffuse_transmission() {
+    let mut model = textured_model();
+    let mut mesh = (*model.meshes[0]).clone();
+    mesh.material = Arc::new(Material {
+        transmission: Some(DiffuseTransmission {
+            factor: 0.25,
+            color: [0.5, 0.75, 0.125],
+        }),
+        ..(*mesh.material).clone()
+    });
+    model.meshes[0] = Arc::new(mesh);
+    // An environment too: its unlit sky material and the leaf's extension side by side.
+    model.environment = Some(Arc::new(
+        Texture::from_rgba("sky", 1, 1, &[9, 9, 200, 255]).expect("png"),
+    ));
+    let bytes = glb_bytes(&model, &ExportMeta::default()).expect("exports");
+    let glb = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+    let json: JsonValue = serde_json::from_slice(&glb.json).expect("json");
+    let used = json["extensionsUsed"].as_array().expect("extensionsUsed");
+    assert!(used.contains(&json!(DIFFUSE_TRANSMISSION)), "{used:?}");
+    assert!(used.contains(&json!(UNLIT)), "{used:?}");
+    assert!(json.get("extensionsRequired").is_none(), "optional");
+    let materials = json["materials"].as_array().expect("materials");
+    let with = |name: &str| {
+        materials
+            .iter()
+            .filter(|m| m["extensions"].get(name).is_some())
+            .count()
+    };
+    assert_eq!((with(DIFFUSE_TRANSMISSION), with(UNLIT)), (1, 1));
+    let leaf = materials
+        .iter()
+        .find_map(|m| m["extensions"].get(DIFFUSE_TRANSMISSION))
+        .expect("the leaf material's extension");
+    assert_eq!(leaf["diffuseTransmissionFactor"], json!(0.25));
+    assert_eq!(
+        leaf["diffuseTransmissionColorFactor"],
+        json!([0.5, 0.75, 0.125])
+    );
+    // Still a glTF the gltf crate reads.
+    gltf::Gltf::from_slice(&bytes).expect("parses");
+}

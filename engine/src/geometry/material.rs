@@ -137,6 +137,21 @@ pub struct Material {
     pub metallic: f32,
     /// Roughness factor.
     pub roughness: f32,
+    /// Light that passes through the surface to its other side (leaves), written as glTF
+    /// `KHR_materials_diffuse_transmission`; `None` for opaque surfaces.
+    pub transmission: Option<DiffuseTransmission>,
+}
+
+/// Diffuse light passing through a thin surface, as glTF `KHR_materials_diffuse_transmission`
+/// describes it: a leaf lit from behind glows in the colour of what passes through, and its
+/// back face is seen in that colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiffuseTransmission {
+    /// The share of diffuse light that passes through, in `[0, 1]`
+    /// (`diffuseTransmissionFactor`).
+    pub factor: f32,
+    /// Linear RGB tint of the light that passes through (`diffuseTransmissionColorFactor`).
+    pub color: [f32; 3],
 }
 
 impl Default for Material {
@@ -151,6 +166,7 @@ impl Default for Material {
             double_sided: false,
             metallic: 0.0,
             roughness: 0.9,
+            transmission: None,
         }
     }
 }

@@ -9,7 +9,7 @@ mod mesh;
 mod model;
 mod skeleton;
 
-pub use material::{AlphaMode, Material, Texture};
+pub use material::{AlphaMode, DiffuseTransmission, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};
 pub use model::{Instance, InstanceGroup, InstanceTransform, Model, PlacementLeaves, Stats};
 pub use skeleton::{LeafPoint, Skeleton};

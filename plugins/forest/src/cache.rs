@@ -22,7 +22,7 @@ use crate::codec::{Reader, Writer, read_model, write_model};
 use crate::rng::splitmix;
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x03";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x04";
 
 /// A folder of grown variants shared by runs (and by processes: entries appear atomically).
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use pge_engine::geometry::{
-    AlphaMode, Instance, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, Model,
-    PlacementLeaves, Primitive, Skeleton, Stats, Texture,
+    AlphaMode, DiffuseTransmission, Instance, InstanceGroup, InstanceTransform, LeafPoint,
+    Material, Mesh, Model, PlacementLeaves, Primitive, Skeleton, Stats, Texture,
 };
 use serde_json::{Map, Number, Value};
 
@@ -224,6 +224,7 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
             double_sided,
             metallic,
             roughness,
+            transmission,
         } = &**m;
         table.str(name);
         table.f32s(base_color);
@@ -245,6 +246,14 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
         table.u8(u8::from(*double_sided));
         table.f32(*metallic);
         table.f32(*roughness);
+        match transmission {
+            None => table.u8(0),
+            Some(t) => {
+                table.u8(1);
+                table.f32(t.factor);
+                table.f32s(&t.color);
+            }
+        }
     }
     if let Some(t) = environment {
         shared(&mut textures, t);
@@ -461,6 +470,14 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
                 double_sided: r.u8()? != 0,
                 metallic: r.f32()?,
                 roughness: r.f32()?,
+                transmission: match r.u8()? {
+                    0 => None,
+                    1 => Some(DiffuseTransmission {
+                        factor: r.f32()?,
+                        color: [r.f32()?, r.f32()?, r.f32()?],
+                    }),
+                    _ => return None,
+                },
             }))
         })
         .collect::<Option<_>>()?;

@@ -50,6 +50,7 @@ fn bench_textures(c: &mut Criterion) {
     group.bench_function("encode leaf 512", |b| {
         b.iter(|| encode_maps("leaf", black_box(leaf_px.clone())).expect("encodes"))
     });
+    // The sets main's bench timed, for comparison.
     for style in [BarkStyle::Furrowed, BarkStyle::Plated] {
         group.bench_function(
             format!("species set 512 ({style:?} bark, lobed leaf)"),
@@ -61,6 +62,32 @@ fn bench_textures(c: &mut Criterion) {
                 })
             },
         );
+    }
+    // Every species of the gallery (scripts/species/): its bark style and leaf shape.
+    for (species, style, shape) in [
+        ("oak", BarkStyle::Furrowed, LeafShape::Lobed),
+        ("conifer", BarkStyle::Plated, LeafShape::Needles),
+        ("willow", BarkStyle::Fibrous, LeafShape::Lanceolate),
+        (
+            "maple (limbs_and_crown)",
+            BarkStyle::Smooth,
+            LeafShape::Palmate,
+        ),
+        ("bush", BarkStyle::Smooth, LeafShape::Ovate),
+        (
+            "broadleaf and six more",
+            BarkStyle::Furrowed,
+            LeafShape::Ovate,
+        ),
+    ] {
+        let leaf = LeafParams { shape, size: 512 };
+        group.bench_function(format!("species {species} 512"), |b| {
+            b.iter(|| {
+                let bark = bark_set(black_box(&bark(style))).expect("bark");
+                let leaf = leaf_set(black_box(&leaf)).expect("leaf");
+                (bark, leaf)
+            })
+        });
     }
     group.finish();
 }

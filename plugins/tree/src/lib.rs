@@ -46,7 +46,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Mat4, Vec3};
-use pge_engine::geometry::{AlphaMode, GeometryError, Material, Mesh, Model, Skeleton};
+use pge_engine::geometry::{
+    AlphaMode, DiffuseTransmission, GeometryError, Material, Mesh, Model, Skeleton,
+};
 use rand_mt::Mt64;
 
 pub use cylinders::{append_bark, bark_mesh};
@@ -196,7 +198,8 @@ pub fn bark_material(options: &MeshOptions) -> Result<Arc<Material>, TreeError> 
 }
 
 /// The leaf material: the procedural PBR set of the options' shape (alpha-masked colour,
-/// normal and roughness maps) or a file's image, alpha mask at 0.5, double-sided.
+/// normal and roughness maps) or a file's image, alpha mask at 0.5, double-sided, letting
+/// light through to its back face ([`leaf_transmission`]).
 pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> {
     let mut material = Material {
         name: "leaves".into(),
@@ -222,7 +225,18 @@ pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> 
     if material.metallic_roughness_texture.is_none() {
         material.roughness = 0.8;
     }
+    material.transmission = leaf_transmission(options);
     Ok(Arc::new(material))
+}
+
+/// The light a leaf lets through: `translucency` of it, in the leaves' back colour (glTF
+/// `KHR_materials_diffuse_transmission`); none at translucency 0.
+pub fn leaf_transmission(options: &LeafOptions) -> Option<DiffuseTransmission> {
+    let [r, g, b, _] = options.back_color;
+    (options.translucency > 0.0).then_some(DiffuseTransmission {
+        factor: options.translucency.clamp(0.0, 1.0),
+        color: [r, g, b],
+    })
 }
 
 /// Builds the whole tree: bark (see [`mesh_skeleton`]) and leaves, as a model with the bark
@@ -353,6 +367,11 @@ pub fn skeleton_centre(skeleton: &Skeleton) -> Vec3 {
 mod tests {
     use super::*;
 
+    fn hex_rgb(s: &str) -> [f32; 3] {
+        let [r, g, b, _] = Material::from_hex("", s).expect("colour").base_color;
+        [r, g, b]
+    }
+
     fn y_tree() -> Skeleton {
         let mut s = Skeleton::new();
         let r = s.push(Vec3::ZERO, None, 0.0, 0);
@@ -387,6 +406,15 @@ mod tests {
         let leaves = &a.meshes[1];
         assert_eq!(leaves.material.alpha, AlphaMode::Mask(0.5));
         assert!(leaves.material.double_sided);
+        let through = leaves.material.transmission.expect("translucent leaves");
+        assert_eq!(through.factor, 0.3);
+        assert_eq!(through.color, hex_rgb("#c8dc64"));
+        assert!(bark.material.transmission.is_none(), "bark is opaque");
+        let opaque = LeafOptions {
+            translucency: 0.0,
+            ..LeafOptions::default()
+        };
+        assert_eq!(leaf_transmission(&opaque), None);
         assert_eq!(leaves.positions.len() as u64, 4 * a.stats.leaves);
         let phases: Vec<&str> = a.stats.phases.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(phases, ["radii", "meshing", "leaves", "textures"]);

@@ -13,7 +13,8 @@
 //!            textureSize = 512, textureScale = 0.6, light = {0.45, 0.8, 0.35},
 //!            flare = { roots = 5, spread = 1, height = 1 } },   -- or flare = true
 //!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
-//!              texture = "leaf.png", shape = "lobed", textureSize = 512 },
+//!              texture = "leaf.png", shape = "lobed", textureSize = 512,
+//!              backColor = "#c8dc64", translucency = 0.3 },
 //!   lod = { sectors = 1, atlas = false },      -- foliage levels of detail (pge_lod)
 //! }
 //! ```
@@ -185,7 +186,8 @@ pub fn read_mesh(o: &Options, mesh: &mut MeshOptions) -> mlua::Result<()> {
 /// Reads a `leaves = {...}` table (its [`Options`], from [`Options::child`]): `perTip =
 /// {min, max}` (or one number), `size`, `width`, `colors = {"#rrggbb", "#rrggbb"}` (or one
 /// colour), `maxDepth`, `texture` (a PNG path, not loaded yet: see [`load_texture`]),
-/// `shape` (`"ovate"`, `"lobed"`, `"lanceolate"`, `"palmate"` or `"needles"`), `textureSize`.
+/// `shape` (`"ovate"`, `"lobed"`, `"lanceolate"`, `"palmate"` or `"needles"`), `textureSize`,
+/// `backColor` (`"#rrggbb"`), `translucency` (0..=1).
 pub fn leaf_options(o: &Options) -> mlua::Result<LeafOptions> {
     let mut leaves = LeafOptions::default();
     if let Some((min, max)) = o.integer_range("perTip", 0..=1000)? {
@@ -244,6 +246,12 @@ pub fn leaf_options(o: &Options) -> mlua::Result<LeafOptions> {
     }
     if let Some(v) = o.integer("textureSize", 16..=2048)? {
         leaves.texture_size = v as u32;
+    }
+    if let Some(c) = o.color("backColor")? {
+        leaves.back_color = c;
+    }
+    if let Some(v) = o.number_f32("translucency", Bounds::Between(0.0, 1.0))? {
+        leaves.translucency = v;
     }
     o.finish()?;
     Ok(leaves)
@@ -419,6 +427,10 @@ mod tests {
                 "{ leaves = { shape = 'round' } }",
                 "leaves.shape must be \"ovate\", \"lobed\", \"lanceolate\", \"palmate\" or \"needles\", got \"round\"",
             ),
+            (
+                "{ leaves = { translucency = 1.5 } }",
+                "leaves.translucency must be a number between 0 and 1, got 1.5",
+            ),
         ];
         for (src, want) in cases {
             assert_eq!(error(src), want, "{src}");
@@ -429,7 +441,8 @@ mod tests {
     fn bark_leaf_shape_and_flare_options() {
         let o = parse(
             "{ mesh = { bark = { style = 'plated', depth = 2 }, textureSize = 1024, textureScale = 0.4, \
-               light = {0, 1, 0}, flare = { roots = 6 } }, leaves = { shape = 'palmate', textureSize = 256 } }",
+               light = {0, 1, 0}, flare = { roots = 6 } }, leaves = { shape = 'palmate', textureSize = 256, \
+               backColor = '#ffffff', translucency = 0.5 } }",
         )
         .expect("ok");
         assert_eq!(o.mesh.bark, BarkStyle::Plated);
@@ -446,6 +459,12 @@ mod tests {
         );
         let l = o.leaves.expect("leaves");
         assert_eq!((l.shape, l.texture_size), (LeafShape::Palmate, 256));
+        assert_eq!((l.back_color, l.translucency), ([1.0; 4], 0.5));
+        assert!(
+            error("{ leaves = { backColor = 'green' } }").contains("leaves.backColor must be"),
+            "{}",
+            error("{ leaves = { backColor = 'green' } }")
+        );
         let o = parse("{ mesh = { bark = 'smooth', flare = true } }").expect("ok");
         assert_eq!(o.mesh.bark, BarkStyle::Smooth);
         assert_eq!(o.mesh.flare, Some(Flare::default()));

@@ -207,6 +207,13 @@ pub struct LeafOptions {
     pub shape: LeafShape,
     /// Side of the procedural leaf maps in pixels (16..=2048, default 512).
     pub texture_size: u32,
+    /// The colour of a leaf's underside and of the light passing through it (linear RGBA;
+    /// default `#c8dc64`, a light yellow green): the leaf material's
+    /// `KHR_materials_diffuse_transmission` colour, the preview's back-face tint.
+    pub back_color: [f32; 4],
+    /// The share of light passing through a leaf, 0..=1 (default 0.3); 0 writes no
+    /// transmission and shades both faces alike.
+    pub translucency: f32,
 }
 
 impl Default for LeafOptions {
@@ -220,6 +227,8 @@ impl Default for LeafOptions {
             texture: TextureSource::Procedural,
             shape: LeafShape::Ovate,
             texture_size: 512,
+            back_color: hex(DEFAULT_LEAF_BACK_COLOR),
+            translucency: 0.3,
         }
     }
 }
@@ -239,6 +248,7 @@ pub struct TreeOptions {
 
 const DEFAULT_BARK: &str = "#6b5444";
 const DEFAULT_LEAF_COLORS: [&str; 2] = ["#2f6b1f", "#7da83a"];
+const DEFAULT_LEAF_BACK_COLOR: &str = "#c8dc64";
 
 fn hex(s: &str) -> [f32; 4] {
     Material::from_hex("", s)

@@ -1,0 +1,120 @@
+//! The texture cache: every set generated once per parameter set and process.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+
+use super::{BarkParams, LeafParams, TextureSet, bark_set, leaf_set};
+use crate::TreeError;
+
+type Cell = Arc<OnceLock<Result<Arc<TextureSet>, String>>>;
+
+/// Texture sets by parameter set, each generated once however many sessions ask for it at
+/// the same time: the first asker generates, the others wait for its result (one
+/// generate-once cell per key, the map locked only to find the cell).
+#[derive(Default)]
+pub struct TextureCache {
+    cells: Mutex<HashMap<String, Cell>>,
+    generated: AtomicU64,
+}
+
+impl TextureCache {
+    /// The process's cache, shared by every session and tree.
+    pub fn global() -> &'static TextureCache {
+        static CACHE: OnceLock<TextureCache> = OnceLock::new();
+        CACHE.get_or_init(TextureCache::default)
+    }
+
+    /// How many sets this cache has generated (not counting the ones it handed out again).
+    pub fn generated(&self) -> u64 {
+        self.generated.load(Ordering::Relaxed)
+    }
+
+    /// The bark set of `params`, generated on first use.
+    pub fn bark(&self, params: &BarkParams) -> Result<Arc<TextureSet>, TreeError> {
+        self.get(format!("bark {params:?}"), || bark_set(params))
+    }
+
+    /// The leaf set of `params`, generated on first use.
+    pub fn leaf(&self, params: &LeafParams) -> Result<Arc<TextureSet>, TreeError> {
+        self.get(format!("leaf {params:?}"), || leaf_set(params))
+    }
+
+    fn get(
+        &self,
+        key: String,
+        make: impl FnOnce() -> Result<TextureSet, TreeError>,
+    ) -> Result<Arc<TextureSet>, TreeError> {
+        let cell = {
+            let mut cells = self.cells.lock().unwrap_or_else(|e| e.into_inner());
+            cells.entry(key).or_default().clone()
+        };
+        cell.get_or_init(|| {
+            self.generated.fetch_add(1, Ordering::Relaxed);
+            make().map(Arc::new).map_err(|e| e.to_string())
+        })
+        .clone()
+        .map_err(TreeError::Generated)
+    }
+}
+
+/// The bark set of `params` from the process's cache.
+pub fn bark_textures(params: &BarkParams) -> Result<Arc<TextureSet>, TreeError> {
+    TextureCache::global().bark(params)
+}
+
+/// The leaf set of `params` from the process's cache.
+pub fn leaf_textures(params: &LeafParams) -> Result<Arc<TextureSet>, TreeError> {
+    TextureCache::global().leaf(params)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::{BarkStyle, LeafShape};
+    use crate::textures::test_support::bark;
+    use rayon::prelude::*;
+
+    #[test]
+    fn sets_are_made_once_per_parameter_set_across_threads() {
+        let cache = TextureCache::default();
+        let params = [
+            bark(BarkStyle::Furrowed, 32),
+            bark(BarkStyle::Plated, 32),
+            BarkParams {
+                color: [0.3, 0.3, 0.3, 1.0],
+                ..bark(BarkStyle::Furrowed, 32)
+            },
+        ];
+        let leaf = LeafParams {
+            shape: LeafShape::Lobed,
+            size: 32,
+        };
+        // 24 variants, as a forest builds them: in parallel, asking for the same sets.
+        let sets: Vec<Vec<Arc<TextureSet>>> = (0..24)
+            .into_par_iter()
+            .map(|i| {
+                vec![
+                    cache.bark(&params[i % 3]).expect("bark"),
+                    cache.leaf(&leaf).expect("leaf"),
+                ]
+            })
+            .collect();
+        assert_eq!(cache.generated(), 4, "three bark sets and one leaf set");
+        for (i, s) in sets.iter().enumerate() {
+            assert!(
+                Arc::ptr_eq(&s[0], &sets[i % 3][0]),
+                "variant {i} shares its bark"
+            );
+            assert!(Arc::ptr_eq(&s[1], &sets[0][1]));
+        }
+        assert!(
+            !Arc::ptr_eq(&sets[0][0], &sets[2][0]),
+            "another colour, another set"
+        );
+        // A new cache makes the same bytes: the sets depend on their parameters only.
+        let again = TextureCache::default().bark(&params[1]).expect("bark");
+        assert_eq!(again.color.png, sets[1][0].color.png);
+        assert_eq!(again.normal.png, sets[1][0].normal.png);
+    }
+}

@@ -1,0 +1,152 @@
+//! From pixels to textures: normal maps from height fields, linear colour to sRGB bytes,
+//! PNG encoding, and reading image files.
+
+use std::path::Path;
+use std::sync::{Arc, OnceLock};
+
+use pge_engine::geometry::Texture;
+use rayon::prelude::*;
+
+use super::TextureSet;
+use crate::TreeError;
+
+/// The three maps of one material as raw pixels, before PNG encoding.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Maps {
+    /// Side of every map in pixels.
+    pub size: u32,
+    /// Base colour pixels, `channels` bytes each (sRGB).
+    pub color: Vec<u8>,
+    /// Bytes per base-colour pixel: 3 (RGB) or 4 (RGBA).
+    pub channels: u8,
+    /// Tangent-space normal map, RGB.
+    pub normal: Vec<u8>,
+    /// Metallic-roughness map, RGB: roughness in G, R and B zero.
+    pub roughness: Vec<u8>,
+}
+
+/// A tangent-space normal map of an `n x n` height field: central differences (wrapping
+/// around the edges when `wrap`, else clamped), `strength` times the height change per texel.
+pub(super) fn normal_map(h: &[f32], n: usize, strength: f32, wrap: bool) -> Vec<u8> {
+    let mut out = vec![0u8; n * n * 3];
+    // The neighbour before and after index `i` of a row or column.
+    let before = |i: usize| match (i, wrap) {
+        (0, true) => n - 1,
+        (0, false) => 0,
+        _ => i - 1,
+    };
+    let after = |i: usize| match (i + 1 == n, wrap) {
+        (true, true) => 0,
+        (true, false) => i,
+        _ => i + 1,
+    };
+    let k = 0.5 * strength;
+    out.par_chunks_mut(n * 3).enumerate().for_each(|(y, row)| {
+        let here = &h[y * n..][..n];
+        let up = &h[before(y) * n..][..n];
+        let down = &h[after(y) * n..][..n];
+        for (x, px) in row.chunks_exact_mut(3).enumerate() {
+            let dx = (here[after(x)] - here[before(x)]) * k;
+            // Image rows grow downwards; +Y of the normal map points up the image.
+            let dy = (up[x] - down[x]) * k;
+            let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
+            let nrm = [-dx * inv, -dy * inv, inv];
+            for i in 0..3 {
+                px[i] = ((nrm[i] * 0.5 + 0.5) * 255.0 + 0.5) as u8;
+            }
+        }
+    });
+    out
+}
+
+/// Encodes the three maps of a set in parallel as PNG, named `<what> color`, `<what> normal`
+/// and `<what> roughness`.
+pub fn encode_maps(what: &str, maps: Maps) -> Result<TextureSet, TreeError> {
+    let n = maps.size;
+    let jobs = [
+        (format!("{what} color"), maps.channels, maps.color),
+        (format!("{what} normal"), 3, maps.normal),
+        (format!("{what} roughness"), 3, maps.roughness),
+    ];
+    let mut maps = jobs
+        .into_par_iter()
+        .map(|(name, channels, px)| {
+            Texture::from_pixels_fast(name, n, n, channels, &px).map(Arc::new)
+        })
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter();
+    let mut next = || {
+        maps.next()
+            .ok_or_else(|| TreeError::Generated("a map is missing".into()))
+    };
+    Ok(TextureSet {
+        color: next()?,
+        normal: next()?,
+        roughness: next()?,
+    })
+}
+
+/// Reads an image file (PNG, or anything `image` decodes) as a texture called `name`.
+pub fn load_png(path: &Path, name: &str) -> Result<Arc<Texture>, TreeError> {
+    let bytes = std::fs::read(path).map_err(|e| TreeError::Texture {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    Texture::from_image_bytes(name, &bytes)
+        .map(Arc::new)
+        .map_err(|e| TreeError::Texture {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
+}
+
+/// Linear [0, 1] to sRGB bytes through a table of 4096 steps (a `powf` per channel and
+/// pixel would cost more than the noise): the table is found once per map, not per pixel.
+#[derive(Clone, Copy)]
+pub(super) struct Srgb(&'static [u8; 4097]);
+
+impl Srgb {
+    /// The process's table.
+    pub(super) fn table() -> Srgb {
+        static TABLE: OnceLock<[u8; 4097]> = OnceLock::new();
+        Srgb(TABLE.get_or_init(|| {
+            std::array::from_fn(|i| {
+                let c = i as f32 / 4096.0;
+                let s = if c <= 0.003_130_8 {
+                    c * 12.92
+                } else {
+                    1.055 * c.powf(1.0 / 2.4) - 0.055
+                };
+                (s * 255.0 + 0.5) as u8
+            })
+        }))
+    }
+
+    /// The sRGB byte of linear `c` (clamped to [0, 1]).
+    #[inline]
+    pub(super) fn byte(self, c: f32) -> u8 {
+        let i = (c.clamp(0.0, 1.0) * 4096.0 + 0.5) as usize;
+        self.0[i.min(4096)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_bytes() {
+        let srgb = Srgb::table();
+        assert_eq!(srgb.byte(0.0), 0);
+        assert_eq!(srgb.byte(1.0), 255);
+        assert_eq!(srgb.byte(0.214_041_14), 128);
+        assert_eq!(srgb.byte(-3.0), 0);
+        assert_eq!(srgb.byte(f32::NAN), 0);
+    }
+
+    #[test]
+    fn missing_files_name_the_path() {
+        let e = load_png(Path::new("/nonexistent/leaf.png"), "leaf").expect_err("missing");
+        assert!(e.to_string().contains("/nonexistent/leaf.png"), "{e}");
+    }
+}

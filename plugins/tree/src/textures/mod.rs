@@ -1,0 +1,86 @@
+//! Procedural PBR textures: bark and leaves as sets of three maps (base colour, tangent-space
+//! normal, roughness), so a tree needs no image files.
+//!
+//! Every map is a pure function of its parameters ([`BarkParams`], [`LeafParams`]): a height
+//! field from fast hashed noise (periodic value noise and stretched cellular noise), the
+//! normal map derived from that height field by central differences, colour and roughness
+//! from the same field. Rows are computed in parallel (rayon) and the three maps are
+//! PNG-encoded in parallel with fast compression; none of it depends on the thread count.
+//!
+//! Sets are generated once per distinct parameter set and process ([`TextureCache`]): the
+//! variants of a forest, built in parallel sessions, share one set per species. Bark tiles
+//! in `u` (around the branch) and `v` (along it).
+
+mod bark;
+mod cache;
+mod leaves;
+mod maps;
+mod needles;
+mod noise;
+
+use std::sync::Arc;
+
+use pge_engine::geometry::Texture;
+
+use crate::options::{BarkStyle, LeafShape};
+
+pub use bark::{bark_maps, bark_set};
+pub use cache::{TextureCache, bark_textures, leaf_textures};
+pub use leaves::{leaf_maps, leaf_set};
+pub use maps::{Maps, encode_maps, load_png};
+
+/// The parameters a bark texture set is made from: its cache key.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BarkParams {
+    /// The pattern.
+    pub style: BarkStyle,
+    /// The bark colour (linear RGBA): the colour of the ridges' sides; furrows are darker,
+    /// ridge tops lighter.
+    pub color: [f32; 4],
+    /// Side of every map in pixels.
+    pub size: u32,
+    /// Relief: how deep furrows and cracks look in the normal map (0 flat, 1 the style's
+    /// own, up to 4).
+    pub depth: f32,
+}
+
+/// The parameters a leaf texture set is made from: its cache key.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafParams {
+    /// The silhouette and its veins.
+    pub shape: LeafShape,
+    /// Side of every map in pixels.
+    pub size: u32,
+}
+
+/// One material's maps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSet {
+    /// Base colour (sRGB; RGBA with the silhouette in alpha for leaves).
+    pub color: Arc<Texture>,
+    /// Tangent-space normal map (glTF convention: +X right, +Y up in the image).
+    pub normal: Arc<Texture>,
+    /// glTF metallic-roughness map: roughness in G, metalness (0) in B.
+    pub roughness: Arc<Texture>,
+}
+
+/// Test helpers shared by the submodules' tests.
+#[cfg(test)]
+mod test_support {
+    use super::*;
+
+    /// A map's PNG decoded.
+    pub fn decode(t: &Texture) -> image::RgbaImage {
+        image::load_from_memory(&t.png).expect("decodes").to_rgba8()
+    }
+
+    /// Dark brown bark of `style` at relief 1.
+    pub fn bark(style: BarkStyle, size: u32) -> BarkParams {
+        BarkParams {
+            style,
+            color: [0.2, 0.12, 0.07, 1.0],
+            size,
+            depth: 1.0,
+        }
+    }
+}
