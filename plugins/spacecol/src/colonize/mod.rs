@@ -17,11 +17,17 @@
 //! Cost: a point's nearest node only changes when a node is added closer to it, so each
 //! point keeps its nearest node and its distance to it (its *reach*), and a new node visits
 //! only the points it changes: those within the influence radius and closer to it than to
-//! their nearest node (or within the kill distance). The [`PointGrid`] (cells of a third
+//! their nearest node (or within the kill distance). The [`PointGrid`](crate::PointGrid) (cells of a third
 //! of the influence radius, split again where points are dense) keeps the largest reach of
 //! each cell and sub-cell, and a new node skips, unread, every cell whose distance exceeds
-//! that bound. An iteration then costs O(attracted points + the points each new node
-//! changes + the cells around it), not points x nodes nor new nodes x points in reach.
+//! that bound. Dead points leave the grid at once (swap-remove in their sub-cell's compact
+//! run), so no query reads them again. Points are numbered in the grid's order, so the
+//! points a query reads lie together in memory. An iteration then costs O(attracted
+//! points, plus the points each new node changes, plus the cells around it), not points x
+//! nodes nor new nodes x points in reach.
+//!
+//! Each node's pull is summed over its points in increasing point number (the grid's
+//! order), a fixed order whatever order the points came within reach in.
 //!
 //! The known failure of the method, a node pulled by points on opposite sides (its sum of
 //! directions cancels) or one that keeps regrowing where a node already stands, is guarded:
@@ -44,7 +50,7 @@ use pge_engine::{Algorithm, Error, Location, Result, RunContext, Step};
 pub use params::Params;
 use state::{NONE, State};
 
-use crate::points::{self, PointGrid};
+use crate::points;
 
 /// Space colonization as an [`Algorithm`]: one step is one growth iteration; `finish` meshes
 /// the current skeleton with [`pge_tree::build_tree`].
@@ -204,15 +210,14 @@ impl Algorithm for SpaceColonization {
         // Pulls: each live point adds its unit direction to its nearest node (a tip only
         // perceives the points within its angle of perception).
         let perceive = (p.perception < 180.0).then(|| p.perception.to_radians().cos());
-        let mut active = std::mem::take(&mut st.active);
-        active.retain(|&i| st.alive[i as usize]);
-        for &i in &active {
+        let mut active = st.take_active();
+        active.retain(|&i| {
             let i = i as usize;
             let n = st.nearest[i] as usize;
             if st.refused[n] == iteration - 1 {
                 // The node could not grow toward these points last time: unreachable.
                 st.kill(i);
-                continue;
+                return false;
             }
             let d2 = st.nearest_d2[i];
             let to = (st.points[i] - st.nodes[n]) / d2.sqrt();
@@ -221,7 +226,7 @@ impl Algorithm for SpaceColonization {
                 && st.dirs[n] != Vec3::ZERO
                 && to.dot(st.dirs[n]) < cos
             {
-                continue;
+                return true;
             }
             if st.count[n] == 0 {
                 st.touched.push(n as u32);
@@ -231,9 +236,9 @@ impl Algorithm for SpaceColonization {
             if d2 < st.closest[n].0 {
                 st.closest[n] = (d2, i as u32);
             }
-        }
-        active.retain(|&i| st.alive[i as usize]);
-        st.active = active;
+            true
+        });
+        st.set_active(active);
 
         // Growth directions, all from the state before this iteration's new nodes.
         st.touched.sort_unstable();
@@ -348,14 +353,7 @@ impl Algorithm for SpaceColonization {
         }
         st.trunk_tips = next_trunks;
 
-        if st.dead_since_grid * 4 > st.alive_count.max(1024) {
-            st.grid = PointGrid::new(&st.points, &st.alive, p.influence / 3.0);
-            let nearest_d2 = &st.nearest_d2;
-            st.grid.set_reaches(|i| nearest_d2[i as usize]);
-            st.dead_since_grid = 0;
-        }
-
-        let finished = st.alive_count == 0 || (st.active.is_empty() && st.trunk_tips.is_empty());
+        let finished = st.alive_count == 0 || (st.none_active() && st.trunk_tips.is_empty());
         let stuck = attempted == 0;
         self.growth_seconds += t.elapsed().as_secs_f64();
         if finished || stuck {

@@ -8,22 +8,28 @@ use glam::Vec3;
 use pge_engine::geometry::Skeleton;
 
 use super::Params;
-use crate::points::PointGrid;
+use crate::grid::PointGrid;
 
 pub(super) const NONE: u32 = u32::MAX;
 
 /// The growing state.
 #[derive(Clone)]
 pub(super) struct State {
+    /// The attraction points, numbered in the grid's order (spatially coherent), not in
+    /// the order they were drawn.
     pub(super) points: Vec<Vec3>,
     pub(super) alive: Vec<bool>,
     pub(super) alive_count: usize,
+    /// Each point's nearest node within the influence radius ([`NONE`]: none yet)...
     pub(super) nearest: Vec<u32>,
+    /// ... and its squared distance to it (its reach in the grid).
     pub(super) nearest_d2: Vec<f32>,
-    /// Points with a nearest node within reach (some may be dead; filtered each step).
-    pub(super) active: Vec<u32>,
-    pub(super) grid: PointGrid,
-    pub(super) dead_since_grid: usize,
+    /// Points with a nearest node, in increasing index order (some may have died since).
+    active: Vec<u32>,
+    /// Points given their first nearest node since `active` was last read, in any order.
+    fresh: Vec<u32>,
+    /// The live points.
+    grid: PointGrid,
     pub(super) nodes: Vec<Vec3>,
     pub(super) parents: Vec<Option<u32>>,
     /// Unit direction of each node's segment (zero for a root).
@@ -53,16 +59,18 @@ impl State {
     pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
         let n = pts.len();
         let alive = vec![true; n];
-        let grid = PointGrid::new(&pts, &alive, influence / 3.0);
+        let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
+        // Points that a query reads together then lie together in memory.
+        let points = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
         State {
-            points: pts,
+            points,
             alive,
             alive_count: n,
             nearest: vec![NONE; n],
             nearest_d2: vec![f32::INFINITY; n],
             active: Vec::new(),
+            fresh: Vec::new(),
             grid,
-            dead_since_grid: 0,
             nodes: Vec::new(),
             parents: Vec::new(),
             dirs: Vec::new(),
@@ -122,31 +130,61 @@ impl State {
             alive_count,
             nearest,
             nearest_d2,
-            active,
-            dead_since_grid,
+            fresh,
             ..
         } = self;
+        // The grid calls back only for the live points closer to the new node than their
+        // reach, their distance to their nearest node.
         grid.update_near(position, p.influence, |i, d2| {
             let i = i as usize;
-            if !alive[i] {
-                return 0.0;
-            }
             if d2 < k2 {
                 alive[i] = false;
                 *alive_count -= 1;
-                *dead_since_grid += 1;
-                return 0.0;
+                return None;
             }
-            if d2 < nearest_d2[i] {
-                if nearest[i] == NONE {
-                    active.push(i as u32);
-                }
-                nearest[i] = index;
-                nearest_d2[i] = d2;
+            if nearest[i] == NONE {
+                fresh.push(i as u32);
             }
-            nearest_d2[i]
+            nearest[i] = index;
+            nearest_d2[i] = d2;
+            Some(d2)
         });
         index
+    }
+
+    /// The live points with a nearest node, in increasing index order (the order in which
+    /// their pulls are summed). Hand the list back with [`Self::set_active`].
+    pub(super) fn take_active(&mut self) -> Vec<u32> {
+        let old = std::mem::take(&mut self.active);
+        let mut fresh = std::mem::take(&mut self.fresh);
+        fresh.sort_unstable();
+        let mut merged = Vec::with_capacity(old.len() + fresh.len());
+        let (mut a, mut b) = (0, 0);
+        while a < old.len() || b < fresh.len() {
+            let i = if b == fresh.len() || (a < old.len() && old[a] < fresh[b]) {
+                a += 1;
+                old[a - 1]
+            } else {
+                b += 1;
+                fresh[b - 1]
+            };
+            if self.alive[i as usize] {
+                merged.push(i);
+            }
+        }
+        fresh.clear();
+        self.fresh = fresh;
+        merged
+    }
+
+    /// Hands back the list [`Self::take_active`] gave (still in increasing order).
+    pub(super) fn set_active(&mut self, active: Vec<u32>) {
+        self.active = active;
+    }
+
+    /// Whether no point pulled at the last iteration nor was given a nearest node since.
+    pub(super) fn none_active(&self) -> bool {
+        self.fresh.is_empty() && self.active.is_empty()
     }
 
     /// Whether a live point lies within the influence radius of `q` (and outside the kill
@@ -154,8 +192,8 @@ impl State {
     pub(super) fn in_range(&self, q: Vec3, p: &Params) -> bool {
         let k2 = p.kill * p.kill;
         let mut found = false;
-        self.grid.for_each_near(q, p.influence, |i, _, d2| {
-            found |= d2 >= k2 && self.alive[i as usize];
+        self.grid.for_each_near(q, p.influence, |_, _, d2| {
+            found |= d2 >= k2;
         });
         found
     }
@@ -168,7 +206,6 @@ impl State {
         for q in start.parents.iter().flatten() {
             is_tip[*q as usize] = false;
         }
-        let k2 = p.kill * p.kill;
         for (i, &tip) in is_tip.iter().enumerate() {
             let position = start.positions[i];
             if tip {
@@ -180,16 +217,14 @@ impl State {
                 grid,
                 alive,
                 alive_count,
-                dead_since_grid,
                 ..
             } = self;
-            grid.for_each_near(position, p.kill, |j, _, d2| {
-                let j = j as usize;
-                if alive[j] && d2 < k2 {
-                    alive[j] = false;
-                    *alive_count -= 1;
-                    *dead_since_grid += 1;
-                }
+            // A live point's reach is at least the kill distance (a point that close to a
+            // node died), so the grid calls back for every point within it.
+            grid.update_near(position, p.kill, |j, _| {
+                alive[j as usize] = false;
+                *alive_count -= 1;
+                None
             });
         }
     }
@@ -213,11 +248,12 @@ impl State {
         false
     }
 
+    /// Removes point `i` (nothing if it is dead already).
     pub(super) fn kill(&mut self, i: usize) {
         if self.alive[i] {
             self.alive[i] = false;
             self.alive_count -= 1;
-            self.dead_since_grid += 1;
+            self.grid.remove(i as u32);
         }
     }
 }
