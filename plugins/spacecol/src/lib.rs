@@ -20,6 +20,7 @@
 //! ```
 
 mod colonize;
+mod grid;
 #[cfg(feature = "lua")]
 mod lua;
 mod points;
@@ -27,8 +28,9 @@ mod shape;
 mod trimesh;
 
 pub use colonize::{Params, SpaceColonization};
+pub use grid::PointGrid;
 #[cfg(feature = "lua")]
 pub use lua::{LuaShape, SpaceColonizationPlugin};
-pub use points::{DEFAULT_POINTS, Mode, PointGrid, generate};
+pub use points::{DEFAULT_POINTS, Mode, generate};
 pub use shape::{PredicateFn, Shape};
 pub use trimesh::{MeshError, TriMesh};

@@ -1,0 +1,154 @@
+//! The parameters of a colonization and their checks.
+
+use glam::Vec3;
+use pge_engine::geometry::Skeleton;
+use pge_tree::TreeOptions;
+
+use crate::points::Mode;
+use crate::shape::Shape;
+
+/// The parameters of a colonization (API.md §5).
+#[derive(Clone, Debug)]
+pub struct Params {
+    /// Where the attraction points are.
+    pub envelope: Shape,
+    /// How many points (`None`: [`points::DEFAULT_POINTS`], or every vertex in the
+    /// `vertices` mode).
+    pub points: Option<u32>,
+    /// How points are taken from the envelope.
+    pub mode: Mode,
+    /// Influence radius: a point pulls its nearest node only within this distance.
+    pub influence: f32,
+    /// Kill distance: a point this close to a node is removed (must be < `influence`).
+    pub kill: f32,
+    /// Segment length D.
+    pub step: f32,
+    /// Tropism g added to each unit growth direction (e.g. `(0, -0.3, 0)` for weeping).
+    pub tropism: Vec3,
+    /// Root positions (several for a bush).
+    pub roots: Vec<Vec3>,
+    /// Direction persistence w: a node grows along `normalize(pull + w * d)`, where `pull`
+    /// is the unit mean of its attractions and `d` the direction of its own segment, before
+    /// tropism is added (0 by default: the pull alone, seed 000).
+    pub persistence: f32,
+    /// Angle of perception in degrees: a branch tip is pulled only by points within this
+    /// angle of its own direction, so it does not chase points beside or behind it (180 by
+    /// default: every point). Nodes that already have a child sprout side branches toward
+    /// any point.
+    pub perception: f32,
+    /// Largest turn in degrees of a branch from the direction it started in: a step that
+    /// would turn further is clamped to this angle (180 by default: unbounded). A branch
+    /// continues through a node's first child; later children start branches of their own.
+    pub max_turn: f32,
+    /// Length of a straight vertical trunk each root grows before anything else may pull
+    /// it (0 by default). Lower points meanwhile pull the trunk's nodes into side branches,
+    /// so a long trunk through the crown gives a central leader (a conifer).
+    pub trunk: f32,
+    /// Iteration cap; reaching it stops with a warning.
+    pub max_iterations: u32,
+    /// Mixed into the run's seed, so one script can grow several different trees (forest
+    /// variants) in one run; 0 by default.
+    pub seed: u64,
+    /// Bark and leaf options.
+    pub tree: TreeOptions,
+    /// A skeleton grown by another method to grow on from (`start = skeleton`): its nodes
+    /// come first, unchanged, in the result; its tips grow toward the points, its other
+    /// nodes only take the points within the kill distance. `roots` and `trunk` are then
+    /// unused.
+    pub start: Option<std::sync::Arc<Skeleton>>,
+}
+
+impl Params {
+    /// Parameters with defaults scaled to the envelope: `step` 1/50 of its bounds' diagonal,
+    /// `influence` 8 steps, `kill` 2 steps, one root at the origin, 1000 iterations.
+    #[must_use]
+    pub fn new(envelope: Shape) -> Params {
+        let (lo, hi) = envelope.bounds();
+        let diag = (hi - lo).length();
+        let step = if diag.is_finite() && diag > 0.0 {
+            diag / 50.0
+        } else {
+            0.1
+        };
+        Params {
+            envelope,
+            points: None,
+            mode: Mode::Fill,
+            influence: 8.0 * step,
+            kill: 2.0 * step,
+            step,
+            tropism: Vec3::ZERO,
+            persistence: 0.0,
+            perception: 180.0,
+            max_turn: 180.0,
+            roots: vec![Vec3::ZERO],
+            trunk: 0.0,
+            max_iterations: 1000,
+            seed: 0,
+            tree: TreeOptions::default(),
+            start: None,
+        }
+    }
+
+    /// Checks the ranges: an error names the parameter and what it needs.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |name: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{name} must be a number > 0, got {v}"))
+            }
+        };
+        positive("step", self.step)?;
+        positive("influence", self.influence)?;
+        positive("kill", self.kill)?;
+        if self.kill >= self.influence {
+            return Err(format!(
+                "kill ({}) must be smaller than influence ({}): points would be removed before they attract",
+                self.kill, self.influence
+            ));
+        }
+        if !(self.persistence.is_finite() && self.persistence >= 0.0) {
+            return Err(format!(
+                "persistence must be a number >= 0, got {}",
+                self.persistence
+            ));
+        }
+        for (name, v) in [("perception", self.perception), ("maxTurn", self.max_turn)] {
+            if !(v.is_finite() && v > 0.0 && v <= 180.0) {
+                return Err(format!(
+                    "{name} must be an angle in degrees > 0 and <= 180, got {v}"
+                ));
+            }
+        }
+        if !(self.trunk.is_finite() && self.trunk >= 0.0) {
+            return Err(format!("trunk must be a number >= 0, got {}", self.trunk));
+        }
+        if !self.tropism.is_finite() {
+            return Err("tropism must be a finite vector".into());
+        }
+        if self.roots.is_empty() || self.roots.iter().any(|r| !r.is_finite()) {
+            return Err("root must be a finite vector (roots: a non-empty list of them)".into());
+        }
+        if let Mode::Surround { thickness } = self.mode {
+            positive("thickness", thickness)?;
+        }
+        if self.mode != Mode::Vertices
+            && let Some(why) = self.envelope.open_mesh()
+        {
+            return Err(format!(
+                "envelope: {why}; the inside test needs a closed mesh (or use mode = \"vertices\")"
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err("maxIterations must be an integer >= 1, got 0".into());
+        }
+        if let Some(start) = &self.start {
+            pge_tree::check_skeleton(start).map_err(|e| format!("start: {e}"))?;
+            if start.is_empty() {
+                return Err("start must be a skeleton with nodes, got an empty one".into());
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,291 @@
+//! The growing state: attraction points with their nearest nodes, the nodes grown so far,
+//! and the updates a new node makes to the points around it.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::Vec3;
+use pge_engine::geometry::Skeleton;
+
+use super::Params;
+use crate::grid::PointGrid;
+
+pub(super) const NONE: u32 = u32::MAX;
+
+/// The growing state.
+#[derive(Clone)]
+pub(super) struct State {
+    /// The attraction points, numbered in the grid's order (spatially coherent), not in
+    /// the order they were drawn.
+    pub(super) points: Vec<Vec3>,
+    pub(super) alive: Vec<bool>,
+    pub(super) alive_count: usize,
+    /// Each point's nearest node within the influence radius ([`NONE`]: none yet)...
+    pub(super) nearest: Vec<u32>,
+    /// ... and its squared distance to it (its reach in the grid).
+    pub(super) nearest_d2: Vec<f32>,
+    /// Points with a nearest node, in increasing index order (some may have died since).
+    active: Vec<u32>,
+    /// Points given their first nearest node since `active` was last read, in any order.
+    fresh: Vec<u32>,
+    /// The live points.
+    grid: PointGrid,
+    pub(super) nodes: Vec<Vec3>,
+    pub(super) parents: Vec<Option<u32>>,
+    /// Unit direction of each node's segment (zero for a root).
+    pub(super) dirs: Vec<Vec3>,
+    /// Unit direction each node's branch started in (zero for a root).
+    pub(super) headings: Vec<Vec3>,
+    /// Whether a node has grown a child.
+    pub(super) has_child: Vec<bool>,
+    /// Nodes by cell of side `step`, for the duplicate-growth guard.
+    node_cells: HashMap<[i32; 3], Vec<u32>, BuildHasherDefault<CellHasher>>,
+    /// The iteration in which a node's growth was refused (its pullers are dropped next).
+    pub(super) refused: Vec<u32>,
+    /// Roots still growing their trunk: the trunk's current tip and the length of straight
+    /// trunk it must still grow.
+    pub(super) trunk_tips: Vec<(u32, f32)>,
+    pub(super) iteration: u32,
+    // Per-step scratch.
+    pub(super) sum: Vec<Vec3>,
+    pub(super) count: Vec<u32>,
+    pub(super) closest: Vec<(f32, u32)>,
+    pub(super) touched: Vec<u32>,
+}
+
+impl State {
+    /// The state before any node: every point alive, in a grid of cells a third of the
+    /// influence radius wide.
+    pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
+        let n = pts.len();
+        let alive = vec![true; n];
+        let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
+        // Points that a query reads together then lie together in memory.
+        let points = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
+        State {
+            points,
+            alive,
+            alive_count: n,
+            nearest: vec![NONE; n],
+            nearest_d2: vec![f32::INFINITY; n],
+            active: Vec::new(),
+            fresh: Vec::new(),
+            grid,
+            nodes: Vec::new(),
+            parents: Vec::new(),
+            dirs: Vec::new(),
+            headings: Vec::new(),
+            has_child: Vec::new(),
+            node_cells: HashMap::default(),
+            refused: Vec::new(),
+            trunk_tips: Vec::new(),
+            iteration: 0,
+            sum: Vec::new(),
+            count: Vec::new(),
+            closest: Vec::new(),
+            touched: Vec::new(),
+        }
+    }
+
+    /// Appends a node (its per-node scratch and its cell) without touching the points.
+    pub(super) fn push_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
+        let index = self.nodes.len() as u32;
+        let dir = parent.map_or(Vec3::ZERO, |q| {
+            (position - self.nodes[q as usize]).normalize_or_zero()
+        });
+        // The first child continues its parent's branch, later ones start their own.
+        let heading = match parent.map(|q| q as usize) {
+            Some(q) if !self.has_child[q] && self.headings[q] != Vec3::ZERO => self.headings[q],
+            _ => dir,
+        };
+        if let Some(q) = parent {
+            self.has_child[q as usize] = true;
+        }
+        self.nodes.push(position);
+        self.parents.push(parent);
+        self.dirs.push(dir);
+        self.headings.push(heading);
+        self.has_child.push(false);
+        self.refused.push(NONE);
+        self.sum.push(Vec3::ZERO);
+        self.count.push(0);
+        self.closest.push((f32::INFINITY, NONE));
+        self.node_cells
+            .entry(cell_of(position, p.step))
+            .or_default()
+            .push(index);
+        index
+    }
+
+    /// Adds a node and updates the points it changes: those within the kill distance die,
+    /// those within the influence radius that are closer to it than to their nearest node
+    /// take it as their nearest. The grid skips every other point without reading it (a
+    /// point's reach is its squared distance to its nearest node).
+    pub(super) fn add_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
+        let index = self.push_node(position, parent, p);
+        let k2 = p.kill * p.kill;
+        let State {
+            grid,
+            alive,
+            alive_count,
+            nearest,
+            nearest_d2,
+            fresh,
+            ..
+        } = self;
+        // The grid calls back only for the live points closer to the new node than their
+        // reach, their distance to their nearest node.
+        grid.update_near(position, p.influence, |i, d2| {
+            let i = i as usize;
+            if d2 < k2 {
+                alive[i] = false;
+                *alive_count -= 1;
+                return None;
+            }
+            if nearest[i] == NONE {
+                fresh.push(i as u32);
+            }
+            nearest[i] = index;
+            nearest_d2[i] = d2;
+            Some(d2)
+        });
+        index
+    }
+
+    /// The live points with a nearest node, in increasing index order (the order in which
+    /// their pulls are summed). Hand the list back with [`Self::set_active`].
+    pub(super) fn take_active(&mut self) -> Vec<u32> {
+        let old = std::mem::take(&mut self.active);
+        let mut fresh = std::mem::take(&mut self.fresh);
+        fresh.sort_unstable();
+        let mut merged = Vec::with_capacity(old.len() + fresh.len());
+        let (mut a, mut b) = (0, 0);
+        while a < old.len() || b < fresh.len() {
+            let i = if b == fresh.len() || (a < old.len() && old[a] < fresh[b]) {
+                a += 1;
+                old[a - 1]
+            } else {
+                b += 1;
+                fresh[b - 1]
+            };
+            if self.alive[i as usize] {
+                merged.push(i);
+            }
+        }
+        fresh.clear();
+        self.fresh = fresh;
+        merged
+    }
+
+    /// Hands back the list [`Self::take_active`] gave (still in increasing order).
+    pub(super) fn set_active(&mut self, active: Vec<u32>) {
+        self.active = active;
+    }
+
+    /// Whether no point pulled at the last iteration nor was given a nearest node since.
+    pub(super) fn none_active(&self) -> bool {
+        self.fresh.is_empty() && self.active.is_empty()
+    }
+
+    /// Whether a live point lies within the influence radius of `q` (and outside the kill
+    /// distance, as after a node at `q` was added).
+    pub(super) fn in_range(&self, q: Vec3, p: &Params) -> bool {
+        let k2 = p.kill * p.kill;
+        let mut found = false;
+        self.grid.for_each_near(q, p.influence, |_, _, d2| {
+            found |= d2 >= k2;
+        });
+        found
+    }
+
+    /// Seeds the nodes from a start skeleton (`start = skeleton`): every node in order;
+    /// the tips attract points as grown nodes do, the other nodes only remove the points
+    /// within the kill distance (they are wood already, not buds).
+    pub(super) fn seed_from(&mut self, start: &Skeleton, p: &Params) {
+        let mut is_tip = vec![true; start.len()];
+        for q in start.parents.iter().flatten() {
+            is_tip[*q as usize] = false;
+        }
+        for (i, &tip) in is_tip.iter().enumerate() {
+            let position = start.positions[i];
+            if tip {
+                self.add_node(position, start.parents[i], p);
+                continue;
+            }
+            self.push_node(position, start.parents[i], p);
+            let State {
+                grid,
+                alive,
+                alive_count,
+                ..
+            } = self;
+            // A live point's reach is at least the kill distance (a point that close to a
+            // node died), so the grid calls back for every point within it.
+            grid.update_near(position, p.kill, |j, _| {
+                alive[j as usize] = false;
+                *alive_count -= 1;
+                None
+            });
+        }
+    }
+
+    /// Whether a node stands within `eps` of `q`.
+    pub(super) fn occupied(&self, q: Vec3, eps: f32, step: f32) -> bool {
+        let c = cell_of(q, step);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(list) = self.node_cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        && list
+                            .iter()
+                            .any(|n| self.nodes[*n as usize].distance_squared(q) < eps * eps)
+                    {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// Removes point `i` (nothing if it is dead already).
+    pub(super) fn kill(&mut self, i: usize) {
+        if self.alive[i] {
+            self.alive[i] = false;
+            self.alive_count -= 1;
+            self.grid.remove(i as u32);
+        }
+    }
+}
+
+/// A fast hasher for integer cell keys (multiply-rotate, as rustc's FxHasher); the cell map
+/// is only probed, never iterated, so its order cannot leak into the output.
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(4) {
+            let mut word = [0u8; 4];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from(u32::from_le_bytes(word)));
+        }
+    }
+
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+pub(super) fn cell_of(p: Vec3, step: f32) -> [i32; 3] {
+    let c = (p / step).floor();
+    [c.x as i32, c.y as i32, c.z as i32]
+}

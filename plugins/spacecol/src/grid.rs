@@ -1,0 +1,503 @@
+//! The uniform grid over the attraction points: which live points lie within a radius of a
+//! node, and which of them a new node changes.
+
+use glam::Vec3;
+
+const NONE: u32 = u32::MAX;
+
+/// A uniform grid over the attraction points, for "which points lie within r of this node"
+/// queries, from which points are removed as they die.
+///
+/// Each cell is split again into `split³` sub-cells (more when the points are dense). Each
+/// sub-cell keeps its live points in a compact run of slots (the point, its position and
+/// its reach, side by side); a removed point's slot takes the run's last point
+/// (swap-remove), so dead points are never read again.
+///
+/// Every point carries a *reach*: the squared distance under which a new node changes
+/// something for it (for colonization, its distance to its nearest node). Cells and
+/// sub-cells remember the largest reach of their points (an upper bound), so
+/// [`PointGrid::update_near`] skips those that no point of which can be affected, without
+/// reading their points.
+#[derive(Clone, Debug)]
+pub struct PointGrid {
+    origin: Vec3,
+    inv_cell: f32,
+    cell: f32,
+    dims: [usize; 3],
+    /// Sub-cells per cell side.
+    split: usize,
+    /// Where the slots of each sub-cell start; a cell's sub-cells are consecutive (x, y, z
+    /// order), so cell `c` holds slots `starts[c s³] .. starts[(c + 1) s³]`.
+    starts: Vec<u32>,
+    /// How many of its slots each sub-cell still fills (its live points).
+    lens: Vec<u32>,
+    /// The point in each slot.
+    items: Vec<u32>,
+    /// The position of the point in each slot.
+    positions: Vec<Vec3>,
+    /// The reach (squared) of the point in each slot.
+    reach: Vec<f32>,
+    /// Each point's slot, [`NONE`] once removed (or never kept).
+    slot_of: Vec<u32>,
+    /// The largest reach in each sub-cell (an upper bound).
+    sub_bound: Vec<f32>,
+    /// The largest reach in each cell (an upper bound).
+    cell_bound: Vec<f32>,
+    /// How far a point may lie outside its cell's nominal box through rounding: skipping
+    /// tests shrink distances by this much, so that they never skip an affected point.
+    slack: f32,
+    /// Scratch of `update_near`: the cells to read.
+    visit: Vec<([usize; 3], usize)>,
+}
+
+/// Grids larger than this many cells get larger cells.
+const MAX_CELLS: usize = 1 << 21;
+
+/// Sub-cells are made only while the grid has at most this many of them.
+const MAX_SUB_CELLS: usize = 1 << 22;
+
+/// The number of points a sub-cell should hold on average.
+const POINTS_PER_SUB_CELL: f32 = 8.0;
+
+impl PointGrid {
+    /// A grid of cells about `cell` wide over the points whose `keep` is true; every kept
+    /// point's reach is infinite. Within a sub-cell, points are in increasing index order.
+    #[must_use]
+    pub fn new(points: &[Vec3], keep: &[bool], cell: f32) -> PointGrid {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for (p, k) in points.iter().zip(keep) {
+            if *k {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        if !lo.is_finite() {
+            lo = Vec3::ZERO;
+            hi = Vec3::ZERO;
+        }
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let mut cell = cell.max(size.max_element() / 1024.0).max(1e-6);
+        let dims = loop {
+            let d = (size / cell).ceil().max(Vec3::ONE);
+            let dims = [d.x as usize, d.y as usize, d.z as usize];
+            if dims[0] * dims[1] * dims[2] <= MAX_CELLS {
+                break dims;
+            }
+            cell *= 1.5;
+        };
+        let cells = dims[0] * dims[1] * dims[2];
+        let kept = keep.iter().filter(|k| **k).count();
+        let per_cell = kept as f32 / cells as f32;
+        let mut split = ((per_cell / POINTS_PER_SUB_CELL).cbrt().round() as usize).clamp(1, 8);
+        while split > 1 && cells * split.pow(3) > MAX_SUB_CELLS {
+            split -= 1;
+        }
+        let top = lo + Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * cell;
+        let slack = 1e-3 * cell + 1e-5 * lo.abs().max(top.abs()).max_element();
+        let mut grid = PointGrid {
+            origin: lo,
+            inv_cell: 1.0 / cell,
+            cell,
+            dims,
+            split,
+            starts: Vec::new(),
+            lens: Vec::new(),
+            items: Vec::new(),
+            positions: Vec::new(),
+            reach: Vec::new(),
+            slot_of: vec![NONE; points.len()],
+            sub_bound: Vec::new(),
+            cell_bound: Vec::new(),
+            slack,
+            visit: Vec::new(),
+        };
+        let subs = cells * split.pow(3);
+        let mut counts = vec![0u32; subs + 1];
+        let sub_of: Vec<usize> = points
+            .iter()
+            .zip(keep)
+            .map(|(p, k)| if *k { grid.sub_index(*p) } else { 0 })
+            .collect();
+        for (i, c) in sub_of.iter().enumerate() {
+            if keep[i] {
+                counts[*c + 1] += 1;
+            }
+        }
+        grid.lens = counts[1..].to_vec();
+        for c in 0..subs {
+            counts[c + 1] += counts[c];
+        }
+        let mut fill = counts.clone();
+        let total = counts[subs] as usize;
+        grid.items = vec![0; total];
+        grid.positions = vec![Vec3::ZERO; total];
+        for (i, c) in sub_of.iter().enumerate() {
+            if keep[i] {
+                let slot = fill[*c];
+                grid.items[slot as usize] = i as u32;
+                grid.positions[slot as usize] = points[i];
+                grid.slot_of[i] = slot;
+                fill[*c] += 1;
+            }
+        }
+        grid.starts = counts;
+        grid.reach = vec![f32::INFINITY; total];
+        grid.sub_bound = (0..subs)
+            .map(|s| if grid.lens[s] > 0 { f32::INFINITY } else { 0.0 })
+            .collect();
+        let s3 = split.pow(3);
+        grid.cell_bound = (0..cells)
+            .map(|c| {
+                grid.sub_bound[c * s3..(c + 1) * s3]
+                    .iter()
+                    .fold(0.0f32, |m, r| m.max(*r))
+            })
+            .collect();
+        grid
+    }
+
+    /// Renumbers the points in the grid's order (cell by cell, sub-cell by sub-cell: the
+    /// points a query reads together get consecutive numbers) and returns the old number
+    /// of each new one; points not in the grid get no new number. Only before any point
+    /// was removed (the slots are then in the grid's order).
+    pub fn renumber(&mut self) -> Vec<u32> {
+        let old = std::mem::replace(&mut self.items, (0..self.positions.len() as u32).collect());
+        self.slot_of = (0..old.len() as u32).collect();
+        old
+    }
+
+    /// Whether point `i` is still in the grid.
+    #[must_use]
+    pub fn contains(&self, i: u32) -> bool {
+        self.slot_of.get(i as usize).is_some_and(|s| *s != NONE)
+    }
+
+    fn coord(&self, v: f32, axis: usize, o: f32) -> usize {
+        (((v - o) * self.inv_cell).floor().max(0.0) as usize).min(self.dims[axis] - 1)
+    }
+
+    /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
+    fn sub_index(&self, p: Vec3) -> usize {
+        let s = self.split;
+        let (o, fine) = (self.origin, self.inv_cell * s as f32);
+        let axis = |v: f32, a: usize, o: f32| {
+            let k = self.coord(v, a, o);
+            let f = ((v - o) * fine).floor().max(0.0) as usize;
+            (k, f.clamp(k * s, k * s + s - 1) - k * s)
+        };
+        let (x, sx) = axis(p.x, 0, o.x);
+        let (y, sy) = axis(p.y, 1, o.y);
+        let (z, sz) = axis(p.z, 2, o.z);
+        let cell = (x * self.dims[1] + y) * self.dims[2] + z;
+        cell * s * s * s + (sx * s + sy) * s + sz
+    }
+
+    /// Removes point `i` (nothing if it is not in the grid): the last point of its
+    /// sub-cell takes its slot.
+    pub fn remove(&mut self, i: u32) {
+        let Some(&slot) = self.slot_of.get(i as usize) else {
+            return;
+        };
+        if slot == NONE {
+            return;
+        }
+        let sub = self.sub_index(self.positions[slot as usize]);
+        self.remove_slot(sub, slot as usize);
+    }
+
+    /// Removes the point in `slot` of sub-cell `sub`, moving the sub-cell's last point in.
+    fn remove_slot(&mut self, sub: usize, slot: usize) {
+        self.lens[sub] -= 1;
+        let last = (self.starts[sub] + self.lens[sub]) as usize;
+        self.slot_of[self.items[slot] as usize] = NONE;
+        if last != slot {
+            self.items[slot] = self.items[last];
+            self.positions[slot] = self.positions[last];
+            self.reach[slot] = self.reach[last];
+            self.slot_of[self.items[slot] as usize] = slot as u32;
+        }
+    }
+
+    /// The cells whose boxes the ball of radius `r` around `q` touches, as runs of z cells:
+    /// `f(self, x, y, z0, z1)` for each (x, y) column, in increasing cell order.
+    fn runs(&self, q: Vec3, r: f32, mut f: impl FnMut(&Self, usize, usize, usize, usize)) {
+        let lo = q - r;
+        let hi = q + r;
+        let top = self.origin
+            + Vec3::new(
+                self.dims[0] as f32,
+                self.dims[1] as f32,
+                self.dims[2] as f32,
+            ) * self.cell;
+        if hi.cmplt(self.origin).any() || lo.cmpgt(top).any() {
+            return;
+        }
+        let r2 = r * r;
+        let (x0, x1) = (
+            self.coord(lo.x, 0, self.origin.x),
+            self.coord(hi.x, 0, self.origin.x),
+        );
+        let (y0, y1) = (
+            self.coord(lo.y, 1, self.origin.y),
+            self.coord(hi.y, 1, self.origin.y),
+        );
+        let (z0, z1) = (
+            self.coord(lo.z, 2, self.origin.z),
+            self.coord(hi.z, 2, self.origin.z),
+        );
+        // Squared distance from q to the slab of cell k along one axis.
+        let gap = |k: usize, q: f32, o: f32| {
+            let a = o + k as f32 * self.cell;
+            let d = (a - q).max(q - (a + self.cell)).max(0.0);
+            d * d
+        };
+        for x in x0..=x1 {
+            let dx = gap(x, q.x, self.origin.x);
+            for y in y0..=y1 {
+                let dxy = dx + gap(y, q.y, self.origin.y);
+                if dxy > r2 {
+                    continue;
+                }
+                // The run of z cells the ball touches in this column.
+                let mut z = z0;
+                while z <= z1 && dxy + gap(z, q.z, self.origin.z) > r2 {
+                    z += 1;
+                }
+                let mut z_end = z1;
+                while z_end > z && dxy + gap(z_end, q.z, self.origin.z) > r2 {
+                    z_end -= 1;
+                }
+                if z > z_end {
+                    continue;
+                }
+                f(self, x, y, z, z_end);
+            }
+        }
+    }
+
+    /// Calls `f(index, position, squared distance)` for every live point within `r` of
+    /// `q`, in no particular order. Only cells that the ball touches are read.
+    pub fn for_each_near(&self, q: Vec3, r: f32, mut f: impl FnMut(u32, Vec3, f32)) {
+        let r2 = r * r;
+        let s3 = self.split.pow(3);
+        self.runs(q, r, |g, x, y, z, z_end| {
+            let row = (x * g.dims[1] + y) * g.dims[2];
+            for sub in (row + z) * s3..(row + z_end + 1) * s3 {
+                let a = g.starts[sub] as usize;
+                let b = a + g.lens[sub] as usize;
+                for (i, p) in g.items[a..b].iter().zip(&g.positions[a..b]) {
+                    let d2 = p.distance_squared(q);
+                    if d2 < r2 {
+                        f(*i, *p, d2);
+                    }
+                }
+            }
+        });
+    }
+
+    /// Squared distance from `q` to the slab `[a, a + w]` along one axis, shrunk by the
+    /// rounding slack (a lower bound of any stored point's distance along that axis).
+    fn near_gap(&self, a: f32, w: f32, q: f32) -> f32 {
+        let d = ((a - q).max(q - (a + w)).max(0.0) - self.slack).max(0.0);
+        d * d
+    }
+
+    /// Calls `f(index, squared distance)` for every live point within `r` of `q` that lies
+    /// closer to `q` than its reach; `f` returns the point's new reach, or `None` to remove
+    /// the point. Calls come cell by cell in increasing cell order, in no particular order
+    /// within a cell. Cells and sub-cells whose largest reach is below their distance to
+    /// `q` are skipped unread.
+    pub fn update_near(&mut self, q: Vec3, r: f32, mut f: impl FnMut(u32, f32) -> Option<f32>) {
+        let r2 = r * r;
+        let mut cells = std::mem::take(&mut self.visit);
+        cells.clear();
+        self.runs(q, r, |g, x, y, z, z_end| {
+            let cx = g.near_gap(g.origin.x + x as f32 * g.cell, g.cell, q.x);
+            let cy = g.near_gap(g.origin.y + y as f32 * g.cell, g.cell, q.y);
+            for zz in z..=z_end {
+                let c = (x * g.dims[1] + y) * g.dims[2] + zz;
+                let cz = g.near_gap(g.origin.z + zz as f32 * g.cell, g.cell, q.z);
+                if cx + cy + cz < g.cell_bound[c] {
+                    cells.push(([x, y, zz], c));
+                }
+            }
+        });
+        for &(at, c) in &cells {
+            self.update_cell(q, r2, at, c, &mut f);
+        }
+        self.visit = cells;
+    }
+
+    /// [`Self::update_near`] within cell `c` at `[x, y, z]`.
+    fn update_cell(
+        &mut self,
+        q: Vec3,
+        r2: f32,
+        [x, y, z]: [usize; 3],
+        c: usize,
+        f: &mut impl FnMut(u32, f32) -> Option<f32>,
+    ) {
+        let s = self.split;
+        let w = self.cell / s as f32;
+        let corner = self.origin + Vec3::new(x as f32, y as f32, z as f32) * self.cell;
+        let first = c * s * s * s;
+        let mut cell_bound = 0.0f32;
+        for sx in 0..s {
+            let gx = self.near_gap(corner.x + sx as f32 * w, w, q.x);
+            for sy in 0..s {
+                let gxy = gx + self.near_gap(corner.y + sy as f32 * w, w, q.y);
+                for sz in 0..s {
+                    let sub = first + (sx * s + sy) * s + sz;
+                    let bound = self.sub_bound[sub];
+                    if gxy + self.near_gap(corner.z + sz as f32 * w, w, q.z) >= bound {
+                        cell_bound = cell_bound.max(bound);
+                        continue;
+                    }
+                    let bound = self.update_sub(q, r2, sub, f);
+                    cell_bound = cell_bound.max(bound);
+                }
+            }
+        }
+        self.cell_bound[c] = cell_bound;
+    }
+
+    /// [`Self::update_near`] within sub-cell `sub`; returns its new largest reach.
+    fn update_sub(
+        &mut self,
+        q: Vec3,
+        r2: f32,
+        sub: usize,
+        f: &mut impl FnMut(u32, f32) -> Option<f32>,
+    ) -> f32 {
+        let start = self.starts[sub] as usize;
+        let mut end = start + self.lens[sub] as usize;
+        let mut kept = 0.0f32;
+        let mut slot = start;
+        while slot < end {
+            let d2 = self.positions[slot].distance_squared(q);
+            if d2 < r2 && d2 < self.reach[slot] {
+                match f(self.items[slot], d2) {
+                    Some(reach) => self.reach[slot] = reach,
+                    None => {
+                        // The last point moves in and is read next, in this slot.
+                        self.remove_slot(sub, slot);
+                        end -= 1;
+                        continue;
+                    }
+                }
+            }
+            kept = kept.max(self.reach[slot]);
+            slot += 1;
+        }
+        self.sub_bound[sub] = kept;
+        kept
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pge_engine::random::uniform24;
+    use rand_mt::Mt64;
+
+    #[test]
+    fn grid_queries_cover_the_neighbourhood() {
+        let pts: Vec<Vec3> = (0..1000)
+            .map(|i| Vec3::new((i % 10) as f32, ((i / 10) % 10) as f32, (i / 100) as f32))
+            .collect();
+        let keep = vec![true; pts.len()];
+        let g = PointGrid::new(&pts, &keep, 1.5);
+        let q = Vec3::new(4.2, 5.1, 3.3);
+        let mut found = Vec::new();
+        g.for_each_near(q, 2.0, |i, p, d2| {
+            assert_eq!(p, pts[i as usize]);
+            assert_eq!(d2, p.distance_squared(q));
+            found.push(i);
+        });
+        found.sort_unstable();
+        let want: Vec<u32> = (0..pts.len() as u32)
+            .filter(|i| pts[*i as usize].distance(q) < 2.0)
+            .collect();
+        assert_eq!(found, want);
+        let mut none = 0;
+        g.for_each_near(Vec3::splat(100.0), 2.0, |_, _, _| none += 1);
+        assert_eq!(none, 0);
+    }
+
+    /// `update_near` against brute force on dense points (cells split into sub-cells): it
+    /// reports exactly the live points within `r` and closer than their reach, keeps the
+    /// reaches it is given for the next queries and forgets the points it removes (as
+    /// `remove` does).
+    #[test]
+    fn updates_visit_exactly_the_live_points_within_reach() {
+        let mut rng = Mt64::new(3);
+        let pts: Vec<Vec3> = (0..20_000)
+            .map(|_| {
+                Vec3::new(
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                ) * 2.0
+            })
+            .collect();
+        let keep: Vec<bool> = (0..pts.len()).map(|i| i % 7 != 0).collect();
+        let mut g = PointGrid::new(&pts, &keep, 0.3);
+        assert!(g.split > 1, "dense points split the cells");
+        let mut live = keep.clone();
+        let mut reach = vec![f32::INFINITY; pts.len()];
+        let r = 0.5;
+        let (mut visited, mut removed) = (0, 0);
+        for round in 0..300u32 {
+            let q = Vec3::new(
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+            ) * 2.2
+                - 0.1;
+            let mut want: Vec<u32> = (0..pts.len() as u32)
+                .filter(|&i| {
+                    let d2 = pts[i as usize].distance_squared(q);
+                    live[i as usize] && d2 < r * r && d2 < reach[i as usize]
+                })
+                .collect();
+            let mut got = Vec::new();
+            g.update_near(q, r, |i, d2| {
+                assert_eq!(d2, pts[i as usize].distance_squared(q));
+                got.push(i);
+                // Some points leave, the others come closer.
+                if (i + round) % 5 == 0 {
+                    live[i as usize] = false;
+                    removed += 1;
+                    None
+                } else {
+                    reach[i as usize] = d2;
+                    Some(d2)
+                }
+            });
+            got.sort_unstable();
+            want.sort_unstable();
+            assert_eq!(got, want, "query {round} at {q}");
+            visited += got.len();
+            // Every 10th round, a point dies outside the queries.
+            if round % 10 == 0 {
+                let i = (round * 61) % pts.len() as u32;
+                g.remove(i);
+                live[i as usize] = false;
+            }
+            for i in (round * 13..round * 13 + 13).map(|i| i % pts.len() as u32) {
+                assert_eq!(g.contains(i), live[i as usize], "point {i}");
+            }
+        }
+        assert!(
+            visited > 1000 && removed > 100,
+            "the queries changed {visited} points and removed {removed}"
+        );
+        let mut left = 0;
+        g.for_each_near(Vec3::ONE, 10.0, |i, _, _| {
+            assert!(live[i as usize]);
+            left += 1;
+        });
+        assert_eq!(left, live.iter().filter(|l| **l).count());
+    }
+}
