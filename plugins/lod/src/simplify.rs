@@ -14,11 +14,16 @@
 //! while both leaves live and the bounds are checked on the new leaf only when its pair is
 //! the cheapest in the queue, which then becomes the new leaf itself. Nothing is allocated
 //! per collapse; the result is deterministic (ties go to the lower label).
+//!
+//! The search is bound by memory latency, so its data is laid out to be read in runs: the
+//! grid's cells lie one after the other in two arrays (centres and radii, then what the cost
+//! needs), each with room for new leaves; the queue is a 4-ary heap (half the levels of a
+//! binary one); and a refused pair is remembered by the partner, whose own attempt at the
+//! same pair (refusal is symmetric) is then skipped without building the new leaf again.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::ops::Range;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::leaf::Leaf;
 
@@ -190,10 +195,6 @@ fn key(cost: f32, label: u32) -> u64 {
     (u64::from(cost.to_bits()) << 32) | u64::from(label)
 }
 
-/// A queue entry: a leaf's current candidate key and the leaf. Every living leaf has at most
-/// one entry in the queue; entries of dead leaves are skipped when popped.
-type Entry = Reverse<(u64, u32)>;
-
 /// What the simplifier keeps per leaf label besides the leaf: its candidate list (the
 /// `CANDIDATES` cheapest allowed-by-angle partners of its last search, by key), how far it
 /// has been consumed, the largest key consumed and the first label its last search did not
@@ -210,17 +211,34 @@ struct Search {
     seen_below: u32,
 }
 
+impl Search {
+    const FRESH: Search = Search {
+        len: 0,
+        next: 0,
+        died: false,
+        refused: 0,
+        floor: 0,
+        seen_below: 0,
+    };
+}
+
 struct Simplifier {
     leaves: Vec<Leaf>,
     children: Vec<[u32; 2]>,
     alive: Vec<bool>,
     alive_count: usize,
+    /// Per label, the last partner whose pair with it was refused by the area bounds
+    /// (`EMPTY`: none). Refusal is symmetric and final while both leaves live, so the
+    /// partner's own attempt at the pair is skipped instead of building the new leaf again.
+    refused_by: Vec<u32>,
     /// `CANDIDATES` keys per label (only the first `len` of each are meaningful).
     candidates: Vec<u64>,
     searches: Vec<Search>,
     grid: Grid,
     built_with: usize,
-    heap: BinaryHeap<Entry>,
+    /// Scratch list of the living labels, for laying out the grid.
+    living: Vec<u32>,
+    queue: Queue,
     weights: Weights,
     max_distance: f32,
     min_cos: f32,
@@ -257,11 +275,13 @@ impl Simplifier {
             children: Vec::with_capacity(leaves.len()),
             alive: Vec::with_capacity(capacity),
             alive_count: leaves.len(),
+            refused_by: Vec::with_capacity(capacity),
             candidates: Vec::with_capacity(capacity * CANDIDATES),
             searches: Vec::with_capacity(capacity),
             grid: Grid::default(),
             built_with: 0,
-            heap: BinaryHeap::with_capacity(capacity),
+            living: Vec::with_capacity(leaves.len()),
+            queue: Queue::with_capacity(capacity),
             weights: selection.weights,
             max_distance: selection.bounds.max_distance.max(0.0),
             max_growth: selection.bounds.max_growth,
@@ -278,16 +298,9 @@ impl Simplifier {
             inv_crown: if crown > 0.0 { 1.0 / crown } else { 0.0 },
         };
         s.alive.resize(leaves.len(), true);
+        s.refused_by.resize(leaves.len(), EMPTY);
         s.candidates.resize(leaves.len() * CANDIDATES, 0);
-        let fresh = Search {
-            len: 0,
-            next: 0,
-            died: false,
-            refused: 0,
-            floor: 0,
-            seen_below: 0,
-        };
-        s.searches.resize(leaves.len(), fresh);
+        s.searches.resize(leaves.len(), Search::FRESH);
         s.rebuild_grid();
         s
     }
@@ -299,25 +312,25 @@ impl Simplifier {
     fn run(&mut self) {
         // The first searches go cell by cell, so neighbouring searches share the cells they
         // read (the queue pops by key alone, so the order of pushes does not matter).
-        let mut order = Vec::with_capacity(self.leaves.len());
-        for cell in &self.grid.cells {
-            order.extend(cell.iter().map(|slot| slot.label));
-        }
+        let order: Vec<u32> = self.grid.traits.iter().map(|t| t.label).collect();
         for i in order {
-            self.search(i, false);
+            if i != EMPTY {
+                self.search(i, false);
+            }
         }
-        while let Some(Reverse((key, a))) = self.heap.pop() {
+        while let Some((key, a)) = self.queue.pop() {
             if !self.alive[a as usize] {
                 continue;
             }
             let b = key as u32;
             let dead = !self.alive[b as usize];
-            if !dead {
+            if !dead && self.refused_by[a as usize] != b {
                 let new = Leaf::collapse(&self.leaves[a as usize], &self.leaves[b as usize]);
                 if self.allowed(a, b, &new) {
                     self.collapse(a, b, new);
                     continue;
                 }
+                self.refused_by[b as usize] = a;
             }
             self.advance(a, key, dead);
         }
@@ -334,20 +347,16 @@ impl Simplifier {
         self.children.push([a.min(b), a.max(b)]);
         self.leaves.push(new);
         self.alive.push(true);
+        self.refused_by.push(EMPTY);
         self.candidates.extend_from_slice(&[0; CANDIDATES]);
-        self.searches.push(Search {
-            len: 0,
-            next: 0,
-            died: false,
-            refused: 0,
-            floor: 0,
-            seen_below: 0,
-        });
+        self.searches.push(Search::FRESH);
         self.alive_count -= 1;
         if self.alive_count * 2 <= self.built_with {
             self.rebuild_grid();
-        } else {
-            self.grid.insert(label, &new);
+        } else if !self.grid.insert(label, &new) {
+            // The new leaf's cell is full: the same cells laid out again, with new room.
+            self.collect_living();
+            self.grid.fill(&self.leaves, &self.living);
         }
         self.search(label, false);
     }
@@ -362,12 +371,17 @@ impl Simplifier {
         while s.next < s.len {
             let key = self.candidates[base + s.next as usize];
             s.next += 1;
-            if self.alive[key as u32 as usize] {
-                self.heap.push(Reverse((key, a)));
+            let b = key as u32;
+            if !self.alive[b as usize] {
+                s.floor = s.floor.max(key);
+                s.died = true;
+            } else if self.refused_by[a as usize] == b {
+                // Refused from `b`'s side already: consumed without queueing it.
+                s.floor = s.floor.max(key);
+            } else {
+                self.queue.push((key, a));
                 return;
             }
-            s.floor = s.floor.max(key);
-            s.died = true;
         }
         // A list whose every candidate was refused by the bounds looks farther only
         // `RETRIES` times, then retires its leaf; new leaves near it still find it.
@@ -380,40 +394,44 @@ impl Simplifier {
     /// Fills `a`'s candidate list with its `CANDIDATES` nearest partners allowed by the
     /// distance and angle bounds, cheapest first, and queues the first. The grid is searched
     /// in rings of cells around `a` until the ring is farther than the farthest of them, or
-    /// than the distance bound to a partner as large as `a`. A repeated search (`again`) skips the
-    /// partners consumed before (keys up to the floor) unless they were made after the last
-    /// search.
+    /// than the distance bound to a partner as large as `a`. A repeated search (`again`)
+    /// skips the partners consumed before (keys up to the floor) unless they were made after
+    /// the last search.
     fn search(&mut self, a: u32, again: bool) {
-        let la = &self.leaves[a as usize];
-        let me = Slot::of(a, la);
+        let me = Traits::of(a, &self.leaves[a as usize]);
         let (floor, seen_below) = {
             let s = &self.searches[a as usize];
             (s.floor, s.seen_below)
         };
+        let centre_of_me = me.center;
         // The distance bound to partners no larger than `a`: larger ones find `a` in their
         // own searches.
         let reach = self.max_distance * 2.0 * me.radius;
         // The nearest allowed partners: (distance squared, key), by distance.
         let mut near = [(f32::MAX, u64::MAX); CANDIDATES];
         let mut len = 0usize;
-        let centre = self.grid.coords(me.center);
+        let centre = self.grid.coords(centre_of_me);
+        let grid = &self.grid;
         let mut ring = 0i32;
         loop {
-            self.grid.ring(centre, ring, |cell| {
-                for slot in cell {
-                    let d2 = me.center.distance_squared(slot.center);
-                    let limit = self.max_distance * (me.radius + slot.radius);
-                    if slot.label == a
-                        || d2 > limit * limit
-                        || (len == CANDIDATES && d2 >= near[CANDIDATES - 1].0)
-                    {
+            grid.ring(centre, ring, |slots| {
+                // Only the centre and radius are read for the distance test (16 bytes a
+                // slot, contiguous); the rest only for the pairs within the bound.
+                for (i, sphere) in slots.clone().zip(&grid.spheres[slots]) {
+                    let d2 = centre_of_me.distance_squared(sphere.truncate());
+                    let limit = self.max_distance * (me.radius + sphere.w);
+                    if d2 > limit * limit || (len == CANDIDATES && d2 >= near[CANDIDATES - 1].0) {
                         continue;
                     }
-                    let Some(cost) = self.cost(&me, la, slot) else {
+                    let other = &grid.traits[i];
+                    if other.label == a {
+                        continue;
+                    }
+                    let Some(cost) = self.cost(&me, other) else {
                         continue;
                     };
-                    let k = key(cost, slot.label);
-                    if again && k <= floor && slot.label < seen_below {
+                    let k = key(cost, other.label);
+                    if again && k <= floor && other.label < seen_below {
                         continue;
                     }
                     // Insertion into the sorted, bounded list.
@@ -427,10 +445,10 @@ impl Simplifier {
                 }
             });
             // Every point of the rings beyond is at least `ring` cells away.
-            let beyond = ring as f32 * self.grid.cell;
+            let beyond = ring as f32 * grid.cell;
             if (len == CANDIDATES && beyond * beyond >= near[len - 1].0)
                 || beyond >= reach
-                || !self.grid.has_ring(centre, ring + 1)
+                || !grid.has_ring(centre, ring + 1)
             {
                 break;
             }
@@ -446,7 +464,7 @@ impl Simplifier {
         s.next = u8::from(len > 0);
         s.seen_below = self.leaves.len() as u32;
         if len > 0 {
-            self.heap.push(Reverse((best[0], a)));
+            self.queue.push((best[0], a));
         }
     }
 
@@ -466,53 +484,57 @@ impl Simplifier {
                 .all(|c| c.cmpge(lo).all() && c.cmple(hi).all())
     }
 
+    /// The living labels, in increasing order, into `self.living`.
+    fn collect_living(&mut self) {
+        self.living.clear();
+        let alive = self.alive.iter().enumerate().filter(|(_, a)| **a);
+        self.living.extend(alive.map(|(i, _)| i as u32));
+    }
+
     /// A grid of the living leaves with about three leaves per occupied cell, so that the
     /// nearest partners of a leaf are found in its cell and the next ring or two.
     fn rebuild_grid(&mut self) {
+        self.collect_living();
         let mut lo = Vec3::splat(f32::MAX);
         let mut hi = Vec3::splat(f32::MIN);
         let mut radii = 0.0f64;
-        let mut living = 0usize;
-        for (leaf, _) in self.leaves.iter().zip(&self.alive).filter(|(_, a)| **a) {
+        for &i in &self.living {
+            let leaf = &self.leaves[i as usize];
             lo = lo.min(leaf.center);
             hi = hi.max(leaf.center);
             radii += f64::from(leaf.radius());
-            living += 1;
         }
+        let living = self.living.len();
         let mean_radius = (radii / living.max(1) as f64) as f32;
         // Cells as wide as the reach of a leaf of the mean size, narrower while the occupied
         // ones hold more than three leaves each (and the grid has at most a cell per leaf).
         let mut cell = self.max_distance * 2.0 * mean_radius;
+        let mut grid = std::mem::take(&mut self.grid);
         loop {
-            let mut grid = Grid::new(lo, hi, cell, living);
-            for (i, leaf) in self.leaves.iter().enumerate() {
-                if self.alive[i] {
-                    grid.insert(i as u32, leaf);
-                }
-            }
-            let occupied = grid.cells.iter().filter(|c| !c.is_empty()).count();
-            let finer = grid.cells.len() * 8 <= living;
-            cell = grid.cell * 0.5;
-            self.grid = grid;
+            grid.shape(lo, hi, cell, living);
+            let occupied = grid.occupied(&self.leaves, &self.living);
+            let finer = grid.cell_count() * 8 <= living;
             if occupied * 3 >= living || !finer {
                 break;
             }
+            cell = grid.cell * 0.5;
         }
+        grid.fill(&self.leaves, &self.living);
+        self.grid = grid;
         self.built_with = living;
     }
 
     /// The weighted distance of seed 003 §2.4.1 between two leaves within the distance
     /// bound, or `None` when the angle bound forbids the pair.
-    fn cost(&self, a: &Slot, la: &Leaf, b: &Slot) -> Option<f32> {
-        let lb = &self.leaves[b.label as usize];
-        let cos = la.normal.dot(lb.normal).abs();
+    fn cost(&self, a: &Traits, b: &Traits) -> Option<f32> {
+        let cos = a.normal.dot(b.normal).abs();
         if cos < self.min_cos {
             return None;
         }
         let d = a.center.distance(b.center) / (a.radius + b.radius);
         let w = &self.weights;
-        let (na, nb) = (la.count as f32, lb.count as f32);
-        let (aa, ab) = (la.area(), lb.area());
+        let (na, nb) = (a.count, b.count);
+        let (aa, ab) = (a.area, b.area);
         let mid = (a.center + b.center) * 0.5;
         let cost = w.distance * d
             + w.coplanarity * (1.0 - cos.min(1.0))
@@ -523,39 +545,135 @@ impl Simplifier {
     }
 }
 
-/// A grid cell's copy of what the distance test of a candidate needs (20 bytes), so the scan
-/// reads little, contiguous memory; the rest is read from the leaf when it passes.
+/// A 4-ary min-heap of (candidate key, leaf): half the levels of a binary heap, and a
+/// node's four children lie side by side. Pops in the order of the pairs, so ties between
+/// equal keys go to the lower leaf.
+struct Queue {
+    items: Vec<(u64, u32)>,
+}
+
+impl Queue {
+    fn with_capacity(capacity: usize) -> Queue {
+        Queue {
+            items: Vec::with_capacity(capacity),
+        }
+    }
+
+    fn push(&mut self, item: (u64, u32)) {
+        let mut i = self.items.len();
+        self.items.push(item);
+        while i > 0 {
+            let parent = (i - 1) / 4;
+            if self.items[parent] <= item {
+                break;
+            }
+            self.items[i] = self.items[parent];
+            i = parent;
+        }
+        self.items[i] = item;
+    }
+
+    fn pop(&mut self) -> Option<(u64, u32)> {
+        let last = self.items.pop()?;
+        let Some(&top) = self.items.first() else {
+            return Some(last);
+        };
+        // Sift `last` down from the root.
+        let n = self.items.len();
+        let mut i = 0;
+        loop {
+            let first = 4 * i + 1;
+            if first >= n {
+                break;
+            }
+            let end = (first + 4).min(n);
+            let mut child = first;
+            for c in first + 1..end {
+                if self.items[c] < self.items[child] {
+                    child = c;
+                }
+            }
+            if self.items[child] >= last {
+                break;
+            }
+            self.items[i] = self.items[child];
+            i = child;
+        }
+        self.items[i] = last;
+        Some(top)
+    }
+}
+
+/// The label of a grid slot with no leaf.
+const EMPTY: u32 = u32::MAX;
+
+/// What the cost of a pair reads of a leaf (the grid keeps a copy in its cell, so a search
+/// reads no leaf).
 #[derive(Clone, Copy)]
-struct Slot {
+struct Traits {
     center: Vec3,
     radius: f32,
+    normal: Vec3,
+    /// Original leaves represented.
+    count: f32,
+    area: f32,
     label: u32,
 }
 
-impl Slot {
-    fn of(label: u32, leaf: &Leaf) -> Slot {
-        Slot {
+impl Traits {
+    const NONE: Traits = Traits {
+        center: Vec3::ZERO,
+        radius: 0.0,
+        normal: Vec3::ZERO,
+        count: 0.0,
+        area: 0.0,
+        label: EMPTY,
+    };
+
+    fn of(label: u32, leaf: &Leaf) -> Traits {
+        Traits {
             center: leaf.center,
             radius: leaf.radius(),
+            normal: leaf.normal,
+            count: leaf.count as f32,
+            area: leaf.area(),
             label,
         }
     }
 }
 
+/// A cell of the grid: its slots are `start .. start + len` of the grid's arrays, with room
+/// up to the next cell's start.
+#[derive(Clone, Copy, Default)]
+struct Cell {
+    start: u32,
+    len: u32,
+}
+
 /// A dense uniform grid of living leaves over the box of their centres; points outside the
-/// box (new leaves may stray a little) go to the nearest border cell.
+/// box (new leaves may stray a little) go to the nearest border cell. The slots of all cells
+/// lie in two arrays, cell after cell (x fastest, so a row of cells is one run of memory):
+/// `spheres` holds each leaf's centre and radius, all the distance test reads, and `traits`
+/// the rest the cost needs. Each cell keeps room for half as many leaves again as it was
+/// laid out with, for the new leaves of collapses.
 #[derive(Default)]
 struct Grid {
     origin: Vec3,
     cell: f32,
     inv_cell: f32,
     dims: [i32; 3],
-    cells: Vec<Vec<Slot>>,
+    /// One per cell, and one past the last that marks the end of the slots.
+    cells: Vec<Cell>,
+    spheres: Vec<Vec4>,
+    traits: Vec<Traits>,
+    /// Scratch: the cell of each leaf being laid out.
+    cell_of: Vec<u32>,
 }
 
 impl Grid {
-    /// At most one cell per leaf: a wider cell than asked when the box is large.
-    fn new(lo: Vec3, hi: Vec3, cell: f32, leaves: usize) -> Grid {
+    /// Sets the grid's box and cell size, with at most one cell per leaf: a wider cell than
+    /// asked when the box is large. The cells are laid out by [`Grid::fill`].
+    fn shape(&mut self, lo: Vec3, hi: Vec3, cell: f32, leaves: usize) {
         let extent = (hi - lo).max(Vec3::ZERO);
         let most = leaves.max(1) as f32;
         let mut cell = if cell > 0.0 && cell.is_finite() {
@@ -576,14 +694,61 @@ impl Grid {
         }
         let n = (extent / cell).floor() + Vec3::ONE;
         // `as` saturates and maps NaN to 0 (coordinates near f32::MAX): at least one cell.
-        let dims = [n.x, n.y, n.z].map(|v| (v as i32).max(1));
-        Grid {
-            origin: lo,
-            cell,
-            inv_cell: 1.0 / cell,
-            dims,
-            cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
+        self.dims = [n.x, n.y, n.z].map(|v| (v as i32).max(1));
+        self.origin = lo;
+        self.cell = cell;
+        self.inv_cell = 1.0 / cell;
+    }
+
+    /// Number of cells.
+    fn cell_count(&self) -> usize {
+        self.dims.iter().map(|&d| d as usize).product()
+    }
+
+    /// Counts the leaves `labels` of each cell into `cells` (zeroed first); the cell of each
+    /// into `cell_of`.
+    fn count(&mut self, leaves: &[Leaf], labels: &[u32]) {
+        self.cells.clear();
+        self.cells.resize(self.cell_count() + 1, Cell::default());
+        self.cell_of.clear();
+        for &l in labels {
+            let c = self.index(self.coords(leaves[l as usize].center));
+            self.cells[c].len += 1;
+            self.cell_of.push(c as u32);
         }
+    }
+
+    /// How many cells the leaves `labels` occupy.
+    fn occupied(&mut self, leaves: &[Leaf], labels: &[u32]) -> usize {
+        self.count(leaves, labels);
+        self.cells.iter().filter(|c| c.len > 0).count()
+    }
+
+    /// Lays out the leaves `labels` cell by cell, in the order given within each cell.
+    fn fill(&mut self, leaves: &[Leaf], labels: &[u32]) {
+        self.count(leaves, labels);
+        let mut start = 0u32;
+        for cell in &mut self.cells {
+            let len = cell.len;
+            *cell = Cell { start, len: 0 };
+            start += len + len / 2 + 1;
+        }
+        let slots = start as usize;
+        self.spheres.clear();
+        self.spheres.resize(slots, Vec4::ZERO);
+        self.traits.clear();
+        self.traits.resize(slots, Traits::NONE);
+        for (k, &l) in labels.iter().enumerate() {
+            let cell = &mut self.cells[self.cell_of[k] as usize];
+            let slot = (cell.start + cell.len) as usize;
+            cell.len += 1;
+            self.put(slot, Traits::of(l, &leaves[l as usize]));
+        }
+    }
+
+    fn put(&mut self, slot: usize, traits: Traits) {
+        self.spheres[slot] = traits.center.extend(traits.radius);
+        self.traits[slot] = traits;
     }
 
     /// The cell coordinates of `p`, clamped to the grid.
@@ -604,16 +769,32 @@ impl Grid {
         ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize
     }
 
-    fn insert(&mut self, label: u32, leaf: &Leaf) {
+    /// Adds the leaf `label` to its cell; `false` when the cell has no room left.
+    fn insert(&mut self, label: u32, leaf: &Leaf) -> bool {
         let i = self.index(self.coords(leaf.center));
-        self.cells[i].push(Slot::of(label, leaf));
+        let (cell, end) = (self.cells[i], self.cells[i + 1].start);
+        if cell.start + cell.len >= end {
+            return false;
+        }
+        self.cells[i].len += 1;
+        self.put((cell.start + cell.len) as usize, Traits::of(label, leaf));
+        true
     }
 
+    /// Removes the leaf `label` at `p` from its cell (the cell's last leaf takes its slot).
     fn remove(&mut self, label: u32, p: Vec3) {
         let i = self.index(self.coords(p));
-        let cell = &mut self.cells[i];
-        if let Some(k) = cell.iter().position(|s| s.label == label) {
-            cell.swap_remove(k);
+        let Cell { start, len } = self.cells[i];
+        let (start, end) = (start as usize, (start + len) as usize);
+        if let Some(k) = self.traits[start..end]
+            .iter()
+            .position(|t| t.label == label)
+        {
+            let last = end - 1;
+            self.spheres[start + k] = self.spheres[last];
+            self.traits[start + k] = self.traits[last];
+            self.traits[last] = Traits::NONE;
+            self.cells[i].len -= 1;
         }
     }
 
@@ -622,22 +803,28 @@ impl Grid {
         (0..3).any(|k| c[k] - ring >= 0 || c[k] + ring < self.dims[k])
     }
 
-    /// Calls `visit` on the cells exactly `ring` cells away from `c` (Chebyshev distance)
-    /// within the grid.
-    fn ring(&self, c: [i32; 3], ring: i32, mut visit: impl FnMut(&[Slot])) {
+    /// Calls `visit` on the slots of the cells exactly `ring` cells away from `c` (Chebyshev
+    /// distance) within the grid: once per run of cells adjacent in memory.
+    fn ring(&self, c: [i32; 3], ring: i32, mut visit: impl FnMut(Range<usize>)) {
         let lo = [0, 1, 2].map(|k| (c[k] - ring).max(0));
         let hi = [0, 1, 2].map(|k| (c[k] + ring).min(self.dims[k] - 1));
+        let mut run = |x0: i32, x1: i32, y: i32, z: i32| {
+            let (first, last) = (self.index([x0, y, z]), self.index([x1, y, z]));
+            for cell in &self.cells[first..=last] {
+                if cell.len > 0 {
+                    visit(cell.start as usize..(cell.start + cell.len) as usize);
+                }
+            }
+        };
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 if ring == 0 || (z - c[2]).abs() == ring || (y - c[1]).abs() == ring {
-                    for x in lo[0]..=hi[0] {
-                        visit(&self.cells[self.index([x, y, z])]);
-                    }
+                    run(lo[0], hi[0], y, z);
                 } else {
                     // Off the ring's faces in y and z only the two x ends are on it.
                     for x in [c[0] - ring, c[0] + ring] {
                         if x >= 0 && x < self.dims[0] {
-                            visit(&self.cells[self.index([x, y, z])]);
+                            run(x, x, y, z);
                         }
                     }
                 }
@@ -736,5 +923,43 @@ mod tests {
         let b = simplify(&leaves, &Selection::default());
         assert_eq!(a, b);
         assert!(a.children.len() > 100, "{}", a.children.len());
+    }
+
+    #[test]
+    fn the_queue_pops_in_increasing_order() {
+        let mut queue = Queue::with_capacity(4);
+        let mut items: Vec<(u64, u32)> = (0..500u32)
+            .map(|i| (u64::from(i.wrapping_mul(2_654_435_761) % 97), i % 13))
+            .collect();
+        for &item in &items {
+            queue.push(item);
+        }
+        items.sort_unstable();
+        let popped: Vec<(u64, u32)> = std::iter::from_fn(|| queue.pop()).collect();
+        assert_eq!(popped, items);
+    }
+
+    #[test]
+    fn a_full_cell_refuses_a_leaf_until_laid_out_again() {
+        let leaves: Vec<Leaf> = (0..6)
+            .map(|i| leaf(Vec3::new(i as f32 * 0.01, 0.0, 0.0), Vec3::Z))
+            .collect();
+        let labels: Vec<u32> = (0..6).collect();
+        let mut grid = Grid::default();
+        grid.shape(Vec3::ZERO, Vec3::splat(0.05), 1.0, leaves.len());
+        grid.fill(&leaves, &labels[..4]);
+        // Four leaves leave room for 4 / 2 + 1 more in their one cell.
+        assert!(grid.insert(4, &leaves[4]));
+        assert!(grid.insert(5, &leaves[5]));
+        assert!(grid.insert(5, &leaves[5]));
+        assert!(!grid.insert(5, &leaves[5]));
+        grid.remove(2, leaves[2].center);
+        assert!(grid.insert(2, &leaves[2]));
+        grid.fill(&leaves, &labels);
+        let mut seen = Vec::new();
+        grid.ring([0, 0, 0], 0, |slots| {
+            seen.extend(grid.traits[slots].iter().map(|t| t.label));
+        });
+        assert_eq!(seen, labels);
     }
 }
