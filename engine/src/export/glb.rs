@@ -6,13 +6,15 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
-use serde::ser::{Serialize, SerializeMap, Serializer};
 use serde_json::{Map, Value as JsonValue, json};
 
-use crate::geometry::{
-    AlphaMode, InstanceGroup, Material, Mesh, Model, Primitive, Skeleton, Texture,
-};
+use crate::geometry::{AlphaMode, InstanceGroup, Material, Mesh, Model, Primitive, Texture};
 use crate::{Error, Result};
+
+pub use super::glb_container::{GLB_LIMIT, glb_container};
+use super::glb_extras::{Extra, MeshExtras};
+pub use super::glb_sky::UNLIT;
+use super::glb_sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
 
 /// What the root `extras.pge` records besides the model's own extras.
 #[derive(Clone, Debug, Default)]
@@ -429,90 +431,6 @@ fn le_bytes<const K: usize, const N: usize>(floats: [f32; K]) -> [u8; N] {
     out
 }
 
-/// One value of a mesh's `extras.pge`: its skeleton, written straight from the model, or one
-/// of the mesh's own extras.
-#[derive(Clone, Copy)]
-enum Extra<'m> {
-    Skeleton(&'m Skeleton),
-    Value(&'m JsonValue),
-}
-
-/// A mesh's `extras.pge` in order, borrowed from the model and serialized in one pass.
-#[derive(Default)]
-struct MeshExtras<'m>(Vec<(&'m str, Extra<'m>)>);
-
-impl MeshExtras<'_> {
-    /// `{"pge": {...}}` as the mesh's extras, serialized in one pass (no `Value` tree).
-    fn extras(&self) -> Result<json::Extras> {
-        serde_json::value::to_raw_value(&Entries([("pge", self)]))
-            .map(Some)
-            .map_err(|e| Error::Export(e.to_string()))
-    }
-}
-
-impl Serialize for MeshExtras<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(self.0.len()))?;
-        for (key, value) in &self.0 {
-            match value {
-                Extra::Skeleton(skeleton) => map.serialize_entry(key, &SkeletonJson(skeleton))?,
-                Extra::Value(value) => map.serialize_entry(key, value)?,
-            }
-        }
-        map.end()
-    }
-}
-
-/// A JSON object of the given entries, in order.
-struct Entries<const N: usize, T>([(&'static str, T); N]);
-
-impl<const N: usize, T: Serialize> Serialize for Entries<N, T> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(N))?;
-        for (key, value) in &self.0 {
-            map.serialize_entry(key, value)?;
-        }
-        map.end()
-    }
-}
-
-/// The skeleton as `{parents, positions, radii, orders}` (API.md §7), serialized straight
-/// from its arrays: a root's parent is -1; floats are written as the `f64` they widen to
-/// (`null` when not finite), as a `serde_json::Value` of them would be.
-struct SkeletonJson<'m>(&'m Skeleton);
-
-/// The items of an iterator, serialized as one JSON array.
-struct Items<F>(F);
-
-impl<I: Iterator<Item: Serialize>, F: Fn() -> I> Serialize for Items<F> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        s.collect_seq((self.0)())
-    }
-}
-
-impl Serialize for SkeletonJson<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let sk = self.0;
-        let mut map = s.serialize_map(Some(4))?;
-        map.serialize_entry(
-            "parents",
-            &Items(|| sk.parents.iter().map(|p| p.map_or(-1, i64::from))),
-        )?;
-        map.serialize_entry(
-            "positions",
-            &Items(|| {
-                sk.positions
-                    .iter()
-                    .flat_map(|p| p.to_array())
-                    .map(f64::from)
-            }),
-        )?;
-        map.serialize_entry("radii", &Items(|| sk.radii.iter().map(|&r| f64::from(r))))?;
-        map.serialize_entry("orders", &sk.orders)?;
-        map.end()
-    }
-}
-
 /// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
 /// the matrix otherwise.
 fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
@@ -815,104 +733,6 @@ impl Builder {
         }
         glb_container(&text, b.bin, GLB_LIMIT)
     }
-}
-
-/// The largest GLB file: its header stores lengths as 32-bit numbers.
-pub const GLB_LIMIT: u64 = u32::MAX as u64;
-
-/// The GLB container around a glTF JSON text (padded to 4 bytes) and a binary chunk (empty:
-/// none): an [`Error::Export`] naming the limit when the file would pass `limit` bytes
-/// ([`GLB_LIMIT`] when exporting; a smaller one in tests), never a truncated length. The
-/// binary chunk becomes the output, moved up behind the header and the JSON in place, rather
-/// than copied into a second allocation of the whole file.
-pub fn glb_container(text: &[u8], bin: Vec<u8>, limit: u64) -> Result<Vec<u8>> {
-    let total = 12
-        + 8
-        + text.len() as u64
-        + if bin.is_empty() {
-            0
-        } else {
-            8 + bin.len() as u64
-        };
-    let limit = limit.min(GLB_LIMIT);
-    if total > limit {
-        return Err(Error::Export(format!(
-            "the model needs a glb of {total} bytes, past the limit of {limit} bytes (a glb \
-             holds at most 4 GiB): lower the detail or split the model"
-        )));
-    }
-    let len32 =
-        |n: u64| u32::try_from(n).map_err(|_| Error::Export(format!("a glb length of {n} bytes")));
-    let mut head = Vec::with_capacity(28 + text.len());
-    head.extend_from_slice(b"glTF");
-    head.extend_from_slice(&2u32.to_le_bytes());
-    head.extend_from_slice(&len32(total)?.to_le_bytes());
-    head.extend_from_slice(&len32(text.len() as u64)?.to_le_bytes());
-    head.extend_from_slice(b"JSON");
-    head.extend_from_slice(text);
-    if bin.is_empty() {
-        return Ok(head);
-    }
-    head.extend_from_slice(&len32(bin.len() as u64)?.to_le_bytes());
-    head.extend_from_slice(b"BIN\0");
-    let mut out = bin;
-    let bin_len = out.len();
-    out.resize(total as usize, 0);
-    out.copy_within(..bin_len, head.len());
-    out[..head.len()].copy_from_slice(&head);
-    Ok(out)
-}
-
-/// The name of the glTF extension the sky dome's material uses.
-pub const UNLIT: &str = "KHR_materials_unlit";
-
-/// The sky dome's radius for a model smaller than a few metres.
-const SKY_MIN_RADIUS: f32 = 50.0;
-/// Columns of the sky dome's mesh.
-const SKY_SEGMENTS: u32 = 48;
-/// Rows of the sky dome's mesh.
-const SKY_RINGS: u32 = 24;
-
-/// A unit sphere seen from inside: `segments` columns and `rings` rows, texture coordinates
-/// of an equirectangular image (v = 0 straight up; u = 0.5 along -Z, u = 0.75 along +X),
-/// inward normals and counter-clockwise triangles as seen from the centre. The seam column
-/// is doubled; each pole is one triangle per column (no zero-area triangles).
-fn sky_sphere(segments: u32, rings: u32) -> Mesh {
-    use std::f32::consts::{PI, TAU};
-    let mut mesh = Mesh {
-        name: "sky".into(),
-        ..Mesh::default()
-    };
-    for r in 0..=rings {
-        let v = r as f32 / rings as f32;
-        let polar = v * PI;
-        for k in 0..=segments {
-            let u = k as f32 / segments as f32;
-            let azimuth = (u - 0.5) * TAU;
-            let dir = Vec3::new(
-                polar.sin() * azimuth.sin(),
-                polar.cos(),
-                -polar.sin() * azimuth.cos(),
-            );
-            mesh.positions.push(dir);
-            mesh.normals.push(-dir);
-            mesh.uvs.push(glam::Vec2::new(u, v));
-        }
-    }
-    let at = |r: u32, k: u32| r * (segments + 1) + k;
-    for r in 0..rings {
-        for k in 0..segments {
-            let (a, b, c, d) = (at(r, k), at(r, k + 1), at(r + 1, k), at(r + 1, k + 1));
-            // Seen from the centre, u grows to the right and v downwards.
-            if r > 0 {
-                mesh.indices.extend([a, c, b]);
-            }
-            if r + 1 < rings {
-                mesh.indices.extend([b, c, d]);
-            }
-        }
-    }
-    mesh
 }
 
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,

@@ -1,6 +1,7 @@
 //! Tests of stages as scenes and of empty models.
 
 use super::*;
+use crate::geometry::Skeleton;
 
 #[test]
 fn stages_are_named_scenes_sharing_their_textures() {
