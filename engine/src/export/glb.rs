@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, Vec3};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
@@ -11,8 +11,10 @@ use serde_json::{Map, Value as JsonValue, json};
 use crate::geometry::{AlphaMode, InstanceGroup, Material, Mesh, Model, Primitive, Texture};
 use crate::{Error, Result};
 
+use super::glb_container::glb_file;
 pub use super::glb_container::{GLB_LIMIT, glb_container};
 use super::glb_extras::{Extra, MeshExtras};
+use super::glb_layout::{Attribute, Data, Layout};
 pub use super::glb_sky::UNLIT;
 use super::glb_sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
 
@@ -45,7 +47,8 @@ pub const GENERATOR: &str = concat!("PGE ", env!("CARGO_PKG_VERSION"));
 #[derive(Default)]
 struct Builder {
     root: json::Root,
-    bin: Vec<u8>,
+    /// The binary chunk's views, placed as the JSON refers to them, written at the end.
+    layout: Layout,
     materials: Vec<(Arc<Material>, json::Index<json::Material>)>,
     textures: Vec<(Arc<Texture>, json::Index<json::Texture>)>,
     images: Vec<(Arc<Texture>, json::Index<json::Image>)>,
@@ -75,25 +78,14 @@ fn written<T: PartialEq, I: Copy>(list: &[(Arc<T>, I)], item: &Arc<T>) -> Option
 }
 
 impl Builder {
+    /// A buffer view of `data` at the next 4-byte boundary of the buffer, placed now and
+    /// written when the file is (see [`Layout`]).
     fn view(
         &mut self,
-        bytes: &[u8],
+        data: Data,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::buffer::View> {
-        self.view_with(bytes.len(), target, |dst| dst.copy_from_slice(bytes))
-    }
-
-    /// A buffer view of `len` bytes at the next 4-byte boundary of the buffer, written in
-    /// place by `fill` (no intermediate copy).
-    fn view_with(
-        &mut self,
-        len: usize,
-        target: Option<json::buffer::Target>,
-        fill: impl FnOnce(&mut [u8]),
-    ) -> json::Index<json::buffer::View> {
-        let offset = self.bin.len().next_multiple_of(4);
-        self.bin.resize(offset + len, 0);
-        fill(&mut self.bin[offset..]);
+        let (offset, len) = self.layout.place(data);
         self.root.push(json::buffer::View {
             buffer: json::Index::new(0),
             byte_length: USize64(len as u64),
@@ -106,23 +98,17 @@ impl Builder {
         })
     }
 
-    /// An accessor of `count` elements of `N` bytes, each written in place from its item of
-    /// `items` by `bytes`.
-    fn accessor<T, const N: usize>(
+    /// An accessor of the `count` elements of `data`, in a view of its own.
+    fn accessor(
         &mut self,
-        items: &[T],
-        bytes: impl Fn(&T) -> [u8; N],
+        data: Data,
+        count: usize,
         component: json::accessor::ComponentType,
         type_: json::accessor::Type,
         bounds: Option<(JsonValue, JsonValue)>,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::Accessor> {
-        let count = items.len();
-        let view = self.view_with(count * N, target, |dst| {
-            for (d, item) in dst.chunks_exact_mut(N).zip(items) {
-                d.copy_from_slice(&bytes(item));
-            }
-        });
+        let view = self.view(data, target);
         let (min, max) = match bounds {
             Some((a, b)) => (Some(a), Some(b)),
             None => (None, None),
@@ -143,8 +129,18 @@ impl Builder {
         })
     }
 
-    /// A VEC3 float vertex attribute, with its `min`/`max` when `bounds`.
-    fn vec3s(&mut self, data: &[Vec3], bounds: bool) -> json::Index<json::Accessor> {
+    /// A VEC3 float vertex attribute of `mesh` (positions or normals), with its `min`/`max`
+    /// when `bounds`.
+    fn vec3s(
+        &mut self,
+        mesh: &Arc<Mesh>,
+        attribute: Attribute,
+        bounds: bool,
+    ) -> json::Index<json::Accessor> {
+        let data = match attribute {
+            Attribute::Normals => &mesh.normals,
+            _ => &mesh.positions,
+        };
         let b = bounds.then(|| {
             let mut lo = [f32::INFINITY; 3];
             let mut hi = [f32::NEG_INFINITY; 3];
@@ -157,8 +153,8 @@ impl Builder {
             (json!(lo.to_vec()), json!(hi.to_vec()))
         });
         self.accessor(
-            data,
-            |p| le_bytes::<3, 12>(p.to_array()),
+            Data::Mesh(mesh.clone(), attribute),
+            data.len(),
             json::accessor::ComponentType::F32,
             json::accessor::Type::Vec3,
             b,
@@ -167,10 +163,10 @@ impl Builder {
     }
 
     /// A VEC2 float vertex attribute (texture coordinates).
-    fn vec2s(&mut self, data: &[Vec2]) -> json::Index<json::Accessor> {
+    fn vec2s(&mut self, mesh: &Arc<Mesh>) -> json::Index<json::Accessor> {
         self.accessor(
-            data,
-            |p| le_bytes::<2, 8>(p.to_array()),
+            Data::Mesh(mesh.clone(), Attribute::Uvs),
+            mesh.uvs.len(),
             json::accessor::ComponentType::F32,
             json::accessor::Type::Vec2,
             None,
@@ -180,13 +176,10 @@ impl Builder {
 
     /// A `COLOR_0` accessor: linear RGBA as normalized unsigned bytes (4 bytes a vertex
     /// instead of 16), rounded to the nearest of the 256 steps.
-    fn colors(&mut self, colors: &[Vec4]) -> json::Index<json::Accessor> {
+    fn colors(&mut self, mesh: &Arc<Mesh>) -> json::Index<json::Accessor> {
         let index = self.accessor(
-            colors,
-            |c| {
-                c.to_array()
-                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            },
+            Data::Mesh(mesh.clone(), Attribute::Colors),
+            mesh.colors.len(),
             json::accessor::ComponentType::U8,
             json::accessor::Type::Vec4,
             None,
@@ -199,21 +192,18 @@ impl Builder {
     }
 
     /// A float accessor of per-instance data (no buffer view target: not a vertex attribute).
-    fn instance_floats(&mut self, data: &[f32], per: usize) -> json::Index<json::Accessor> {
+    fn instance_floats(&mut self, data: Vec<f32>, per: usize) -> json::Index<json::Accessor> {
         use json::accessor::Type;
         let type_ = if per == 3 { Type::Vec3 } else { Type::Vec4 };
-        let index = self.accessor(
-            data,
-            |f| f.to_le_bytes(),
+        let count = data.len() / per;
+        self.accessor(
+            Data::Floats(data),
+            count,
             json::accessor::ComponentType::F32,
             type_,
             None,
             None,
-        );
-        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-            accessor.count = USize64((data.len() / per) as u64);
-        }
-        index
+        )
     }
 
     /// The embedded PNG image of `tex`, written once however many textures (and the
@@ -222,7 +212,7 @@ impl Builder {
         if let Some(i) = written(&self.images, tex) {
             return i;
         }
-        let view = self.view(&tex.png, None);
+        let view = self.view(Data::Png(tex.clone()), None);
         let index = self.root.push(json::Image {
             buffer_view: Some(view),
             mime_type: Some(json::image::MimeType("image/png".into())),
@@ -317,7 +307,7 @@ impl Builder {
         index
     }
 
-    fn mesh(&mut self, mesh: &Mesh) -> Result<json::Index<json::Mesh>> {
+    fn mesh(&mut self, mesh: &Arc<Mesh>) -> Result<json::Index<json::Mesh>> {
         let (primitive, pge) = self.primitive(mesh)?;
         let extras = if pge.0.is_empty() {
             None
@@ -365,28 +355,34 @@ impl Builder {
         }))
     }
 
-    fn primitive<'m>(&mut self, mesh: &'m Mesh) -> Result<(json::mesh::Primitive, MeshExtras<'m>)> {
+    fn primitive<'m>(
+        &mut self,
+        mesh: &'m Arc<Mesh>,
+    ) -> Result<(json::mesh::Primitive, MeshExtras<'m>)> {
         use json::accessor::{ComponentType, Type};
         use json::mesh::Semantic;
         // The callers validated the model (and the sky dome is built here, valid).
         let mut attributes = std::collections::BTreeMap::new();
         attributes.insert(
             Valid(Semantic::Positions),
-            self.vec3s(&mesh.positions, true),
+            self.vec3s(mesh, Attribute::Positions, true),
         );
         if !mesh.normals.is_empty() {
-            attributes.insert(Valid(Semantic::Normals), self.vec3s(&mesh.normals, false));
+            attributes.insert(
+                Valid(Semantic::Normals),
+                self.vec3s(mesh, Attribute::Normals, false),
+            );
         }
         // Texture coordinates only where a texture reads them.
         if !mesh.uvs.is_empty() && mesh.material.texture.is_some() {
-            attributes.insert(Valid(Semantic::TexCoords(0)), self.vec2s(&mesh.uvs));
+            attributes.insert(Valid(Semantic::TexCoords(0)), self.vec2s(mesh));
         }
         if !mesh.colors.is_empty() {
-            attributes.insert(Valid(Semantic::Colors(0)), self.colors(&mesh.colors));
+            attributes.insert(Valid(Semantic::Colors(0)), self.colors(mesh));
         }
         let indices = self.accessor(
-            &mesh.indices,
-            |i| i.to_le_bytes(),
+            Data::Mesh(mesh.clone(), Attribute::Indices),
+            mesh.indices.len(),
             ComponentType::U32,
             Type::Scalar,
             None,
@@ -420,15 +416,6 @@ impl Builder {
         };
         Ok((primitive, pge))
     }
-}
-
-/// Four little-endian `f32`s or fewer, as one array of bytes.
-fn le_bytes<const K: usize, const N: usize>(floats: [f32; K]) -> [u8; N] {
-    let mut out = [0; N];
-    for (d, f) in out.chunks_exact_mut(4).zip(floats) {
-        d.copy_from_slice(&f.to_le_bytes());
-    }
-    out
 }
 
 /// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
@@ -473,7 +460,6 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
 pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<Vec<u8>> {
     model.validate()?;
     let mut b = Builder::new();
-    b.reserve(model);
     b.instancing = instancing;
     b.root.scene = Some(b.scene(model, "pge")?);
     b.finish(model, meta, None)
@@ -490,9 +476,6 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
     };
     let mut b = Builder::new();
     let mut summary = Vec::with_capacity(stages.len());
-    for (_, model) in stages {
-        b.reserve(model);
-    }
     for (name, model) in stages {
         model.validate()?;
         b.root.scene = Some(b.scene(model, name)?);
@@ -508,25 +491,6 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
 }
 
 impl Builder {
-    /// Reserves the buffer for the vertex and index data of `model`'s meshes and the JSON
-    /// (skeletons), so that it is allocated once rather than grown (and copied) as meshes
-    /// are written.
-    fn reserve(&mut self, model: &Model) {
-        let bytes: usize = model
-            .meshes
-            .iter()
-            .map(|m| {
-                (m.positions.len() + m.normals.len()) * 12
-                    + m.uvs.len() * 8
-                    + (m.colors.len() + m.indices.len()) * 4
-                    + 16
-                    + m.skeleton.as_ref().map_or(0, |s| s.positions.len() * 80)
-            })
-            .sum();
-        // The JSON goes in front of the buffer at the end (see `finish`): room for it too.
-        self.bin.reserve(bytes + (1 << 16));
-    }
-
     fn new() -> Builder {
         let mut b = Builder::default();
         b.root.asset = json::Asset {
@@ -580,9 +544,9 @@ impl Builder {
                         s.extend_from_slice(&[x.scale; 3]);
                     }
                     let accessors = [
-                        self.instance_floats(&t, 3),
-                        self.instance_floats(&r, 4),
-                        self.instance_floats(&s, 3),
+                        self.instance_floats(t, 3),
+                        self.instance_floats(r, 4),
+                        self.instance_floats(s, 3),
                     ];
                     let index = self.root.push(json::Node {
                         mesh: Some(mesh),
@@ -660,6 +624,7 @@ impl Builder {
             roughness: 1.0,
             ..Material::default()
         });
+        let mesh = Arc::new(mesh);
         let index = self.mesh(&mesh)?;
         if let Some(material) = written(&self.materials, &mesh.material) {
             self.unlit.push(material.value());
@@ -711,12 +676,10 @@ impl Builder {
             scene.extras.clone_from(&extras);
         }
         b.root.extras = extras;
-        while !b.bin.len().is_multiple_of(4) {
-            b.bin.push(0);
-        }
-        if !b.bin.is_empty() {
+        let bin_len = b.layout.padded_len();
+        if bin_len > 0 {
             b.root.push(json::Buffer {
-                byte_length: USize64(b.bin.len() as u64),
+                byte_length: USize64(bin_len as u64),
                 name: None,
                 uri: None,
                 extensions: None,
@@ -731,7 +694,7 @@ impl Builder {
         while !text.len().is_multiple_of(4) {
             text.push(b' ');
         }
-        glb_container(&text, b.bin, GLB_LIMIT)
+        glb_file(&text, bin_len, GLB_LIMIT, |bin| b.layout.write(bin))
     }
 }
 

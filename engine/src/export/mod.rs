@@ -3,6 +3,7 @@
 mod glb;
 mod glb_container;
 mod glb_extras;
+mod glb_layout;
 mod glb_sky;
 mod obj;
 
