@@ -1,6 +1,6 @@
 //! Export speed: a 500,000-triangle grid mesh to glb bytes; a 2 M-triangle tree-like mesh
 //! (normals, colours, a 100,000-node skeleton) to glb bytes beside its limit, one copy of
-//! the same number of bytes; and a script run end to end.
+//! the same number of bytes, on every core and on one thread; and a script run end to end.
 
 use std::sync::Arc;
 
@@ -78,6 +78,14 @@ fn export(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("glb_tree_2m_triangles", |b| {
         b.iter(|| glb_bytes(&model, &ExportMeta::default()).expect("exports"))
+    });
+    // The same on one thread (the row above uses every core): the 2-thread speed-up.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a thread pool");
+    g.bench_function("glb_tree_2m_triangles_1_thread", |b| {
+        b.iter(|| one.install(|| glb_bytes(&model, &ExportMeta::default()).expect("exports")))
     });
     g.bench_function("memcpy_same_bytes", |b| b.iter(|| source.clone()));
     g.finish();

@@ -2,18 +2,23 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, Vec3};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
-use serde::ser::{Serialize, SerializeMap, Serializer};
 use serde_json::{Map, Value as JsonValue, json};
 
 use crate::geometry::{
-    AlphaMode, DiffuseTransmission, InstanceGroup, Material, Mesh, Model, Primitive, Skeleton,
-    Texture,
+    AlphaMode, DiffuseTransmission, InstanceGroup, Material, Mesh, Model, Primitive, Texture,
 };
 use crate::{Error, Result};
+
+use super::glb_container::glb_file;
+pub use super::glb_container::{GLB_LIMIT, glb_container};
+use super::glb_extras::{Extra, MeshExtras};
+use super::glb_layout::{Attribute, Data, Layout};
+pub use super::glb_sky::UNLIT;
+use super::glb_sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
 
 /// What the root `extras.pge` records besides the model's own extras.
 #[derive(Clone, Debug, Default)]
@@ -44,7 +49,8 @@ pub const GENERATOR: &str = concat!("PGE ", env!("CARGO_PKG_VERSION"));
 #[derive(Default)]
 struct Builder {
     root: json::Root,
-    bin: Vec<u8>,
+    /// The binary chunk's views, placed as the JSON refers to them, written at the end.
+    layout: Layout,
     materials: Vec<(Arc<Material>, json::Index<json::Material>)>,
     textures: Vec<(Arc<Texture>, json::Index<json::Texture>)>,
     images: Vec<(Arc<Texture>, json::Index<json::Image>)>,
@@ -77,25 +83,14 @@ fn written<T: PartialEq, I: Copy>(list: &[(Arc<T>, I)], item: &Arc<T>) -> Option
 }
 
 impl Builder {
+    /// A buffer view of `data` at the next 4-byte boundary of the buffer, placed now and
+    /// written when the file is (see [`Layout`]).
     fn view(
         &mut self,
-        bytes: &[u8],
+        data: Data,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::buffer::View> {
-        self.view_with(bytes.len(), target, |dst| dst.copy_from_slice(bytes))
-    }
-
-    /// A buffer view of `len` bytes at the next 4-byte boundary of the buffer, written in
-    /// place by `fill` (no intermediate copy).
-    fn view_with(
-        &mut self,
-        len: usize,
-        target: Option<json::buffer::Target>,
-        fill: impl FnOnce(&mut [u8]),
-    ) -> json::Index<json::buffer::View> {
-        let offset = self.bin.len().next_multiple_of(4);
-        self.bin.resize(offset + len, 0);
-        fill(&mut self.bin[offset..]);
+        let (offset, len) = self.layout.place(data);
         self.root.push(json::buffer::View {
             buffer: json::Index::new(0),
             byte_length: USize64(len as u64),
@@ -108,23 +103,17 @@ impl Builder {
         })
     }
 
-    /// An accessor of `count` elements of `N` bytes, each written in place from its item of
-    /// `items` by `bytes`.
-    fn accessor<T, const N: usize>(
+    /// An accessor of the `count` elements of `data`, in a view of its own.
+    fn accessor(
         &mut self,
-        items: &[T],
-        bytes: impl Fn(&T) -> [u8; N],
+        data: Data,
+        count: usize,
         component: json::accessor::ComponentType,
         type_: json::accessor::Type,
         bounds: Option<(JsonValue, JsonValue)>,
         target: Option<json::buffer::Target>,
     ) -> json::Index<json::Accessor> {
-        let count = items.len();
-        let view = self.view_with(count * N, target, |dst| {
-            for (d, item) in dst.chunks_exact_mut(N).zip(items) {
-                d.copy_from_slice(&bytes(item));
-            }
-        });
+        let view = self.view(data, target);
         let (min, max) = match bounds {
             Some((a, b)) => (Some(a), Some(b)),
             None => (None, None),
@@ -145,8 +134,18 @@ impl Builder {
         })
     }
 
-    /// A VEC3 float vertex attribute, with its `min`/`max` when `bounds`.
-    fn vec3s(&mut self, data: &[Vec3], bounds: bool) -> json::Index<json::Accessor> {
+    /// A VEC3 float vertex attribute of `mesh` (positions or normals), with its `min`/`max`
+    /// when `bounds`.
+    fn vec3s(
+        &mut self,
+        mesh: &Arc<Mesh>,
+        attribute: Attribute,
+        bounds: bool,
+    ) -> json::Index<json::Accessor> {
+        let data = match attribute {
+            Attribute::Normals => &mesh.normals,
+            _ => &mesh.positions,
+        };
         let b = bounds.then(|| {
             let mut lo = [f32::INFINITY; 3];
             let mut hi = [f32::NEG_INFINITY; 3];
@@ -159,8 +158,8 @@ impl Builder {
             (json!(lo.to_vec()), json!(hi.to_vec()))
         });
         self.accessor(
-            data,
-            |p| le_bytes::<3, 12>(p.to_array()),
+            Data::Mesh(mesh.clone(), attribute),
+            data.len(),
             json::accessor::ComponentType::F32,
             json::accessor::Type::Vec3,
             b,
@@ -169,10 +168,10 @@ impl Builder {
     }
 
     /// A VEC2 float vertex attribute (texture coordinates).
-    fn vec2s(&mut self, data: &[Vec2]) -> json::Index<json::Accessor> {
+    fn vec2s(&mut self, mesh: &Arc<Mesh>) -> json::Index<json::Accessor> {
         self.accessor(
-            data,
-            |p| le_bytes::<2, 8>(p.to_array()),
+            Data::Mesh(mesh.clone(), Attribute::Uvs),
+            mesh.uvs.len(),
             json::accessor::ComponentType::F32,
             json::accessor::Type::Vec2,
             None,
@@ -182,13 +181,10 @@ impl Builder {
 
     /// A `COLOR_0` accessor: linear RGBA as normalized unsigned bytes (4 bytes a vertex
     /// instead of 16), rounded to the nearest of the 256 steps.
-    fn colors(&mut self, colors: &[Vec4]) -> json::Index<json::Accessor> {
+    fn colors(&mut self, mesh: &Arc<Mesh>) -> json::Index<json::Accessor> {
         let index = self.accessor(
-            colors,
-            |c| {
-                c.to_array()
-                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            },
+            Data::Mesh(mesh.clone(), Attribute::Colors),
+            mesh.colors.len(),
             json::accessor::ComponentType::U8,
             json::accessor::Type::Vec4,
             None,
@@ -201,21 +197,18 @@ impl Builder {
     }
 
     /// A float accessor of per-instance data (no buffer view target: not a vertex attribute).
-    fn instance_floats(&mut self, data: &[f32], per: usize) -> json::Index<json::Accessor> {
+    fn instance_floats(&mut self, data: Vec<f32>, per: usize) -> json::Index<json::Accessor> {
         use json::accessor::Type;
         let type_ = if per == 3 { Type::Vec3 } else { Type::Vec4 };
-        let index = self.accessor(
-            data,
-            |f| f.to_le_bytes(),
+        let count = data.len() / per;
+        self.accessor(
+            Data::Floats(data),
+            count,
             json::accessor::ComponentType::F32,
             type_,
             None,
             None,
-        );
-        if let Some(accessor) = self.root.accessors.get_mut(index.value()) {
-            accessor.count = USize64((data.len() / per) as u64);
-        }
-        index
+        )
     }
 
     /// The embedded PNG image of `tex`, written once however many textures (and the
@@ -224,7 +217,7 @@ impl Builder {
         if let Some(i) = written(&self.images, tex) {
             return i;
         }
-        let view = self.view(&tex.png, None);
+        let view = self.view(Data::Png(tex.clone()), None);
         let index = self.root.push(json::Image {
             buffer_view: Some(view),
             mime_type: Some(json::image::MimeType("image/png".into())),
@@ -322,7 +315,7 @@ impl Builder {
         index
     }
 
-    fn mesh(&mut self, mesh: &Mesh) -> Result<json::Index<json::Mesh>> {
+    fn mesh(&mut self, mesh: &Arc<Mesh>) -> Result<json::Index<json::Mesh>> {
         let (primitive, pge) = self.primitive(mesh)?;
         let extras = if pge.0.is_empty() {
             None
@@ -370,28 +363,34 @@ impl Builder {
         }))
     }
 
-    fn primitive<'m>(&mut self, mesh: &'m Mesh) -> Result<(json::mesh::Primitive, MeshExtras<'m>)> {
+    fn primitive<'m>(
+        &mut self,
+        mesh: &'m Arc<Mesh>,
+    ) -> Result<(json::mesh::Primitive, MeshExtras<'m>)> {
         use json::accessor::{ComponentType, Type};
         use json::mesh::Semantic;
         // The callers validated the model (and the sky dome is built here, valid).
         let mut attributes = std::collections::BTreeMap::new();
         attributes.insert(
             Valid(Semantic::Positions),
-            self.vec3s(&mesh.positions, true),
+            self.vec3s(mesh, Attribute::Positions, true),
         );
         if !mesh.normals.is_empty() {
-            attributes.insert(Valid(Semantic::Normals), self.vec3s(&mesh.normals, false));
+            attributes.insert(
+                Valid(Semantic::Normals),
+                self.vec3s(mesh, Attribute::Normals, false),
+            );
         }
         // Texture coordinates only where a texture reads them.
         if !mesh.uvs.is_empty() && mesh.material.texture.is_some() {
-            attributes.insert(Valid(Semantic::TexCoords(0)), self.vec2s(&mesh.uvs));
+            attributes.insert(Valid(Semantic::TexCoords(0)), self.vec2s(mesh));
         }
         if !mesh.colors.is_empty() {
-            attributes.insert(Valid(Semantic::Colors(0)), self.colors(&mesh.colors));
+            attributes.insert(Valid(Semantic::Colors(0)), self.colors(mesh));
         }
         let indices = self.accessor(
-            &mesh.indices,
-            |i| i.to_le_bytes(),
+            Data::Mesh(mesh.clone(), Attribute::Indices),
+            mesh.indices.len(),
             ComponentType::U32,
             Type::Scalar,
             None,
@@ -424,99 +423,6 @@ impl Builder {
             targets: None,
         };
         Ok((primitive, pge))
-    }
-}
-
-/// Four little-endian `f32`s or fewer, as one array of bytes.
-fn le_bytes<const K: usize, const N: usize>(floats: [f32; K]) -> [u8; N] {
-    let mut out = [0; N];
-    for (d, f) in out.chunks_exact_mut(4).zip(floats) {
-        d.copy_from_slice(&f.to_le_bytes());
-    }
-    out
-}
-
-/// One value of a mesh's `extras.pge`: its skeleton, written straight from the model, or one
-/// of the mesh's own extras.
-#[derive(Clone, Copy)]
-enum Extra<'m> {
-    Skeleton(&'m Skeleton),
-    Value(&'m JsonValue),
-}
-
-/// A mesh's `extras.pge` in order, borrowed from the model and serialized in one pass.
-#[derive(Default)]
-struct MeshExtras<'m>(Vec<(&'m str, Extra<'m>)>);
-
-impl MeshExtras<'_> {
-    /// `{"pge": {...}}` as the mesh's extras, serialized in one pass (no `Value` tree).
-    fn extras(&self) -> Result<json::Extras> {
-        serde_json::value::to_raw_value(&Entries([("pge", self)]))
-            .map(Some)
-            .map_err(|e| Error::Export(e.to_string()))
-    }
-}
-
-impl Serialize for MeshExtras<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(self.0.len()))?;
-        for (key, value) in &self.0 {
-            match value {
-                Extra::Skeleton(skeleton) => map.serialize_entry(key, &SkeletonJson(skeleton))?,
-                Extra::Value(value) => map.serialize_entry(key, value)?,
-            }
-        }
-        map.end()
-    }
-}
-
-/// A JSON object of the given entries, in order.
-struct Entries<const N: usize, T>([(&'static str, T); N]);
-
-impl<const N: usize, T: Serialize> Serialize for Entries<N, T> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(N))?;
-        for (key, value) in &self.0 {
-            map.serialize_entry(key, value)?;
-        }
-        map.end()
-    }
-}
-
-/// The skeleton as `{parents, positions, radii, orders}` (API.md §7), serialized straight
-/// from its arrays: a root's parent is -1; floats are written as the `f64` they widen to
-/// (`null` when not finite), as a `serde_json::Value` of them would be.
-struct SkeletonJson<'m>(&'m Skeleton);
-
-/// The items of an iterator, serialized as one JSON array.
-struct Items<F>(F);
-
-impl<I: Iterator<Item: Serialize>, F: Fn() -> I> Serialize for Items<F> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        s.collect_seq((self.0)())
-    }
-}
-
-impl Serialize for SkeletonJson<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let sk = self.0;
-        let mut map = s.serialize_map(Some(4))?;
-        map.serialize_entry(
-            "parents",
-            &Items(|| sk.parents.iter().map(|p| p.map_or(-1, i64::from))),
-        )?;
-        map.serialize_entry(
-            "positions",
-            &Items(|| {
-                sk.positions
-                    .iter()
-                    .flat_map(|p| p.to_array())
-                    .map(f64::from)
-            }),
-        )?;
-        map.serialize_entry("radii", &Items(|| sk.radii.iter().map(|&r| f64::from(r))))?;
-        map.serialize_entry("orders", &sk.orders)?;
-        map.end()
     }
 }
 
@@ -595,7 +501,6 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
 pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<Vec<u8>> {
     model.validate()?;
     let mut b = Builder::new();
-    b.reserve(model);
     b.instancing = instancing;
     b.root.scene = Some(b.scene(model, "pge")?);
     b.finish(model, meta, None)
@@ -612,9 +517,6 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
     };
     let mut b = Builder::new();
     let mut summary = Vec::with_capacity(stages.len());
-    for (_, model) in stages {
-        b.reserve(model);
-    }
     for (name, model) in stages {
         model.validate()?;
         b.root.scene = Some(b.scene(model, name)?);
@@ -630,25 +532,6 @@ pub fn glb_stages_bytes(stages: &[(String, Model)], meta: &ExportMeta) -> Result
 }
 
 impl Builder {
-    /// Reserves the buffer for the vertex and index data of `model`'s meshes and the JSON
-    /// (skeletons), so that it is allocated once rather than grown (and copied) as meshes
-    /// are written.
-    fn reserve(&mut self, model: &Model) {
-        let bytes: usize = model
-            .meshes
-            .iter()
-            .map(|m| {
-                (m.positions.len() + m.normals.len()) * 12
-                    + m.uvs.len() * 8
-                    + (m.colors.len() + m.indices.len()) * 4
-                    + 16
-                    + m.skeleton.as_ref().map_or(0, |s| s.positions.len() * 80)
-            })
-            .sum();
-        // The JSON goes in front of the buffer at the end (see `finish`): room for it too.
-        self.bin.reserve(bytes + (1 << 16));
-    }
-
     fn new() -> Builder {
         let mut b = Builder::default();
         b.root.asset = json::Asset {
@@ -702,9 +585,9 @@ impl Builder {
                         s.extend_from_slice(&[x.scale; 3]);
                     }
                     let accessors = [
-                        self.instance_floats(&t, 3),
-                        self.instance_floats(&r, 4),
-                        self.instance_floats(&s, 3),
+                        self.instance_floats(t, 3),
+                        self.instance_floats(r, 4),
+                        self.instance_floats(s, 3),
                     ];
                     let index = self.root.push(json::Node {
                         mesh: Some(mesh),
@@ -784,6 +667,7 @@ impl Builder {
             roughness: 1.0,
             ..Material::default()
         });
+        let mesh = Arc::new(mesh);
         let index = self.mesh(&mesh)?;
         if let Some(material) = written(&self.materials, &mesh.material) {
             self.unlit.push(material.value());
@@ -835,12 +719,10 @@ impl Builder {
             scene.extras.clone_from(&extras);
         }
         b.root.extras = extras;
-        while !b.bin.len().is_multiple_of(4) {
-            b.bin.push(0);
-        }
-        if !b.bin.is_empty() {
+        let bin_len = b.layout.padded_len();
+        if bin_len > 0 {
             b.root.push(json::Buffer {
-                byte_length: USize64(b.bin.len() as u64),
+                byte_length: USize64(bin_len as u64),
                 name: None,
                 uri: None,
                 extensions: None,
@@ -856,112 +738,14 @@ impl Builder {
         while !text.len().is_multiple_of(4) {
             text.push(b' ');
         }
-        glb_container(&text, b.bin, GLB_LIMIT)
+        glb_file(&text, bin_len, GLB_LIMIT, |bin| b.layout.write(bin))
     }
 }
-
-/// The largest GLB file: its header stores lengths as 32-bit numbers.
-pub const GLB_LIMIT: u64 = u32::MAX as u64;
-
-/// The GLB container around a glTF JSON text (padded to 4 bytes) and a binary chunk (empty:
-/// none): an [`Error::Export`] naming the limit when the file would pass `limit` bytes
-/// ([`GLB_LIMIT`] when exporting; a smaller one in tests), never a truncated length. The
-/// binary chunk becomes the output, moved up behind the header and the JSON in place, rather
-/// than copied into a second allocation of the whole file.
-pub fn glb_container(text: &[u8], bin: Vec<u8>, limit: u64) -> Result<Vec<u8>> {
-    let total = 12
-        + 8
-        + text.len() as u64
-        + if bin.is_empty() {
-            0
-        } else {
-            8 + bin.len() as u64
-        };
-    let limit = limit.min(GLB_LIMIT);
-    if total > limit {
-        return Err(Error::Export(format!(
-            "the model needs a glb of {total} bytes, past the limit of {limit} bytes (a glb \
-             holds at most 4 GiB): lower the detail or split the model"
-        )));
-    }
-    let len32 =
-        |n: u64| u32::try_from(n).map_err(|_| Error::Export(format!("a glb length of {n} bytes")));
-    let mut head = Vec::with_capacity(28 + text.len());
-    head.extend_from_slice(b"glTF");
-    head.extend_from_slice(&2u32.to_le_bytes());
-    head.extend_from_slice(&len32(total)?.to_le_bytes());
-    head.extend_from_slice(&len32(text.len() as u64)?.to_le_bytes());
-    head.extend_from_slice(b"JSON");
-    head.extend_from_slice(text);
-    if bin.is_empty() {
-        return Ok(head);
-    }
-    head.extend_from_slice(&len32(bin.len() as u64)?.to_le_bytes());
-    head.extend_from_slice(b"BIN\0");
-    let mut out = bin;
-    let bin_len = out.len();
-    out.resize(total as usize, 0);
-    out.copy_within(..bin_len, head.len());
-    out[..head.len()].copy_from_slice(&head);
-    Ok(out)
-}
-
-/// The name of the glTF extension the sky dome's material uses.
-pub const UNLIT: &str = "KHR_materials_unlit";
 
 /// The name of the glTF extension of materials that let light through (leaves): declared in
 /// `extensionsUsed`, not required (a client without it draws the material as it would
 /// without the extension).
 pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
-
-/// The sky dome's radius for a model smaller than a few metres.
-const SKY_MIN_RADIUS: f32 = 50.0;
-/// Columns of the sky dome's mesh.
-const SKY_SEGMENTS: u32 = 48;
-/// Rows of the sky dome's mesh.
-const SKY_RINGS: u32 = 24;
-
-/// A unit sphere seen from inside: `segments` columns and `rings` rows, texture coordinates
-/// of an equirectangular image (v = 0 straight up; u = 0.5 along -Z, u = 0.75 along +X),
-/// inward normals and counter-clockwise triangles as seen from the centre. The seam column
-/// is doubled; each pole is one triangle per column (no zero-area triangles).
-fn sky_sphere(segments: u32, rings: u32) -> Mesh {
-    use std::f32::consts::{PI, TAU};
-    let mut mesh = Mesh {
-        name: "sky".into(),
-        ..Mesh::default()
-    };
-    for r in 0..=rings {
-        let v = r as f32 / rings as f32;
-        let polar = v * PI;
-        for k in 0..=segments {
-            let u = k as f32 / segments as f32;
-            let azimuth = (u - 0.5) * TAU;
-            let dir = Vec3::new(
-                polar.sin() * azimuth.sin(),
-                polar.cos(),
-                -polar.sin() * azimuth.cos(),
-            );
-            mesh.positions.push(dir);
-            mesh.normals.push(-dir);
-            mesh.uvs.push(glam::Vec2::new(u, v));
-        }
-    }
-    let at = |r: u32, k: u32| r * (segments + 1) + k;
-    for r in 0..rings {
-        for k in 0..segments {
-            let (a, b, c, d) = (at(r, k), at(r, k + 1), at(r + 1, k), at(r + 1, k + 1));
-            // Seen from the centre, u grows to the right and v downwards.
-            if r > 0 {
-                mesh.indices.extend([a, c, b]);
-            }
-            if r + 1 < rings {
-                mesh.indices.extend([b, c, d]);
-            }
-        }
-    }
-    mesh
-}
 
 /// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
 /// ROTATION, SCALE] accessors), `KHR_materials_unlit` and

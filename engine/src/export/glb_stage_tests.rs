@@ -1,6 +1,7 @@
 //! Tests of stages as scenes and of empty models.
 
 use super::*;
+use crate::geometry::Skeleton;
 
 #[test]
 fn stages_are_named_scenes_sharing_their_textures() {
@@ -105,7 +106,8 @@ fn streamed_mesh_extras_match_a_value_tree() {
     };
     let streamed = |mesh: &Mesh| {
         let mut b = Builder::new();
-        let (_, pge) = b.primitive(mesh).expect("primitive");
+        let mesh = Arc::new(mesh.clone());
+        let (_, pge) = b.primitive(&mesh).expect("primitive");
         pge.extras()
             .expect("extras")
             .expect("some")
@@ -121,5 +123,6 @@ fn streamed_mesh_extras_match_a_value_tree() {
     let empty =
         Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
     let mut b = Builder::new();
+    let empty = Arc::new(empty);
     assert!(b.primitive(&empty).expect("primitive").1.0.is_empty());
 }

@@ -1,7 +1,7 @@
 //! Tests of the glb writer: meshes, materials, extras, instancing.
 
 use super::*;
-use crate::geometry::{Material, Mesh};
+use crate::geometry::{Material, Mesh, Skeleton};
 use glam::{Quat, Vec2};
 
 pub(super) fn textured_model() -> Model {

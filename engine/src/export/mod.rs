@@ -1,6 +1,10 @@
 //! Writing models: glTF 2.0 binary (`.glb`) and Wavefront `.obj` + `.mtl`.
 
 mod glb;
+mod glb_container;
+mod glb_extras;
+mod glb_layout;
+mod glb_sky;
 mod obj;
 
 pub use glb::{

@@ -1,8 +1,12 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
 use super::{Material, Skeleton};
+
+/// Elements a thread checks at a time when a mesh is validated.
+const CHECK_CHUNK: usize = 1 << 15;
 
 /// Why a mesh, a texture or a colour was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -165,7 +169,12 @@ impl Mesh {
         }
         // The largest index first (a loop without early exit, vectorized), the culprit only
         // when there is one.
-        let largest = self.indices.iter().copied().max().unwrap_or(0);
+        let largest = self
+            .indices
+            .par_chunks(CHECK_CHUNK)
+            .map(|c| c.iter().copied().max().unwrap_or(0))
+            .max()
+            .unwrap_or(0);
         if let Some((at, &index)) = (largest as usize >= n)
             .then(|| {
                 self.indices
@@ -181,28 +190,28 @@ impl Mesh {
                 vertices: n,
             });
         }
-        // All finite first (without early exit, vectorized), the culprit only when not.
-        let finite3 = |attribute, v: &[Vec3]| {
-            if v.iter().fold(true, |all, p| all & p.is_finite()) {
+        // All finite first (without early exit, vectorized, in parallel pieces), the culprit
+        // only when not.
+        fn check<T: Copy + Sync, const K: usize>(
+            attribute: &'static str,
+            v: &[T],
+            floats: impl Fn(T) -> [f32; K] + Sync,
+        ) -> Result<(), GeometryError> {
+            let finite = |c: &[T]| {
+                c.iter().fold(true, |all, &p| {
+                    all & floats(p).iter().all(|x| x.is_finite())
+                })
+            };
+            if v.par_chunks(CHECK_CHUNK).all(finite) {
                 return Ok(());
             }
-            let at = v.iter().position(|p| !p.is_finite()).unwrap_or_default();
+            let at = v.iter().position(|&p| !finite(&[p])).unwrap_or_default();
             Err(GeometryError::NotFinite { attribute, at })
-        };
-        finite3("positions", &self.positions)?;
-        finite3("normals", &self.normals)?;
-        if let Some(at) = self.uvs.iter().position(|p| !p.is_finite()) {
-            return Err(GeometryError::NotFinite {
-                attribute: "uvs",
-                at,
-            });
         }
-        if let Some(at) = self.colors.iter().position(|p| !p.is_finite()) {
-            return Err(GeometryError::NotFinite {
-                attribute: "colors",
-                at,
-            });
-        }
+        check("positions", &self.positions, |p: Vec3| p.to_array())?;
+        check("normals", &self.normals, |p: Vec3| p.to_array())?;
+        check("uvs", &self.uvs, |p: Vec2| p.to_array())?;
+        check("colors", &self.colors, |p: Vec4| p.to_array())?;
         Ok(())
     }
 

@@ -1,5 +1,6 @@
 //! Meshing throughput: a random binary tree of branches turned into bark (triangles per
-//! second), and a complete tree of about 20,000 triangles with leaves built end to end.
+//! second, on every core and on one thread), and a complete tree of about 20,000 triangles
+//! with leaves built end to end.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
@@ -53,6 +54,27 @@ fn bench_meshing(c: &mut Criterion) {
                 mesh.uvs.clear();
                 mesh.indices.clear();
                 append_bark(black_box(&s), &MeshOptions::default(), &mut mesh);
+                black_box(mesh.indices.len())
+            })
+        },
+    );
+    // The same on one thread (the row above uses every core): the 2-thread speed-up.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a thread pool");
+    group.bench_function(
+        format!(
+            "append_bark {} nodes, {triangles} triangles, 1 thread",
+            s.len()
+        ),
+        |b| {
+            b.iter(|| {
+                mesh.positions.clear();
+                mesh.normals.clear();
+                mesh.uvs.clear();
+                mesh.indices.clear();
+                one.install(|| append_bark(black_box(&s), &MeshOptions::default(), &mut mesh));
                 black_box(mesh.indices.len())
             })
         },

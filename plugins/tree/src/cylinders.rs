@@ -17,6 +17,7 @@ use std::f32::consts::TAU;
 
 use glam::{Quat, Vec2, Vec3};
 use pge_engine::geometry::{Mesh, Skeleton};
+use rayon::prelude::*;
 
 use crate::options::{Flare, MeshOptions};
 use crate::radii::main_children;
@@ -47,51 +48,105 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
         .collect();
     let children = skeleton.children();
     let main = main_children(skeleton, &children);
-    let forks = children
-        .iter()
-        .map(|c| c.len().saturating_sub(1))
-        .sum::<usize>();
-    let rings = skeleton.len() + forks;
-    let caps_count = if caps { skeleton.tips().len() * 2 } else { 0 };
-    let verts = rings * (sides + 1) + caps_count * (sides + 1);
-    mesh.positions.reserve(verts);
-    mesh.normals.reserve(verts);
-    mesh.uvs.reserve(verts);
-    mesh.indices
-        .reserve(rings * sides * 6 + caps_count * sides * 3);
-
     let scale = if options.texture_scale > 0.0 && options.texture_scale.is_finite() {
         options.texture_scale
     } else {
         MeshOptions::default().texture_scale
     };
-    let mut builder = Tube {
+    let shape = Shape {
         trig: &trig,
         sides,
-        mesh,
-        points: Vec::new(),
         scale,
         away: -options.light.try_normalize().unwrap_or(Vec3::ZERO),
     };
+    let flare = options
+        .flare
+        .filter(|f| f.height > 0.0 && f.spread > 0.0 && f.roots > 0);
+
+    // The tubes in the order they are written: a root's, then its node's laterals, node by
+    // node.
+    let mut tubes = Vec::new();
     for i in 0..skeleton.len() {
         if skeleton.parents[i].is_none() {
-            builder.points.clear();
-            walk(skeleton, &main, i, &mut builder.points);
-            builder.emit(caps, caps, Vec3::Y, options.flare);
+            tubes.push(TubeSpec {
+                start: i,
+                fork: None,
+                base_cap: caps,
+                tip_cap: caps,
+                fallback: Vec3::Y,
+                flare,
+            });
         }
         for &c in &children[i] {
             if Some(c) != main[i] {
-                builder.points.clear();
                 let attach = skeleton.positions[i];
-                builder.points.push((attach, skeleton.radii[c as usize]));
-                walk(skeleton, &main, c as usize, &mut builder.points);
                 let incoming = skeleton.parents[i]
                     .and_then(|p| (attach - skeleton.positions[p as usize]).try_normalize())
                     .unwrap_or(Vec3::Y);
-                builder.emit(false, caps, incoming, None);
+                tubes.push(TubeSpec {
+                    start: c as usize,
+                    fork: Some(i),
+                    base_cap: false,
+                    tip_cap: caps,
+                    fallback: incoming,
+                    flare: None,
+                });
             }
         }
     }
+
+    // Two passes over the tubes, each in parallel: first every tube's rings and how many
+    // vertices and indices it writes; then, a prefix sum having placed each tube in the
+    // mesh, its vertices and indices, written into slices of its own. A tube's numbers
+    // depend only on the tube: the same mesh for any number of threads.
+    let points: Vec<Vec<(Vec3, f32, f32)>> = tubes
+        .par_iter()
+        .map(|t| tube_points(skeleton, &main, t))
+        .collect();
+    let counts: Vec<(usize, usize)> = tubes
+        .iter()
+        .zip(&points)
+        .map(|(t, pts)| t.counts(pts, sides))
+        .collect();
+    let base = mesh.positions.len();
+    let index_base = mesh.indices.len();
+    let vertices: usize = counts.iter().map(|c| c.0).sum();
+    let indices: usize = counts.iter().map(|c| c.1).sum();
+    mesh.positions.resize(base + vertices, Vec3::ZERO);
+    mesh.normals.resize(base + vertices, Vec3::ZERO);
+    mesh.uvs.resize(base + vertices, Vec2::ZERO);
+    mesh.indices.resize(index_base + indices, 0);
+    let mut sinks = Vec::with_capacity(tubes.len());
+    let mut positions = &mut mesh.positions[base..];
+    let mut normals = &mut mesh.normals[base..];
+    let mut uvs = &mut mesh.uvs[base..];
+    let mut index_slots = &mut mesh.indices[index_base..];
+    let mut first = base as u32;
+    for &(v, i) in &counts {
+        let (p, rest) = positions.split_at_mut(v);
+        positions = rest;
+        let (n, rest) = normals.split_at_mut(v);
+        normals = rest;
+        let (u, rest) = uvs.split_at_mut(v);
+        uvs = rest;
+        let (x, rest) = index_slots.split_at_mut(i);
+        index_slots = rest;
+        sinks.push(Sink {
+            positions: p,
+            normals: n,
+            uvs: u,
+            indices: x,
+            first,
+            vertices: 0,
+            indices_written: 0,
+        });
+        first += v as u32;
+    }
+    tubes
+        .par_iter()
+        .zip(&points)
+        .zip(sinks)
+        .for_each(|((t, pts), mut sink)| shape.emit(t, pts, &mut sink));
 }
 
 /// A bark mesh of `skeleton` alone: [`append_bark`] into an empty mesh named `bark`, with the
@@ -143,45 +198,127 @@ fn with_flare_rings(points: &[(Vec3, f32)], height: f32) -> Vec<(Vec3, f32, f32)
     out
 }
 
-struct Tube<'a> {
+/// One tube of the bark: where it starts, its caps, the direction it takes while it has no
+/// segment of non-zero length yet, and the flare widening its first metres.
+struct TubeSpec {
+    /// The tube's first node after the fork.
+    start: usize,
+    /// The fork node a lateral starts at (inside its parent); `None` for a root's tube.
+    fork: Option<usize>,
+    base_cap: bool,
+    tip_cap: bool,
+    fallback: Vec3,
+    flare: Option<Flare>,
+}
+
+impl TubeSpec {
+    /// The vertices and indices the tube writes through its rings `pts` (see
+    /// [`tube_points`]).
+    fn counts(&self, pts: &[(Vec3, f32, f32)], sides: usize) -> (usize, usize) {
+        let (Some(&(_, base_radius, _)), Some(&(_, tip_radius, _))) = (pts.first(), pts.last())
+        else {
+            return (0, 0);
+        };
+        if pts.len() < 2 {
+            return (0, 0);
+        }
+        let mut vertices = pts.len() * (sides + 1);
+        let mut indices = (pts.len() - 1) * sides * 6;
+        if self.base_cap && base_radius > 0.0 && self.flare.is_none() {
+            vertices += sides + 1;
+            indices += sides * 3;
+        }
+        if self.tip_cap && tip_radius > 0.0 {
+            vertices += sides + 1;
+            indices += sides * 3;
+        }
+        (vertices, indices)
+    }
+}
+
+/// The rings of a tube: its points (from the fork for a lateral, then along the continuing
+/// children to a tip) with their radii and distances from the start, and the flare's extra
+/// rings; none when the tube has no segment.
+fn tube_points(skeleton: &Skeleton, main: &[Option<u32>], t: &TubeSpec) -> Vec<(Vec3, f32, f32)> {
+    let mut points = Vec::new();
+    if let Some(fork) = t.fork {
+        points.push((skeleton.positions[fork], skeleton.radii[t.start]));
+    }
+    walk(skeleton, main, t.start, &mut points);
+    if points.len() < 2 {
+        return Vec::new();
+    }
+    match t.flare {
+        Some(f) => with_flare_rings(&points, f.height),
+        None => {
+            let mut travelled = 0.0;
+            let mut prev = points[0].0;
+            points
+                .iter()
+                .map(|&(p, r)| {
+                    travelled += p.distance(prev);
+                    prev = p;
+                    (p, r, travelled)
+                })
+                .collect()
+        }
+    }
+}
+
+/// The part of the mesh one tube writes: slices of the attributes and indices of its own.
+struct Sink<'a> {
+    positions: &'a mut [Vec3],
+    normals: &'a mut [Vec3],
+    uvs: &'a mut [Vec2],
+    indices: &'a mut [u32],
+    /// The mesh index of the slices' first vertex.
+    first: u32,
+    vertices: usize,
+    indices_written: usize,
+}
+
+impl Sink<'_> {
+    /// The mesh index of the next vertex.
+    fn next_index(&self) -> u32 {
+        self.first + self.vertices as u32
+    }
+
+    fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2) {
+        self.positions[self.vertices] = position;
+        self.normals[self.vertices] = normal;
+        self.uvs[self.vertices] = uv;
+        self.vertices += 1;
+    }
+
+    fn indices(&mut self, indices: &[u32]) {
+        let at = self.indices_written;
+        self.indices[at..at + indices.len()].copy_from_slice(indices);
+        self.indices_written += indices.len();
+    }
+}
+
+/// What every tube shares: the ring's cosines and sines, the UV scale and the seam's side.
+struct Shape<'a> {
     trig: &'a [(f32, f32)],
     sides: usize,
-    mesh: &'a mut Mesh,
-    points: Vec<(Vec3, f32)>,
     /// Metres of bark per texture tile.
     scale: f32,
     /// The unit direction the seams face (away from the light), or zero.
     away: Vec3,
 }
 
-impl Tube<'_> {
-    /// Emits one tube through `self.points`; `fallback` is the direction used while the tube
-    /// has no segment of non-zero length yet; `flare` widens its first metres.
-    fn emit(&mut self, base_cap: bool, tip_cap: bool, fallback: Vec3, flare: Option<Flare>) {
-        if self.points.len() < 2 {
+impl Shape<'_> {
+    /// Emits one tube through its rings `pts` (see [`tube_points`]) into `out`.
+    fn emit(&self, tube: &TubeSpec, pts: &[(Vec3, f32, f32)], out: &mut Sink) {
+        if pts.len() < 2 {
             return;
         }
-        let flare = flare.filter(|f| f.height > 0.0 && f.spread > 0.0 && f.roots > 0);
-        let pts: Vec<(Vec3, f32, f32)> = match flare {
-            Some(f) => with_flare_rings(&self.points, f.height),
-            None => {
-                let mut travelled = 0.0;
-                let mut prev = self.points[0].0;
-                self.points
-                    .iter()
-                    .map(|&(p, r)| {
-                        travelled += p.distance(prev);
-                        prev = p;
-                        (p, r, travelled)
-                    })
-                    .collect()
-            }
-        };
+        let flare = tube.flare;
         // Segment directions, each falling back to the previous one.
         let first_dir = pts
             .windows(2)
             .find_map(|w| (w[1].0 - w[0].0).try_normalize())
-            .unwrap_or(fallback);
+            .unwrap_or(tube.fallback);
         let mut seg = Vec::with_capacity(pts.len() - 1);
         let mut last = first_dir;
         for w in pts.windows(2) {
@@ -212,10 +349,10 @@ impl Tube<'_> {
         let mut dir = ring_dir(0);
         let mut side = seam_side(dir, dir.any_orthonormal_vector());
         let mut v = 0.0f32;
-        if base_cap && pts[0].1 > 0.0 && flare.is_none() {
-            self.cap(pts[0].0, pts[0].1, side, dir, -1.0, v);
+        if tube.base_cap && pts[0].1 > 0.0 && flare.is_none() {
+            self.cap(out, (pts[0].0, pts[0].1), (side, dir), -1.0, v);
         }
-        let first_index = self.mesh.positions.len() as u32;
+        let first_index = out.next_index();
         for j in 0..pts.len() {
             if j > 0 {
                 let next_dir = ring_dir(j);
@@ -250,50 +387,56 @@ impl Tube<'_> {
                     ),
                     _ => (1.0, offset),
                 };
-                self.mesh.positions.push(centre + shape * radius * widen);
-                self.mesh.normals.push(normal);
-                self.mesh
-                    .uvs
-                    .push(Vec2::new(around * k as f32 / self.sides as f32, v));
+                out.vertex(
+                    centre + shape * radius * widen,
+                    normal,
+                    Vec2::new(around * k as f32 / self.sides as f32, v),
+                );
             }
             if j > 0 {
                 let a0 = first_index + (j as u32 - 1) * stride;
                 let b0 = a0 + stride;
                 for k in 0..self.sides as u32 {
                     let (a, b, c, d) = (a0 + k, a0 + k + 1, b0 + k + 1, b0 + k);
-                    self.mesh.indices.extend_from_slice(&[a, b, c, a, c, d]);
+                    out.indices(&[a, b, c, a, c, d]);
                 }
             }
         }
         let (centre, radius, _) = pts[pts.len() - 1];
-        if tip_cap && radius > 0.0 {
-            self.cap(centre, radius, side, dir, 1.0, v);
+        if tube.tip_cap && radius > 0.0 {
+            self.cap(out, (centre, radius), (side, dir), 1.0, v);
         }
     }
 
-    /// A flat cap: a centre vertex and one ring of `sides` vertices facing `sign * dir`.
-    fn cap(&mut self, centre: Vec3, radius: f32, side: Vec3, dir: Vec3, sign: f32, v: f32) {
+    /// A flat cap of the ring at `centre` with `radius`, framed by `side` and `dir`: a
+    /// centre vertex and one ring of `sides` vertices facing `sign * dir`.
+    fn cap(
+        &self,
+        out: &mut Sink,
+        (centre, radius): (Vec3, f32),
+        (side, dir): (Vec3, Vec3),
+        sign: f32,
+        v: f32,
+    ) {
         let binormal = dir.cross(side);
         let normal = dir * sign;
-        let base = self.mesh.positions.len() as u32;
+        let base = out.next_index();
         let r = radius / self.scale;
-        self.mesh.positions.push(centre);
-        self.mesh.normals.push(normal);
-        self.mesh.uvs.push(Vec2::new(0.5, v));
+        out.vertex(centre, normal, Vec2::new(0.5, v));
         for &(c, s) in &self.trig[..self.sides] {
-            self.mesh
-                .positions
-                .push(centre + (side * c + binormal * s) * radius);
-            self.mesh.normals.push(normal);
-            self.mesh.uvs.push(Vec2::new(0.5 + r * c, v + r * s));
+            out.vertex(
+                centre + (side * c + binormal * s) * radius,
+                normal,
+                Vec2::new(0.5 + r * c, v + r * s),
+            );
         }
         let n = self.sides as u32;
         for k in 0..n {
             let (a, b) = (base + 1 + k, base + 1 + (k + 1) % n);
             if sign > 0.0 {
-                self.mesh.indices.extend_from_slice(&[base, a, b]);
+                out.indices(&[base, a, b]);
             } else {
-                self.mesh.indices.extend_from_slice(&[base, b, a]);
+                out.indices(&[base, b, a]);
             }
         }
     }
@@ -636,6 +779,58 @@ mod tests {
         assert!(is_closed(&closed), "caps close the tube");
         let open = mesh_of(&s, 7, false);
         assert!(!is_closed(&open), "without caps the ends are open");
+    }
+
+    #[test]
+    fn any_thread_count_gives_the_same_mesh_appended_after_another() {
+        // A branching skeleton of a few thousand nodes: many tubes, some with caps.
+        let mut s = Skeleton::new();
+        s.push(Vec3::ZERO, None, 0.0, 0);
+        for i in 1..3000u32 {
+            let parent = if i % 5 == 0 { i / 3 } else { i - 1 };
+            let t = i as f32 * 0.37;
+            let p = s.positions[parent as usize] + Vec3::new(t.sin() * 0.2, 0.3, t.cos() * 0.2);
+            s.push(p, Some(parent), 0.0, u32::from(i % 5 == 0));
+        }
+        crate::pipe_radii(&mut s, 0.01, 2.3);
+        let options = MeshOptions {
+            flare: Some(Flare {
+                roots: 4,
+                spread: 0.5,
+                height: 1.0,
+            }),
+            ..MeshOptions::default()
+        };
+        let on = |threads: usize, mesh: &mut Mesh| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool")
+                .install(|| append_bark(&s, &options, mesh));
+        };
+        let mut one = Mesh::default();
+        on(1, &mut one);
+        one.validate().expect("valid");
+        for threads in [2, 3, 8] {
+            let mut other = Mesh::default();
+            on(threads, &mut other);
+            assert_eq!(other.positions, one.positions, "{threads} threads");
+            assert_eq!(other.normals, one.normals, "{threads} threads");
+            assert_eq!(other.uvs, one.uvs, "{threads} threads");
+            assert_eq!(other.indices, one.indices, "{threads} threads");
+        }
+        // Appended after another mesh: the same vertices after it, indices shifted by its
+        // vertex count.
+        let mut two = column_mesh();
+        let before = two.positions.len();
+        on(2, &mut two);
+        assert_eq!(two.positions[before..], one.positions[..]);
+        let shifted: Vec<u32> = one.indices.iter().map(|i| i + before as u32).collect();
+        assert_eq!(two.indices[column_mesh().indices.len()..], shifted[..]);
+    }
+
+    fn column_mesh() -> Mesh {
+        mesh_of(&column(), 5, true)
     }
 
     #[test]

@@ -1,0 +1,57 @@
+//! The GLB container: header, JSON chunk and binary chunk.
+
+use crate::{Error, Result};
+
+/// The largest GLB file: its header stores lengths as 32-bit numbers.
+pub const GLB_LIMIT: u64 = u32::MAX as u64;
+
+/// The GLB container around a glTF JSON text (padded to 4 bytes) and a binary chunk (empty:
+/// none): an [`Error::Export`] naming the limit when the file would pass `limit` bytes
+/// ([`GLB_LIMIT`] when exporting; a smaller one in tests), never a truncated length.
+pub fn glb_container(text: &[u8], bin: Vec<u8>, limit: u64) -> Result<Vec<u8>> {
+    glb_file(text, bin.len(), limit, |dst| dst.copy_from_slice(&bin))
+}
+
+/// The GLB file of a glTF JSON text (padded to 4 bytes) and a binary chunk of `bin_len`
+/// bytes (0: none) that `write_bin` writes in place into the file's zeroed bytes, so that
+/// the file is allocated once, at its size, and the binary chunk never copied. The zeroed
+/// allocation costs no pass of its own: the allocator hands out fresh zero pages for a large
+/// one, and they are first touched where the chunk is written. As [`glb_container`] past
+/// `limit`.
+pub(super) fn glb_file(
+    text: &[u8],
+    bin_len: usize,
+    limit: u64,
+    write_bin: impl FnOnce(&mut [u8]),
+) -> Result<Vec<u8>> {
+    let bin_chunk = if bin_len == 0 { 0 } else { 8 + bin_len as u64 };
+    let total = 12 + 8 + text.len() as u64 + bin_chunk;
+    let limit = limit.min(GLB_LIMIT);
+    if total > limit {
+        return Err(Error::Export(format!(
+            "the model needs a glb of {total} bytes, past the limit of {limit} bytes (a glb \
+             holds at most 4 GiB): lower the detail or split the model"
+        )));
+    }
+    let len32 =
+        |n: u64| u32::try_from(n).map_err(|_| Error::Export(format!("a glb length of {n} bytes")));
+    let total32 = len32(total)?;
+    let text32 = len32(text.len() as u64)?;
+    let bin32 = len32(bin_len as u64)?;
+    let mut out = vec![0u8; total as usize];
+    let (head, rest) = out.split_at_mut(20);
+    head[..4].copy_from_slice(b"glTF");
+    head[4..8].copy_from_slice(&2u32.to_le_bytes());
+    head[8..12].copy_from_slice(&total32.to_le_bytes());
+    head[12..16].copy_from_slice(&text32.to_le_bytes());
+    head[16..20].copy_from_slice(b"JSON");
+    let (json, rest) = rest.split_at_mut(text.len());
+    json.copy_from_slice(text);
+    if bin_len > 0 {
+        let (bin_head, bin) = rest.split_at_mut(8);
+        bin_head[..4].copy_from_slice(&bin32.to_le_bytes());
+        bin_head[4..].copy_from_slice(b"BIN\0");
+        write_bin(bin);
+    }
+    Ok(out)
+}

@@ -1,0 +1,221 @@
+//! The binary chunk in two passes: while the JSON is built every buffer view is only placed
+//! (its offset and length computed, its data kept by reference), and at the end the bytes
+//! are written straight into the output, in parallel over disjoint slices of it (rayon).
+//! Each element's bytes depend only on the element, so the output is the same for any
+//! number of threads.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use crate::geometry::{Mesh, Texture};
+
+/// Bytes of a piece of work when a view is cut up for the threads: large enough that a
+/// piece costs far more than handing it to a thread, small enough to balance 2-8 threads
+/// over a model of a few megabytes.
+const PIECE_BYTES: usize = 1 << 18;
+
+/// One attribute (or the indices) of a mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Attribute {
+    /// `positions`: VEC3 floats.
+    Positions,
+    /// `normals`: VEC3 floats.
+    Normals,
+    /// `uvs`: VEC2 floats.
+    Uvs,
+    /// `colors`: linear RGBA as normalized unsigned bytes, rounded to the nearest of the 256
+    /// steps.
+    Colors,
+    /// `indices`: unsigned 32-bit integers.
+    Indices,
+}
+
+/// Where a buffer view's bytes come from.
+pub(super) enum Data {
+    /// An attribute of a mesh.
+    Mesh(Arc<Mesh>, Attribute),
+    /// Little-endian floats (per-instance data).
+    Floats(Vec<f32>),
+    /// An embedded PNG image, as it is.
+    Png(Arc<Texture>),
+}
+
+impl Data {
+    /// Bytes of one element.
+    fn element_bytes(&self) -> usize {
+        match self {
+            Data::Mesh(_, Attribute::Positions | Attribute::Normals) => 12,
+            Data::Mesh(_, Attribute::Uvs) => 8,
+            Data::Mesh(_, Attribute::Colors | Attribute::Indices) | Data::Floats(_) => 4,
+            Data::Png(_) => 1,
+        }
+    }
+
+    /// Number of elements.
+    fn count(&self) -> usize {
+        match self {
+            Data::Mesh(m, Attribute::Positions) => m.positions.len(),
+            Data::Mesh(m, Attribute::Normals) => m.normals.len(),
+            Data::Mesh(m, Attribute::Uvs) => m.uvs.len(),
+            Data::Mesh(m, Attribute::Colors) => m.colors.len(),
+            Data::Mesh(m, Attribute::Indices) => m.indices.len(),
+            Data::Floats(f) => f.len(),
+            Data::Png(t) => t.png.len(),
+        }
+    }
+
+    /// Writes the elements from `first` on into `dst`, as many as it holds.
+    fn fill(&self, first: usize, dst: &mut [u8]) {
+        let n = dst.len() / self.element_bytes();
+        let range = first..first + n;
+        match self {
+            Data::Mesh(m, Attribute::Positions) => {
+                floats(dst, &m.positions[range], |p| p.to_array())
+            }
+            Data::Mesh(m, Attribute::Normals) => floats(dst, &m.normals[range], |p| p.to_array()),
+            Data::Mesh(m, Attribute::Uvs) => floats(dst, &m.uvs[range], |p| p.to_array()),
+            Data::Mesh(m, Attribute::Colors) => {
+                for (d, c) in dst.chunks_exact_mut(4).zip(&m.colors[range]) {
+                    d.copy_from_slice(&c.to_array().map(unit_byte));
+                }
+            }
+            Data::Mesh(m, Attribute::Indices) => {
+                for (d, i) in dst.chunks_exact_mut(4).zip(&m.indices[range]) {
+                    d.copy_from_slice(&i.to_le_bytes());
+                }
+            }
+            Data::Floats(f) => floats(dst, &f[range], |&x| [x]),
+            Data::Png(t) => dst.copy_from_slice(&t.png[range]),
+        }
+    }
+}
+
+/// Writes `K` little-endian floats per item of `items` into `dst`.
+fn floats<T, const K: usize>(dst: &mut [u8], items: &[T], array: impl Fn(&T) -> [f32; K]) {
+    for (d, item) in dst.chunks_exact_mut(4 * K).zip(items) {
+        for (d, f) in d.chunks_exact_mut(4).zip(array(item)) {
+            d.copy_from_slice(&f.to_le_bytes());
+        }
+    }
+}
+
+/// A colour channel as a normalized unsigned byte: clamped to `0..=1`, times 255, rounded to
+/// the nearest (halves away from zero, as `f32::round`; `NaN` gives 0), without a call to
+/// `round` (the difference from the truncated value is exact below 2^23).
+fn unit_byte(v: f32) -> u8 {
+    let x = v.clamp(0.0, 1.0) * 255.0;
+    let whole = x as u8;
+    whole + u8::from(x - f32::from(whole) >= 0.5)
+}
+
+/// A view placed in the buffer.
+struct View {
+    offset: usize,
+    data: Data,
+}
+
+/// The binary chunk's views, placed but not yet written.
+#[derive(Default)]
+pub(super) struct Layout {
+    views: Vec<View>,
+    len: usize,
+}
+
+impl Layout {
+    /// Places `data` at the next 4-byte boundary: its offset and length in bytes.
+    pub(super) fn place(&mut self, data: Data) -> (usize, usize) {
+        let offset = self.len.next_multiple_of(4);
+        let len = data.count() * data.element_bytes();
+        self.len = offset + len;
+        self.views.push(View { offset, data });
+        (offset, len)
+    }
+
+    /// The buffer's length in bytes, padded to 4 bytes.
+    pub(super) fn padded_len(&self) -> usize {
+        self.len.next_multiple_of(4)
+    }
+
+    /// Writes every view into `bin`, which holds [`Layout::padded_len`] zero bytes: the
+    /// views' bytes in pieces of about [`PIECE_BYTES`] on the current rayon pool's threads
+    /// (the padding between them stays zero).
+    pub(super) fn write(&self, bin: &mut [u8]) {
+        let mut pieces = Vec::with_capacity(self.views.len() + self.len / PIECE_BYTES);
+        let mut rest = bin;
+        let mut at = 0;
+        for view in &self.views {
+            let size = view.data.element_bytes();
+            let (_, tail) = rest.split_at_mut(view.offset - at);
+            let (mut bytes, tail) = tail.split_at_mut(view.data.count() * size);
+            rest = tail;
+            at = view.offset + bytes.len();
+            let per_piece = (PIECE_BYTES / size).max(1) * size;
+            let mut first = 0;
+            while !bytes.is_empty() {
+                let (piece, more) = bytes.split_at_mut(per_piece.min(bytes.len()));
+                pieces.push((&view.data, first, piece));
+                first += per_piece / size;
+                bytes = more;
+            }
+        }
+        pieces
+            .into_par_iter()
+            .for_each(|(data, first, piece)| data.fill(first, piece));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_bytes_round_as_f32_round_does() {
+        let round = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        // Every 97th float of 0..=1, and each half-way point between two steps with its
+        // neighbours.
+        let spread = (0..=1.0f32.to_bits()).step_by(97).map(f32::from_bits);
+        let halves = (0..255).flat_map(|k| {
+            let h = (k as f32 + 0.5) / 255.0;
+            [
+                f32::from_bits(h.to_bits() - 1),
+                h,
+                f32::from_bits(h.to_bits() + 1),
+            ]
+        });
+        let edges = [f32::NAN, -0.0, -0.1, 1.1, f32::INFINITY, f32::NEG_INFINITY];
+        for v in spread.chain(halves).chain(edges) {
+            assert_eq!(unit_byte(v), round(v), "{v}");
+        }
+    }
+
+    #[test]
+    fn views_are_written_at_their_offsets_in_pieces() {
+        let mesh = Arc::new(Mesh {
+            indices: (0..200_000u32).collect(),
+            ..Mesh::default()
+        });
+        let mut layout = Layout::default();
+        let floats = vec![1.5f32, -2.0, 3.25];
+        assert_eq!(layout.place(Data::Floats(floats.clone())), (0, 12));
+        let png = Arc::new(Texture {
+            name: "three bytes".into(),
+            width: 1,
+            height: 1,
+            png: vec![7, 8, 9],
+        });
+        assert_eq!(layout.place(Data::Png(png)), (12, 3));
+        let (offset, len) = layout.place(Data::Mesh(mesh.clone(), Attribute::Indices));
+        assert_eq!((offset, len), (16, 800_000));
+        let mut bin = vec![0xAA; layout.padded_len()];
+        bin[15] = 0;
+        layout.write(&mut bin);
+        let want: Vec<u8> = floats
+            .iter()
+            .flat_map(|f| f.to_le_bytes())
+            .chain([7, 8, 9, 0])
+            .chain(mesh.indices.iter().flat_map(|i| i.to_le_bytes()))
+            .collect();
+        assert_eq!(bin, want);
+    }
+}
