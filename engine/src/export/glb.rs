@@ -57,6 +57,8 @@ struct Builder {
     sky: Option<json::Index<json::Mesh>>,
     /// Materials that need `KHR_materials_unlit` (the sky's).
     unlit: Vec<usize>,
+    /// The shared variants a tile's instance groups refer to (`glb_bytes_shared`).
+    shared: Option<shared::Shared>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -650,7 +652,10 @@ impl Builder {
             if group.transforms.is_empty() {
                 continue;
             }
-            let mesh = self.group_mesh(group, &model.meshes)?;
+            let mesh = match self.shared_mesh(group)? {
+                Some(mesh) => mesh,
+                None => self.group_mesh(group, &model.meshes)?,
+            };
             match self.instancing {
                 Instancing::Gpu => {
                     let mut t = Vec::with_capacity(group.transforms.len() * 3);
@@ -758,6 +763,8 @@ impl Builder {
         stages: Option<JsonValue>,
     ) -> Result<Vec<u8>> {
         let mut b = self;
+        // What the instances of shared variants draw (a tile that refers to them).
+        let [sv, st, sn, sl] = b.shared_counts(model);
         let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
         let mut pge = Map::new();
         pge.insert("generator".into(), GENERATOR.into());
@@ -766,10 +773,10 @@ impl Builder {
         pge.insert(
             "stats".into(),
             json!({
-                "vertices": model.vertex_count(),
-                "triangles": model.triangle_count(),
-                "nodes": model.stats.nodes,
-                "leaves": model.stats.leaves,
+                "vertices": model.vertex_count() as u64 + sv,
+                "triangles": model.triangle_count() as u64 + st,
+                "nodes": model.stats.nodes + sn,
+                "leaves": model.stats.leaves + sl,
                 "modules": model.stats.modules,
             }),
         );
@@ -796,6 +803,10 @@ impl Builder {
         while !b.bin.len().is_multiple_of(4) {
             b.bin.push(0);
         }
+        if b.bin.is_empty() && b.shared.is_some() {
+            // Buffer 0 must exist before the shared one (buffer 1).
+            b.bin.resize(4, 0);
+        }
         if !b.bin.is_empty() {
             b.root.push(json::Buffer {
                 byte_length: USize64(b.bin.len() as u64),
@@ -805,6 +816,7 @@ impl Builder {
                 extras: None,
             });
         }
+        b.push_shared_buffer();
         let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() {
             b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
         } else {
@@ -958,6 +970,9 @@ fn with_extensions(
     }
     serde_json::to_vec(&value).map_err(export)
 }
+
+#[path = "glb_shared.rs"]
+pub(super) mod shared;
 
 #[cfg(test)]
 #[path = "glb_tests.rs"]

@@ -26,6 +26,7 @@ mod layout;
 pub mod lua;
 mod poisson;
 mod rng;
+mod shared;
 mod terrain;
 
 pub use assemble::{Grown, assemble, layout_model, transform};
@@ -38,6 +39,7 @@ pub use layout::{
 pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
 pub use rng::{Rng, hash};
+pub use shared::{VariantSharing, shared_layer, variants_model};
 pub use terrain::{FbmOptions, Grid, Raster, Terrain};
 
 /// Why a forest cannot be laid out.
