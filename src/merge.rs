@@ -598,7 +598,7 @@ fn read_mesh<'s>(
     };
     let mut parts = Vec::new();
     for prim in mesh.primitives() {
-        let reader = prim.reader(|b| buffer(b));
+        let reader = prim.reader(buffer);
         let primitive = match prim.mode() {
             gltf::mesh::Mode::Triangles => Primitive::Triangles,
             gltf::mesh::Mode::Lines => Primitive::Lines,

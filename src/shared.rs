@@ -89,10 +89,10 @@ pub fn read_variants(dir: &Path, script: &Path, seed: u64) -> anyhow::Result<Sha
             path.display()
         )
     };
-    if recorded("scriptSha256") != Value::from(crate::merge::sha256_hex(&bytes)) {
+    if recorded("scriptSha256") != crate::merge::sha256_hex(&bytes) {
         return Err(other("script", recorded("script")));
     }
-    if recorded("seed") != Value::from(seed) {
+    if recorded("seed") != seed {
         return Err(other("seed", recorded("seed")));
     }
     if let Ok(meta) = std::fs::metadata(dir.join(BIN))
