@@ -124,12 +124,21 @@ class Progress:
         self.quiet = quiet
         self.start = time.monotonic()
         self.tty = sys.stderr.isatty()
+        self.note = None
+
+    def later(self, line):
+        """A line said with the first tile written (a run that fails before says only its
+        error)."""
+        self.note = line
 
     def tile(self, i, j):
         """Tile (i, j) has been written."""
         self.done += 1
         if self.quiet:
             return
+        if self.note is not None:
+            sys.stderr.write(self.note + "\n")
+            self.note = None
         grown = self.done - self.skipped
         elapsed = time.monotonic() - self.start
         rate = grown / elapsed if elapsed > 0 else 0.0
@@ -272,6 +281,7 @@ def grow(args):
     # The shared variants are written once, on this machine on all its cores, while Ray
     # connects; the tasks get their description (not the meshes) through the object store.
     writer = None
+    created = not os.path.exists(out)
     if shared and not variants_ok:
         os.makedirs(out, exist_ok=True)
         writer = start_variants(program, script, args, overrides, out)
@@ -285,6 +295,9 @@ def grow(args):
         if writer is not None and writer.poll() is None:
             writer.kill()
             writer.wait()
+        if created:
+            # Nothing of this world was there before: leave nothing behind.
+            shutil.rmtree(out, ignore_errors=True)
         raise
     recorded = old.get("variants") if old is not None else None
     if shared and recorded is not None and recorded != variants:
@@ -296,6 +309,8 @@ def grow(args):
         progress.say(f"{len(done)} of {len(tiles)} tiles already in {args.out}: skipped")
     if not todo:
         mf.write(out, ident, script, params or {}, list(done.values()), True, variants)
+        if progress.note is not None:
+            progress.say(progress.note)
         progress.say(f"world complete: {len(tiles)} tiles in {args.out}, nothing to do")
         return 0
     if ray is None:
@@ -382,9 +397,9 @@ def finish_variants(writer, out, progress):
     entry = mf.variants_entry(out)
     if entry is None:
         raise WorldError(f"variants: pge wrote no {mf.VARIANTS_JSON} in {out}")
-    progress.say(
-        f"variants: {entry['bytes'] / 1e6:.1f} MB in {mf.VARIANTS_BIN} "
-        f"({time.monotonic() - start:.1f}s after Ray connected)"
+    progress.later(
+        f"variants: {entry['bytes'] / 1e6:.1f} MB in {mf.VARIANTS_BIN}, written once "
+        f"(waited {time.monotonic() - start:.1f}s for them after connecting)"
     )
     return entry
 
