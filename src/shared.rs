@@ -18,13 +18,13 @@ pub const DESCRIPTION: &str = "variants.json";
 /// The binary file of the shared variants in their folder.
 pub const BIN: &str = "variants.bin";
 
-/// What shared variants are grown from, as `variants.json` records it: the script (as given)
-/// and its SHA-256, the seed, and the declared parameters' values.
+/// What shared variants are grown from, as `variants.json` records it: the script's SHA-256
+/// (not its path: the same script given by another path writes the same bytes), the seed,
+/// and the declared parameters' values.
 pub fn identity(script: &Path, meta: &ExportMeta) -> anyhow::Result<Map<String, Value>> {
     let bytes =
         std::fs::read(script).with_context(|| format!("cannot read {}", script.display()))?;
     let mut info = Map::new();
-    info.insert("script".into(), script.display().to_string().into());
     info.insert(
         "scriptSha256".into(),
         crate::merge::sha256_hex(&bytes).into(),
@@ -90,7 +90,7 @@ pub fn read_variants(dir: &Path, script: &Path, seed: u64) -> anyhow::Result<Sha
         )
     };
     if recorded("scriptSha256") != crate::merge::sha256_hex(&bytes) {
-        return Err(other("script", recorded("script")));
+        return Err(other("script", recorded("scriptSha256")));
     }
     if recorded("seed") != seed {
         return Err(other("seed", recorded("seed")));

@@ -51,7 +51,16 @@ impl SharedVariants {
     /// wrong with one that is not.
     pub fn parse(text: &[u8]) -> Result<SharedVariants> {
         let bad = |what: &str| Error::Export(format!("not a shared variants description ({what})"));
-        let root: gltf::Root = serde_json::from_slice(text).map_err(|e| bad(&e.to_string()))?;
+        let mut value: JsonValue =
+            serde_json::from_slice(text).map_err(|e| bad(&e.to_string()))?;
+        // The variants' own extras (their skeletons, most of the description) stay in the
+        // description: a tile places the meshes, it does not describe them.
+        if let Some(meshes) = value.get_mut("meshes").and_then(JsonValue::as_array_mut) {
+            for mesh in meshes.iter_mut().filter_map(JsonValue::as_object_mut) {
+                mesh.remove("extras");
+            }
+        }
+        let root: gltf::Root = serde_json::from_value(value).map_err(|e| bad(&e.to_string()))?;
         let extras: JsonValue = match &root.extras {
             Some(raw) => serde_json::from_str(raw.get()).map_err(|e| bad(&e.to_string()))?,
             None => return Err(bad("no extras.pge.variants")),
@@ -68,12 +77,6 @@ impl SharedVariants {
         let bin_bytes = buffer.byte_length.0;
         if root.buffer_views.iter().any(|v| v.buffer.value() != 0) {
             return Err(bad("a buffer view of another buffer"));
-        }
-        // The variants' own extras (their skeletons, most of the description) stay in the
-        // description: a tile places the meshes, it does not describe them.
-        let mut root = root;
-        for mesh in &mut root.meshes {
-            mesh.extras = None;
         }
         let mut groups = Vec::new();
         for g in info
@@ -292,5 +295,68 @@ impl Builder {
             };
             self.root.push(buffer);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{InstanceGroup, InstanceTransform, Mesh};
+    use glam::{Mat4, Vec3};
+
+    fn triangle(name: &str) -> Mesh {
+        let mut m = Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2])
+            .expect("mesh");
+        m.name = name.into();
+        m.extras.insert("note".into(), json!("kept in the description"));
+        m
+    }
+
+    #[test]
+    fn a_tile_refers_to_the_shared_meshes_and_counts_their_instances() {
+        let mut variants = Model::new();
+        variants.meshes.push(std::sync::Arc::new(triangle("oak/0")));
+        variants.groups.push(InstanceGroup {
+            name: "oak/0".into(),
+            meshes: vec![0],
+            transforms: Vec::new(),
+        });
+        let (text, bin) =
+            variants_files(&variants, &[[5, 2]], Map::new(), "variants.bin").expect("files");
+        let description: JsonValue = serde_json::from_slice(&text).expect("json");
+        assert_eq!(description["buffers"][0]["uri"], "variants.bin");
+        assert_eq!(description["buffers"][0]["byteLength"], bin.len());
+        assert_eq!(description["meshes"][0]["extras"]["pge"]["note"], "kept in the description");
+        let shared = SharedVariants::parse(&text).expect("parsed");
+        assert_eq!(shared.group("oak/0").map(|g| (g.mesh, g.nodes)), Some((0, 5)));
+
+        let mut tile = Model::new();
+        tile.add_mesh(triangle("terrain"), Mat4::IDENTITY);
+        let at = |x: f32| InstanceTransform {
+            translation: [x, 0.0, 0.0],
+            rotation: [0.0, 0.0, 0.0, 1.0],
+            scale: 1.0,
+        };
+        tile.groups.push(InstanceGroup {
+            name: "oak/0".into(),
+            meshes: Vec::new(),
+            transforms: vec![at(1.0), at(2.0)],
+        });
+        let glb = glb_bytes_shared(&tile, &ExportMeta::default(), Instancing::Gpu, &shared, "../v")
+            .expect("tile");
+        let file = ::gltf::binary::Glb::from_slice(&glb).expect("glb");
+        let json: JsonValue = serde_json::from_slice(&file.json).expect("json");
+        assert_eq!(json["buffers"][1]["uri"], "../v");
+        assert_eq!(json["bufferViews"][0]["buffer"], 1);
+        assert_eq!(json["meshes"][0]["name"], "oak/0");
+        assert!(json["meshes"][0].get("extras").is_none(), "{}", json["meshes"][0]);
+        assert_eq!(json["extras"]["pge"]["stats"]["nodes"], 10);
+        assert_eq!(json["extras"]["pge"]["stats"]["vertices"], 3 + 2 * 3);
+
+        tile.groups[0].name = "elm/0".into();
+        let err = glb_bytes_shared(&tile, &ExportMeta::default(), Instancing::Gpu, &shared, "v")
+            .expect_err("no such variant");
+        assert!(err.to_string().contains("elm/0"), "{err}");
+        assert!(SharedVariants::parse(b"{}").is_err());
     }
 }
