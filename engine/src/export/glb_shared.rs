@@ -51,8 +51,7 @@ impl SharedVariants {
     /// wrong with one that is not.
     pub fn parse(text: &[u8]) -> Result<SharedVariants> {
         let bad = |what: &str| Error::Export(format!("not a shared variants description ({what})"));
-        let mut value: JsonValue =
-            serde_json::from_slice(text).map_err(|e| bad(&e.to_string()))?;
+        let mut value: JsonValue = serde_json::from_slice(text).map_err(|e| bad(&e.to_string()))?;
         // The variants' own extras (their skeletons, most of the description) stay in the
         // description: a tile places the meshes, it does not describe them.
         if let Some(meshes) = value.get_mut("meshes").and_then(JsonValue::as_array_mut) {
@@ -305,10 +304,11 @@ mod tests {
     use glam::{Mat4, Vec3};
 
     fn triangle(name: &str) -> Mesh {
-        let mut m = Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2])
-            .expect("mesh");
+        let mut m =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
         m.name = name.into();
-        m.extras.insert("note".into(), json!("kept in the description"));
+        m.extras
+            .insert("note".into(), json!("kept in the description"));
         m
     }
 
@@ -326,9 +326,15 @@ mod tests {
         let description: JsonValue = serde_json::from_slice(&text).expect("json");
         assert_eq!(description["buffers"][0]["uri"], "variants.bin");
         assert_eq!(description["buffers"][0]["byteLength"], bin.len());
-        assert_eq!(description["meshes"][0]["extras"]["pge"]["note"], "kept in the description");
+        assert_eq!(
+            description["meshes"][0]["extras"]["pge"]["note"],
+            "kept in the description"
+        );
         let shared = SharedVariants::parse(&text).expect("parsed");
-        assert_eq!(shared.group("oak/0").map(|g| (g.mesh, g.nodes)), Some((0, 5)));
+        assert_eq!(
+            shared.group("oak/0").map(|g| (g.mesh, g.nodes)),
+            Some((0, 5))
+        );
 
         let mut tile = Model::new();
         tile.add_mesh(triangle("terrain"), Mat4::IDENTITY);
@@ -342,14 +348,24 @@ mod tests {
             meshes: Vec::new(),
             transforms: vec![at(1.0), at(2.0)],
         });
-        let glb = glb_bytes_shared(&tile, &ExportMeta::default(), Instancing::Gpu, &shared, "../v")
-            .expect("tile");
+        let glb = glb_bytes_shared(
+            &tile,
+            &ExportMeta::default(),
+            Instancing::Gpu,
+            &shared,
+            "../v",
+        )
+        .expect("tile");
         let file = ::gltf::binary::Glb::from_slice(&glb).expect("glb");
         let json: JsonValue = serde_json::from_slice(&file.json).expect("json");
         assert_eq!(json["buffers"][1]["uri"], "../v");
         assert_eq!(json["bufferViews"][0]["buffer"], 1);
         assert_eq!(json["meshes"][0]["name"], "oak/0");
-        assert!(json["meshes"][0].get("extras").is_none(), "{}", json["meshes"][0]);
+        assert!(
+            json["meshes"][0].get("extras").is_none(),
+            "{}",
+            json["meshes"][0]
+        );
         assert_eq!(json["extras"]["pge"]["stats"]["nodes"], 10);
         assert_eq!(json["extras"]["pge"]["stats"]["vertices"], 3 + 2 * 3);
 
