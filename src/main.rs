@@ -11,6 +11,7 @@ mod output;
 #[cfg(feature = "preview")]
 mod preview;
 mod run;
+mod shared;
 mod stages;
 mod tiles;
 

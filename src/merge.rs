@@ -1,6 +1,9 @@
 //! `pge merge`: the tiles of a world directory (written by `pge-world`) as one glb, every
-//! variant mesh written once and instanced across the tiles.
+//! variant mesh written once and instanced across the tiles. Tiles may be standalone glbs or
+//! refer to the world's shared variants (`variants.bin`, by a relative URI): those are read
+//! once, however many tiles place them.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -59,6 +62,9 @@ struct Manifest {
     seed: u64,
     params: Vec<(String, Value)>,
     tiles: Vec<TileEntry>,
+    /// The shared variants' binary file, its SHA-256 and their description, when the tiles
+    /// refer to them.
+    variants: Option<(String, String, Option<String>)>,
 }
 
 /// The manifest of `dir`; an error saying what to do when it is not a complete world.
@@ -110,16 +116,29 @@ fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
             sha256: text("sha256")?,
         });
     }
+    let variants = match world.get("variants") {
+        None | Some(Value::Null) => None,
+        Some(v) => {
+            let text = |k: &str| {
+                v.get(k)
+                    .and_then(Value::as_str)
+                    .map(str::to_string)
+                    .ok_or_else(|| bad(&format!("the variants' {k} is not a string")))
+            };
+            Some((text("file")?, text("sha256")?, text("description").ok()))
+        }
+    };
     Ok(Manifest {
         seed,
         params,
         tiles,
+        variants,
     })
 }
 
 /// The SHA-256 (FIPS 180-4) of `data` as 64 hex digits, as `pge-world` records it. Written
 /// here rather than taken from a crate: a check of a few files, not a hot path.
-fn sha256_hex(data: &[u8]) -> String {
+pub(crate) fn sha256_hex(data: &[u8]) -> String {
     const K: [u32; 64] = [
         0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4,
         0xab1c5ed5, 0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe,
@@ -189,6 +208,7 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         seed,
         params,
         tiles,
+        variants,
     } = read_manifest(&args.dir)?;
     let chosen: Vec<&TileEntry> = tiles
         .iter()
@@ -204,6 +224,41 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         );
     }
     let mut world = World::default();
+    if let Some((file, sha256, description)) = &variants {
+        let path = args.dir.join(file);
+        let bytes =
+            std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        if sha256_hex(&bytes) != *sha256 {
+            bail!(
+                "{}: the file does not match world.json (run pge-world again to rewrite it)",
+                path.display()
+            );
+        }
+        let key = normal_path(&path)?;
+        world.external.insert(key.clone(), Arc::new(bytes));
+        // The variant meshes' extras (skeletons) are in the description, not in the tiles.
+        if let Some(description) = description {
+            let path = args.dir.join(description);
+            let text =
+                std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+            let json: Value = serde_json::from_slice(&text)
+                .with_context(|| format!("{}: not a variants description", path.display()))?;
+            let extras = json
+                .get("meshes")
+                .and_then(Value::as_array)
+                .map(|meshes| {
+                    meshes
+                        .iter()
+                        .map(|m| match m.pointer("/extras/pge") {
+                            Some(Value::Object(e)) => e.clone(),
+                            _ => Map::new(),
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            world.shared_extras.insert(key, extras);
+        }
+    }
     for t in &chosen {
         let path = args.dir.join(&t.file);
         let bytes =
@@ -214,8 +269,9 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
                 path.display()
             );
         }
+        let folder = path.parent().unwrap_or(Path::new("."));
         world
-            .add_tile(&bytes, (t.i, t.j))
+            .add_tile(&bytes, (t.i, t.j), folder)
             .with_context(|| path.display().to_string())?;
     }
     let model = world.finish();
@@ -241,23 +297,80 @@ struct World {
     /// Extras of the first tile, summed counts of every tile.
     forest: Option<Map<String, Value>>,
     tiles: Vec<[u64; 2]>,
+    /// External buffers read so far (shared variants), by their absolute path.
+    external: HashMap<PathBuf, Arc<Vec<u8>>>,
+    /// The group of each shared variant mesh placed so far: (its buffer's path, its glTF
+    /// mesh index) -> group.
+    shared_groups: HashMap<(PathBuf, usize), usize>,
+    /// Per shared binary file, the `extras.pge` of each mesh of its description.
+    shared_extras: HashMap<PathBuf, Vec<Map<String, Value>>>,
 }
 
 impl World {
-    /// Adds the terrain patch and the placements of one tile's glb.
-    fn add_tile(&mut self, bytes: &[u8], index: (u64, u64)) -> anyhow::Result<()> {
+    /// Adds the terrain patch and the placements of one tile's glb (in `folder`, against
+    /// which the URIs of its external buffers resolve).
+    fn add_tile(&mut self, bytes: &[u8], index: (u64, u64), folder: &Path) -> anyhow::Result<()> {
         let gltf = Gltf::from_slice(bytes).context("not a readable .glb")?;
         let blob = gltf.blob.as_deref();
-        check_bounds(&gltf.document, blob)?;
-        let buffer = |b: gltf::Buffer| if b.index() == 0 { blob } else { None };
+        // Buffer 0 is the binary chunk; the others are files beside the tile.
+        let mut files: Vec<Option<(PathBuf, Arc<Vec<u8>>)>> = vec![None];
+        for buffer in gltf.document.buffers().skip(1) {
+            let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+                bail!("buffer {} has no URI", buffer.index());
+            };
+            let path = normal_path(&folder.join(relative_file(uri)?))?;
+            let data = match self.external.get(&path) {
+                Some(d) => d.clone(),
+                None => {
+                    let d = std::fs::read(&path).with_context(|| {
+                        format!("cannot read {} (buffer {})", path.display(), buffer.index())
+                    })?;
+                    let d = Arc::new(d);
+                    self.external.insert(path.clone(), d.clone());
+                    d
+                }
+            };
+            files.push(Some((path, data)));
+        }
+        let data: Vec<Option<&[u8]>> = files
+            .iter()
+            .enumerate()
+            .map(|(k, f)| match f {
+                _ if k == 0 => blob,
+                Some((_, d)) => Some(d.as_slice()),
+                None => None,
+            })
+            .collect();
+        check_bounds(&gltf.document, &data)?;
+        let buffer = |b: gltf::Buffer| data.get(b.index()).copied().flatten();
         let json: Value = serde_json::from_slice(&gltf::binary::Glb::from_slice(bytes)?.json)?;
         let scene = gltf
             .document
             .default_scene()
             .or_else(|| gltf.document.scenes().next());
+        // A mesh whose data is in an external buffer is the shared variant of that file: read
+        // once for the whole world.
+        let shared_key = |mesh: &gltf::Mesh| -> Option<(PathBuf, usize)> {
+            let prim = mesh.primitives().next()?;
+            let view = prim.get(&gltf::Semantic::Positions)?.view()?;
+            let (path, _) = files.get(view.buffer().index())?.as_ref()?;
+            Some((path.clone(), mesh.index()))
+        };
         let mut meshes = Vec::new();
         for mesh in gltf.document.meshes() {
-            meshes.push(read_mesh(&mesh, blob, &json)?);
+            let key = shared_key(&mesh);
+            meshes.push(match key {
+                Some(key) if self.shared_groups.contains_key(&key) => (String::new(), Vec::new()),
+                Some((path, k)) => {
+                    let (name, mut parts) = read_mesh(&mesh, &buffer, &json)?;
+                    let extras = self.shared_extras.get(&path).and_then(|e| e.get(k));
+                    if let (Some(first), Some(extras)) = (parts.first_mut(), extras) {
+                        first.extras = extras.clone();
+                    }
+                    (name, parts)
+                }
+                None => read_mesh(&mesh, &buffer, &json)?,
+            });
         }
         for node in scene.iter().flat_map(|s| s.nodes()) {
             let Some(mesh) = node.mesh() else { continue };
@@ -288,21 +401,37 @@ impl World {
                 }
             };
             let counts = leaf_counts(leaves, transforms.len())?;
-            self.place(name, parts, transforms, counts);
+            match shared_key(&mesh) {
+                Some(key) => {
+                    let group = match self.shared_groups.get(&key) {
+                        Some(&g) => g,
+                        None => {
+                            let none = counts.as_ref().map(|_| Vec::new());
+                            let g = self.place(name, parts, Vec::new(), none);
+                            self.shared_groups.insert(key, g);
+                            g
+                        }
+                    };
+                    self.extend(group, transforms, counts);
+                }
+                None => {
+                    self.place(name, parts, transforms, counts);
+                }
+            }
         }
         self.add_extras(&json, index)
     }
 
     /// Adds placements of the variant `name` made of `parts`, sharing an equal variant
     /// already written, with their leaf counts: the group keeps counts only while every
-    /// batch of its placements has them.
+    /// batch of its placements has them. Returns the group.
     fn place(
         &mut self,
         name: &str,
         parts: &[Mesh],
         transforms: Vec<InstanceTransform>,
         counts: Option<Vec<u32>>,
-    ) {
+    ) -> usize {
         let found = self
             .variants
             .iter()
@@ -332,6 +461,17 @@ impl World {
                 self.model.groups.len() - 1
             }
         };
+        self.extend(group, transforms, counts);
+        group
+    }
+
+    /// Adds placements (and their leaf counts) to group `group`.
+    fn extend(
+        &mut self,
+        group: usize,
+        transforms: Vec<InstanceTransform>,
+        counts: Option<Vec<u32>>,
+    ) {
         let group = &mut self.model.groups[group];
         match (&mut group.leaves, counts) {
             (Some(leaves), Some(counts)) => leaves.counts.extend(counts),
@@ -387,13 +527,23 @@ impl World {
 }
 
 /// Checks that every accessor lies inside its buffer view, every view inside its buffer and
-/// the buffer inside the binary chunk, so that reading them cannot go out of bounds (the
-/// gltf crate's validation does not compare them with the bytes actually present).
-fn check_bounds(doc: &gltf::Document, blob: Option<&[u8]>) -> anyhow::Result<()> {
-    let present = blob.map_or(0, <[u8]>::len);
+/// the buffer inside its data (the binary chunk, or the file it names), so that reading them
+/// cannot go out of bounds (the gltf crate's validation does not compare them with the bytes
+/// actually present).
+fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> anyhow::Result<()> {
     for buffer in doc.buffers() {
-        if buffer.index() > 0 || buffer.length() > present {
-            bail!("buffer {} is not in the binary chunk", buffer.index());
+        let present = data
+            .get(buffer.index())
+            .copied()
+            .flatten()
+            .map_or(0, <[u8]>::len);
+        if buffer.length() > present {
+            let what = if buffer.index() == 0 {
+                "the binary chunk"
+            } else {
+                "the file it names"
+            };
+            bail!("buffer {} is not in {what}", buffer.index());
         }
     }
     for view in doc.views() {
@@ -488,9 +638,9 @@ fn read_instances<'a>(
 
 /// A glTF mesh as its name and one [`Mesh`] per primitive; the mesh's `extras.pge` goes to
 /// the first (where the exporter, which lets the first member's keys win, puts it back).
-fn read_mesh(
+fn read_mesh<'s>(
     mesh: &gltf::Mesh,
-    blob: Option<&[u8]>,
+    buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
     json: &Value,
 ) -> anyhow::Result<(String, Vec<Mesh>)> {
     let name = mesh.name().unwrap_or_default().to_string();
@@ -503,7 +653,7 @@ fn read_mesh(
     };
     let mut parts = Vec::new();
     for prim in mesh.primitives() {
-        let reader = prim.reader(|b| if b.index() == 0 { blob } else { None });
+        let reader = prim.reader(buffer);
         let primitive = match prim.mode() {
             gltf::mesh::Mode::Triangles => Primitive::Triangles,
             gltf::mesh::Mode::Lines => Primitive::Lines,
@@ -534,7 +684,7 @@ fn read_mesh(
                 .with_context(|| format!("mesh {name}: no indices"))?
                 .into_u32()
                 .collect(),
-            material: Arc::new(read_material(&prim.material(), blob, json)?),
+            material: Arc::new(read_material(&prim.material(), buffer, json)?),
             ..Mesh::default()
         };
         if parts.is_empty() {
@@ -546,16 +696,16 @@ fn read_mesh(
 }
 
 /// A glTF material as PGE's, its textures (base colour, normal, metallic-roughness) read
-/// back from the binary chunk, its `KHR_materials_diffuse_transmission` from the file's
-/// JSON (`json`: the gltf crate reads no such extension).
-fn read_material(
+/// back from their buffers, its `KHR_materials_diffuse_transmission` from the file's JSON
+/// (`json`: the gltf crate reads no such extension).
+fn read_material<'s>(
     m: &gltf::Material,
-    blob: Option<&[u8]>,
+    buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
     json: &Value,
 ) -> anyhow::Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let read = |texture: Option<gltf::Texture>| -> anyhow::Result<Option<Arc<Texture>>> {
-        texture.map(|t| read_texture(&t, blob)).transpose()
+        texture.map(|t| read_texture(&t, buffer)).transpose()
     };
     Ok(Material {
         name: m.name().unwrap_or_default().to_string(),
@@ -590,15 +740,18 @@ fn read_transmission(json: &Value, index: usize) -> Option<DiffuseTransmission> 
     })
 }
 
-/// A texture's PNG image, read back from the binary chunk.
-fn read_texture(texture: &gltf::Texture, blob: Option<&[u8]>) -> anyhow::Result<Arc<Texture>> {
+/// A texture's PNG image, read back from its buffer.
+fn read_texture<'s>(
+    texture: &gltf::Texture,
+    buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+) -> anyhow::Result<Arc<Texture>> {
     let image = texture.source();
     let gltf::image::Source::View { view, .. } = image.source() else {
         bail!("an image outside the .glb");
     };
-    let png = blob
+    let png = buffer(view.buffer())
         .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
-        .context("an image outside the binary chunk")?;
+        .context("an image outside its buffer")?;
     let (width, height) = png_size(png).context("an image that is not a PNG")?;
     Ok(Arc::new(Texture {
         name: image.name().unwrap_or_default().to_string(),
@@ -606,6 +759,47 @@ fn read_texture(texture: &gltf::Texture, blob: Option<&[u8]>) -> anyhow::Result<
         height,
         png: png.to_vec(),
     }))
+}
+
+/// The file a buffer's URI names, relative to the tile: percent-decoded; absolute paths,
+/// schemes (`data:`, `http:`) and `..` past nothing are refused.
+fn relative_file(uri: &str) -> anyhow::Result<PathBuf> {
+    let refuse = || anyhow::anyhow!("buffer URI '{uri}' is not a relative file");
+    if uri.starts_with('/') || uri.contains(':') || uri.contains('\\') || uri.is_empty() {
+        return Err(refuse());
+    }
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut k = 0;
+    while k < bytes.len() {
+        if bytes[k] == b'%' {
+            let hex = uri.get(k + 1..k + 3).ok_or_else(refuse)?;
+            out.push(u8::from_str_radix(hex, 16).map_err(|_| refuse())?);
+            k += 3;
+        } else {
+            out.push(bytes[k]);
+            k += 1;
+        }
+    }
+    let text = String::from_utf8(out).map_err(|_| refuse())?;
+    Ok(PathBuf::from(text))
+}
+
+/// `path` made absolute, `.` and `..` folded (lexically), so one file has one key.
+fn normal_path(path: &Path) -> anyhow::Result<PathBuf> {
+    let absolute =
+        std::path::absolute(path).with_context(|| format!("cannot resolve {}", path.display()))?;
+    let mut out = PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    Ok(out)
 }
 
 /// Width and height from a PNG's header.
@@ -673,7 +867,10 @@ mod tests {
         let bytes = pge_engine::export::glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default())
             .expect("glb");
         let mut world = World::default();
-        world.add_tile(&bytes, (0, 0)).expect("a valid tile reads");
+        let here = Path::new(".");
+        world
+            .add_tile(&bytes, (0, 0), here)
+            .expect("a valid tile reads");
         assert_eq!(world.model.meshes.len(), 1);
 
         let file = gltf::binary::Glb::from_slice(&bytes).expect("glb");
@@ -693,7 +890,7 @@ mod tests {
             (glb(&sparse, &bin), "sparse"),
         ] {
             let err = World::default()
-                .add_tile(&bad, (0, 0))
+                .add_tile(&bad, (0, 0), here)
                 .expect_err("refused");
             assert!(format!("{err:#}").contains(needle), "{err:#}");
         }

@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pge_engine::export::Instancing;
 use pge_engine::mlua::{ObjectLike, Value};
 use pge_engine::{Generated, Session};
-use pge_forest::{ForestPlugin, VariantCache};
+use pge_forest::{ForestPlugin, VariantCache, VariantSharing};
 
 use crate::common::ScriptArgs;
 use crate::output::{export_meta, write_model};
@@ -51,6 +51,16 @@ pub struct RunArgs {
     /// next run (the tiles of a world grow each variant once); the output is the same.
     #[arg(long, value_name = "DIR")]
     pub variant_cache: Option<PathBuf>,
+    /// Write the variants of the forest's layers of a few variants once, into
+    /// DIR/variants.bin and its glTF description DIR/variants.json, for tiles that refer to
+    /// them (--variants DIR); no trees are placed.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["tile", "variants", "stages", "output"])]
+    pub variants_out: Option<PathBuf>,
+    /// Refer to the variants written by --variants-out DIR instead of growing them: the glb
+    /// holds the terrain and the trees' placements, its variant meshes are in DIR/variants.bin
+    /// (a second buffer, by a URI relative to the output). Only DIR/variants.json is read.
+    #[arg(long, value_name = "DIR", conflicts_with = "stages")]
+    pub variants: Option<PathBuf>,
 }
 
 /// `--instancing`.
@@ -85,11 +95,15 @@ pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Like [`Session::generate`], for tile `(i, j)` of the forest the script returns.
-fn generate_tile(
+/// Like [`Session::generate`], for the forest the script returns (an error naming `option`
+/// when it returns something else), or its tile `(i, j)`; `check` sees the declared
+/// parameters before anything grows.
+fn generate_forest(
     session: &Session,
     path: &Path,
-    (i, j): (usize, usize),
+    tile: Option<(usize, usize)>,
+    option: &str,
+    check: &dyn Fn(&[pge_engine::ParamInfo]) -> anyhow::Result<()>,
     progress: &mut dyn FnMut(u32, Option<u32>),
 ) -> anyhow::Result<Generated> {
     let t0 = Instant::now();
@@ -99,22 +113,29 @@ fn generate_tile(
         _ => false,
     };
     if !is_forest {
+        let tiled = if tile.is_some() { " with tile = T" } else { "" };
         anyhow::bail!(
-            "{}: --tile needs a script that returns a forest (pge.Forest with tile = T)",
+            "{}: {option} needs a script that returns a forest (pge.Forest{tiled})",
             path.display()
         );
     }
-    let selected = match &value {
-        Value::UserData(ud) => ud.call_method::<Value>("selectTile", (i, j)),
-        _ => Ok(Value::Nil),
-    };
-    selected.map_err(|e| pge_engine::lua::to_engine_error(session.lua(), e))?;
+    check(&session.declared_params())?;
+    if let Some((i, j)) = tile {
+        let selected = match &value {
+            Value::UserData(ud) => ud.call_method::<Value>("selectTile", (i, j)),
+            _ => Ok(Value::Nil),
+        };
+        selected.map_err(|e| pge_engine::lua::to_engine_error(session.lua(), e))?;
+    }
     let mut algorithm = session.algorithm_from(value)?;
     let ctx = session.context();
     let planned = ctx.steps.or(algorithm.planned_steps());
     let mut model =
         pge_engine::algorithm::run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
-    model.warn_if_empty(path);
+    // The shared variants place nothing: they are not an empty model.
+    if option != "--variants-out" {
+        model.warn_if_empty(path);
+    }
     Ok(Generated {
         model,
         params: session.declared_params(),
@@ -160,9 +181,31 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         }
         return crate::stages::run_stages(args, stages, &output);
     }
-    let forest = match &args.variant_cache {
+    if args.variants.is_some() && ext.as_deref() != Some("glb") {
+        crate::common::usage!(
+            "{}: --variants writes a glb that refers to the shared variants, which needs a .glb \
+             output",
+            output.display()
+        );
+    }
+    let mut forest = match &args.variant_cache {
         Some(dir) => ForestPlugin::with_variant_cache(VariantCache::new(dir)),
         None => ForestPlugin::default(),
+    };
+    if args.variants_out.is_some() {
+        forest = forest.sharing(VariantSharing::Write);
+    }
+    // The description is checked before anything runs.
+    let shared = match &args.variants {
+        Some(dir) => {
+            forest = forest.sharing(VariantSharing::Refer);
+            Some(crate::shared::read_variants(
+                dir,
+                &args.script.script,
+                args.script.seed,
+            )?)
+        }
+        None => None,
     };
     let engine = args.script.engine_with_forest(forest)?;
     let session = engine.session(args.script.session_options(args.steps))?;
@@ -176,11 +219,39 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         }
         bar.set_position(taken as u64);
     };
-    let generated = match args.tile {
-        None => session
-            .generate(&args.script.script, &mut progress)
+    let script = &args.script.script;
+    let check_params = |params: &[pge_engine::ParamInfo]| match (&shared, &args.variants) {
+        (Some(shared), Some(dir)) => crate::shared::check_params(shared, dir, script, params),
+        _ => Ok(()),
+    };
+    let generated = match (args.tile, &args.variants_out, &args.variants) {
+        (None, None, None) => session
+            .generate(script, &mut progress)
             .map_err(anyhow::Error::from),
-        Some(tile) => generate_tile(&session, &args.script.script, tile, &mut progress),
+        (tile, None, None) => generate_forest(
+            &session,
+            script,
+            tile,
+            "--tile",
+            &check_params,
+            &mut progress,
+        ),
+        (tile, Some(_), _) => generate_forest(
+            &session,
+            script,
+            tile,
+            "--variants-out",
+            &check_params,
+            &mut progress,
+        ),
+        (tile, None, Some(_)) => generate_forest(
+            &session,
+            script,
+            tile,
+            "--variants",
+            &check_params,
+            &mut progress,
+        ),
     };
     bar.finish_and_clear();
     let mut generated = generated?;
@@ -193,7 +264,29 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         InstancingArg::Gpu => Instancing::Gpu,
         InstancingArg::Nodes => Instancing::Nodes,
     };
-    write_model(&generated.model, &meta, &output, instancing)?;
+    let output = match (&args.variants_out, &shared, &args.variants) {
+        (Some(dir), _, _) => {
+            let info = crate::shared::identity(script, &meta)?;
+            crate::shared::write_variants(dir, &generated.model, info)?;
+            dir.join(crate::shared::DESCRIPTION)
+        }
+        (None, Some(shared), Some(dir)) => {
+            let uri = crate::shared::relative_uri(dir, &output)?;
+            let bytes = pge_engine::export::glb_bytes_shared(
+                &generated.model,
+                &meta,
+                instancing,
+                shared,
+                &uri,
+            )?;
+            crate::output::write_atomically(&output, &bytes)?;
+            output
+        }
+        _ => {
+            write_model(&generated.model, &meta, &output, instancing)?;
+            output
+        }
+    };
     generated
         .model
         .stats

@@ -48,24 +48,31 @@ fn root_extras(glb: &Path) -> Value {
 /// A world directory as `pge-world` writes it: every tile by `pge run --tile`, and the
 /// manifest.
 fn world(dir: &Path) {
+    world_of(dir, false);
+}
+
+/// [`world`], with tiles that refer to the world's shared variants when `shared`
+/// (`pge run --variants-out DIR`, then `pge run --tile I,J --variants DIR`).
+fn world_of(dir: &Path, shared: bool) {
     let script = forest();
     let tiles: Value = serde_json::from_slice(&run_ok(&["tiles", &script])).expect("json");
     std::fs::create_dir_all(dir.join("tiles")).expect("tiles folder");
+    let d = dir.to_string_lossy().to_string();
+    if shared {
+        run_ok(&["run", &script, "--variants-out", &d, "-q"]);
+    }
     let mut entries = Vec::new();
     for t in tiles.as_array().expect("tiles") {
         let (i, j) = (t["i"].as_u64().expect("i"), t["j"].as_u64().expect("j"));
         let file = format!("tiles/{i}_{j}.glb");
         let out = dir.join(&file);
         let tile = format!("{i},{j}");
-        run_ok(&[
-            "run",
-            &script,
-            "--tile",
-            &tile,
-            "-o",
-            &out.to_string_lossy(),
-            "-q",
-        ]);
+        let o = out.to_string_lossy().to_string();
+        let mut args = vec!["run", &script, "--tile", &tile, "-o", &o, "-q"];
+        if shared {
+            args.extend_from_slice(&["--variants", &d]);
+        }
+        run_ok(&args);
         let instances = root_extras(&out)["forest"]["instances"].clone();
         entries.push(
             json!({"i": i, "j": j, "min": t["min"], "max": t["max"], "file": file,
@@ -73,8 +80,12 @@ fn world(dir: &Path) {
         );
     }
     let params = root_extras(&dir.join("tiles/0_0.glb"))["params"].clone();
-    let manifest = json!({"format": "pge-world/1", "script": script, "scriptSha256": "",
+    let mut manifest = json!({"format": "pge-world/1", "script": script, "scriptSha256": "",
         "seed": 1, "set": {}, "params": params, "complete": true, "tiles": entries});
+    if shared {
+        manifest["variants"] = json!({"file": "variants.bin",
+            "sha256": sha256(&dir.join("variants.bin")), "description": "variants.json"});
+    }
     std::fs::write(dir.join("world.json"), manifest.to_string()).expect("manifest");
 }
 
@@ -302,4 +313,33 @@ fn a_directory_that_is_not_a_complete_world_is_a_one_line_error() {
 
     let o = merge(&[&ws, "--rect", "2,0,1,1"]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn a_world_of_tiles_that_share_their_variants_merges_into_the_same_glb() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (alone, shared) = (dir.path().join("alone"), dir.path().join("shared"));
+    world_of(&alone, false);
+    world_of(&shared, true);
+    let merged = |w: &Path| {
+        let out = w.join("merged.glb");
+        let o = merge(&[&w.to_string_lossy(), "-o", &out.to_string_lossy()]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let (a, b) = (merged(&alone), merged(&shared));
+    // Every variant read once from variants.bin, with its extras from variants.json: the
+    // same glb as the standalone tiles give, byte for byte.
+    assert_eq!(std::fs::read(&a).expect("a"), std::fs::read(&b).expect("b"));
+    let c = content(&b);
+    assert_eq!(c.meshes["terrain"], 16);
+
+    // A damaged shared file is refused, nothing written.
+    std::fs::write(shared.join("variants.bin"), b"damaged").expect("damaged");
+    let out = dir.path().join("out.glb");
+    expect_error(
+        &[&shared.to_string_lossy(), "-o", &out.to_string_lossy()],
+        &["variants.bin", "does not match"],
+        &out,
+    );
 }

@@ -67,6 +67,8 @@ struct Builder {
     /// Materials with `KHR_materials_diffuse_transmission` (leaves), and what they let
     /// through.
     transmissive: Vec<(usize, DiffuseTransmission)>,
+    /// The shared variants a tile's instance groups refer to (`glb_bytes_shared`).
+    shared: Option<shared::Shared>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -573,7 +575,10 @@ impl Builder {
             if group.transforms.is_empty() {
                 continue;
             }
-            let mesh = self.group_mesh(group, &model.meshes)?;
+            let mesh = match self.shared_mesh(group)? {
+                Some(mesh) => mesh,
+                None => self.group_mesh(group, &model.meshes)?,
+            };
             match self.instancing {
                 Instancing::Gpu => {
                     let mut t = Vec::with_capacity(group.transforms.len() * 3);
@@ -684,6 +689,8 @@ impl Builder {
         stages: Option<JsonValue>,
     ) -> Result<Vec<u8>> {
         let mut b = self;
+        // What the instances of shared variants draw (a tile that refers to them).
+        let [sv, st, sn, sl] = b.shared_counts(model);
         let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
         let mut pge = Map::new();
         pge.insert("generator".into(), GENERATOR.into());
@@ -692,10 +699,10 @@ impl Builder {
         pge.insert(
             "stats".into(),
             json!({
-                "vertices": model.vertex_count(),
-                "triangles": model.triangle_count(),
-                "nodes": model.stats.nodes,
-                "leaves": model.stats.leaves,
+                "vertices": model.vertex_count() as u64 + sv,
+                "triangles": model.triangle_count() as u64 + st,
+                "nodes": model.stats.nodes + sn,
+                "leaves": model.stats.leaves + sl,
                 "modules": model.stats.modules,
             }),
         );
@@ -719,7 +726,11 @@ impl Builder {
             scene.extras.clone_from(&extras);
         }
         b.root.extras = extras;
-        let bin_len = b.layout.padded_len();
+        let mut bin_len = b.layout.padded_len();
+        if bin_len == 0 && b.shared.is_some() {
+            // Buffer 0 must exist before the shared one (buffer 1).
+            bin_len = 4;
+        }
         if bin_len > 0 {
             b.root.push(json::Buffer {
                 byte_length: USize64(bin_len as u64),
@@ -729,6 +740,7 @@ impl Builder {
                 extras: None,
             });
         }
+        b.push_shared_buffer();
         let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty()
         {
             b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
@@ -814,6 +826,9 @@ fn with_extensions(
     }
     serde_json::to_vec(&value).map_err(export)
 }
+
+#[path = "glb_shared.rs"]
+pub(super) mod shared;
 
 #[cfg(test)]
 #[path = "glb_tests.rs"]

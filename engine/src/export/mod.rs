@@ -7,6 +7,9 @@ mod glb_layout;
 mod glb_sky;
 mod obj;
 
+pub use glb::shared::{
+    SharedGroup, SharedVariants, VARIANTS_FORMAT, glb_bytes_shared, variants_files,
+};
 pub use glb::{
     ExportMeta, GLB_LIMIT, GPU_INSTANCING, Instancing, glb_bytes, glb_bytes_with, glb_container,
     glb_stages_bytes,

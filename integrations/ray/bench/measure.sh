@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # The measurements of integrations/ray/README.md, in one run on one machine:
 #   A. `pge run` of the whole forest (every core);
-#   B. its tiles by `pge run --tile I,J --threads 1`, two at a time, without Ray;
-#   B'. the same with a variant cache (--variant-cache, cold: a new folder);
-#   C. the same tiles through pge-world on a local Ray cluster of two one-CPU nodes
-#      (a head and one worker node on 127.0.0.1), with a cold variant cache, and
-#   C'. again without the variant cache (--no-variant-cache), then (D) `pge merge`.
+#   V. `pge run --variants-out` (every core): the shared variants, written once;
+#   T. the tiles by `pge run --tile I,J --variants DIR --threads 1`, two at a time, no Ray;
+#   F. Ray's fixed cost: `ray.init` connecting to the cluster, then a first (empty) task;
+#   C. pge-world on a local Ray cluster of two one-CPU nodes (a head and one worker node on
+#      127.0.0.1), shared variants (the default), every file checked against V and T;
+#   S. pge-world --standalone-tiles with a cold variant cache (the former tile format);
+#   D. `pge merge` of C's world.
 # Usage (from the repository root, after .ci/ray or with ray and pge-world installed):
 #   integrations/ray/bench/measure.sh [SCRIPT] [WORKDIR]
+# STANDALONE=0 skips S.
 set -euo pipefail
 script=${1:-scripts/forests/big.lua}
 work=${2:-$(mktemp -d /tmp/pgebench.XXXXXX)}
@@ -16,6 +19,7 @@ venv=${VENV:-$root/target/ray-venv}
 export PATH="$root/target/release:$venv/bin:$PATH" RAY_USAGE_STATS_ENABLED=0
 mkdir -p "$work"
 now() { date +%s.%N; }
+since() { echo "$(now) - $1" | bc; }
 # 13 distinct free ports (bound all at once): the head's GCS port, then 6 per node.
 read -r -a free <<<"$(python3 -c '
 import socket
@@ -32,29 +36,24 @@ echo "load before: $(uptime)"
 
 t0=$(now)
 pge run "$script" -o "$work/whole.glb" -q
-t1=$(now)
-whole=$(echo "$t1 - $t0" | bc)
+whole=$(since "$t0")
 echo "A. pge run, whole forest: ${whole}s, $(stat -c %s "$work/whole.glb") bytes"
 
-mkdir -p "$work/local"
+mkdir -p "$work/local/tiles"
+t0=$(now)
+pge run "$script" --variants-out "$work/local" -q
+variants=$(since "$t0")
+echo "V. pge run --variants-out: ${variants}s, $(stat -c %s "$work/local/variants.bin") +" \
+  "$(stat -c %s "$work/local/variants.json") bytes"
 export SCRIPT=$script WORK=$work
 t0=$(now)
 pge tiles "$script" | grep -o '"i":[0-9]*,"j":[0-9]*' | sed 's/"i":\([0-9]*\),"j":\([0-9]*\)/\1 \2/' |
-  xargs -P 2 -L 1 sh -c 'pge run "$SCRIPT" --tile "$0,$1" --threads 1 -q -o "$WORK/local/$0_$1.glb"'
-t1=$(now)
-local_tiles=$(echo "$t1 - $t0" | bc)
-echo "B. pge run --tile, 16 tiles two at a time: ${local_tiles}s, $(du -cb "$work"/local/*.glb | tail -1 | cut -f1) bytes"
-
-mkdir -p "$work/cached"
-t0=$(now)
-pge tiles "$script" | grep -o '"i":[0-9]*,"j":[0-9]*' | sed 's/"i":\([0-9]*\),"j":\([0-9]*\)/\1 \2/' |
-  xargs -P 2 -L 1 sh -c 'pge run "$SCRIPT" --tile "$0,$1" --threads 1 -q -o "$WORK/cached/$0_$1.glb" --variant-cache "$WORK/variants-local"'
-t1=$(now)
-cached_tiles=$(echo "$t1 - $t0" | bc)
-echo "B'. the same with a cold --variant-cache: ${cached_tiles}s, $(du -cb "$work"/variants-local | tail -1 | cut -f1) bytes of cache"
-for f in "$work"/local/*.glb; do
-  cmp -s "$f" "$work/cached/$(basename "$f")" || { echo "tile $(basename "$f") differs with the cache"; exit 1; }
-done
+  xargs -P 2 -L 1 sh -c 'pge run "$SCRIPT" --tile "$0,$1" --variants "$WORK/local" --threads 1 -q -o "$WORK/local/tiles/$0_$1.glb"'
+local_tiles=$(since "$t0")
+echo "T. pge run --tile --variants, 16 tiles two at a time: ${local_tiles}s," \
+  "$(du -cb "$work"/local/tiles/*.glb | tail -1 | cut -f1) bytes"
+pge run "$script" --tile 1,1 --variants "$work/local" --threads 1 -q --stats -o "$work/one.glb" |
+  sed 's/^/   tile 1,1: /'
 
 temp=$(mktemp -d /tmp/pgerayb.XXXXXX)
 head_port=${free[0]}
@@ -67,28 +66,57 @@ ray start --head --node-ip-address=127.0.0.1 --port="$head_port" --num-cpus=1 \
 # shellcheck disable=SC2046
 ray start --address="127.0.0.1:$head_port" --node-ip-address=127.0.0.1 --num-cpus=1 \
   --object-store-memory=600000000 $(ports 1) >/dev/null
+
+# F: what any Ray job pays before its first task returns: Python and Ray imported, connected,
+# a first task scheduled, its worker process started, its result back.
+fixed=$("$venv/bin/python" - "127.0.0.1:$head_port" <<'EOF'
+import sys, time
+t0 = time.monotonic()
+import ray
+ray.init(address=sys.argv[1], _node_ip_address="127.0.0.1", logging_level="ERROR",
+         log_to_driver=False)
+t1 = time.monotonic()
+ray.get(ray.remote(lambda: 1).options(num_cpus=1).remote())
+t2 = time.monotonic()
+print(f"{t1 - t0:.2f} {t2 - t1:.2f} {t2 - t0:.2f}")
+EOF
+)
+read -r connect first fixed_total <<<"$fixed"
+echo "F. Ray's fixed cost: import + connect ${connect}s, first task ${first}s, ${fixed_total}s in all"
+
 t0=$(now)
-pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port" \
-  --variant-cache "$work/variants-ray"
-t1=$(now)
-ray_time=$(echo "$t1 - $t0" | bc)
-echo "C. pge-world on Ray, 2 nodes x 1 CPU, cold variant cache: ${ray_time}s, $(du -cb "$work"/world/tiles/*.glb | tail -1 | cut -f1) bytes"
-t0=$(now)
-pge-world "$script" --out "$work/world-plain" --address "127.0.0.1:$head_port" --no-variant-cache
-t1=$(now)
-plain_time=$(echo "$t1 - $t0" | bc)
-echo "C'. pge-world on Ray, 2 nodes x 1 CPU, no variant cache: ${plain_time}s"
-for f in "$work"/local/*.glb; do
-  cmp -s "$f" "$work/world/tiles/$(basename "$f")" || { echo "tile $(basename "$f") differs"; exit 1; }
-  cmp -s "$f" "$work/world-plain/tiles/$(basename "$f")" || { echo "tile $(basename "$f") differs"; exit 1; }
+pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port"
+ray_time=$(since "$t0")
+echo "C. pge-world on Ray, 2 nodes x 1 CPU, shared variants: ${ray_time}s," \
+  "$(du -cb "$work"/world/tiles/*.glb | tail -1 | cut -f1) bytes of tiles"
+for f in variants.bin variants.json; do
+  cmp -s "$work/local/$f" "$work/world/$f" || { echo "$f differs"; exit 1; }
 done
-echo "   every tile equals the local one"
+for f in "$work"/local/tiles/*.glb; do
+  cmp -s "$f" "$work/world/tiles/$(basename "$f")" || { echo "tile $(basename "$f") differs"; exit 1; }
+done
+echo "   the variants and every tile equal the local ones"
+
+if [ "${STANDALONE:-1}" != 0 ]; then
+  t0=$(now)
+  pge-world "$script" --out "$work/world-standalone" --address "127.0.0.1:$head_port" \
+    --standalone-tiles --variant-cache "$work/variants-ray" -q
+  standalone=$(since "$t0")
+  echo "S. pge-world --standalone-tiles, cold variant cache: ${standalone}s," \
+    "$(du -cb "$work"/world-standalone/tiles/*.glb | tail -1 | cut -f1) bytes"
+fi
+
 t0=$(now)
 pge merge "$work/world" -o "$work/merged.glb"
-t1=$(now)
-echo "D. pge merge: $(echo "$t1 - $t0" | bc)s, $(stat -c %s "$work/merged.glb") bytes"
+echo "D. pge merge: $(since "$t0")s, $(stat -c %s "$work/merged.glb") bytes"
+if [ "${STANDALONE:-1}" != 0 ]; then
+  pge merge "$work/world-standalone" -o "$work/merged-standalone.glb"
+  cmp -s "$work/merged.glb" "$work/merged-standalone.glb" || { echo "the merged worlds differ"; exit 1; }
+  echo "   the same glb as the merged standalone tiles"
+fi
 echo "ratios: C / A = $(echo "scale=2; $ray_time / $whole" | bc)," \
-  "C' / A = $(echo "scale=2; $plain_time / $whole" | bc)," \
-  "B' / A = $(echo "scale=2; $cached_tiles / $whole" | bc)," \
-  "B / A = $(echo "scale=2; $local_tiles / $whole" | bc)"
+  "(C - F) / A = $(echo "scale=2; ($ray_time - $fixed_total) / $whole" | bc)," \
+  "T / A = $(echo "scale=2; $local_tiles / $whole" | bc)," \
+  "(V + T) / A = $(echo "scale=2; ($variants + $local_tiles) / $whole" | bc)"
+[ -n "${standalone:-}" ] && echo "        S / A = $(echo "scale=2; $standalone / $whole" | bc)"
 echo "load after: $(uptime)"

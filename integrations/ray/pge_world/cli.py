@@ -83,11 +83,18 @@ def parser():
         help="pge's --time-limit for every tile (default: pge's own)",
     )
     p.add_argument(
+        "--standalone-tiles",
+        action="store_true",
+        help="every tile carries the variant meshes it places (a glb of its own, ~30 MB for "
+        "big.lua) instead of referring to DIR/variants.bin, the variants written once on this "
+        "machine (the default)",
+    )
+    p.add_argument(
         "--variant-cache",
         default="",
         metavar="DIR",
-        help="pge's --variant-cache on every worker: the folder where the tiles of a machine "
-        "share the species variants they grow (a path that exists on every machine, local "
+        help="with --standalone-tiles, pge's --variant-cache on every worker: the folder where "
+        "the tiles of a machine share the species variants they grow (a path that exists on every machine, local "
         "or shared); default: pge-variants-USER in each machine's temporary folder",
     )
     p.add_argument(
@@ -117,12 +124,21 @@ class Progress:
         self.quiet = quiet
         self.start = time.monotonic()
         self.tty = sys.stderr.isatty()
+        self.note = None
+
+    def later(self, line):
+        """A line said with the first tile written (a run that fails before says only its
+        error)."""
+        self.note = line
 
     def tile(self, i, j):
         """Tile (i, j) has been written."""
         self.done += 1
         if self.quiet:
             return
+        if self.note is not None:
+            sys.stderr.write(self.note + "\n")
+            self.note = None
         grown = self.done - self.skipped
         elapsed = time.monotonic() - self.start
         rate = grown / elapsed if elapsed > 0 else 0.0
@@ -239,7 +255,11 @@ def grow(args):
             f"{old.get('seed')}, set {old.get('set')}): choose another --out or delete it"
         )
     tiles = tile_list(program, script, args.seed, overrides)
+    shared = not args.standalone_tiles
     done = mf.done_tiles(out, old) if old is not None else {}
+    if old is not None and (old.get("variants") is not None) != shared:
+        # Tiles of the other form (standalone or referring to shared variants): grown again.
+        done = {}
     params = old.get("params") if old is not None else None
     if args.adopt:
         for t in tiles:
@@ -248,16 +268,53 @@ def grow(args):
                 if entry is not None:
                     done[(t["i"], t["j"])] = entry
                     params = tile_params
+    variants_ok = shared and old is not None and mf.variants_intact(out, old)
     todo = [t for t in tiles if (t["i"], t["j"]) not in done]
-    progress = Progress(len(tiles), len(tiles) - len(todo), args.quiet)
-    if done:
+    progress = Progress(len(tiles), 0, args.quiet)
+    variants = old.get("variants") if variants_ok else None
+    if not todo and (variants_ok or not shared):
         progress.say(f"{len(done)} of {len(tiles)} tiles already in {args.out}: skipped")
-    if not todo:
-        mf.write(out, ident, script, params or {}, list(done.values()), True)
+        mf.write(out, ident, script, params or {}, list(done.values()), True, variants)
         progress.say(f"world complete: {len(tiles)} tiles in {args.out}, nothing to do")
         return 0
 
-    ray = connect(args.address)
+    # The shared variants are written once, on this machine on all its cores, while Ray
+    # connects; the tasks get their description (not the meshes) through the object store.
+    writer = None
+    created = not os.path.exists(out)
+    if shared and not variants_ok:
+        os.makedirs(out, exist_ok=True)
+        writer = start_variants(program, script, args, overrides, out)
+    ray = None
+    try:
+        if todo:
+            ray = connect(args.address)
+        if writer is not None:
+            variants = finish_variants(writer, out, progress)
+    except BaseException:
+        if writer is not None and writer.poll() is None:
+            writer.kill()
+            writer.wait()
+        if created:
+            # Nothing of this world was there before: leave nothing behind.
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+    recorded = old.get("variants") if old is not None else None
+    if shared and recorded is not None and recorded != variants:
+        # Other variants (another pge): every tile refers to them, every tile grows again.
+        done = {}
+        todo = list(tiles)
+    progress.done = progress.skipped = len(tiles) - len(todo)
+    if done:
+        progress.say(f"{len(done)} of {len(tiles)} tiles already in {args.out}: skipped")
+    if not todo:
+        mf.write(out, ident, script, params or {}, list(done.values()), True, variants)
+        if progress.note is not None:
+            progress.say(progress.note)
+        progress.say(f"world complete: {len(tiles)} tiles in {args.out}, nothing to do")
+        return 0
+    if ray is None:
+        ray = connect(args.address)
     from ray import cloudpickle
 
     from . import tile as tile_module
@@ -272,13 +329,17 @@ def grow(args):
         scheduling_strategy="SPREAD",
     )
     variant_cache = args.variant_cache and os.path.abspath(args.variant_cache)
-    if args.no_variant_cache:
+    if args.no_variant_cache or shared:
         variant_cache = None
+    description = None
+    if shared:
+        with open(os.path.join(out, mf.VARIANTS_JSON), "rb") as f:
+            description = ray.put(f.read())
     pending = {}
     for t in todo:
         ref = task.remote(
             args.pge, script, args.seed, overrides, t["i"], t["j"], args.cpus_per_tile,
-            args.time_limit, variant_cache,
+            args.time_limit, variant_cache, description,
         )
         pending[ref] = t
     written = dict(done)
@@ -295,21 +356,52 @@ def grow(args):
                     params = mf.glb_root_extras(result["glb"]).get("params", {})
                 progress.tile(t["i"], t["j"])
             if ready and time.monotonic() - last_write > 2.0 and pending:
-                mf.write(out, ident, script, params, list(written.values()), False)
+                mf.write(out, ident, script, params, list(written.values()), False, variants)
                 last_write = time.monotonic()
     except BaseException:
         for ref in pending:
             ray.cancel(ref, force=True)
         if len(written) > len(done):
-            mf.write(out, ident, script, params or {}, list(written.values()), False)
+            mf.write(out, ident, script, params or {}, list(written.values()), False, variants)
         raise
-    mf.write(out, ident, script, params, list(written.values()), True)
+    mf.write(out, ident, script, params, list(written.values()), True, variants)
     total = sum(e["instances"] for e in written.values())
     elapsed = time.monotonic() - progress.start
     progress.say(
         f"world complete: {len(tiles)} tiles, {total} instances in {args.out} ({elapsed:.1f}s)"
     )
     return 0
+
+
+def start_variants(program, script, args, overrides, out):
+    """Starts ``pge run SCRIPT --variants-out DIR`` on this machine (every core)."""
+    cmd = [program, "run"] + pge_args(script, args.seed, overrides, args.time_limit)
+    cmd += ["--variants-out", out, "-q"]
+    try:
+        return subprocess.Popen(
+            cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+            text=True,
+        )
+    except OSError as e:
+        raise WorldError(f"cannot run {program}: {e}") from e
+
+
+def finish_variants(writer, out, progress):
+    """Waits for :func:`start_variants`; the manifest's record of the variants, or the
+    error line of pge."""
+    start = time.monotonic()
+    _, err = writer.communicate()
+    if writer.returncode != 0:
+        message = last_line(err) or f"pge exited with status {writer.returncode}"
+        raise WorldError(f"variants: {message}")
+    entry = mf.variants_entry(out)
+    if entry is None:
+        raise WorldError(f"variants: pge wrote no {mf.VARIANTS_JSON} in {out}")
+    progress.later(
+        f"variants: {entry['bytes'] / 1e6:.1f} MB in {mf.VARIANTS_BIN}, written once "
+        f"(waited {time.monotonic() - start:.1f}s for them after connecting)"
+    )
+    return entry
 
 
 def matches(value, text):

@@ -103,12 +103,41 @@ def done_tiles(directory, manifest):
     return done
 
 
-def write(directory, ident, script, params, tiles, complete):
-    """Writes the manifest atomically: ``tiles`` in (i, j) order, their instance total."""
+VARIANTS_BIN = "variants.bin"
+VARIANTS_JSON = "variants.json"
+
+
+def variants_entry(directory):
+    """The manifest's record of the shared variants in ``directory`` (written by ``pge run
+    --variants-out``): each file's name, SHA-256 and length; None when either is missing."""
+    entry = {}
+    for key, name in (("", VARIANTS_BIN), ("description", VARIANTS_JSON)):
+        try:
+            with open(os.path.join(directory, name), "rb") as f:
+                data = f.read()
+        except OSError:
+            return None
+        entry[key or "file"] = name
+        entry[(key + "Sha256") if key else "sha256"] = sha256_bytes(data)
+        entry[(key + "Bytes") if key else "bytes"] = len(data)
+    return entry
+
+
+def variants_intact(directory, manifest):
+    """Whether the shared variants ``manifest`` records are in ``directory`` unchanged."""
+    recorded = manifest.get("variants")
+    return recorded is not None and variants_entry(directory) == recorded
+
+
+def write(directory, ident, script, params, tiles, complete, variants=None):
+    """Writes the manifest atomically: ``tiles`` in (i, j) order, their instance total, and
+    the shared variants' record (:func:`variants_entry`) when the tiles refer to them."""
     tiles = sorted(tiles, key=lambda t: (t["i"], t["j"]))
     manifest = {"format": FORMAT, "script": script}
     manifest.update(ident)
     manifest["params"] = params
+    if variants is not None:
+        manifest["variants"] = variants
     manifest["complete"] = complete
     manifest["instances"] = sum(t["instances"] for t in tiles)
     manifest["tiles"] = tiles

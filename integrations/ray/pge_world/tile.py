@@ -69,13 +69,21 @@ def default_variant_cache():
 
 
 def grow_tile(
-    program, script, seed, overrides, i, j, threads=1, time_limit=None, variant_cache=""
+    program, script, seed, overrides, i, j, threads=1, time_limit=None, variant_cache="",
+    variants=None,
 ):
     """Runs ``pge run SCRIPT --tile I,J`` with ``program`` (a name looked up on this
     machine's PATH, or a path) and returns ``{"glb": bytes, "instances": n, "node": host}``.
 
     ``variant_cache`` is pge's ``--variant-cache`` folder: ``""`` for this machine's own
     (:func:`default_variant_cache`), None for none.
+
+    ``variants`` is the world's shared variants description (the bytes of
+    ``variants.json``), or None for a standalone tile. The tile then refers to the variants
+    instead of carrying them: the description is written into a scratch folder laid out as
+    the world directory (``variants.json`` beside ``tiles/``), so the tile's reference is
+    ``../variants.bin`` as in the world; the worker needs neither the binary file nor a
+    shared folder.
 
     Raises :class:`TileFailed` when ``program`` is missing or ``pge`` exits with an error.
     """
@@ -87,13 +95,19 @@ def grow_tile(
             "install pge there, or pass --pge with its path on the workers"
         )
     with tempfile.TemporaryDirectory(prefix="pge-tile-") as folder:
-        out = os.path.join(folder, f"{i}_{j}.glb")
+        os.mkdir(os.path.join(folder, "tiles"))
+        out = os.path.join(folder, "tiles", f"{i}_{j}.glb")
         cmd = [exe, "run"] + pge_args(script, seed, overrides, time_limit)
         cmd += ["--tile", f"{i},{j}", "-o", out, "-q", "--stats", "--threads", str(threads)]
-        if variant_cache == "":
-            variant_cache = default_variant_cache()
-        if variant_cache is not None:
-            cmd += ["--variant-cache", variant_cache]
+        if variants is not None:
+            with open(os.path.join(folder, "variants.json"), "wb") as f:
+                f.write(variants)
+            cmd += ["--variants", folder]
+        else:
+            if variant_cache == "":
+                variant_cache = default_variant_cache()
+            if variant_cache is not None:
+                cmd += ["--variant-cache", variant_cache]
         proc = subprocess.run(
             cmd,
             stdin=subprocess.DEVNULL,

@@ -48,6 +48,36 @@ def local_tiles(pge_bin, folder, *sets):
     return out
 
 
+def local_shared_tiles(pge_bin, folder, *sets):
+    """The variants and every tile of the test forest as local `pge run --variants-out` and
+    `pge run --tile --variants` write them into ``folder`` (laid out as a world directory):
+    ({file name: bytes} of the variants, {(i, j): tile bytes})."""
+    extra = [a for s in sets for a in ("--set", s)]
+    subprocess.run(
+        [pge_bin, "run", FOREST, "--variants-out", folder, "-q", "--threads", "1"] + extra,
+        check=True, capture_output=True,
+    )
+    listed = subprocess.run(
+        [pge_bin, "tiles", FOREST] + extra, capture_output=True, text=True, check=True
+    )
+    os.makedirs(os.path.join(folder, "tiles"), exist_ok=True)
+    out = {}
+    for t in json.loads(listed.stdout):
+        path = os.path.join(folder, "tiles", f"{t['i']}_{t['j']}.glb")
+        subprocess.run(
+            [pge_bin, "run", FOREST, "--tile", f"{t['i']},{t['j']}", "--variants", folder,
+             "-o", path, "-q", "--threads", "1"] + extra,
+            check=True, capture_output=True,
+        )
+        with open(path, "rb") as f:
+            out[(t["i"], t["j"])] = f.read()
+    variants = {}
+    for name in ("variants.bin", "variants.json"):
+        with open(os.path.join(folder, name), "rb") as f:
+            variants[name] = f.read()
+    return variants, out
+
+
 @pytest.fixture(scope="module")
 def reference(pge_bin, tmp_path_factory):
     """The local tiles of the forest as the tests run it (spin makes tiles slower)."""
@@ -70,7 +100,8 @@ def tile_bytes(folder, world):
 def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, reference, tmp_path):
     out = str(tmp_path / "world")
     variants = tmp_path / "variants"
-    p = pge_world(cluster, "--out", out, "--set", "spin=0", "--variant-cache", str(variants))
+    p = pge_world(cluster, "--out", out, "--set", "spin=0", "--variant-cache", str(variants),
+                  "--standalone-tiles")
     assert p.returncode == 0, p.stderr
     assert "tiles 16/16" in p.stderr, p.stderr
     # The tiles shared the variants of the script species (shrub.lua, two variants) through
@@ -107,7 +138,7 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
     # A second run on the same directory finds every tile and grows none.
     stamps = {n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns
               for n in os.listdir(os.path.join(out, "tiles"))}
-    again = pge_world(cluster, "--out", out, "--set", "spin=0")
+    again = pge_world(cluster, "--out", out, "--set", "spin=0", "--standalone-tiles")
     assert again.returncode == 0, again.stderr
     assert "16 of 16 tiles already" in again.stderr and "nothing to do" in again.stderr
     assert {n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns for n in stamps} == stamps
@@ -116,11 +147,63 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
     damaged = os.path.join(out, world["tiles"][5]["file"])
     with open(damaged, "r+b") as f:
         f.write(b"XXXX")
-    resumed = pge_world(cluster, "--out", out, "--set", "spin=0")
+    resumed = pge_world(cluster, "--out", out, "--set", "spin=0", "--standalone-tiles")
     assert resumed.returncode == 0, resumed.stderr
     assert "15 of 16 tiles already" in resumed.stderr, resumed.stderr
     assert tile_bytes(out, read_world(out)) == reference
     assert read_world(out) == world
+
+
+def test_tiles_that_share_their_variants_are_the_local_ones(cluster, pge_bin, tmp_path):
+    # The default: the variants written once (on the driver, every core), tiles that refer
+    # to them; each file equal to the local runs on one thread.
+    variants, reference = local_shared_tiles(pge_bin, str(tmp_path / "local"), "spin=0")
+    out = str(tmp_path / "world")
+    p = pge_world(cluster, "--out", out, "--set", "spin=0")
+    assert p.returncode == 0, p.stderr
+    assert "tiles 16/16" in p.stderr and "variants:" in p.stderr, p.stderr
+    for name, data in variants.items():
+        with open(os.path.join(out, name), "rb") as f:
+            assert f.read() == data, name
+    world = read_world(out)
+    assert world["complete"] is True
+    assert world["variants"] == {
+        "file": "variants.bin",
+        "sha256": hashlib.sha256(variants["variants.bin"]).hexdigest(),
+        "bytes": len(variants["variants.bin"]),
+        "description": "variants.json",
+        "descriptionSha256": hashlib.sha256(variants["variants.json"]).hexdigest(),
+        "descriptionBytes": len(variants["variants.json"]),
+    }
+    got = tile_bytes(out, world)
+    assert got == reference
+    for t in world["tiles"]:
+        assert t["sha256"] == hashlib.sha256(got[(t["i"], t["j"])]).hexdigest()
+        assert t["instances"] == mf.glb_root_extras(got[(t["i"], t["j"])])["forest"]["instances"]
+    # Every tile is small: the variants are not in it.
+    assert max(len(b) for b in got.values()) * 4 < len(variants["variants.bin"])
+
+    # A second run does no work; damaged variants are written again, the tiles kept.
+    stamps = {n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns
+              for n in os.listdir(os.path.join(out, "tiles"))}
+    again = pge_world(cluster, "--out", out, "--set", "spin=0")
+    assert again.returncode == 0, again.stderr
+    assert "16 of 16 tiles already" in again.stderr and "nothing to do" in again.stderr
+    with open(os.path.join(out, "variants.bin"), "r+b") as f:
+        f.write(b"XXXX")
+    repaired = pge_world(cluster, "--out", out, "--set", "spin=0")
+    assert repaired.returncode == 0, repaired.stderr
+    assert "variants:" in repaired.stderr, repaired.stderr
+    assert {n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns for n in stamps} == stamps
+    assert read_world(out) == world
+    with open(os.path.join(out, "variants.bin"), "rb") as f:
+        assert f.read() == variants["variants.bin"]
+
+    # The same directory grown again as standalone tiles: every tile is regrown.
+    alone = pge_world(cluster, "--out", out, "--set", "spin=0", "--standalone-tiles")
+    assert alone.returncode == 0, alone.stderr
+    assert "already" not in alone.stderr, alone.stderr
+    assert "variants" not in read_world(out)
 
 
 def extra_node_workers(cluster):
@@ -149,8 +232,7 @@ def extra_node_workers(cluster):
 def test_killing_a_worker_in_the_middle_changes_nothing(cluster, pge_bin, tmp_path):
     # About a second of Lua per pge run: a tile is still running when its worker is killed.
     spin = "spin=12000000"
-    (tmp_path / "local").mkdir()
-    reference = local_tiles(pge_bin, str(tmp_path / "local"), spin)
+    _, reference = local_shared_tiles(pge_bin, str(tmp_path / "local"), spin)
     out = str(tmp_path / "world")
     cmd = CLI + [FOREST, "--address", cluster.address,
            "--out", out, "--set", spin]
@@ -175,12 +257,16 @@ def test_killing_a_worker_in_the_middle_changes_nothing(cluster, pge_bin, tmp_pa
     assert tile_bytes(out, world) == reference
 
 
-def test_a_tile_that_fails_stops_the_run_with_its_message(cluster, tmp_path):
+@pytest.mark.parametrize("mode", ["--standalone-tiles", "shared"])
+def test_a_tile_that_fails_stops_the_run_with_its_message(cluster, tmp_path, mode):
     out = str(tmp_path / "world")
-    p = pge_world(cluster, "--out", out, "--set", "broken=true")
+    extra = [mode] if mode.startswith("--") else []
+    p = pge_world(cluster, "--out", out, "--set", "broken=true", *extra)
     assert p.returncode == 1
     lines = p.stderr.strip().splitlines()
-    assert lines[-1].startswith("pge-world: tile "), p.stderr
+    # Shared variants are written first, on the driver: the broken species fails there.
+    where = "pge-world: tile " if extra else "pge-world: variants: "
+    assert lines[-1].startswith(where), p.stderr
     assert "forest.lua:" in lines[-1] and "no sap in this species" in lines[-1], p.stderr
     assert "Traceback" not in p.stderr
     if os.path.exists(os.path.join(out, "world.json")):
@@ -257,7 +343,7 @@ def test_tiles_written_by_a_job_array_are_adopted(cluster, pge_bin, reference, t
     for (i, j), data in reference.items():
         if (i, j) != (3, 3):
             (out / "tiles" / f"{i}_{j}.glb").write_bytes(data)
-    p = pge_world(cluster, "--out", str(out), "--set", "spin=0", "--adopt")
+    p = pge_world(cluster, "--out", str(out), "--set", "spin=0", "--adopt", "--standalone-tiles")
     assert p.returncode == 0, p.stderr
     assert "15 of 16 tiles already" in p.stderr, p.stderr
     world = read_world(str(out))
@@ -268,7 +354,7 @@ def test_tiles_written_by_a_job_array_are_adopted(cluster, pge_bin, reference, t
     other = tmp_path / "other"
     (other / "tiles").mkdir(parents=True)
     (other / "tiles" / "0_0.glb").write_bytes(reference[(0, 0)])
-    p = pge_world(cluster, "--out", str(other), "--seed", "5", "--adopt")
+    p = pge_world(cluster, "--out", str(other), "--seed", "5", "--adopt", "--standalone-tiles")
     assert p.returncode == 1
     assert "0_0.glb: written with another seed" in p.stderr, p.stderr
     assert not (other / "world.json").exists()

@@ -27,7 +27,7 @@ pub fn transform(position: [f32; 3], yaw: f32, scale: f32) -> InstanceTransform 
 }
 
 /// A copy of `mesh` moved by `m` (for variants whose parts are not at the origin).
-fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
+pub(crate) fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
     let normal = Mat3::from_mat4(*m).inverse().transpose();
     let mut out = mesh.clone();
     for p in &mut out.positions {

@@ -31,6 +31,7 @@ mod lod;
 pub mod lua;
 mod poisson;
 mod rng;
+mod shared;
 mod terrain;
 
 pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
@@ -47,6 +48,7 @@ pub use lod::{
 pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
 pub use rng::{Rng, hash};
+pub use shared::{VariantSharing, shared_layer, variants_model};
 pub use terrain::{FbmOptions, Grid, Raster, Terrain};
 
 /// Why a forest cannot be laid out.

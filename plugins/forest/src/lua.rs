@@ -23,15 +23,16 @@ use pge_tree::lod::{Budget, LodOptions, MAX_SECTORS};
 
 use crate::{
     Camera, Density, FbmOptions, Forest, ForestError, ForestLod, Grown, GrownVariant, Layer,
-    Layout, Method, Raster, Terrain, VariantCache, VariantKey, VariantLod, Variants,
-    assemble_budgeted, check_budget, instance_leaves, layout_model, unique_seed, variant_lod,
-    variant_seed, with_lod,
+    Layout, Method, Raster, Terrain, VariantCache, VariantKey, VariantLod, VariantSharing,
+    Variants, assemble_budgeted, check_budget, instance_leaves, layout_model, shared_layer,
+    unique_seed, variant_lod, variant_seed, variants_model, with_lod,
 };
 
 /// Adds `pge.Forest` to every session.
 #[derive(Clone, Debug, Default)]
 pub struct ForestPlugin {
     variant_cache: Option<VariantCache>,
+    sharing: Option<VariantSharing>,
 }
 
 impl ForestPlugin {
@@ -41,7 +42,16 @@ impl ForestPlugin {
     pub fn with_variant_cache(cache: VariantCache) -> ForestPlugin {
         ForestPlugin {
             variant_cache: Some(cache),
+            sharing: None,
         }
+    }
+
+    /// Forests write only their shared variants, or refer to them instead of growing them
+    /// (`pge run --variants-out DIR`, `--variants DIR`; see [`VariantSharing`]).
+    #[must_use]
+    pub fn sharing(mut self, sharing: VariantSharing) -> ForestPlugin {
+        self.sharing = Some(sharing);
+        self
     }
 }
 
@@ -53,6 +63,9 @@ impl Plugin for ForestPlugin {
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
         if let Some(cache) = &self.variant_cache {
             lua.set_app_data(cache.clone());
+        }
+        if let Some(sharing) = self.sharing {
+            lua.set_app_data(sharing);
         }
         pge.set("Forest", lua.create_function(new_forest)?)
     }
@@ -606,6 +619,10 @@ impl ForestAlgorithm {
     fn grow(&self, layout: &Layout, ctx: &RunContext) -> pge_engine::Result<Vec<Grown>> {
         let spec = self.spec.borrow();
         let seed = spec.forest.seed;
+        // Layers whose variants a tile refers to rather than grows (`--variants DIR`).
+        let referred = |l: usize| {
+            self.sharing() == Some(VariantSharing::Refer) && shared_layer(&spec.forest, l)
+        };
         // (layer, variant, seed) of every tree to grow, in a fixed order.
         let mut jobs: Vec<Vec<u64>> = Vec::new();
         for (l, layer) in spec.forest.layers.iter().enumerate() {
@@ -621,7 +638,7 @@ impl ForestAlgorithm {
         }
         let mut scripts: Vec<(usize, usize, u64)> = Vec::new();
         for (l, (species, _)) in spec.species.iter().enumerate() {
-            if matches!(species, Species::Path { .. }) {
+            if matches!(species, Species::Path { .. }) && !referred(l) {
                 scripts.extend(jobs[l].iter().enumerate().map(|(v, &s)| (l, v, s)));
             }
         }
@@ -694,6 +711,9 @@ impl ForestAlgorithm {
             let Species::Function { f, params } = species else {
                 continue;
             };
+            if referred(l) {
+                continue;
+            }
             let Some(lua) = self.lua.try_upgrade() else {
                 return Err(Error::script(location.clone(), "the Lua state is gone"));
             };
@@ -713,10 +733,21 @@ impl ForestAlgorithm {
                     .push(run(&mut *algorithm, &inner, &mut |_| {})?);
             }
         }
+        for (l, g) in grown.iter_mut().enumerate() {
+            if referred(l) {
+                g.variants = vec![Model::new(); jobs[l].len()];
+            }
+        }
         if let Some(options) = &spec.lod.variants {
             give_levels(&spec, &mut grown, options)?;
         }
         Ok(grown)
+    }
+
+    /// The run's [`VariantSharing`], if any.
+    fn sharing(&self) -> Option<VariantSharing> {
+        let lua = self.lua.try_upgrade()?;
+        lua.app_data_ref::<VariantSharing>().map(|s| *s)
     }
 }
 
@@ -809,6 +840,9 @@ impl Algorithm for ForestAlgorithm {
         let spec = self.spec.borrow();
         let mut model = match (&self.model, &self.layout, &self.grown) {
             (Some(model), _, _) => model.clone(),
+            (None, _, Some(grown)) if self.sharing() == Some(VariantSharing::Write) => {
+                variants_model(&spec.forest, grown)
+            }
             (None, Some(layout), Some(grown)) => assembled(&spec, layout, grown)?,
             (None, Some(layout), None) => layout_model(&spec.forest, layout, spec.selected),
             _ => layout_model(&spec.forest, &Layout::default(), spec.selected),
@@ -827,12 +861,25 @@ impl Algorithm for ForestAlgorithm {
 impl ForestAlgorithm {
     /// One step: layout, then variants, then assembly; returns the step's name.
     fn step_timed(&mut self, ctx: &RunContext) -> pge_engine::Result<(&'static str, Step)> {
+        if self.layout.is_none() && self.sharing() == Some(VariantSharing::Write) {
+            // Writing the shared variants: no trees to place.
+            self.layout = Some(Layout::default());
+            return Ok(("layout", Step::Continue));
+        }
         if self.layout.is_none() {
             let spec = self.spec.borrow();
             if let Some(camera) = &spec.lod.camera {
                 check_budget(&spec.forest, camera).map_err(|e| {
                     Error::script(spec.location.clone(), format!("pge.Forest: {e}"))
                 })?;
+                if self.sharing() == Some(VariantSharing::Refer) {
+                    return Err(Error::script(
+                        spec.location.clone(),
+                        "pge.Forest: lod.camera needs the variants' leaves, which a tile \
+                         referring to shared variants (--variants) does not grow: write \
+                         standalone tiles",
+                    ));
+                }
             }
             let mut layout = spec
                 .forest
@@ -860,7 +907,11 @@ impl ForestAlgorithm {
         if self.model.is_none() {
             let spec = self.spec.borrow();
             if let (Some(layout), Some(grown)) = (&self.layout, &self.grown) {
-                self.model = Some(assembled(&spec, layout, grown)?);
+                self.model = Some(if self.sharing() == Some(VariantSharing::Write) {
+                    variants_model(&spec.forest, grown)
+                } else {
+                    assembled(&spec, layout, grown)?
+                });
             }
         }
         Ok(("assembly", Step::Done))

@@ -1,0 +1,209 @@
+//! `pge run SCRIPT --variants-out DIR` writes a forest's variants once (`DIR/variants.bin`
+//! and its glTF description `DIR/variants.json`); `pge run SCRIPT --tile I,J --variants DIR`
+//! writes a tile that refers to them instead of carrying them (docs/glb.md, "Tiles that share
+//! their variants").
+
+use std::path::{Component, Path, PathBuf};
+
+use anyhow::Context;
+use pge_engine::ParamInfo;
+use pge_engine::export::{ExportMeta, SharedVariants, variants_files};
+use pge_engine::geometry::Model;
+use serde_json::{Map, Value};
+
+use crate::output::write_atomically;
+
+/// The description of the shared variants in their folder.
+pub const DESCRIPTION: &str = "variants.json";
+/// The binary file of the shared variants in their folder.
+pub const BIN: &str = "variants.bin";
+
+/// What shared variants are grown from, as `variants.json` records it: the script's SHA-256
+/// (not its path: the same script given by another path writes the same bytes), the seed,
+/// and the declared parameters' values.
+pub fn identity(script: &Path, meta: &ExportMeta) -> anyhow::Result<Map<String, Value>> {
+    let bytes =
+        std::fs::read(script).with_context(|| format!("cannot read {}", script.display()))?;
+    let mut info = Map::new();
+    info.insert(
+        "scriptSha256".into(),
+        crate::merge::sha256_hex(&bytes).into(),
+    );
+    info.insert("seed".into(), meta.seed.into());
+    let params: Map<String, Value> = meta.params.iter().cloned().collect();
+    info.insert("params".into(), Value::Object(params));
+    Ok(info)
+}
+
+/// Writes the variants model of a `--variants-out` run into `dir`: the binary file first,
+/// the description last (each atomically), so a description is never without its file.
+pub fn write_variants(dir: &Path, model: &Model, info: Map<String, Value>) -> anyhow::Result<()> {
+    let counts: Vec<[u64; 2]> = model
+        .extras
+        .get("sharedVariants")
+        .and_then(Value::as_array)
+        .map(|list| {
+            list.iter()
+                .map(|c| {
+                    let n = |k: &str| c.get(k).and_then(Value::as_u64).unwrap_or(0);
+                    [n("nodes"), n("leaves")]
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let (text, bin) = variants_files(model, &counts, info, BIN)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    write_atomically(&dir.join(BIN), &bin)?;
+    write_atomically(&dir.join(DESCRIPTION), &text)
+}
+
+/// The description in `dir`, checked against this run before it grows anything: it exists,
+/// it is one, it was written for this script (same bytes) and seed, and its binary file,
+/// when present, has the length it records (a tile never reads it: a worker may have the
+/// description alone).
+pub fn read_variants(dir: &Path, script: &Path, seed: u64) -> anyhow::Result<SharedVariants> {
+    let path = dir.join(DESCRIPTION);
+    let again = format!(
+        "write them again with pge run {} --variants-out {}",
+        script.display(),
+        dir.display()
+    );
+    let text = std::fs::read(&path).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: no shared variants here ({}); write them with pge run {} --variants-out {}",
+            path.display(),
+            e.kind(),
+            script.display(),
+            dir.display()
+        )
+    })?;
+    let shared = SharedVariants::parse(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {e}; {again}", path.display()))?;
+    let info = shared.info();
+    let bytes =
+        std::fs::read(script).with_context(|| format!("cannot read {}", script.display()))?;
+    let recorded = |k: &str| info.get(k).cloned().unwrap_or(Value::Null);
+    let other = |what: &str, was: Value| {
+        anyhow::anyhow!(
+            "{}: the shared variants were written for another {what} ({was}); {again}",
+            path.display()
+        )
+    };
+    if recorded("scriptSha256") != crate::merge::sha256_hex(&bytes) {
+        return Err(other("script", recorded("scriptSha256")));
+    }
+    if recorded("seed") != seed {
+        return Err(other("seed", recorded("seed")));
+    }
+    if let Ok(meta) = std::fs::metadata(dir.join(BIN))
+        && meta.len() != shared.bin_bytes()
+    {
+        return Err(anyhow::anyhow!(
+            "{}: {} bytes where the description says {}; {again}",
+            dir.join(BIN).display(),
+            meta.len(),
+            shared.bin_bytes()
+        ));
+    }
+    Ok(shared)
+}
+
+/// Checks that the shared variants were written with the parameters of this run (known once
+/// the script has run).
+pub fn check_params(
+    shared: &SharedVariants,
+    dir: &Path,
+    script: &Path,
+    params: &[ParamInfo],
+) -> anyhow::Result<()> {
+    let now: Map<String, Value> = params
+        .iter()
+        .map(|p| (p.name.clone(), p.value.to_json()))
+        .collect();
+    let recorded = shared.info().get("params").cloned().unwrap_or(Value::Null);
+    if recorded != Value::Object(now) {
+        anyhow::bail!(
+            "{}: the shared variants were written with other parameters ({recorded}); write \
+             them again with pge run {} --variants-out {} and the same --set values",
+            dir.join(DESCRIPTION).display(),
+            script.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// The URI of `dir/variants.bin` relative to the folder of `output` (`../variants.bin` for a
+/// tile in `DIR/tiles/`), `/`-separated and percent-encoded as glTF asks.
+pub fn relative_uri(dir: &Path, output: &Path) -> anyhow::Result<String> {
+    let absolute = |p: &Path| -> anyhow::Result<PathBuf> {
+        let p = if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        };
+        Ok(normal(&std::path::absolute(p).with_context(|| {
+            format!("cannot resolve {}", p.display())
+        })?))
+    };
+    let target = absolute(&dir.join(BIN))?;
+    let from = absolute(output.parent().unwrap_or(Path::new("")))?;
+    let (t, f): (Vec<_>, Vec<_>) = (target.components().collect(), from.components().collect());
+    let common = t.iter().zip(&f).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        anyhow::bail!(
+            "{} and {} have no folder in common: the tile cannot refer to the variants",
+            dir.display(),
+            output.display()
+        );
+    }
+    let mut parts: Vec<String> = vec!["..".into(); f.len() - common];
+    parts.extend(
+        t[common..]
+            .iter()
+            .map(|c| encode(&c.as_os_str().to_string_lossy())),
+    );
+    Ok(parts.join("/"))
+}
+
+/// `p` with `.` and `..` folded (lexically).
+fn normal(p: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// A path segment percent-encoded: everything but RFC 3986's unreserved characters.
+fn encode(segment: &str) -> String {
+    let mut out = String::with_capacity(segment.len());
+    for b in segment.bytes() {
+        if b.is_ascii_alphanumeric() || matches!(b, b'-' | b'.' | b'_' | b'~') {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_uri_is_relative_to_the_tiles_folder() {
+        let uri = |d: &str, o: &str| relative_uri(Path::new(d), Path::new(o)).expect("uri");
+        assert_eq!(uri("/w", "/w/tiles/0_0.glb"), "../variants.bin");
+        assert_eq!(uri("/w/", "/w/0_0.glb"), "variants.bin");
+        assert_eq!(uri("/w/v", "/w/tiles/./a/../0_0.glb"), "../v/variants.bin");
+        assert_eq!(uri("/my w/v", "/x/t.glb"), "../my%20w/v/variants.bin");
+    }
+}
