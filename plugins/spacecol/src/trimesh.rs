@@ -322,8 +322,12 @@ impl TriMesh {
     /// in its default scene, placed by the node transforms.
     pub fn parse_gltf(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), MeshError> {
         check_accessor_indices(bytes)?;
-        let (doc, buffers, _) =
-            gltf::import_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
+        // Buffers only: a shape needs no images (and the gltf crate's image import panics on
+        // an image view without a MIME type, found by the mesh_gltf fuzz target).
+        let gltf::Gltf { document: doc, blob } =
+            gltf::Gltf::from_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
+        let buffers = gltf::import_buffers(&doc, None, blob)
+            .map_err(|e| MeshError::Gltf(e.to_string()))?;
         let mut positions = Vec::new();
         let mut triangles = Vec::new();
         let scene = doc.default_scene().or_else(|| doc.scenes().next());
@@ -587,6 +591,20 @@ mod tests {
             e.to_string().contains("(POSITION) must be FLOAT VEC3"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn an_image_view_without_a_mime_type_is_ignored_not_a_panic() {
+        // Found by the mesh_gltf fuzz target: the gltf crate's image import unwrapped the
+        // missing MIME type. The mesh reader reads no image.
+        let text = triangle_gltf((5125, "SCALAR"), (5126, "VEC3"), "[]");
+        let text = text.replacen(
+            r#""accessors""#,
+            r#""images": [{"bufferView": 0}], "accessors""#,
+            1,
+        );
+        let (positions, _) = TriMesh::parse_gltf(text.as_bytes()).expect("the mesh reads");
+        assert_eq!(positions.len(), 3);
     }
 
     #[test]
