@@ -324,10 +324,12 @@ impl TriMesh {
         check_accessor_indices(bytes)?;
         // Buffers only: a shape needs no images (and the gltf crate's image import panics on
         // an image view without a MIME type, found by the mesh_gltf fuzz target).
-        let gltf::Gltf { document: doc, blob } =
-            gltf::Gltf::from_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
-        let buffers = gltf::import_buffers(&doc, None, blob)
-            .map_err(|e| MeshError::Gltf(e.to_string()))?;
+        let gltf::Gltf {
+            document: doc,
+            blob,
+        } = gltf::Gltf::from_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
+        let buffers =
+            gltf::import_buffers(&doc, None, blob).map_err(|e| MeshError::Gltf(e.to_string()))?;
         let mut positions = Vec::new();
         let mut triangles = Vec::new();
         let scene = doc.default_scene().or_else(|| doc.scenes().next());
