@@ -217,7 +217,7 @@ impl Scene {
         Scene {
             meshes,
             skeleton,
-            bounds: bounds(model),
+            bounds: model.bounds(),
             stats,
             environment,
         }
@@ -247,38 +247,6 @@ fn forest_lods(model: &Model, forest: &[bool]) -> HashMap<usize, Mesh> {
             Some((m, mesh))
         })
         .collect()
-}
-
-/// The model's world-space bounds, as [`Model::bounds`] finds them but with each mesh's own
-/// bounds found once rather than once per instance (a forest places a mesh 10,000 times).
-fn bounds(model: &Model) -> Option<(Vec3, Vec3)> {
-    let own: Vec<Option<(Vec3, Vec3)>> = model.meshes.iter().map(|m| m.bounds()).collect();
-    let grouped = model.groups.iter().flat_map(|g| {
-        g.transforms.iter().flat_map(move |t| {
-            let m = t.matrix();
-            g.meshes.iter().map(move |&mesh| (mesh, m))
-        })
-    });
-    let plain = model.instances.iter().map(|i| (i.mesh, i.transform));
-    let mut out: Option<(Vec3, Vec3)> = None;
-    for (mesh, transform) in plain.chain(grouped) {
-        let Some(Some((lo, hi))) = own.get(mesh) else {
-            continue;
-        };
-        for corner in 0..8 {
-            let c = Vec3::new(
-                if corner & 1 == 0 { lo.x } else { hi.x },
-                if corner & 2 == 0 { lo.y } else { hi.y },
-                if corner & 4 == 0 { lo.z } else { hi.z },
-            );
-            let p = transform.transform_point3(c);
-            out = Some(match out {
-                None => (p, p),
-                Some((a, b)) => (a.min(p), b.max(p)),
-            });
-        }
-    }
-    out
 }
 
 /// The sphere around the bounding box of `mesh`'s positions.

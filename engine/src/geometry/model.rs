@@ -336,9 +336,11 @@ impl Model {
         Ok(())
     }
 
-    /// World-space bounds `(min, max)` over all instances, or `None` when empty.
+    /// World-space bounds `(min, max)` over all instances, or `None` when empty. Each mesh's
+    /// own bounds are found once, not once per instance (a forest places a mesh 10,000 times).
     #[must_use]
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let own: Vec<Option<(Vec3, Vec3)>> = self.meshes.iter().map(|m| m.bounds()).collect();
         let mut out: Option<(Vec3, Vec3)> = None;
         let grouped = self.groups.iter().flat_map(|g| {
             g.transforms.iter().flat_map(move |t| {
@@ -348,7 +350,7 @@ impl Model {
         });
         let plain = self.instances.iter().map(|i| (i.mesh, i.transform));
         for (mesh, transform) in plain.chain(grouped) {
-            let Some((lo, hi)) = self.meshes[mesh].bounds() else {
+            let Some(Some((lo, hi))) = own.get(mesh) else {
                 continue;
             };
             for corner in 0..8 {
