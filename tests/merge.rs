@@ -9,26 +9,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{pge, root, run_validator};
+use common::{pge, pge_ok as run_ok, ray_forest as forest, run_validator};
 use serde_json::{Value, json};
-
-/// The 16-tile test forest of the Ray integration.
-fn forest() -> String {
-    root()
-        .join("integrations/ray/tests/forest.lua")
-        .to_string_lossy()
-        .to_string()
-}
-
-fn run_ok(args: &[&str]) -> Vec<u8> {
-    let o = pge(args);
-    assert!(
-        o.status.success(),
-        "pge {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o.stdout
-}
 
 fn sha256(path: &Path) -> String {
     let o = Command::new("sha256sum")

@@ -9,26 +9,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{pge, root, run_validator};
+use common::{pge, pge_ok as run_ok, ray_forest as forest, root, run_validator};
 use serde_json::Value;
-
-/// The 16-tile test forest of the Ray integration.
-fn forest() -> String {
-    root()
-        .join("integrations/ray/tests/forest.lua")
-        .to_string_lossy()
-        .to_string()
-}
-
-fn run_ok(args: &[&str]) -> Vec<u8> {
-    let o = pge(args);
-    assert!(
-        o.status.success(),
-        "pge {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o.stdout
-}
 
 fn s(p: &Path) -> String {
     p.to_string_lossy().to_string()

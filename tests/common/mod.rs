@@ -61,3 +61,22 @@ pub fn run_validator(files: &[PathBuf]) -> (bool, String) {
     }
     (o.status.success(), report)
 }
+
+/// Runs `pge` with `args` and checks that it succeeded; its standard output.
+pub fn pge_ok(args: &[&str]) -> Vec<u8> {
+    let o = pge(args);
+    assert!(
+        o.status.success(),
+        "pge {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o.stdout
+}
+
+/// The 16-tile test forest of the Ray integration.
+pub fn ray_forest() -> String {
+    root()
+        .join("integrations/ray/tests/forest.lua")
+        .to_string_lossy()
+        .to_string()
+}
