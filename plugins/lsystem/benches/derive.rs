@@ -365,6 +365,7 @@ fn bench_lua(c: &mut Criterion) {
     let location = Location::new("bench", 0);
     let mut g = c.benchmark_group("lua_rules");
     g.sample_size(10);
+    // (name, script, modules produced, modules in the final string)
     let cases = [
         (
             "RRule A -> {B{}, A{}, B{}} on 100k",
@@ -373,6 +374,7 @@ fn bench_lua(c: &mut Criterion) {
             l:RRule("A", function(a) return { B{}, A{}, B{} } end)
             l:iterations(1)
             return l"#,
+            300_000,
             300_000,
         ),
         (
@@ -383,16 +385,40 @@ fn bench_lua(c: &mut Criterion) {
             l:iterations(1)
             return l"#,
             100_000,
+            100_000,
+        ),
+        // The rule calls alone: the axiom is 100 times shorter, so parsing it and setting
+        // up the run are about 1% of the work.
+        (
+            "RRule A(x) -> A(x+1), 1k modules x 100 steps",
+            r#"local l = pge.LSystem("bench")
+            l:axiom(string.rep("A(1)", 1000))
+            l:RRule("A", function(a) return A{a[1] + 1} end)
+            l:iterations(100)
+            return l"#,
+            100_000,
+            1_000,
+        ),
+        // The floor: a rule that does not apply (the module is copied).
+        (
+            "RRule A(x) -> nil, 1k modules x 100 steps",
+            r#"local l = pge.LSystem("bench")
+            l:axiom(string.rep("A(1)", 1000))
+            l:RRule("A", function(a) return nil end)
+            l:iterations(100)
+            return l"#,
+            100_000,
+            1_000,
         ),
     ];
-    for (name, code, modules) in cases {
+    for (name, code, produced, len) in cases {
         let value = session.eval_value(code).expect("script");
-        g.throughput(Throughput::Elements(modules));
+        g.throughput(Throughput::Elements(produced));
         g.bench_function(name, |bench| {
             bench.iter(|| {
                 let d = pge_lsystem::derive_value(session.lua(), &value, &ctx, &location)
                     .expect("derives");
-                assert_eq!(d.len() as u64, modules);
+                assert_eq!(d.len() as u64, len);
             });
         });
     }
