@@ -51,29 +51,32 @@ pub(crate) fn truthy(v: &Value) -> bool {
     !matches!(v, Value::Nil | Value::Boolean(false))
 }
 
-/// Reads the numbers of a parameter table that is a plain array of numbers.
+/// Reads the numbers of a parameter table that is a plain array of numbers: its keys are
+/// exactly `1..=n` and every value is a number. One pass over the table's pairs, which for
+/// keys present in the table calls into Lua unprotected (no `pcall` per module).
 pub(crate) fn numeric_params(t: &Table, out: &mut Vec<f64>) -> mlua::Result<bool> {
     out.clear();
     let n = t.raw_len();
     if n == 0 {
         return Ok(t.is_empty());
     }
-    for i in 1..=n {
-        match t.raw_get::<Value>(i)? {
-            Value::Integer(x) => out.push(x as f64),
-            Value::Number(x) => out.push(x),
+    out.resize(n, 0.0);
+    let mut count = 0usize;
+    for pair in t.pairs::<Value, Value>() {
+        let (k, v) = pair?;
+        count += 1;
+        let slot = match k {
+            Value::Integer(i) if i >= 1 && i as u64 <= n as u64 => i as usize - 1,
+            _ => return Ok(false),
+        };
+        match v {
+            Value::Integer(x) => out[slot] = x as f64,
+            Value::Number(x) => out[slot] = x,
             _ => return Ok(false),
         }
     }
-    let mut count = 0usize;
-    for pair in t.pairs::<Value, Value>() {
-        pair?;
-        count += 1;
-        if count > n {
-            return Ok(false);
-        }
-    }
-    Ok(true)
+    // Distinct keys, all in 1..=n: n of them are exactly 1..=n.
+    Ok(count == n)
 }
 
 /// The positional numbers of a parameter table (for the default interpretation).

@@ -117,6 +117,71 @@ mod tests {
     }
 
     #[test]
+    fn constructors_tag_tables_and_refuse_other_values_at_the_calling_line() {
+        // `A()` is an empty symbol; a constructed symbol may be changed before it is
+        // returned; a symbol passed to a constructor is copied.
+        let t = text(
+            r#"local l = pge.LSystem("t")
+            l:axiom{ A(), B{2} }
+            l:RRule("A", function()
+                local s = C{1}
+                s.v = 2
+                local e = E{}
+                e[1] = 4
+                return { s, e, D(s), A() }
+            end)
+            l:RRule("B", function(b) return B(b) end)
+            l:iterations(1)
+            return l"#,
+        );
+        assert_eq!(t, "C(1) E(4) D(1) A B(2)");
+        let s = session(1);
+        let name: String = s
+            .eval("local s = Apex{age = 1} return s.name .. getmetatable(s).__name")
+            .expect("runs");
+        assert_eq!(name, "Apexsymbol Apex");
+        let e = error(
+            "local l = pge.LSystem('t')\nl:axiom{ A{} }\nl:RRule('A', function()\n  return B(5)\nend)\nl:iterations(1)\nreturn l",
+        );
+        assert_eq!(
+            e,
+            "eval:4: the parameters of symbol 'B' must be one table (B{...}), not number"
+        );
+        let e = error("return A('x')");
+        assert_eq!(
+            e,
+            "eval:1: the parameters of symbol 'A' must be one table (A{...}), not string"
+        );
+    }
+
+    #[test]
+    fn only_plain_arrays_of_numbers_are_stored_unboxed() {
+        // A table with a hole, a named field or a non-number travels as the same Lua table:
+        // the rule of the next step sees the very table, and JSON writes its fields.
+        let s = session(1);
+        let d = derive_in(
+            &s,
+            r#"local l = pge.LSystem("t")
+            local holey = A{1, 2, 3}
+            holey[2] = nil
+            l:axiom{ A{1, 2.5}, holey, A{1, v = 2}, A{1, "x"}, A{} }
+            l:RRule("A", function(a) return A(a) end)
+            l:iterations(2)
+            return l"#,
+            None,
+        )
+        .expect("derives");
+        let mut out = Vec::new();
+        d.write_json(&mut out).expect("json");
+        let json: serde_json::Value = serde_json::from_slice(&out).expect("valid json");
+        assert_eq!(json[0]["params"], serde_json::json!([1, 2.5]));
+        assert_eq!(json[1]["params"], serde_json::json!({"1": 1, "3": 3}));
+        assert_eq!(json[2]["params"], serde_json::json!({"1": 1, "v": 2}));
+        assert_eq!(json[3]["params"], serde_json::json!([1, "x"]));
+        assert_eq!(d.module_text(0), "A(1,2.5)");
+    }
+
+    #[test]
     fn successor_strings_with_rand_or_globals_are_evaluated_each_time() {
         let t = text(
             r#"local l = pge.LSystem("t")

@@ -1,7 +1,8 @@
 //! Symbols in Lua: `A{...}`, `pge.sym(name, params)`.
 //!
 //! A symbol is its own parameter table tagged with the symbol's metatable, so that `A{}` in a
-//! hot rule costs one table and no call into Rust, and a rule reads `a.v` or `a[1]` directly.
+//! hot rule costs one table and one call of a Rust function (no Lua instructions), and a rule
+//! reads `a.v` or `a[1]` directly.
 //! Rust recognises a symbol by its metatable (see [`SymbolTags`]).
 
 use std::cell::RefCell;
@@ -51,7 +52,9 @@ pub(crate) fn tags(lua: &Lua) -> Rc<RefCell<SymbolTags>> {
     with_shared(lua, |s| s.tags.clone())
 }
 
-/// The constructor of `name`: a Lua function `function(p) return setmetatable(p or {}, meta) end`.
+/// The constructor of `name`, a Rust function: `A{...}` tags the table it is given with the
+/// symbol's metatable and returns it (`A()` tags a new empty table). Running no Lua
+/// instructions, it costs a rule nothing under the session's instruction-count hook.
 pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
     let sym = session_symbols(lua).borrow_mut().intern(name);
     let tags = tags(lua);
@@ -63,34 +66,54 @@ pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
     fields.raw_set("name", name)?;
     meta.raw_set("__index", fields)?;
     meta.raw_set("__name", format!("symbol {name}"))?;
-    let factory: Function = lua
+    // A table that is already a symbol (`Floor(b), Roof(b)`), or has any metatable, is
+    // copied (with the global `next`, in its order) so that one table never stands for two
+    // symbols. Rare, so written in Lua.
+    let copy: Function = lua
         .load(
-            r#"local meta, name = ...
-            local setmetatable, getmetatable, type, error, next =
-                setmetatable, getmetatable, type, error, next
+            r#"local next = next
             return function(p)
-                if p == nil then return setmetatable({}, meta) end
-                if type(p) ~= "table" then
-                    error("the parameters of symbol '" .. name .. "' must be one table ("
-                        .. name .. "{...}), not " .. type(p), 2)
-                end
-                if getmetatable(p) ~= nil then
-                    -- Already a symbol (`Floor(b), Roof(b)`): tag a copy, so that one
-                    -- table never stands for two symbols.
-                    local c = {}
-                    for k, v in next, p do c[k] = v end
-                    return setmetatable(c, meta)
-                end
-                return setmetatable(p, meta)
+                local c = {}
+                for k, v in next, p do c[k] = v end
+                return c
             end"#,
         )
         .set_name("=pge.sym")
-        .into_function()?;
-    let f: Function = factory.call((meta.clone(), name))?;
+        .call(())?;
+    let tag = meta.clone();
+    let symbol = name.to_string();
+    let f = lua.create_function(move |lua, p: Value| -> mlua::Result<Table> {
+        let t = match p {
+            Value::Nil => lua.create_table()?,
+            Value::Table(t) if !t.has_metatable() => t,
+            Value::Table(t) => copy.call::<Table>(t)?,
+            other => {
+                return Err(script_error(
+                    lua,
+                    format!(
+                        "the parameters of symbol '{symbol}' must be one table ({symbol}{{...}}), \
+                         not {}",
+                        lua_type_name(&other)
+                    ),
+                ));
+            }
+        };
+        t.set_metatable(Some(tag.clone()))?;
+        Ok(t)
+    })?;
     let mut t = tags.borrow_mut();
     t.by_meta.insert(meta.to_pointer() as usize, sym);
     t.constructors.insert(sym, (meta, f.clone()));
     Ok(f)
+}
+
+/// What Lua's `type` says of a value.
+fn lua_type_name(v: &Value) -> &'static str {
+    match v {
+        Value::Integer(_) | Value::Number(_) => "number",
+        Value::LightUserData(_) | Value::UserData(_) => "userdata",
+        other => other.type_name(),
+    }
 }
 
 pub(crate) fn register(lua: &Lua, pge: &mlua::Table) -> mlua::Result<()> {
