@@ -154,6 +154,58 @@ mod tests {
         );
     }
 
+    /// Derives `code` in a session of an engine with `limits` applied to its builder.
+    fn derive_limited(
+        code: &str,
+        limits: impl FnOnce(pge_engine::EngineBuilder) -> pge_engine::EngineBuilder,
+    ) -> pge_engine::Error {
+        let engine = limits(Engine::builder().plugin(LSystemPlugin))
+            .build()
+            .expect("engine");
+        let s = engine.session(SessionOptions::default()).expect("session");
+        derive_in(&s, code, None).expect_err("stops")
+    }
+
+    #[test]
+    fn limits_hold_inside_rule_functions() {
+        use pge_engine::Error;
+        let endless = "local l = pge.LSystem('t')\nl:axiom('A(1) A(2)')\n\
+                       l:RRule('A', function(a)\n  while true do end\nend)\n\
+                       l:iterations(1)\nreturn l";
+        let e = derive_limited(endless, |b| b.instruction_limit(Some(1_000_000)));
+        assert!(
+            matches!(&e, Error::InstructionLimit { location, .. } if location.line == Some(4)),
+            "{e:?}"
+        );
+        assert!(e.to_string().starts_with("eval:4:"), "{e}");
+        let e = derive_limited(endless, |b| {
+            b.time_limit(Some(std::time::Duration::from_millis(200)))
+        });
+        assert!(
+            matches!(&e, Error::TimeLimit { location } if location.line == Some(4)),
+            "{e:?}"
+        );
+        // Memory: every call keeps a new symbol with a growing table.
+        let e = derive_limited(
+            "local l = pge.LSystem('t')\nl:axiom('A(1)')\n\
+             l:RRule('A', function(a) return { A{a[1]}, B{ big = string.rep('x', 1 << 20) } } end)\n\
+             l:iterations(40)\nl:maxModules(100000000)\nreturn l",
+            |b| b.memory_limit_mib(16),
+        );
+        assert!(matches!(&e, Error::MemoryLimit { .. }), "{e:?}");
+        // The module cap, on strings only rule functions make.
+        let e = derive_limited(
+            "local l = pge.LSystem('big')\nl:axiom{ A{1} }\n\
+             l:RRule('A', function(a) return { A{a[1]}, A{a[1] + 1} } end)\n\
+             l:maxModules(100)\nl:iterations(20)\nreturn l",
+            |b| b,
+        );
+        assert!(
+            matches!(&e, Error::ModuleLimit { step: 7, count, max: 100, .. } if *count > 100),
+            "{e:?}"
+        );
+    }
+
     #[test]
     fn only_plain_arrays_of_numbers_are_stored_unboxed() {
         // A table with a hole, a named field or a non-number travels as the same Lua table:
