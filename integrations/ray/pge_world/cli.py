@@ -320,18 +320,19 @@ def cluster_nodes(ray):
     return working, all(addr == mine for _, addr, _ in working)
 
 
-def warm_up(ray, nodes, cpus):
+def warm_up(ray, nodes):
     """An empty task on every node, so that each starts its worker process while this
-    machine writes the variants (the tile tasks then find a worker waiting)."""
+    machine writes the variants (the tile tasks then find a worker waiting). It reserves no
+    CPU: a tile task is never kept waiting by it."""
     from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
     empty = ray.remote(_nothing)
     return [
         empty.options(
-            num_cpus=min(cpus, n),
+            num_cpus=0,
             scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=True),
         ).remote()
-        for node, _, n in nodes
+        for node, _, _ in nodes
     ]
 
 
@@ -418,7 +419,7 @@ def grow(args):
             clock.mark("Ray imported and connected")
         nodes, local = cluster_nodes(ray) if ray is not None else ([], True)
         if todo and writer is not None:
-            warm = warm_up(ray, nodes, args.cpus_per_tile)
+            warm = warm_up(ray, nodes)
         variants = old.get("variants") if variants_ok else None
         if writer is not None:
             variants = finish_variants(writer, out, progress)
@@ -681,6 +682,19 @@ def params_of(out, t, grown):
 def main(argv=None):
     """The console script: exit status 0, 1 (a problem to fix) or 2 (usage)."""
     args = parser().parse_args(argv)
+    status = run(args)
+    if "ray" in sys.modules and argv is None:
+        # Connected to a cluster: everything is written (the manifest atomically), and
+        # Ray's own shutdown at exit (disconnecting the job, which the cluster notices
+        # anyway) takes most of a second. Leave at once.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status
+
+
+def run(args):
+    """:func:`grow` with its errors as one line on stderr: the exit status."""
     try:
         return grow(args)
     except WorldError as e:
