@@ -5,7 +5,9 @@
 #   T. the tiles by `pge run --tile I,J --variants DIR --threads 1`, two at a time, no Ray;
 #   B. the tiles in two batches, each ONE `pge run --tile I,J --tile ... --out-dir` (as
 #      pge-world's tasks run them), two at a time, no Ray;
-#   F. Ray's fixed cost: `ray.init` connecting to the cluster, then a first (empty) task;
+#   F. Ray's fixed cost: `ray.init` connecting to the cluster, then a first (empty) task (on
+#      the driver's node, whose worker the first job finds prestarted); W: then an empty task
+#      on the other node, whose worker starts on demand (as every worker of a later job);
 #   C. pge-world on a local Ray cluster of two one-CPU nodes (a head and one worker node on
 #      127.0.0.1), shared variants (the default), every file checked against V and T; its
 #      phases (--timings);
@@ -90,11 +92,20 @@ ray.init(address=sys.argv[1], _node_ip_address="127.0.0.1", logging_level="ERROR
 t1 = time.monotonic()
 ray.get(ray.remote(lambda: 1).options(num_cpus=1).remote())
 t2 = time.monotonic()
-print(f"{t1 - t0:.2f} {t2 - t1:.2f} {t2 - t0:.2f}")
+# The first job on a cluster finds a worker prestarted on the driver's node; a worker on
+# another node (and every worker of a later job, as pge-world's) starts on demand.
+from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+here = ray.get_runtime_context().get_node_id()
+other = next(n["NodeID"] for n in ray.nodes() if n["Alive"] and n["NodeID"] != here)
+ray.get(ray.remote(lambda: 1).options(
+    num_cpus=1, scheduling_strategy=NodeAffinitySchedulingStrategy(other, soft=False)).remote())
+t3 = time.monotonic()
+print(f"{t1 - t0:.2f} {t2 - t1:.2f} {t2 - t0:.2f} {t3 - t2:.2f}")
 EOF
 )
-read -r connect first fixed_total <<<"$fixed"
-echo "F. Ray's fixed cost: import + connect ${connect}s, first task ${first}s, ${fixed_total}s in all"
+read -r connect first fixed_total worker_start <<<"$fixed"
+echo "F. Ray's fixed cost: import + connect ${connect}s, first task ${first}s, ${fixed_total}s in all;" \
+  "W. a task on the other node (its worker started on demand): ${worker_start}s more"
 
 t0=$(now)
 pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port" --timings
@@ -132,6 +143,7 @@ if [ "${STANDALONE:-1}" != 0 ]; then
 fi
 echo "ratios: C / A = $(echo "scale=2; $ray_time / $whole" | bc)," \
   "(C - F) / A = $(echo "scale=2; ($ray_time - $fixed_total) / $whole" | bc)," \
+  "(C - F - W) / A = $(echo "scale=2; ($ray_time - $fixed_total - $worker_start) / $whole" | bc)," \
   "T / A = $(echo "scale=2; $local_tiles / $whole" | bc)," \
   "B / A = $(echo "scale=2; $batched / $whole" | bc)," \
   "(V + T) / A = $(echo "scale=2; ($variants + $local_tiles) / $whole" | bc)"

@@ -1,4 +1,5 @@
-"""``pge-world SCRIPT --out DIR``: one Ray task per tile of a forest, a world directory.
+"""``pge-world SCRIPT --out DIR``: a forest grown on a Ray cluster in batches of tiles (one
+task and one ``pge`` process each), a world directory.
 
 Errors the user can fix (no cluster, another world in DIR, a script without ``tile``, a
 script error in a tile, no ``pge`` on a worker) end with one line on stderr and exit
@@ -35,7 +36,8 @@ def parser():
     p = argparse.ArgumentParser(
         prog="pge-world",
         description="Grow a PGE forest (a script with tile = T) tile by tile on a Ray "
-        "cluster: one task per tile, written to DIR/tiles/I_J.glb with the manifest "
+        "cluster, in batches (one task and one pge process each), written to "
+        "DIR/tiles/I_J.glb with the manifest "
         "DIR/world.json. Running again on the same DIR resumes: tiles already written "
         "are skipped.",
     )
