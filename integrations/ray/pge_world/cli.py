@@ -128,7 +128,7 @@ def parser():
         default=0,
         metavar="N",
         help="tiles one task grows with one pge process (default: the tiles spread evenly "
-        "over the cluster's CPUs, one task each)",
+        "over the cluster's CPUs, one task each, at most 16 tiles a task)",
     )
     p.add_argument(
         "--timings",
@@ -343,14 +343,21 @@ def _nothing():
     return None
 
 
+# The most tiles a task grows by default: enough to spread pge's start over many tiles, few
+# enough that progress, load balance and a retried task stay fine-grained on a small cluster.
+MAX_TILES_PER_TASK = 16
+
+
 def batches_of(todo, slots, per_task):
     """The tiles to grow cut into batches, one task each: ``per_task`` tiles a batch, or
-    (0) as many batches as ``slots``, balanced; tiles dealt in turn, so neighbouring tiles
-    (similar work) land in different batches."""
+    (0) one batch per CPU slot, balanced, but no more than :data:`MAX_TILES_PER_TASK` tiles
+    a batch; tiles dealt in turn, so neighbouring tiles (similar work) land in different
+    batches."""
     if per_task > 0:
         count = -(-len(todo) // per_task)
     else:
-        count = min(len(todo), max(1, slots))
+        count = max(slots, -(-len(todo) // MAX_TILES_PER_TASK), 1)
+    count = min(count, len(todo))
     return [todo[k::count] for k in range(count)]
 
 
