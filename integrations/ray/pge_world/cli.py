@@ -322,27 +322,6 @@ def cluster_nodes(ray):
     return working, all(addr == mine for _, addr, _ in working)
 
 
-def warm_up(ray, nodes):
-    """An empty task on every node, so that each starts its worker process while this
-    machine writes the variants (the tile tasks then find a worker waiting). It reserves no
-    CPU: a tile task is never kept waiting by it."""
-    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
-
-    empty = ray.remote(_nothing)
-    return [
-        empty.options(
-            num_cpus=0,
-            scheduling_strategy=NodeAffinitySchedulingStrategy(node, soft=True),
-        ).remote()
-        for node, _, _ in nodes
-    ]
-
-
-def _nothing():
-    """The warm-up task."""
-    return None
-
-
 # The most tiles a task grows by default: enough to spread pge's start over many tiles, few
 # enough that progress, load balance and a retried task stay fine-grained on a small cluster.
 MAX_TILES_PER_TASK = 16
@@ -400,7 +379,6 @@ def grow(args):
         os.makedirs(out, exist_ok=True)
         writer = start_variants(program, script, args, overrides, out)
     ray = None
-    warm = []
     progress = Progress(0, 0, args.quiet)
     try:
         if old is None or not old.get("complete") or (shared and not variants_ok):
@@ -426,9 +404,9 @@ def grow(args):
         if todo and ray is None:
             ray = connect(args.address)
             clock.mark("Ray imported and connected")
+        # No warm-up task: it starts a worker of its own beside the tiles' (measured: the
+        # extra Python processes on each node slowed the tiles more than they saved).
         nodes, local = cluster_nodes(ray) if ray is not None else ([], True)
-        if todo and writer is not None:
-            warm = warm_up(ray, nodes)
         variants = old.get("variants") if variants_ok else None
         if writer is not None:
             variants = finish_variants(writer, out, progress)
