@@ -36,9 +36,14 @@ pub struct RunArgs {
     #[arg(short, long)]
     pub quiet: bool,
     /// Write only tile I,J of a forest with `tile = T` (I along x, J along z, from 0 at the
-    /// -x, -z corner).
-    #[arg(long, value_name = "I,J", value_parser = parse_tile)]
-    pub tile: Option<(usize, usize)>,
+    /// -x, -z corner). Repeatable with --out-dir: several tiles by one process.
+    #[arg(long, value_name = "I,J", value_parser = parse_tile, action = clap::ArgAction::Append)]
+    pub tile: Vec<(usize, usize)>,
+    /// Write each --tile I,J to DIR/I_J.glb (the script's engine and the shared variants'
+    /// description are read once for every tile; the files are those of --tile I,J -o
+    /// DIR/I_J.glb).
+    #[arg(long, value_name = "DIR", requires = "tile", conflicts_with = "output")]
+    pub out_dir: Option<PathBuf>,
     /// Worker threads for parallel work (forest variants); default: every core. The output
     /// is byte-identical for any N.
     #[arg(long, value_name = "N")]
@@ -159,6 +164,15 @@ pub(crate) fn progress_bar(quiet: bool) -> ProgressBar {
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     set_threads(args.threads)?;
+    if let Some(dir) = &args.out_dir {
+        return run_tiles(args, dir);
+    }
+    if args.tile.len() > 1 {
+        crate::common::usage!(
+            "{} tiles need --out-dir DIR (each is written to DIR/I_J.glb)",
+            args.tile.len()
+        );
+    }
     let output = match &args.output {
         Some(o) => o.clone(),
         None => {
@@ -188,6 +202,34 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             output.display()
         );
     }
+    let prepared = prepare(args)?;
+    run_one(args, &prepared, args.tile.first().copied(), &output, t0)
+}
+
+/// `pge run SCRIPT --tile I,J [--tile I,J]... --out-dir DIR`: the tiles one after the other
+/// in this process, each in a session of its own (so each file is the one `--tile I,J -o
+/// DIR/I_J.glb` writes), the engine and the shared variants' description made and read
+/// once. A tile that fails stops the run with `tile I,J: ` before its error; the tiles
+/// written before it stay (each file is whole).
+fn run_tiles(args: &RunArgs, dir: &Path) -> anyhow::Result<()> {
+    let prepared = prepare(args)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    for &(i, j) in &args.tile {
+        let output = dir.join(format!("{i}_{j}.glb"));
+        run_one(args, &prepared, Some((i, j)), &output, Instant::now())
+            .with_context(|| format!("tile {i},{j}"))?;
+    }
+    Ok(())
+}
+
+/// What every tile of a run shares: the engine (with its forest plugin) and the shared
+/// variants' description (`--variants DIR`), checked before anything runs.
+struct Prepared {
+    engine: pge_engine::Engine,
+    shared: Option<pge_engine::export::SharedVariants>,
+}
+
+fn prepare(args: &RunArgs) -> anyhow::Result<Prepared> {
     let mut forest = match &args.variant_cache {
         Some(dir) => ForestPlugin::with_variant_cache(VariantCache::new(dir)),
         None => ForestPlugin::default(),
@@ -195,7 +237,6 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if args.variants_out.is_some() {
         forest = forest.sharing(VariantSharing::Write);
     }
-    // The description is checked before anything runs.
     let shared = match &args.variants {
         Some(dir) => {
             forest = forest.sharing(VariantSharing::Refer);
@@ -207,8 +248,24 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let engine = args.script.engine_with_forest(forest)?;
-    let session = engine.session(args.script.session_options(args.steps))?;
+    Ok(Prepared {
+        engine: args.script.engine_with_forest(forest)?,
+        shared,
+    })
+}
+
+/// Runs the script once (tile `tile` of its forest, when given) and writes `output`.
+fn run_one(
+    args: &RunArgs,
+    prepared: &Prepared,
+    tile: Option<(usize, usize)>,
+    output: &Path,
+    t0: Instant,
+) -> anyhow::Result<()> {
+    let shared = &prepared.shared;
+    let session = prepared
+        .engine
+        .session(args.script.session_options(args.steps))?;
     // Files a script writes (`img:save`) go beside the output.
     session.set_output_folder(output.parent().unwrap_or(std::path::Path::new("")))?;
     let bar = progress_bar(args.quiet);
@@ -224,7 +281,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         (Some(shared), Some(dir)) => crate::shared::check_params(shared, dir, script, params),
         _ => Ok(()),
     };
-    let generated = match (args.tile, &args.variants_out, &args.variants) {
+    let generated = match (tile, &args.variants_out, &args.variants) {
         (None, None, None) => session
             .generate(script, &mut progress)
             .map_err(anyhow::Error::from),
@@ -264,14 +321,16 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         InstancingArg::Gpu => Instancing::Gpu,
         InstancingArg::Nodes => Instancing::Nodes,
     };
-    let output = match (&args.variants_out, &shared, &args.variants) {
+    let mut summary = None;
+    let output = match (&args.variants_out, shared, &args.variants) {
         (Some(dir), _, _) => {
             let info = crate::shared::identity(script, &meta)?;
             crate::shared::write_variants(dir, &generated.model, info)?;
+            summary = Some(crate::shared::summary(&generated.model));
             dir.join(crate::shared::DESCRIPTION)
         }
         (None, Some(shared), Some(dir)) => {
-            let uri = crate::shared::relative_uri(dir, &output)?;
+            let uri = crate::shared::relative_uri(dir, output)?;
             let bytes = pge_engine::export::glb_bytes_shared(
                 &generated.model,
                 &meta,
@@ -279,18 +338,26 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
                 shared,
                 &uri,
             )?;
-            crate::output::write_atomically(&output, &bytes)?;
-            output
+            crate::output::write_atomically(output, &bytes)?;
+            output.to_path_buf()
         }
         _ => {
-            write_model(&generated.model, &meta, &output, instancing)?;
-            output
+            write_model(&generated.model, &meta, output, instancing)?;
+            output.to_path_buf()
         }
     };
     generated
         .model
         .stats
         .add_phase("export", te.elapsed().as_secs_f64());
+    if let Some(summary) = &summary
+        && !args.quiet
+        && !args.stats
+    {
+        for line in crate::shared::summary_lines(summary) {
+            println!("{line}");
+        }
+    }
     if args.stats {
         let m = &generated.model;
         let phases: serde_json::Map<String, serde_json::Value> = m
@@ -299,11 +366,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             .iter()
             .map(|(k, v)| (k.clone(), (*v).into()))
             .collect();
-        let stats = serde_json::json!({
-            "vertices": m.vertex_count(),
-            "triangles": m.triangle_count(),
-            "nodes": m.stats.nodes,
-            "leaves": m.stats.leaves,
+        // A tile that refers to shared variants counts what their instances draw and stand
+        // for, as its glb's extras.pge.stats do, and names them.
+        let (referred, [sv, st, sn, sl]) = match shared {
+            Some(shared) => crate::shared::referred(m, shared),
+            None => (Vec::new(), [0; 4]),
+        };
+        let mut stats = serde_json::json!({
+            "vertices": m.vertex_count() as u64 + sv,
+            "triangles": m.triangle_count() as u64 + st,
+            "nodes": m.stats.nodes + sn,
+            "leaves": m.stats.leaves + sl,
             "modules": m.stats.modules,
             "meshes": m.meshes.len(),
             "instances": m.extras.get("forest").and_then(|f| f.get("instances")).cloned()
@@ -313,6 +386,15 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             "warnings": m.stats.warnings,
             "output": output.display().to_string(),
         });
+        if let Some((i, j)) = tile {
+            stats["tile"] = serde_json::json!([i, j]);
+        }
+        if shared.is_some() {
+            stats["variants"] = referred.into();
+        }
+        if let Some(summary) = summary {
+            stats["variants"] = summary.into();
+        }
         println!("{stats}");
     }
     Ok(())

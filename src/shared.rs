@@ -57,6 +57,112 @@ pub fn write_variants(dir: &Path, model: &Model, info: Map<String, Value>) -> an
     write_atomically(&dir.join(DESCRIPTION), &text)
 }
 
+/// What each variant of a `--variants-out` run is, in the order of the description:
+/// `{"name", "vertices", "triangles", "nodes", "leaves"}` (what one instance draws and stands
+/// for) and, for a variant with foliage levels of detail, `"lod": {"leaves", "roots",
+/// "levels"}` (its mesh's `extras.pge.lod`; `levels = leaves - roots + 1`, from the roots
+/// alone to every leaf).
+pub fn summary(model: &Model) -> Vec<Value> {
+    let counts = model.extras.get("sharedVariants").and_then(Value::as_array);
+    model
+        .groups
+        .iter()
+        .enumerate()
+        .map(|(g, group)| {
+            let meshes = || group.meshes.iter().map(|&m| &model.meshes[m]);
+            let count = |k: &str| {
+                counts
+                    .and_then(|c| c.get(g))
+                    .and_then(|c| c.get(k))
+                    .and_then(Value::as_u64)
+                    .unwrap_or(0)
+            };
+            let mut entry = Map::new();
+            entry.insert("name".into(), group.name.clone().into());
+            let vertices: usize = meshes().map(|m| m.vertex_count()).sum();
+            let triangles: usize = meshes().map(|m| m.triangle_count()).sum();
+            entry.insert("vertices".into(), vertices.into());
+            entry.insert("triangles".into(), triangles.into());
+            entry.insert("nodes".into(), count("nodes").into());
+            entry.insert("leaves".into(), count("leaves").into());
+            let lod = meshes().find_map(|m| {
+                let lod = m.extras.get("lod")?;
+                let n = |k: &str| lod.get(k).and_then(Value::as_u64);
+                Some((n("leaves")?, n("roots")?))
+            });
+            if let Some((leaves, roots)) = lod {
+                let levels = leaves.saturating_sub(roots) + 1;
+                entry.insert(
+                    "lod".into(),
+                    serde_json::json!({"leaves": leaves, "roots": roots, "levels": levels}),
+                );
+            }
+            Value::Object(entry)
+        })
+        .collect()
+}
+
+/// The [`summary`] as lines for the terminal, one per variant.
+pub fn summary_lines(summary: &[Value]) -> Vec<String> {
+    summary
+        .iter()
+        .map(|v| {
+            let n = |k: &str| v.get(k).and_then(Value::as_u64).unwrap_or(0);
+            let name = v.get("name").and_then(Value::as_str).unwrap_or_default();
+            let mut line = format!(
+                "{name}: {} vertices, {} triangles, {} nodes, {} leaves",
+                n("vertices"),
+                n("triangles"),
+                n("nodes"),
+                n("leaves")
+            );
+            if let Some(lod) = v.get("lod") {
+                let l = |k: &str| lod.get(k).and_then(Value::as_u64).unwrap_or(0);
+                line.push_str(&format!(
+                    ", {} LOD levels ({} to {} leaves)",
+                    l("levels"),
+                    l("roots"),
+                    l("leaves")
+                ));
+            }
+            line
+        })
+        .collect()
+}
+
+/// The shared variants a tile's `model` places (its instance groups without meshes of their
+/// own, with at least one instance), in the model's order: `{"name", "instances", "vertices", "triangles", "nodes",
+/// "leaves"}`, the last four what one instance draws and stands for (from the description);
+/// and the sums over the instances of vertices, triangles, nodes and leaves (what the tile's
+/// `extras.pge.stats` add for them).
+pub fn referred(model: &Model, shared: &SharedVariants) -> (Vec<Value>, [u64; 4]) {
+    let mut sum = [0u64; 4];
+    let mut list = Vec::new();
+    let placed = model
+        .groups
+        .iter()
+        .filter(|g| g.meshes.is_empty() && !g.transforms.is_empty());
+    for group in placed {
+        let Some(g) = shared.group(&group.name) else {
+            continue;
+        };
+        let n = group.transforms.len() as u64;
+        let per = [g.vertices, g.triangles, g.nodes, g.leaves];
+        for (s, p) in sum.iter_mut().zip(per) {
+            *s += n * p;
+        }
+        list.push(serde_json::json!({
+            "name": group.name,
+            "instances": n,
+            "vertices": g.vertices,
+            "triangles": g.triangles,
+            "nodes": g.nodes,
+            "leaves": g.leaves,
+        }));
+    }
+    (list, sum)
+}
+
 /// The description in `dir`, checked against this run before it grows anything: it exists,
 /// it is one, it was written for this script (same bytes) and seed, and its binary file,
 /// when present, has the length it records (a tile never reads it: a worker may have the

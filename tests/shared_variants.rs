@@ -3,7 +3,10 @@
 //! --tile I,J --variants DIR` writes a small tile that refers to them. Both are the same bytes
 //! for any thread count, the tile places the same trees as the standalone tile, the Khronos
 //! validator accepts it (with the shared file loaded), and a description that is missing or
-//! of another script, seed or parameters is a one-line error, exit 1, nothing written.
+//! of another script, seed or parameters is a one-line error, exit 1, nothing written. One
+//! `pge run --tile ... --tile ... --out-dir` writes the files of the single runs; a shared
+//! tile's `--stats` count and name the variants it refers to; `--variants-out` sums up each
+//! variant with its levels of detail (as the standalone tile's meshes carry them).
 
 mod common;
 
@@ -229,4 +232,201 @@ fn variants_that_are_missing_or_of_another_run_are_one_line_errors() {
         &obj,
     ]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// The JSON lines `pge` printed on stdout.
+fn json_lines(stdout: &[u8]) -> Vec<Value> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| serde_json::from_str(l).expect("a JSON line"))
+        .collect()
+}
+
+#[test]
+fn one_process_writes_several_tiles_and_their_stats_name_the_shared_variants() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let world = dir.path().join("world");
+    let one = shared_tile(&world, "1,2", "1", &[]);
+    let script = forest();
+    let w = s(&world);
+    let other = world.join("tiles").join("0_3.glb");
+    run_ok(&[
+        "run",
+        &script,
+        "--tile",
+        "0,3",
+        "--variants",
+        &w,
+        "-o",
+        &s(&other),
+        "-q",
+    ]);
+
+    // --tile twice, --out-dir: the files of the single runs, one stats line per tile.
+    let batch = world.join("batch");
+    let stdout = run_ok(&[
+        "run",
+        &script,
+        "--tile",
+        "1,2",
+        "--tile",
+        "0,3",
+        "--variants",
+        &w,
+        "--out-dir",
+        &s(&batch),
+        "-q",
+        "--stats",
+        "--threads",
+        "1",
+    ]);
+    for (file, single) in [("1_2.glb", &one), ("0_3.glb", &other)] {
+        assert_eq!(
+            std::fs::read(batch.join(file)).expect("batch tile"),
+            std::fs::read(single).expect("single tile"),
+            "{file}"
+        );
+    }
+    let stats = json_lines(&stdout);
+    assert_eq!(stats.len(), 2, "{stats:?}");
+    assert_eq!(stats[0]["tile"], serde_json::json!([1, 2]));
+    assert_eq!(stats[1]["tile"], serde_json::json!([0, 3]));
+
+    // A shared tile's stats count what its glb's extras.pge.stats count (the shared
+    // variants' instances too) and list the variants it refers to, from variants.json.
+    let description: Value =
+        serde_json::from_slice(&std::fs::read(world.join("variants.json")).expect("json"))
+            .expect("description");
+    let groups = description["extras"]["pge"]["variants"]["groups"]
+        .as_array()
+        .expect("groups");
+    for (line, file) in stats.iter().zip(["1_2.glb", "0_3.glb"]) {
+        let extras = json_chunk(&batch.join(file))["extras"]["pge"]["stats"].clone();
+        for key in ["vertices", "triangles", "nodes", "leaves"] {
+            assert_eq!(line[key], extras[key], "{file}: {key}");
+        }
+        assert!(line["nodes"].as_u64() > Some(0), "{line}");
+        let referred = line["variants"].as_array().expect("variants");
+        assert!(!referred.is_empty(), "{line}");
+        let mut nodes = 0;
+        for v in referred {
+            let g = groups
+                .iter()
+                .find(|g| g["name"] == v["name"])
+                .expect("a variant of the description");
+            assert_eq!((&v["nodes"], &v["leaves"]), (&g["nodes"], &g["leaves"]));
+            assert!(v["instances"].as_u64() > Some(0));
+            nodes += v["instances"].as_u64().expect("n") * v["nodes"].as_u64().expect("nodes");
+        }
+        // The unique trees (the function species) are the tile's own.
+        assert!(nodes <= line["nodes"].as_u64().expect("nodes"), "{line}");
+    }
+
+    // Several tiles without --out-dir, and --out-dir without --tile, are usage errors.
+    for args in [
+        vec!["run", &script, "--tile", "0,0", "--tile", "1,1", "-q"],
+        vec!["run", &script, "--out-dir", &w, "-q"],
+    ] {
+        assert_eq!(pge(&args).status.code(), Some(2), "{args:?}");
+    }
+    // A tile that fails stops the run naming it; the tiles before it are written.
+    let failing = dir.path().join("failing");
+    let o = pge(&[
+        "run",
+        &script,
+        "--tile",
+        "0,0",
+        "--tile",
+        "9,9",
+        "--variants",
+        &w,
+        "--out-dir",
+        &s(&failing),
+        "-q",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with("tile 9,9: ") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    assert!(failing.join("0_0.glb").exists() && !failing.join("9_9.glb").exists());
+}
+
+#[test]
+fn the_variants_written_are_summed_up_with_their_levels_of_detail() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = dir.path().join("leafy.lua");
+    std::fs::write(
+        &script,
+        r##"local forest = pge.Forest{ size = {40, 40}, seed = 2, tile = 20 }
+forest:scatter{ species = function(params, seed)
+                  return pge.SpaceColonization{
+                    envelope = pge.shape.ellipsoid{ center = {0, 0.8, 0}, radii = {0.8, 0.6, 0.8} },
+                    points = 40, step = 0.15, influence = 0.8, kill = 0.25, roots = {{0, 0, 0}},
+                    mesh = { sides = 4, color = "#5e4b3b" },
+                    leaves = { perTip = {1, 2}, size = 0.15, maxDepth = 1, colors = {"#3d6b25"} },
+                    lod = true }
+                end, minDistance = 4, variants = 2 }
+return forest
+"##,
+    )
+    .expect("script");
+    let script = s(&script);
+    let world = dir.path().join("world");
+    let stdout = run_ok(&[
+        "run",
+        &script,
+        "--variants-out",
+        &s(&world),
+        "-q",
+        "--stats",
+    ]);
+    let stats = json_lines(&stdout);
+    let summary = stats[0]["variants"].as_array().expect("variants");
+    assert_eq!(summary.len(), 2, "{summary:?}");
+    let description: Value =
+        serde_json::from_slice(&std::fs::read(world.join("variants.json")).expect("json"))
+            .expect("description");
+    // The standalone tile's variant meshes carry the same levels as the description's.
+    let tile = dir.path().join("tile.glb");
+    run_ok(&["run", &script, "--tile", "0,0", "-o", &s(&tile), "-q"]);
+    let standalone = json_chunk(&tile);
+    for (k, v) in summary.iter().enumerate() {
+        assert!(
+            v["name"]
+                .as_str()
+                .is_some_and(|n| n.ends_with(&format!("/{k}"))),
+            "{v}"
+        );
+        let lod = &v["lod"];
+        let (leaves, roots) = (
+            lod["leaves"].as_u64().expect("leaves"),
+            lod["roots"].as_u64().expect("roots"),
+        );
+        assert!(roots > 0 && leaves > roots, "{v}");
+        assert_eq!(lod["levels"].as_u64(), Some(leaves - roots + 1));
+        let mesh = description["extras"]["pge"]["variants"]["groups"][k]["mesh"]
+            .as_u64()
+            .expect("mesh") as usize;
+        let described = &description["meshes"][mesh]["extras"]["pge"]["lod"];
+        assert_eq!(described["leaves"].as_u64(), Some(leaves), "{described}");
+        assert!(described["primitives"].is_array(), "{described}");
+        let name = v["name"].as_str().expect("name");
+        if let Some(own) = standalone["meshes"]
+            .as_array()
+            .expect("meshes")
+            .iter()
+            .find(|m| m["name"] == name)
+        {
+            assert_eq!(&own["extras"]["pge"]["lod"], described, "{name}");
+        }
+    }
+    // Without --stats, one line per variant on stdout.
+    let again = dir.path().join("again");
+    let text =
+        String::from_utf8(run_ok(&["run", &script, "--variants-out", &s(&again)])).expect("utf-8");
+    assert_eq!(text.lines().count(), 2, "{text}");
+    assert!(text.contains("LOD levels"), "{text}");
 }

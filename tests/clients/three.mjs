@@ -9,12 +9,13 @@
 // MODULES is a node_modules folder holding `three` and `playwright-core`; OUT receives one
 // NAME.png per file and `three.json` (what the loader built for each file). Chromium is
 // Debian's (/usr/bin/chromium, or $CHROMIUM); the page and the files are served on
-// 127.0.0.1 only.
+// 127.0.0.1 only, each file by its path, so a glb whose buffer is a file beside it (a tile
+// that refers to its world's `../variants.bin`) is loaded as a viewer loads it from disk.
 
 import { createServer } from "node:http";
 import { createRequire } from "node:module";
 import { readFileSync, writeFileSync, mkdirSync, existsSync } from "node:fs";
-import { basename, join, resolve, extname } from "node:path";
+import { basename, dirname, join, resolve, extname } from "node:path";
 
 const [modules, out, ...files] = process.argv.slice(2);
 if (!modules || !out || files.length === 0) {
@@ -22,6 +23,9 @@ if (!modules || !out || files.length === 0) {
   process.exit(2);
 }
 const require = createRequire(join(resolve(modules), "noop.js"));
+// The folders whose files the server may send: each file's folder's parent.
+const roots = [...new Set(files.map((f) => dirname(dirname(resolve(f)))))];
+const fileUrl = (f) => "/fs" + resolve(f).split("/").map(encodeURIComponent).join("/");
 const { chromium } = require("playwright-core");
 const threeDir = join(resolve(modules), "three");
 mkdirSync(out, { recursive: true });
@@ -155,11 +159,14 @@ const server = createServer((req, res) => {
       body = readFileSync(path);
       type = types[extname(path)] ?? type;
     }
-  } else if (url.pathname.startsWith("/glb/")) {
-    const index = Number(url.pathname.slice(5));
-    if (Number.isInteger(index) && index >= 0 && index < files.length) {
-      body = readFileSync(files[index]);
-      type = "model/gltf-binary";
+  } else if (url.pathname.startsWith("/fs/")) {
+    // A file by its absolute path, so that the URIs of a glb's external buffers resolve as
+    // on disk (a tile's "../variants.bin"): the given files and what lies in their folders
+    // and the folders above them, nothing else.
+    const path = resolve("/" + url.pathname.slice(4).split("/").map(decodeURIComponent).join("/"));
+    if (roots.some((root) => path.startsWith(root + "/")) && existsSync(path)) {
+      body = readFileSync(path);
+      type = extname(path) === ".glb" ? "model/gltf-binary" : type;
     }
   }
   if (body === null) {
@@ -194,14 +201,14 @@ try {
   page.on("pageerror", (e) => messages.push(`page error: ${e.message}`));
   await page.goto(base + "/");
   await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
-  for (const [index, file] of files.entries()) {
+  for (const file of files) {
     const name = basename(file, ".glb");
     messages = [];
     const t0 = Date.now();
     let result;
     try {
       result = await page.evaluate(([url, empty]) => window.show(url, empty),
-        [`${base}/glb/${index}`, name.startsWith("empty_")]);
+        [base + fileUrl(file), name.startsWith("empty_")]);
     } catch (e) {
       result = { error: String(e.message ?? e).split("\n")[0] };
     }

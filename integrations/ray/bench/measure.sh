@@ -3,9 +3,14 @@
 #   A. `pge run` of the whole forest (every core);
 #   V. `pge run --variants-out` (every core): the shared variants, written once;
 #   T. the tiles by `pge run --tile I,J --variants DIR --threads 1`, two at a time, no Ray;
-#   F. Ray's fixed cost: `ray.init` connecting to the cluster, then a first (empty) task;
+#   B. the tiles in two batches, each ONE `pge run --tile I,J --tile ... --out-dir` (as
+#      pge-world's tasks run them), two at a time, no Ray;
+#   F. Ray's fixed cost: `ray.init` connecting to the cluster, then a first (empty) task (on
+#      the driver's node, whose worker the first job finds prestarted); W: then an empty task
+#      on the other node, whose worker starts on demand (as every worker of a later job);
 #   C. pge-world on a local Ray cluster of two one-CPU nodes (a head and one worker node on
-#      127.0.0.1), shared variants (the default), every file checked against V and T;
+#      127.0.0.1), shared variants (the default), every file checked against V and T; its
+#      phases (--timings);
 #   S. pge-world --standalone-tiles with a cold variant cache (the former tile format);
 #   D. `pge merge` of C's world.
 # Usage (from the repository root, after .ci/ray or with ray and pge-world installed):
@@ -52,6 +57,15 @@ pge tiles "$script" | grep -o '"i":[0-9]*,"j":[0-9]*' | sed 's/"i":\([0-9]*\),"j
 local_tiles=$(since "$t0")
 echo "T. pge run --tile --variants, 16 tiles two at a time: ${local_tiles}s," \
   "$(du -cb "$work"/local/tiles/*.glb | tail -1 | cut -f1) bytes"
+mkdir -p "$work/local/batch"
+pge tiles "$script" | grep -o '"i":[0-9]*,"j":[0-9]*' | sed 's/"i":\([0-9]*\),"j":\([0-9]*\)/--tile \1,\2/' |
+  awk '{ b[NR % 2] = b[NR % 2] " " $0 } END { print b[0]; print b[1] }' >"$work/batches"
+t0=$(now)
+# shellcheck disable=SC2016
+xargs -P 2 -L 1 sh -c 'pge run "$SCRIPT" "$@" --variants "$WORK/local" --threads 1 -q --out-dir "$WORK/local/batch"' sh \
+  <"$work/batches"
+batched=$(since "$t0")
+echo "B. two pge run --tile ... --out-dir of 8 tiles, two at a time: ${batched}s"
 pge run "$script" --tile 1,1 --variants "$work/local" --threads 1 -q --stats -o "$work/one.glb" |
   sed 's/^/   tile 1,1: /'
 
@@ -78,14 +92,23 @@ ray.init(address=sys.argv[1], _node_ip_address="127.0.0.1", logging_level="ERROR
 t1 = time.monotonic()
 ray.get(ray.remote(lambda: 1).options(num_cpus=1).remote())
 t2 = time.monotonic()
-print(f"{t1 - t0:.2f} {t2 - t1:.2f} {t2 - t0:.2f}")
+# The first job on a cluster finds a worker prestarted on the driver's node; a worker on
+# another node (and every worker of a later job, as pge-world's) starts on demand.
+from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+here = ray.get_runtime_context().get_node_id()
+other = next(n["NodeID"] for n in ray.nodes() if n["Alive"] and n["NodeID"] != here)
+ray.get(ray.remote(lambda: 1).options(
+    num_cpus=1, scheduling_strategy=NodeAffinitySchedulingStrategy(other, soft=False)).remote())
+t3 = time.monotonic()
+print(f"{t1 - t0:.2f} {t2 - t1:.2f} {t2 - t0:.2f} {t3 - t2:.2f}")
 EOF
 )
-read -r connect first fixed_total <<<"$fixed"
-echo "F. Ray's fixed cost: import + connect ${connect}s, first task ${first}s, ${fixed_total}s in all"
+read -r connect first fixed_total worker_start <<<"$fixed"
+echo "F. Ray's fixed cost: import + connect ${connect}s, first task ${first}s, ${fixed_total}s in all;" \
+  "W. a task on the other node (its worker started on demand): ${worker_start}s more"
 
 t0=$(now)
-pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port"
+pge-world "$script" --out "$work/world" --address "127.0.0.1:$head_port" --timings
 ray_time=$(since "$t0")
 echo "C. pge-world on Ray, 2 nodes x 1 CPU, shared variants: ${ray_time}s," \
   "$(du -cb "$work"/world/tiles/*.glb | tail -1 | cut -f1) bytes of tiles"
@@ -94,6 +117,10 @@ for f in variants.bin variants.json; do
 done
 for f in "$work"/local/tiles/*.glb; do
   cmp -s "$f" "$work/world/tiles/$(basename "$f")" || { echo "tile $(basename "$f") differs"; exit 1; }
+done
+for f in "$work"/local/batch/*.glb; do
+  # The batch's files are in batch/, beside tiles/: the same URI, ../variants.bin.
+  cmp -s "$f" "$work/local/tiles/$(basename "$f")" || { echo "batch $(basename "$f") differs"; exit 1; }
 done
 echo "   the variants and every tile equal the local ones"
 
@@ -116,7 +143,9 @@ if [ "${STANDALONE:-1}" != 0 ]; then
 fi
 echo "ratios: C / A = $(echo "scale=2; $ray_time / $whole" | bc)," \
   "(C - F) / A = $(echo "scale=2; ($ray_time - $fixed_total) / $whole" | bc)," \
+  "(C - F - W) / A = $(echo "scale=2; ($ray_time - $fixed_total - $worker_start) / $whole" | bc)," \
   "T / A = $(echo "scale=2; $local_tiles / $whole" | bc)," \
+  "B / A = $(echo "scale=2; $batched / $whole" | bc)," \
   "(V + T) / A = $(echo "scale=2; ($variants + $local_tiles) / $whole" | bc)"
 [ -n "${standalone:-}" ] && echo "        S / A = $(echo "scale=2; $standalone / $whole" | bc)"
 echo "load after: $(uptime)"

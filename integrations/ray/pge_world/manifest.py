@@ -56,15 +56,26 @@ def write_atomically(path, data):
         raise
 
 
-def glb_root_extras(data):
-    """The root ``extras.pge`` of a .glb's JSON chunk (an empty dict when it has none)."""
+def glb_json(data):
+    """The JSON chunk of a .glb."""
     if len(data) < 20 or data[:4] != b"glTF":
         raise WorldError("not a .glb file")
     length, kind = struct.unpack_from("<I4s", data, 12)
     if kind != b"JSON":
         raise WorldError("a .glb without a JSON chunk")
-    root = json.loads(data[20 : 20 + length])
-    return (root.get("extras") or {}).get("pge") or {}
+    return json.loads(data[20 : 20 + length])
+
+
+def glb_root_extras(data):
+    """The root ``extras.pge`` of a .glb's JSON chunk (an empty dict when it has none)."""
+    return (glb_json(data).get("extras") or {}).get("pge") or {}
+
+
+def refers_to_variants(data):
+    """Whether a tile's .glb refers to the world's shared variants (a buffer whose URI is
+    ``../variants.bin``) rather than carrying them."""
+    buffers = glb_json(data).get("buffers") or []
+    return any(b.get("uri") == "../" + VARIANTS_BIN for b in buffers)
 
 
 def identity(script_sha256, seed, overrides):

@@ -1,10 +1,12 @@
-"""One tile on a worker: ``pge run SCRIPT --tile I,J``, its bytes and instance count.
+"""Tiles on a worker: one ``pge run SCRIPT --tile I,J --tile ...`` for a batch of tiles,
+their hashes, instance counts and (without a shared folder) bytes.
 
 This module imports nothing from Ray, so the same function runs in a Ray task, in a test, or
 by hand.
 """
 
 import getpass
+import hashlib
 import json
 import os
 import shutil
@@ -13,6 +15,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import time
 
 
 class TileFailed(Exception):
@@ -68,25 +71,33 @@ def default_variant_cache():
     return os.path.join(tempfile.gettempdir(), f"pge-variants-{user}")
 
 
-def grow_tile(
-    program, script, seed, overrides, i, j, threads=1, time_limit=None, variant_cache="",
-    variants=None,
+def grow_tiles(
+    program, script, seed, overrides, tiles, threads=1, time_limit=None, variant_cache="",
+    shared=False, description=None, out=None,
 ):
-    """Runs ``pge run SCRIPT --tile I,J`` with ``program`` (a name looked up on this
-    machine's PATH, or a path) and returns ``{"glb": bytes, "instances": n, "node": host}``.
+    """Grows the tiles ``[(i, j), ...]`` with ONE ``pge run SCRIPT --tile I,J --tile ...
+    --out-dir D`` (the script's engine and the variants' description read once for the
+    batch; each file is the one ``pge run --tile I,J`` writes) with ``program`` (a name
+    looked up on this machine's PATH, or a path). Returns ``{"node": host, "seconds": s,
+    "tiles": [{"i", "j", "sha256", "bytes", "instances"}, ...]}``, each tile's entry with
+    ``"glb"`` (its bytes) unless ``out`` is given.
 
-    ``variant_cache`` is pge's ``--variant-cache`` folder: ``""`` for this machine's own
-    (:func:`default_variant_cache`), None for none.
+    ``out`` is the world directory when this worker sees it (the driver's machine, or a
+    shared folder): pge writes the tiles into ``out/tiles/`` itself (each file atomically)
+    and reads the shared variants' description there; nothing but hashes travels back.
+    Without it the tiles are written into a scratch folder laid out as the world directory
+    and their bytes are returned; shared variants then need ``description`` (the bytes of
+    ``variants.json``, written into the scratch folder: the worker needs neither the binary
+    file nor a shared folder).
 
-    ``variants`` is the world's shared variants description (the bytes of
-    ``variants.json``), or None for a standalone tile. The tile then refers to the variants
-    instead of carrying them: the description is written into a scratch folder laid out as
-    the world directory (``variants.json`` beside ``tiles/``), so the tile's reference is
-    ``../variants.bin`` as in the world; the worker needs neither the binary file nor a
-    shared folder.
+    ``shared``: the tiles refer to the world's shared variants (``../variants.bin``) rather
+    than carry them. ``variant_cache`` (standalone tiles) is pge's ``--variant-cache``
+    folder: ``""`` for this machine's own (:func:`default_variant_cache`), None for none.
 
-    Raises :class:`TileFailed` when ``program`` is missing or ``pge`` exits with an error.
+    Raises :class:`TileFailed` when ``program`` is missing, ``out`` is not on this machine,
+    or ``pge`` exits with an error (its one line: ``tile I,J: FILE:LINE: message``).
     """
+    start = time.monotonic()
     exe = shutil.which(program)
     host = socket.gethostname()
     if exe is None:
@@ -94,20 +105,30 @@ def grow_tile(
             f"no `{program}` program on the PATH of the worker on {host}: "
             "install pge there, or pass --pge with its path on the workers"
         )
-    with tempfile.TemporaryDirectory(prefix="pge-tile-") as folder:
-        os.mkdir(os.path.join(folder, "tiles"))
-        out = os.path.join(folder, "tiles", f"{i}_{j}.glb")
+    if out is not None and not os.path.isdir(os.path.join(out, "tiles")):
+        raise TileFailed(
+            f"the world directory {out} is not on the worker on {host}: run pge-world with "
+            "--no-shared-fs, or on a folder every machine shares"
+        )
+    with tempfile.TemporaryDirectory(prefix="pge-tile-") as scratch:
+        world = out if out is not None else scratch
+        folder = os.path.join(world, "tiles")
         cmd = [exe, "run"] + pge_args(script, seed, overrides, time_limit)
-        cmd += ["--tile", f"{i},{j}", "-o", out, "-q", "--stats", "--threads", str(threads)]
-        if variants is not None:
-            with open(os.path.join(folder, "variants.json"), "wb") as f:
-                f.write(variants)
-            cmd += ["--variants", folder]
+        for i, j in tiles:
+            cmd += ["--tile", f"{i},{j}"]
+        cmd += ["--out-dir", folder, "-q", "--stats", "--threads", str(threads)]
+        if shared:
+            if out is None:
+                os.mkdir(folder)
+                with open(os.path.join(scratch, "variants.json"), "wb") as f:
+                    f.write(description)
+            cmd += ["--variants", world]
         else:
             if variant_cache == "":
                 variant_cache = default_variant_cache()
             if variant_cache is not None:
                 cmd += ["--variant-cache", variant_cache]
+            os.makedirs(folder, exist_ok=True)
         proc = subprocess.run(
             cmd,
             stdin=subprocess.DEVNULL,
@@ -119,9 +140,22 @@ def grow_tile(
             message = last_line(proc.stderr) or f"pge exited with status {proc.returncode}"
             raise TileFailed(message)
         try:
-            stats = json.loads(last_line(proc.stdout))
-            with open(out, "rb") as f:
-                glb = f.read()
-        except (OSError, ValueError) as e:
+            stats = [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
+            instances = {tuple(s["tile"]): int(s.get("instances", 0)) for s in stats}
+            grown = []
+            for i, j in tiles:
+                with open(os.path.join(folder, f"{i}_{j}.glb"), "rb") as f:
+                    data = f.read()
+                entry = {
+                    "i": i,
+                    "j": j,
+                    "sha256": hashlib.sha256(data).hexdigest(),
+                    "bytes": len(data),
+                    "instances": instances[(i, j)],
+                }
+                if out is None:
+                    entry["glb"] = data
+                grown.append(entry)
+        except (OSError, ValueError, KeyError, TypeError) as e:
             raise TileFailed(f"pge wrote no tile on {host}: {e}") from e
-    return {"glb": glb, "instances": int(stats.get("instances", 0)), "node": host}
+    return {"node": host, "seconds": time.monotonic() - start, "tiles": grown}

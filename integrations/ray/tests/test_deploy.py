@@ -1,7 +1,9 @@
-"""The Kubernetes and Slurm files (deploy/), without Kubernetes or Slurm: the Job manifest
-is valid YAML describing an Indexed Job over big.lua's tiles, `tile-index.sh` maps every
-index to the tile `pge tiles` lists at that place, and the Slurm array script, run as one
-array task would run it, writes the same bytes as `pge run --tile`."""
+"""The Kubernetes and Slurm files (deploy/), without Kubernetes or Slurm: the Job manifests
+are valid YAML describing a Job that writes the shared variants to the volume and an Indexed
+Job over big.lua's tiles that refers to them, `tile-index.sh` maps every index to the tile
+`pge tiles` lists at that place, and the Slurm scripts, run as their jobs would run them,
+write the same variants and tile bytes as `pge run --variants-out` and `pge run --tile
+--variants`."""
 
 import json
 import os
@@ -25,11 +27,18 @@ def path_env(pge_bin):
     return env
 
 
-def test_the_job_is_an_indexed_job_over_every_tile_of_big(pge_bin):
-    with open(os.path.join(DEPLOY, "k8s", "forest-job.yaml"), encoding="utf-8") as f:
-        docs = list(yaml.safe_load_all(f))
-    job = next(d for d in docs if d["kind"] == "Job")
-    claim = next(d for d in docs if d["kind"] == "PersistentVolumeClaim")
+def yaml_docs(name):
+    with open(os.path.join(DEPLOY, "k8s", name), encoding="utf-8") as f:
+        return list(yaml.safe_load_all(f))
+
+
+def test_the_jobs_write_the_variants_then_every_tile_of_big_referring_to_them(pge_bin):
+    claim = yaml_docs("volume.yaml")[0]
+    assert claim["kind"] == "PersistentVolumeClaim"
+    assert claim["spec"]["accessModes"] == ["ReadWriteMany"]
+    variants = yaml_docs("variants-job.yaml")[0]
+    job = yaml_docs("forest-job.yaml")[0]
+    assert variants["kind"] == job["kind"] == "Job"
     spec = job["spec"]
     assert spec["completionMode"] == "Indexed"
     pod = spec["template"]["spec"]
@@ -37,8 +46,15 @@ def test_the_job_is_an_indexed_job_over_every_tile_of_big(pge_bin):
     env = {e["name"]: e["value"] for e in container["env"]}
     assert spec["completions"] == len(tiles(pge_bin, os.path.join(ROOT, env["SCRIPT"])))
     assert "$JOB_COMPLETION_INDEX" in container["args"][0]
-    assert pod["volumes"][0]["persistentVolumeClaim"]["claimName"] == claim["metadata"]["name"]
-    assert container["volumeMounts"][0]["mountPath"] == "/world"
+    assert "--variants /world" in container["args"][0]
+    writer = variants["spec"]["template"]["spec"]
+    first = writer["containers"][0]
+    # The same script and seed, the variants written where the tiles look for them.
+    assert {e["name"]: e["value"] for e in first["env"]} == env
+    assert "--variants-out /world" in first["args"][0]
+    for p in (pod, writer):
+        assert p["volumes"][0]["persistentVolumeClaim"]["claimName"] == claim["metadata"]["name"]
+        assert p["containers"][0]["volumeMounts"][0]["mountPath"] == "/world"
 
 
 def test_every_index_picks_its_tile_and_past_the_last_is_an_error(pge_bin):
@@ -53,15 +69,26 @@ def test_every_index_picks_its_tile_and_past_the_last_is_an_error(pge_bin):
     assert past.returncode == 1 and "no tile number" in past.stderr
 
 
-def test_a_slurm_array_task_writes_its_tile(pge_bin, tmp_path):
+def test_the_slurm_jobs_write_the_variants_and_a_tile_referring_to_them(pge_bin, tmp_path):
     env = path_env(pge_bin)
-    env.update(SLURM_ARRAY_TASK_ID="6", SLURM_SUBMIT_DIR=ROOT, SLURM_CPUS_PER_TASK="1")
+    env.update(SLURM_SUBMIT_DIR=ROOT, SLURM_CPUS_PER_TASK="1")
     out = tmp_path / "world"
+    subprocess.run(["bash", os.path.join(DEPLOY, "slurm", "variants.sbatch"), FOREST, str(out),
+                    "--seed", "4"], env=env, check=True, capture_output=True)
+    env.update(SLURM_ARRAY_TASK_ID="6")
     subprocess.run(["bash", os.path.join(DEPLOY, "slurm", "forest.sbatch"), FOREST, str(out),
                     "--seed", "4"], env=env, check=True, capture_output=True)
     t = tiles(pge_bin, FOREST)[6]
-    ref = tmp_path / "ref.glb"
+    ref = tmp_path / "ref"
+    subprocess.run([pge_bin, "run", FOREST, "--variants-out", str(ref), "--seed", "4", "-q"],
+                   check=True, capture_output=True)
+    (ref / "tiles").mkdir()
     subprocess.run([pge_bin, "run", FOREST, "--tile", f"{t['i']},{t['j']}", "--seed", "4",
-                    "-q", "-o", str(ref)], check=True, capture_output=True)
+                    "--variants", str(ref), "-q", "-o", str(ref / "tiles" / "tile.glb")],
+                   check=True, capture_output=True)
     assert os.listdir(out / "tiles") == [f"{t['i']}_{t['j']}.glb"]
-    assert (out / "tiles" / f"{t['i']}_{t['j']}.glb").read_bytes() == ref.read_bytes()
+    assert (out / "tiles" / f"{t['i']}_{t['j']}.glb").read_bytes() == (
+        ref / "tiles" / "tile.glb"
+    ).read_bytes()
+    for name in ("variants.bin", "variants.json"):
+        assert (out / name).read_bytes() == (ref / name).read_bytes()

@@ -154,14 +154,19 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
     assert read_world(out) == world
 
 
-def test_tiles_that_share_their_variants_are_the_local_ones(cluster, pge_bin, tmp_path):
+@pytest.mark.parametrize("fs", ["--shared-fs", "--no-shared-fs"])
+def test_tiles_that_share_their_variants_are_the_local_ones(cluster, pge_bin, tmp_path, fs):
     # The default: the variants written once (on the driver, every core), tiles that refer
-    # to them; each file equal to the local runs on one thread.
+    # to them; each file equal to the local runs on one thread. The tasks write the tiles
+    # into the world directory themselves (a shared folder: this machine, the default here)
+    # or send their bytes back through the object store (--no-shared-fs).
     variants, reference = local_shared_tiles(pge_bin, str(tmp_path / "local"), "spin=0")
     out = str(tmp_path / "world")
-    p = pge_world(cluster, "--out", out, "--set", "spin=0")
+    p = pge_world(cluster, "--out", out, "--set", "spin=0", fs, "--timings")
     assert p.returncode == 0, p.stderr
     assert "tiles 16/16" in p.stderr and "variants:" in p.stderr, p.stderr
+    # One task per CPU of the cluster (two), each one pge process for its eight tiles.
+    assert p.stderr.count("batch of 8 tiles back from") == 2, p.stderr
     for name, data in variants.items():
         with open(os.path.join(out, name), "rb") as f:
             assert f.read() == data, name
@@ -357,6 +362,32 @@ def test_tiles_written_by_a_job_array_are_adopted(cluster, pge_bin, reference, t
     p = pge_world(cluster, "--out", str(other), "--seed", "5", "--adopt", "--standalone-tiles")
     assert p.returncode == 1
     assert "0_0.glb: written with another seed" in p.stderr, p.stderr
+    assert not (other / "world.json").exists()
+
+
+def test_shared_tiles_written_by_a_job_array_are_adopted(cluster, pge_bin, reference, tmp_path):
+    # As deploy/'s Jobs leave them: the variants written first, then tiles that refer to
+    # them, no manifest.
+    out = tmp_path / "world"
+    variants, shared = local_shared_tiles(pge_bin, str(out), "spin=0")
+    (out / "tiles" / "3_3.glb").unlink()
+    p = pge_world(cluster, "--out", str(out), "--set", "spin=0", "--adopt")
+    assert p.returncode == 0, p.stderr
+    assert "15 of 16 tiles already" in p.stderr, p.stderr
+    world = read_world(str(out))
+    assert world["complete"] is True and len(world["tiles"]) == 16
+    assert tile_bytes(str(out), world) == shared
+    for name, data in variants.items():
+        assert (out / name).read_bytes() == data, name
+
+    # A standalone tile among shared ones is refused, not adopted.
+    other = tmp_path / "other"
+    (other / "tiles").mkdir(parents=True)
+    (other / "tiles" / "0_0.glb").write_bytes(reference[(0, 0)])
+    p = pge_world(cluster, "--out", str(other), "--set", "spin=0", "--adopt")
+    assert p.returncode == 1
+    assert "0_0.glb: the tile carries its variants" in p.stderr, p.stderr
+    assert p.stderr.count("\n") == 1, p.stderr
     assert not (other / "world.json").exists()
 
 

@@ -50,13 +50,21 @@ pub fn variants_model(forest: &Forest, grown: &[Grown]) -> Model {
         let name = forest.layers.get(l).map_or("layer", |x| x.name.as_str());
         for (v, variant) in g.variants.iter().enumerate() {
             let mut meshes = Vec::new();
+            // As `assemble` writes a variant: its first leaf part carries the variant's
+            // levels of detail (`extras.pge.lod` with `primitives`).
+            let mut lod = crate::variant_extras(variant);
             for inst in &variant.instances {
                 let mesh = &variant.meshes[inst.mesh];
-                let mesh = if inst.transform == Mat4::IDENTITY {
+                let mut mesh = if inst.transform == Mat4::IDENTITY {
                     mesh.clone()
                 } else {
                     Arc::new(baked(mesh, &inst.transform))
                 };
+                if mesh.extras.contains_key("lod")
+                    && let Some(lod) = lod.take()
+                {
+                    Arc::make_mut(&mut mesh).extras.insert("lod".into(), lod);
+                }
                 model.meshes.push(mesh);
                 meshes.push(model.meshes.len() - 1);
             }
@@ -98,9 +106,18 @@ mod tests {
         let mut moved = Model::new();
         moved.add_mesh(tri.clone(), Mat4::from_translation(Vec3::Y));
         moved.stats.nodes = 7;
+        // A variant with foliage levels of detail: its leaf part carries the variant's.
+        let mut leaves = tri.clone();
+        leaves.name = "leaves".into();
+        leaves.extras.insert(
+            "lod".into(),
+            json!({"leaves": 1, "roots": 1, "table": [[1, 1, 0]]}),
+        );
+        let mut leafy = Model::from_mesh(tri.clone());
+        leafy.add_mesh(leaves, Mat4::IDENTITY);
         let grown = vec![
             Grown {
-                variants: vec![Model::from_mesh(tri.clone()), moved],
+                variants: vec![leafy, moved],
             },
             Grown {
                 variants: vec![Model::from_mesh(tri)],
@@ -112,6 +129,8 @@ mod tests {
         assert!(shared.groups.iter().all(|g| g.transforms.is_empty()));
         assert!(shared_layer(&f, 0) && !shared_layer(&f, 1) && !shared_layer(&f, 2));
         assert_eq!(shared.extras["sharedVariants"][1]["nodes"], 7);
+        let lod = &shared.meshes[shared.groups[0].meshes[1]].extras["lod"];
+        assert_eq!(lod["primitives"][0]["primitive"], 1, "{lod}");
 
         // The same meshes as the tile's own groups of those variants.
         let layout = f.layout(Some((0, 0))).expect("layout");

@@ -1,0 +1,322 @@
+//! The merged model: the tiles' terrain patches and placements added one by one, every
+//! variant written once.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, bail};
+use glam::Mat4;
+use gltf::Gltf;
+use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model, PlacementLeaves};
+use serde_json::{Map, Value};
+
+use super::read::{
+    check_bounds, leaf_counts, normal_path, read_instances, read_mesh, relative_file,
+};
+
+/// The model being merged.
+#[derive(Default)]
+pub(super) struct World {
+    model: Model,
+    /// Variants written so far: the group's name and its meshes, for sharing them.
+    variants: Vec<(String, Vec<Mesh>)>,
+    /// Extras of the first tile, summed counts of every tile.
+    forest: Option<Map<String, Value>>,
+    tiles: Vec<[u64; 2]>,
+    /// External buffers read so far (shared variants), by their absolute path.
+    pub(super) external: HashMap<PathBuf, Arc<Vec<u8>>>,
+    /// The group of each shared variant mesh placed so far: (its buffer's path, its glTF
+    /// mesh index) -> group.
+    shared_groups: HashMap<(PathBuf, usize), usize>,
+    /// Per shared binary file, the `extras.pge` of each mesh of its description.
+    pub(super) shared_extras: HashMap<PathBuf, Vec<Map<String, Value>>>,
+}
+
+impl World {
+    /// Adds the terrain patch and the placements of one tile's glb (in `folder`, against
+    /// which the URIs of its external buffers resolve).
+    pub(super) fn add_tile(
+        &mut self,
+        bytes: &[u8],
+        index: (u64, u64),
+        folder: &Path,
+    ) -> anyhow::Result<()> {
+        let gltf = Gltf::from_slice(bytes).context("not a readable .glb")?;
+        let blob = gltf.blob.as_deref();
+        // Buffer 0 is the binary chunk; the others are files beside the tile.
+        let mut files: Vec<Option<(PathBuf, Arc<Vec<u8>>)>> = vec![None];
+        for buffer in gltf.document.buffers().skip(1) {
+            let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+                bail!("buffer {} has no URI", buffer.index());
+            };
+            let path = normal_path(&folder.join(relative_file(uri)?))?;
+            let data = match self.external.get(&path) {
+                Some(d) => d.clone(),
+                None => {
+                    let d = std::fs::read(&path).with_context(|| {
+                        format!("cannot read {} (buffer {})", path.display(), buffer.index())
+                    })?;
+                    let d = Arc::new(d);
+                    self.external.insert(path.clone(), d.clone());
+                    d
+                }
+            };
+            files.push(Some((path, data)));
+        }
+        let data: Vec<Option<&[u8]>> = files
+            .iter()
+            .enumerate()
+            .map(|(k, f)| match f {
+                _ if k == 0 => blob,
+                Some((_, d)) => Some(d.as_slice()),
+                None => None,
+            })
+            .collect();
+        check_bounds(&gltf.document, &data)?;
+        let buffer = |b: gltf::Buffer| data.get(b.index()).copied().flatten();
+        let json: Value = serde_json::from_slice(&gltf::binary::Glb::from_slice(bytes)?.json)?;
+        let scene = gltf
+            .document
+            .default_scene()
+            .or_else(|| gltf.document.scenes().next());
+        // A mesh whose data is in an external buffer is the shared variant of that file: read
+        // once for the whole world.
+        let shared_key = |mesh: &gltf::Mesh| -> Option<(PathBuf, usize)> {
+            let prim = mesh.primitives().next()?;
+            let view = prim.get(&gltf::Semantic::Positions)?.view()?;
+            let (path, _) = files.get(view.buffer().index())?.as_ref()?;
+            Some((path.clone(), mesh.index()))
+        };
+        let mut meshes = Vec::new();
+        for mesh in gltf.document.meshes() {
+            let key = shared_key(&mesh);
+            meshes.push(match key {
+                Some(key) if self.shared_groups.contains_key(&key) => (String::new(), Vec::new()),
+                Some((path, k)) => {
+                    let (name, mut parts) = read_mesh(&mesh, &buffer, &json)?;
+                    let extras = self.shared_extras.get(&path).and_then(|e| e.get(k));
+                    if let (Some(first), Some(extras)) = (parts.first_mut(), extras) {
+                        first.extras = extras.clone();
+                    }
+                    (name, parts)
+                }
+                None => read_mesh(&mesh, &buffer, &json)?,
+            });
+        }
+        for node in scene.iter().flat_map(|s| s.nodes()) {
+            let Some(mesh) = node.mesh() else { continue };
+            let (name, parts) = &meshes[mesh.index()];
+            let instancing = json
+                .get("nodes")
+                .and_then(|n| n.get(node.index()))
+                .and_then(|n| n.pointer("/extensions/EXT_mesh_gpu_instancing/attributes"));
+            // Each placement's leaves for the forest's camera, when the tile has them.
+            let leaves = json
+                .get("nodes")
+                .and_then(|n| n.get(node.index()))
+                .and_then(|n| n.pointer("/extras/pge/lod/leaves"));
+            let transforms = match instancing {
+                Some(attributes) => read_instances(&gltf, attributes, &buffer)?,
+                None if parts.len() == 1 && leaves.is_none() => {
+                    let m = Mat4::from_cols_array_2d(&node.transform().matrix());
+                    self.model.add_mesh(parts[0].clone(), m);
+                    continue;
+                }
+                None => {
+                    let (t, r, s) = node.transform().decomposed();
+                    vec![InstanceTransform {
+                        translation: t,
+                        rotation: r,
+                        scale: s[0].max(s[1]).max(s[2]),
+                    }]
+                }
+            };
+            let counts = leaf_counts(leaves, transforms.len())?;
+            match shared_key(&mesh) {
+                Some(key) => {
+                    let group = match self.shared_groups.get(&key) {
+                        Some(&g) => g,
+                        None => {
+                            let none = counts.as_ref().map(|_| Vec::new());
+                            let g = self.place(name, parts, Vec::new(), none);
+                            self.shared_groups.insert(key, g);
+                            g
+                        }
+                    };
+                    self.extend(group, transforms, counts);
+                }
+                None => {
+                    self.place(name, parts, transforms, counts);
+                }
+            }
+        }
+        self.add_extras(&json, index)
+    }
+
+    /// Adds placements of the variant `name` made of `parts`, sharing an equal variant
+    /// already written, with their leaf counts: the group keeps counts only while every
+    /// batch of its placements has them. Returns the group.
+    fn place(
+        &mut self,
+        name: &str,
+        parts: &[Mesh],
+        transforms: Vec<InstanceTransform>,
+        counts: Option<Vec<u32>>,
+    ) -> usize {
+        let found = self
+            .variants
+            .iter()
+            .position(|(n, m)| n == name && m.as_slice() == parts);
+        let group = match found {
+            Some(g) => g,
+            None => {
+                let first = self.model.meshes.len();
+                for m in parts {
+                    self.model.meshes.push(Arc::new(m.clone()));
+                }
+                let roots = parts
+                    .first()
+                    .and_then(|p| p.extras.get("lod")?.get("roots")?.as_u64())
+                    .and_then(|r| u32::try_from(r).ok())
+                    .unwrap_or(0);
+                self.model.groups.push(InstanceGroup {
+                    name: name.to_string(),
+                    meshes: (first..first + parts.len()).collect(),
+                    transforms: Vec::new(),
+                    leaves: counts.is_some().then(|| PlacementLeaves {
+                        roots,
+                        counts: Vec::new(),
+                    }),
+                });
+                self.variants.push((name.to_string(), parts.to_vec()));
+                self.model.groups.len() - 1
+            }
+        };
+        self.extend(group, transforms, counts);
+        group
+    }
+
+    /// Adds placements (and their leaf counts) to group `group`.
+    fn extend(
+        &mut self,
+        group: usize,
+        transforms: Vec<InstanceTransform>,
+        counts: Option<Vec<u32>>,
+    ) {
+        let group = &mut self.model.groups[group];
+        match (&mut group.leaves, counts) {
+            (Some(leaves), Some(counts)) => leaves.counts.extend(counts),
+            (leaves, _) => *leaves = None,
+        }
+        group.transforms.extend(transforms);
+    }
+
+    /// Sums the tile's stats and forest counts into the world's.
+    fn add_extras(&mut self, json: &Value, (i, j): (u64, u64)) -> anyhow::Result<()> {
+        let pge = json.pointer("/extras/pge").cloned().unwrap_or(Value::Null);
+        let count = |p: &str| pge.pointer(p).and_then(Value::as_u64).unwrap_or(0);
+        self.model.stats.nodes += count("/stats/nodes");
+        self.model.stats.leaves += count("/stats/leaves");
+        self.model.stats.modules += count("/stats/modules");
+        self.tiles.push([i, j]);
+        let Some(Value::Object(tile)) = pge.get("forest") else {
+            return Ok(());
+        };
+        let Some(forest) = &mut self.forest else {
+            self.forest = Some(tile.clone());
+            return Ok(());
+        };
+        let sum = |a: Option<&Value>, b: Option<&Value>| {
+            a.and_then(Value::as_u64).unwrap_or(0) + b.and_then(Value::as_u64).unwrap_or(0)
+        };
+        let total = sum(forest.get("instances"), tile.get("instances"));
+        forest.insert("instances".into(), total.into());
+        if let (Some(Value::Array(all)), Some(Value::Array(these))) =
+            (forest.get_mut("species"), tile.get("species"))
+        {
+            for (a, b) in all.iter_mut().zip(these) {
+                let n = sum(a.get("count"), b.get("count"));
+                if let Some(a) = a.as_object_mut() {
+                    a.insert("count".into(), n.into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The merged model, its `extras.pge.forest` naming the tiles it holds.
+    pub(super) fn finish(mut self) -> Model {
+        if let Some(mut forest) = self.forest.take() {
+            forest.remove("tileIndex");
+            forest.insert("tiles".into(), serde_json::json!(self.tiles));
+            self.model
+                .extras
+                .insert("forest".into(), Value::Object(forest));
+        }
+        self.model
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use pge_engine::export::ExportMeta;
+
+    /// A glb of `json` and `bin`, chunks padded as the format asks.
+    fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+        let mut text = serde_json::to_vec(json).expect("json");
+        while !text.len().is_multiple_of(4) {
+            text.push(b' ');
+        }
+        let total = 12 + 8 + text.len() + 8 + bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&text);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+        out
+    }
+
+    #[test]
+    fn a_tile_whose_accessors_overrun_their_data_is_an_error_not_a_panic() {
+        let mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let bytes = pge_engine::export::glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default())
+            .expect("glb");
+        let mut world = World::default();
+        let here = Path::new(".");
+        world
+            .add_tile(&bytes, (0, 0), here)
+            .expect("a valid tile reads");
+        assert_eq!(world.model.meshes.len(), 1);
+
+        let file = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+        let json: Value = serde_json::from_slice(&file.json).expect("json");
+        let bin = file.bin.expect("bin").to_vec();
+        let mut more = json.clone();
+        more["accessors"][0]["count"] = 1000.into();
+        let mut shorter = json.clone();
+        shorter["buffers"][0]["byteLength"] = (bin.len() as u64 + 64).into();
+        let mut sparse = json;
+        sparse["accessors"][0]["sparse"] = serde_json::json!({"count": 1,
+            "indices": {"bufferView": 0, "componentType": 5125},
+            "values": {"bufferView": 0}});
+        for (bad, needle) in [
+            (glb(&more, &bin), "goes past"),
+            (glb(&shorter, &bin), "not in the binary chunk"),
+            (glb(&sparse, &bin), "sparse"),
+        ] {
+            let err = World::default()
+                .add_tile(&bad, (0, 0), here)
+                .expect_err("refused");
+            assert!(format!("{err:#}").contains(needle), "{err:#}");
+        }
+    }
+}
