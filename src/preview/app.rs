@@ -11,7 +11,7 @@ use pge_engine::{Engine, ParamValue};
 use super::camera::OrbitCamera;
 use super::live::Live;
 use super::reload::{Settings, Status};
-use super::render::{Renderer, Toggles};
+use super::render::{FrameTimes, Renderer, Toggles};
 
 mod panel;
 
@@ -40,6 +40,9 @@ pub struct AppOptions {
     pub full_quality_motion: bool,
     /// Where `--camera` places the camera once the first model is framed.
     pub camera: Option<super::CameraSpec>,
+    /// `--orbit-frames N`: turn once around the model in N moving frames, then rest,
+    /// printing where each frame's time went.
+    pub orbit_frames: Option<u32>,
 }
 
 enum Shot {
@@ -86,6 +89,8 @@ pub struct PreviewApp {
     last_motion: Option<Instant>,
     /// Save to first frame on screen of the latest model a save caused.
     save_to_screen: Option<Duration>,
+    /// The `--orbit-frames` measurement, while it runs.
+    orbit: Option<Orbit>,
 }
 
 impl PreviewApp {
@@ -101,7 +106,14 @@ impl PreviewApp {
         let live = Live::start(Arc::new(engine), script.clone(), settings, move || {
             wake.request_repaint()
         })?;
-        let renderer = cc.wgpu_render_state.as_ref().map(Renderer::new);
+        let wake = cc.egui_ctx.clone();
+        let mut renderer = cc
+            .wgpu_render_state
+            .as_ref()
+            .map(|state| Renderer::new(state, move || wake.request_repaint()));
+        if let Some(r) = &mut renderer {
+            r.measure_gpu(options.orbit_frames.is_some());
+        }
         let export_path = script.with_extension("glb").to_string_lossy().into_owned();
         Ok(PreviewApp {
             live,
@@ -136,6 +148,7 @@ impl PreviewApp {
             drawn_after_save: None,
             last_motion: None,
             save_to_screen: None,
+            orbit: options.orbit_frames.map(Orbit::new),
         })
     }
 
@@ -240,6 +253,18 @@ impl PreviewApp {
             self.camera.yaw += 0.5 * dt;
             self.viewport_dirty = true;
         }
+        let model_shown = self.framed && !self.live.reloader().is_running();
+        let orbit_moving = match &mut self.orbit {
+            Some(orbit) if model_shown && !orbit.finished() => {
+                let (moving, redraw) = orbit.next_frame(Instant::now());
+                if moving {
+                    self.camera.yaw += std::f32::consts::TAU / orbit.frames as f32;
+                }
+                self.viewport_dirty |= redraw;
+                Some(moving)
+            }
+            _ => None,
+        };
         // While the camera moves, draw at 30 % resolution with an eighth of the leaves and the
         // largest eighth of big bark meshes (measured: a 126k-leaf tree turns at 38-40
         // frames/s on llvmpipe instead of 18-20); once it rests, draw once more at full
@@ -248,10 +273,12 @@ impl PreviewApp {
         if self.camera != camera_before {
             self.last_motion = Some(now);
         }
-        let moving = !self.full_quality_motion
-            && self
-                .last_motion
-                .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE);
+        let moving = orbit_moving.unwrap_or_else(|| {
+            !self.full_quality_motion
+                && self
+                    .last_motion
+                    .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE)
+        });
         if moving {
             ui.ctx().request_repaint_after(MOTION_SETTLE);
         }
@@ -262,6 +289,13 @@ impl PreviewApp {
             (rect.height() * ppp).round() as u32,
         ];
         let state = (size, self.camera, self.toggles);
+        // A forest plan for the camera arrived after the frame was drawn: draw it.
+        if let Some(renderer) = &mut self.renderer
+            && !renderer.settled()
+            && renderer.plan_ready()
+        {
+            self.viewport_dirty = true;
+        }
         if self.viewport_dirty || self.last_viewport != Some(state) {
             if let (Some(renderer), Some(rs)) = (&mut self.renderer, frame.wgpu_render_state()) {
                 let t0 = Instant::now();
@@ -278,6 +312,11 @@ impl PreviewApp {
                 );
                 self.texture = Some(id);
                 self.render_ms = t0.elapsed().as_secs_f64() * 1000.0;
+                if let Some(orbit) = &mut self.orbit
+                    && orbit_moving.is_some()
+                {
+                    orbit.drawn(moving, renderer.times(), t0.elapsed(), renderer.settled());
+                }
             }
             self.viewport_dirty = false;
             self.last_viewport = Some(state);
@@ -365,7 +404,9 @@ impl PreviewApp {
         };
         match state {
             Shot::Waiting => {
-                let settled = !self.live.reloader().is_running()
+                let settled = self.orbit.as_ref().is_none_or(Orbit::finished)
+                    && self.renderer.as_ref().is_none_or(Renderer::settled)
+                    && !self.live.reloader().is_running()
                     && (self.live.reloader().current().is_some()
                         || !matches!(self.live.reloader().status(), Status::Running))
                     && self.uploaded == self.live.reloader().generation_count()
@@ -466,6 +507,7 @@ impl PreviewApp {
 
 impl eframe::App for PreviewApp {
     fn update(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
+        let started = Instant::now();
         self.count_frame();
         self.pump();
         self.keys(ctx);
@@ -477,6 +519,16 @@ impl eframe::App for PreviewApp {
             .frame(egui::Frame::NONE)
             .show(ctx, |ui| self.viewport(ui, frame));
         self.screenshot(ctx);
+        if let Some(orbit) = &mut self.orbit {
+            orbit.updated(started.elapsed());
+            if orbit.finished() && self.shot.is_none() {
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            // While resting, the planner's plan wakes the window.
+            if orbit.turning() || orbit.finished() || !self.framed {
+                ctx.request_repaint();
+            }
+        }
         if self.turntable || self.drawn_after_save.is_some() {
             ctx.request_repaint();
         } else if self.live.reloader().is_running() {
@@ -484,6 +536,124 @@ impl eframe::App for PreviewApp {
         }
         if let Some(at) = self.live.reloader().next_wake() {
             ctx.request_repaint_after(at.saturating_duration_since(Instant::now()));
+        }
+    }
+}
+
+/// `--orbit-frames N`: once the first model is on screen, the camera turns once around it in
+/// N frames drawn as moving ones, then rests until a frame at full quality is drawn with its
+/// final forest plan; every frame's times go to stderr, then a summary.
+struct Orbit {
+    frames: u32,
+    /// Moving frames drawn so far.
+    turned: u32,
+    /// How long the window's update of the last moving frame took (the viewport's drawing
+    /// and the panel's layout; the rest of a frame is egui's painting and presenting).
+    update: Option<Duration>,
+    /// Start of each moving frame.
+    starts: Vec<Instant>,
+    /// When the resting frames began, and whether the last one drew the final plan.
+    rest: Option<(Instant, bool)>,
+}
+
+impl Orbit {
+    fn new(frames: u32) -> Orbit {
+        Orbit {
+            frames,
+            turned: 0,
+            update: None,
+            starts: Vec::new(),
+            rest: None,
+        }
+    }
+
+    fn finished(&self) -> bool {
+        self.rest.is_some_and(|(_, done)| done)
+    }
+
+    /// A frame starts: whether it is a moving one, and whether it must be drawn (every
+    /// moving frame and the first resting one; the next resting ones when a plan arrives).
+    fn next_frame(&mut self, now: Instant) -> (bool, bool) {
+        if self.turned < self.frames {
+            self.turned += 1;
+            self.starts.push(now);
+            return (true, true);
+        }
+        let first_rest = self.rest.is_none();
+        if first_rest {
+            self.rest = Some((now, false));
+        }
+        (false, first_rest)
+    }
+
+    /// The window's update of the frame took `took`.
+    fn updated(&mut self, took: Duration) {
+        if self.turning() || self.rest.is_none() {
+            self.update = Some(took);
+        }
+    }
+
+    /// Still turning: frames follow one another without waiting for anything.
+    fn turning(&self) -> bool {
+        self.turned < self.frames
+    }
+
+    /// The frame was drawn, its render-thread `times` and `total` time; `settled`: the
+    /// forest plan drawn is the one for this camera.
+    fn drawn(&mut self, moving: bool, times: FrameTimes, total: Duration, settled: bool) {
+        let ms = |d: Duration| d.as_secs_f64() * 1000.0;
+        let since = self
+            .starts
+            .len()
+            .checked_sub(2)
+            .and_then(|k| self.starts.get(k))
+            .zip(self.starts.last())
+            .filter(|_| moving)
+            .map(|(a, b)| {
+                let update = self.update.map_or(0.0, ms);
+                format!(
+                    ", previous frame {:.1} ms (update {update:.1} ms, egui's painting and presenting {:.1} ms)",
+                    ms(*b - *a),
+                    ms(*b - *a) - update
+                )
+            })
+            .unwrap_or_default();
+        eprintln!(
+            "orbit frame {}/{} {}: plan {:.1} ms (planner thread{}), upload {:.1} ms ({} instances), submit {:.1} ms, gpu {:.1} ms, render {:.1} ms{since}",
+            self.turned,
+            self.frames,
+            if moving { "moving" } else { "resting" },
+            ms(times.plan),
+            if times.plan.is_zero() {
+                ", none arrived"
+            } else {
+                ""
+            },
+            ms(times.upload),
+            times.uploaded,
+            ms(times.submit),
+            ms(times.gpu),
+            ms(total),
+        );
+        if moving || self.finished() {
+            return;
+        }
+        if let Some((rest_start, done)) = &mut self.rest
+            && settled
+        {
+            *done = true;
+            let turning = match (self.starts.first(), self.starts.last()) {
+                (Some(a), Some(b)) if self.starts.len() > 1 => {
+                    (self.starts.len() - 1) as f64 / b.duration_since(*a).as_secs_f64()
+                }
+                _ => 0.0,
+            };
+            eprintln!(
+                "orbit: {:.1} frames/s while turning ({} frames), resting frame with its final plan {:.0} ms after the turn",
+                turning,
+                self.starts.len(),
+                ms(rest_start.elapsed())
+            );
         }
     }
 }
