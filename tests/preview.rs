@@ -447,3 +447,20 @@ fn an_orbit_reports_every_frame_and_ends_on_the_resting_plan() {
     );
     assert!(look_at(&dir.path().join("orbit.png")).colours > 50);
 }
+
+#[test]
+fn an_orbit_of_a_failing_script_ends_with_its_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("broken.lua"),
+        "local x = 1\nlocal y = = 2\nreturn x\n",
+    )
+    .expect("write");
+    let Some(out) = preview(&["broken.lua", "--orbit-frames", "3"], dir.path()) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("broken.lua:2:"), "FILE:LINE in: {stderr}");
+    assert!(!stderr.contains("orbit frame"), "nothing turned: {stderr}");
+}

@@ -158,8 +158,8 @@ impl PreviewApp {
         self.play();
         match self.live.reloader().status() {
             Status::Error(message) if self.shown_error.as_ref() != Some(message) => {
-                // A screenshot run reports its error when the window closes.
-                if self.shot.is_none() {
+                // A screenshot or orbit run reports its error when the window closes.
+                if self.shot.is_none() && self.orbit.is_none() {
                     eprintln!("{message}");
                 }
                 self.shown_error = Some(message.clone());
@@ -461,6 +461,32 @@ impl PreviewApp {
         ctx.request_repaint();
     }
 
+    /// An `--orbit-frames` run whose generation failed has no model to turn around: it ends
+    /// (the error goes to the screenshot's result, or is the run's when there is none).
+    fn orbit_without_model(&mut self) {
+        let reloader = self.live.reloader();
+        if reloader.is_running() || reloader.current().is_some() {
+            return;
+        }
+        let message = match reloader.status() {
+            Status::Error(m) => m.clone(),
+            Status::Gone => gone_message(reloader.script()),
+            _ => return,
+        };
+        let Some(orbit) = &mut self.orbit else {
+            return;
+        };
+        if orbit.finished() {
+            return;
+        }
+        orbit.abandon();
+        if self.shot.is_none()
+            && let Ok(mut slot) = self.shot_result.lock()
+        {
+            *slot = Some(Err(anyhow::anyhow!("{message}")));
+        }
+    }
+
     fn count_frame(&mut self) {
         let now = Instant::now();
         // The previous frame, which drew a model a save caused, has been presented.
@@ -519,6 +545,7 @@ impl eframe::App for PreviewApp {
             .frame(egui::Frame::NONE)
             .show(ctx, |ui| self.viewport(ui, frame));
         self.screenshot(ctx);
+        self.orbit_without_model();
         if let Some(orbit) = &mut self.orbit {
             orbit.updated(started.elapsed());
             if orbit.finished() && self.shot.is_none() {
@@ -591,6 +618,12 @@ impl Orbit {
         if self.turning() || self.rest.is_none() {
             self.update = Some(took);
         }
+    }
+
+    /// Ends the orbit without turning (there is no model).
+    fn abandon(&mut self) {
+        self.turned = self.frames;
+        self.rest = Some((Instant::now(), true));
     }
 
     /// Still turning: frames follow one another without waiting for anything.

@@ -185,6 +185,16 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
         let inner = failure.lock().ok().and_then(|mut f| f.take());
         inner.unwrap_or_else(|| anyhow!("cannot open the preview window: {e}"))
     })?;
+    if args.screenshot.is_none() && args.orbit_frames.is_some() {
+        // An orbit whose generation failed leaves its error here.
+        let result = screenshot_result
+            .lock()
+            .map_err(|_| anyhow!("orbit state poisoned"))?
+            .take();
+        if let Some(r) = result {
+            r?;
+        }
+    }
     if let Some(path) = &args.screenshot {
         let result = screenshot_result
             .lock()
