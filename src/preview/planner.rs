@@ -178,10 +178,11 @@ impl Planner {
         }
     }
 
-    /// Whether the last plan handed out was made for `want` (nothing more will come for it).
+    /// Whether the last plan handed out was made for `want` (nothing more will come for it;
+    /// nothing ever comes when the planner thread could not be started).
     #[must_use]
     pub fn settled(&self, want: &Request) -> bool {
-        self.set.is_none() || self.applied.as_ref() == Some(want)
+        self.set.is_none() || self.jobs.is_none() || self.applied.as_ref() == Some(want)
     }
 
     /// Asks for the plan of `want` (the camera and budget of the frame being drawn) unless
