@@ -581,6 +581,19 @@ struct Orbit {
     starts: Vec<Instant>,
     /// When the resting frames began, and whether the last one drew the final plan.
     rest: Option<(Instant, bool)>,
+    /// CPU time of the whole process (every thread) when the turn began and ended.
+    cpu: (Option<Duration>, Option<Duration>),
+}
+
+/// CPU time the process has used so far, over all its threads (Linux: the sum of
+/// `/proc/self/task/*/schedstat`); `None` elsewhere.
+fn process_cpu() -> Option<Duration> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let text = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(Duration::from_nanos(total))
 }
 
 impl Orbit {
@@ -591,6 +604,7 @@ impl Orbit {
             update: None,
             starts: Vec::new(),
             rest: None,
+            cpu: (None, None),
         }
     }
 
@@ -602,6 +616,9 @@ impl Orbit {
     /// moving frame and the first resting one; the next resting ones when a plan arrives).
     fn next_frame(&mut self, now: Instant) -> (bool, bool) {
         if self.turned < self.frames {
+            if self.turned == 0 {
+                self.cpu.0 = process_cpu();
+            }
             self.turned += 1;
             self.starts.push(now);
             return (true, true);
@@ -609,6 +626,7 @@ impl Orbit {
         let first_rest = self.rest.is_none();
         if first_rest {
             self.rest = Some((now, false));
+            self.cpu.1 = process_cpu();
         }
         (false, first_rest)
     }
@@ -681,8 +699,17 @@ impl Orbit {
                 }
                 _ => 0.0,
             };
+            // Between the first moving frame's start and the first resting frame's: the
+            // moving frames but the last.
+            let cpu = match self.cpu {
+                (Some(a), Some(b)) if self.starts.len() > 1 => format!(
+                    ", {:.0} ms of CPU per moving frame (this process, every thread)",
+                    ms(b.saturating_sub(a)) / self.starts.len() as f64
+                ),
+                _ => String::new(),
+            };
             eprintln!(
-                "orbit: {:.1} frames/s while turning ({} frames), resting frame with its final plan {:.0} ms after the turn",
+                "orbit: {:.1} frames/s while turning ({} frames){cpu}, resting frame with its final plan {:.0} ms after the turn",
                 turning,
                 self.starts.len(),
                 ms(rest_start.elapsed())

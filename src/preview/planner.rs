@@ -75,6 +75,28 @@ pub struct Request {
     pub budget: u64,
 }
 
+/// While the camera moves, the plan asked for last is drawn on as long as the camera looks
+/// within this angle (radians) of the same direction, from within this share of its
+/// distance to the model of the same eye: the plan's margin
+/// ([`forest::MOVING_MARGIN`]) covers that much turning.
+pub const MOVING_REUSE: f32 = 0.026;
+
+impl Request {
+    /// Whether a moving frame for `other` may draw the plan made for `self`: the same
+    /// budget, a view direction within [`MOVING_REUSE`] radians, and an eye moved less than
+    /// [`MOVING_REUSE`] times `distance` (the eye's distance to what it looks at).
+    #[must_use]
+    pub fn close_to(&self, other: &Request, distance: f32) -> bool {
+        // A perspective view_proj's last row is the view direction: clip w is the depth.
+        let forward = |r: &Request| r.view.view_proj.row(3).truncate().normalize_or_zero();
+        let (a, b) = (forward(self), forward(other));
+        self.budget == other.budget
+            && a != glam::Vec3::ZERO
+            && a.dot(b) >= MOVING_REUSE.cos()
+            && self.view.eye.distance(other.view.eye) <= MOVING_REUSE * distance
+    }
+}
+
 /// A finished plan.
 #[derive(Debug)]
 pub struct Planned {
@@ -112,6 +134,8 @@ pub struct Planner {
     in_flight: bool,
     /// The request of the plan last handed out in this epoch.
     applied: Option<Request>,
+    /// The request last asked for in this epoch.
+    asked: Option<Request>,
 }
 
 impl Planner {
@@ -135,6 +159,7 @@ impl Planner {
             set: None,
             in_flight: false,
             applied: None,
+            asked: None,
         }
     }
 
@@ -145,6 +170,13 @@ impl Planner {
         self.set = set.filter(|s| !s.is_empty());
         self.in_flight = false;
         self.applied = None;
+        self.asked = None;
+    }
+
+    /// The request last asked for since the last [`Planner::reset`].
+    #[must_use]
+    pub fn asked(&self) -> Option<&Request> {
+        self.asked.as_ref()
     }
 
     /// The current epoch.
@@ -200,6 +232,9 @@ impl Planner {
             request: want,
         };
         self.in_flight = jobs.send(job).is_ok();
+        if self.in_flight {
+            self.asked = Some(want);
+        }
     }
 
     /// The next plan of the current epoch that has arrived (waiting for one if `block` and
@@ -425,6 +460,36 @@ mod tests {
         assert_eq!(planned.request, request(1.0, 5_000));
         assert!(planner.settled(&request(1.0, 5_000)));
         assert!(!planner.settled(&first));
+    }
+
+    #[test]
+    fn a_moving_camera_reuses_a_plan_while_it_turns_little() {
+        let proj = Mat4::perspective_rh(0.8, 1.0, 0.1, 10_000.0);
+        // Orbiting a target 100 m away by `angle` radians.
+        let orbit = |angle: f32, budget| {
+            let target = Vec3::new(0.0, 0.0, -100.0);
+            let eye = target + 100.0 * Vec3::new(angle.sin(), 0.0, angle.cos());
+            Request {
+                view: View {
+                    eye,
+                    view_proj: proj * Mat4::look_at_rh(eye, target, Vec3::Y),
+                },
+                budget,
+            }
+        };
+        let at = orbit(0.0, 500);
+        assert!(at.close_to(&at, 100.0));
+        assert!(at.close_to(&orbit(0.01, 500), 100.0));
+        assert!(orbit(0.01, 500).close_to(&at, 100.0));
+        assert!(!at.close_to(&orbit(0.05, 500), 100.0), "turned too far");
+        assert!(!at.close_to(&orbit(0.01, 600), 100.0), "another budget");
+        // Zooming in by 10 % keeps the direction but moves the eye 10 m.
+        let mut zoomed = at;
+        zoomed.view.eye.z -= 10.0;
+        zoomed.view.view_proj =
+            proj * Mat4::look_at_rh(zoomed.view.eye, Vec3::new(0.0, 0.0, -100.0), Vec3::Y);
+        assert!(!at.close_to(&zoomed, 100.0));
+        assert!(at.close_to(&zoomed, 1000.0), "small for a far model");
     }
 
     #[test]

@@ -112,6 +112,9 @@ pub struct Renderer {
     forest_meshes: Vec<usize>,
     /// The camera and budget of the last frame.
     last_request: Option<Request>,
+    /// The centre of the model's bounds: camera motion is measured against the eye's
+    /// distance to it.
+    focus: Option<Vec3>,
     /// Where the last frame's time went.
     times: FrameTimes,
     /// Wait for the GPU after each frame, to measure its share ([`FrameTimes::gpu`]).
@@ -202,6 +205,7 @@ impl Renderer {
             ready: None,
             forest_meshes: Vec::new(),
             last_request: None,
+            focus: None,
             times: FrameTimes::default(),
             measure_gpu: false,
         }
@@ -268,6 +272,7 @@ impl Renderer {
             .filter_map(|(k, m)| Some((k, (m.index_in_scene, m.forest.as_ref()?.detail.clone()))))
             .unzip();
         self.forest_meshes = forest_meshes;
+        self.focus = scene.bounds.map(|(lo, hi)| (lo + hi) * 0.5);
         self.ready = None;
         self.planner
             .reset(Some(Arc::new(ForestSet::new(scene.clone(), set))));
@@ -402,7 +407,16 @@ impl Renderer {
             },
             budget,
         };
-        self.planner.ask(request);
+        // While moving, the plan asked for last is drawn on while the camera turns little.
+        let focus = self.focus.map_or(1.0, |f| f.distance(eye));
+        let reuse = moving
+            && self
+                .planner
+                .asked()
+                .is_some_and(|last| last.close_to(&request, focus));
+        if !reuse {
+            self.planner.ask(request);
+        }
         self.last_request = Some(request);
         let t0 = Instant::now();
         let mut triangles = 0u64;
