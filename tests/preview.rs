@@ -326,8 +326,8 @@ fn drawn(stdout: &[u8]) -> (u64, u64) {
     }
 }
 
-#[test]
-fn a_forest_is_drawn_within_its_leaf_budget() {
+/// A directory with `small.lua`: about 170 bushes of two variants on a 40 m terrain.
+fn small_forest() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::copy(
         root().join("scripts/species/bush.lua"),
@@ -343,6 +343,12 @@ fn a_forest_is_drawn_within_its_leaf_budget() {
          return f\n",
     )
     .expect("write");
+    dir
+}
+
+#[test]
+fn a_forest_is_drawn_within_its_leaf_budget() {
+    let dir = small_forest();
     let shot = |budget: &str, png: &str| {
         let out = preview(
             &[
@@ -382,4 +388,79 @@ fn a_forest_is_drawn_within_its_leaf_budget() {
         all.colours > 50 && tight.colours > 50,
         "lit leaves and bark"
     );
+}
+
+#[test]
+fn an_orbit_reports_every_frame_and_ends_on_the_resting_plan() {
+    let dir = small_forest();
+    let Some(out) = preview(
+        &[
+            "small.lua",
+            "--leaf-budget",
+            "3000",
+            "--camera",
+            "30,12",
+            "--orbit-frames",
+            "4",
+            "--screenshot",
+            "orbit.png",
+        ],
+        dir.path(),
+    ) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "pge preview failed: {stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    let moving: Vec<&&str> = lines
+        .iter()
+        .filter(|l| l.starts_with("orbit frame") && l.contains("moving"))
+        .collect();
+    assert_eq!(moving.len(), 4, "{stderr}");
+    for (k, line) in moving.iter().enumerate() {
+        assert!(
+            line.starts_with(&format!("orbit frame {}/4 moving: plan ", k + 1)),
+            "{line}"
+        );
+        for part in ["upload", "submit", "gpu", "render"] {
+            assert!(line.contains(part), "{part} missing in {line}");
+        }
+    }
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("orbit frame 4/4 resting")),
+        "{stderr}"
+    );
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("orbit: ") && l.contains("while turning (4 frames)")),
+        "{stderr}"
+    );
+    // The picture is of the resting frame with its own plan: the budget's leaves, not the
+    // 128th of it a moving frame draws.
+    let (_, leaves) = drawn(&out.stdout);
+    assert!(
+        (1_000..=3_000).contains(&leaves),
+        "{leaves} leaves drawn for a budget of 3000"
+    );
+    assert!(look_at(&dir.path().join("orbit.png")).colours > 50);
+}
+
+#[test]
+fn an_orbit_of_a_failing_script_ends_with_its_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(
+        dir.path().join("broken.lua"),
+        "local x = 1\nlocal y = = 2\nreturn x\n",
+    )
+    .expect("write");
+    let Some(out) = preview(&["broken.lua", "--orbit-frames", "3"], dir.path()) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("broken.lua:2:"), "FILE:LINE in: {stderr}");
+    assert!(!stderr.contains("orbit frame"), "nothing turned: {stderr}");
 }

@@ -8,11 +8,13 @@ use std::time::{Duration, Instant};
 use eframe::egui::{self, Color32};
 use pge_engine::{Engine, ParamValue};
 
+use self::orbit::Orbit;
 use super::camera::OrbitCamera;
 use super::live::Live;
 use super::reload::{Settings, Status};
 use super::render::{Renderer, Toggles};
 
+mod orbit;
 mod panel;
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
@@ -40,6 +42,9 @@ pub struct AppOptions {
     pub full_quality_motion: bool,
     /// Where `--camera` places the camera once the first model is framed.
     pub camera: Option<super::CameraSpec>,
+    /// `--orbit-frames N`: turn once around the model in N moving frames, then rest,
+    /// printing where each frame's time went.
+    pub orbit_frames: Option<u32>,
 }
 
 enum Shot {
@@ -86,6 +91,8 @@ pub struct PreviewApp {
     last_motion: Option<Instant>,
     /// Save to first frame on screen of the latest model a save caused.
     save_to_screen: Option<Duration>,
+    /// The `--orbit-frames` measurement, while it runs.
+    orbit: Option<Orbit>,
 }
 
 impl PreviewApp {
@@ -101,7 +108,14 @@ impl PreviewApp {
         let live = Live::start(Arc::new(engine), script.clone(), settings, move || {
             wake.request_repaint()
         })?;
-        let renderer = cc.wgpu_render_state.as_ref().map(Renderer::new);
+        let wake = cc.egui_ctx.clone();
+        let mut renderer = cc
+            .wgpu_render_state
+            .as_ref()
+            .map(|state| Renderer::new(state, move || wake.request_repaint()));
+        if let Some(r) = &mut renderer {
+            r.measure_gpu(options.orbit_frames.is_some());
+        }
         let export_path = script.with_extension("glb").to_string_lossy().into_owned();
         Ok(PreviewApp {
             live,
@@ -136,6 +150,7 @@ impl PreviewApp {
             drawn_after_save: None,
             last_motion: None,
             save_to_screen: None,
+            orbit: options.orbit_frames.map(Orbit::new),
         })
     }
 
@@ -145,8 +160,8 @@ impl PreviewApp {
         self.play();
         match self.live.reloader().status() {
             Status::Error(message) if self.shown_error.as_ref() != Some(message) => {
-                // A screenshot run reports its error when the window closes.
-                if self.shot.is_none() {
+                // A screenshot or orbit run reports its error when the window closes.
+                if self.shot.is_none() && self.orbit.is_none() {
                     eprintln!("{message}");
                 }
                 self.shown_error = Some(message.clone());
@@ -240,6 +255,18 @@ impl PreviewApp {
             self.camera.yaw += 0.5 * dt;
             self.viewport_dirty = true;
         }
+        let model_shown = self.framed && !self.live.reloader().is_running();
+        let orbit_moving = match &mut self.orbit {
+            Some(orbit) if model_shown && !orbit.finished() => {
+                let (moving, redraw) = orbit.next_frame(Instant::now());
+                if moving {
+                    self.camera.yaw += std::f32::consts::TAU / orbit.frames as f32;
+                }
+                self.viewport_dirty |= redraw;
+                Some(moving)
+            }
+            _ => None,
+        };
         // While the camera moves, draw at 30 % resolution with an eighth of the leaves and the
         // largest eighth of big bark meshes (measured: a 126k-leaf tree turns at 38-40
         // frames/s on llvmpipe instead of 18-20); once it rests, draw once more at full
@@ -248,10 +275,12 @@ impl PreviewApp {
         if self.camera != camera_before {
             self.last_motion = Some(now);
         }
-        let moving = !self.full_quality_motion
-            && self
-                .last_motion
-                .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE);
+        let moving = orbit_moving.unwrap_or_else(|| {
+            !self.full_quality_motion
+                && self
+                    .last_motion
+                    .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE)
+        });
         if moving {
             ui.ctx().request_repaint_after(MOTION_SETTLE);
         }
@@ -262,6 +291,13 @@ impl PreviewApp {
             (rect.height() * ppp).round() as u32,
         ];
         let state = (size, self.camera, self.toggles);
+        // A forest plan for the camera arrived after the frame was drawn: draw it.
+        if let Some(renderer) = &mut self.renderer
+            && !renderer.settled()
+            && renderer.plan_ready()
+        {
+            self.viewport_dirty = true;
+        }
         if self.viewport_dirty || self.last_viewport != Some(state) {
             if let (Some(renderer), Some(rs)) = (&mut self.renderer, frame.wgpu_render_state()) {
                 let t0 = Instant::now();
@@ -278,6 +314,11 @@ impl PreviewApp {
                 );
                 self.texture = Some(id);
                 self.render_ms = t0.elapsed().as_secs_f64() * 1000.0;
+                if let Some(orbit) = &mut self.orbit
+                    && orbit_moving.is_some()
+                {
+                    orbit.drawn(moving, renderer.times(), t0.elapsed(), renderer.settled());
+                }
             }
             self.viewport_dirty = false;
             self.last_viewport = Some(state);
@@ -365,7 +406,9 @@ impl PreviewApp {
         };
         match state {
             Shot::Waiting => {
-                let settled = !self.live.reloader().is_running()
+                let settled = self.orbit.as_ref().is_none_or(Orbit::finished)
+                    && self.renderer.as_ref().is_none_or(Renderer::settled)
+                    && !self.live.reloader().is_running()
                     && (self.live.reloader().current().is_some()
                         || !matches!(self.live.reloader().status(), Status::Running))
                     && self.uploaded == self.live.reloader().generation_count()
@@ -420,6 +463,32 @@ impl PreviewApp {
         ctx.request_repaint();
     }
 
+    /// An `--orbit-frames` run whose generation failed has no model to turn around: it ends
+    /// (the error goes to the screenshot's result, or is the run's when there is none).
+    fn orbit_without_model(&mut self) {
+        let reloader = self.live.reloader();
+        if reloader.is_running() || reloader.current().is_some() {
+            return;
+        }
+        let message = match reloader.status() {
+            Status::Error(m) => m.clone(),
+            Status::Gone => gone_message(reloader.script()),
+            _ => return,
+        };
+        let Some(orbit) = &mut self.orbit else {
+            return;
+        };
+        if orbit.finished() {
+            return;
+        }
+        orbit.abandon();
+        if self.shot.is_none()
+            && let Ok(mut slot) = self.shot_result.lock()
+        {
+            *slot = Some(Err(anyhow::anyhow!("{message}")));
+        }
+    }
+
     fn count_frame(&mut self) {
         let now = Instant::now();
         // The previous frame, which drew a model a save caused, has been presented.
@@ -466,6 +535,7 @@ impl PreviewApp {
 
 impl eframe::App for PreviewApp {
     fn update(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
+        let started = Instant::now();
         self.count_frame();
         self.pump();
         self.keys(ctx);
@@ -477,6 +547,17 @@ impl eframe::App for PreviewApp {
             .frame(egui::Frame::NONE)
             .show(ctx, |ui| self.viewport(ui, frame));
         self.screenshot(ctx);
+        self.orbit_without_model();
+        if let Some(orbit) = &mut self.orbit {
+            orbit.updated(started.elapsed());
+            if orbit.finished() && self.shot.is_none() {
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            // While resting, the planner's plan wakes the window.
+            if orbit.turning() || orbit.finished() || !self.framed {
+                ctx.request_repaint();
+            }
+        }
         if self.turntable || self.drawn_after_save.is_some() {
             ctx.request_repaint();
         } else if self.live.reloader().is_running() {

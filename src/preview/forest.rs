@@ -40,8 +40,16 @@ pub const SUB_ROOTS: u32 = 8;
 /// fewest leaves keep about the coarsest level's leaf area.
 pub const GROWN: f32 = 2.83;
 
-/// While the camera moves, frames draw this share of the budget.
-pub const MOVING_SHARE: u64 = 32;
+/// While the camera moves, frames draw this share of the budget. Measured on
+/// `scripts/forests/big.lua` with Mesa's software renderer (`--orbit-frames`, load 10 to
+/// 14 on 2 cores): with a 32nd (62,500 leaves and as many bark triangles of the default
+/// budget) the renderer took 110 to 400 ms per moving frame, with a 128th 13 to 120 ms.
+pub const MOVING_SHARE: u64 = 128;
+
+/// While the camera moves, plans are made for a view this much wider (and taller) than the
+/// frame's: a plan is drawn a frame or two after the camera it was made for, and the margin
+/// keeps the trees at the frame's edges that came into view meanwhile.
+pub const MOVING_MARGIN: f32 = 1.25;
 
 /// The leaf budgets `--leaf-budget` and the side panel's slider allow.
 pub const LEAF_BUDGETS: std::ops::RangeInclusive<u64> = 100..=100_000_000;
@@ -196,7 +204,7 @@ pub struct Plan {
 }
 
 /// Where the camera is.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     /// The eye.
     pub eye: Vec3,

@@ -14,6 +14,8 @@
 //! to its model on screen to stderr (for
 //! measuring the viewport's speed and the reload latency); `PGE_PREVIEW_LOG=full` does the
 //! same with every frame drawn at full quality (no reduced detail while moving).
+//! `--orbit-frames N` turns the camera once around the model in N frames and prints where
+//! each frame's time went (a forest's plans are made off the window's thread: [`planner`]).
 
 mod app;
 pub mod camera;
@@ -21,6 +23,7 @@ pub mod forest;
 pub mod live;
 pub mod lod;
 mod pipeline;
+pub mod planner;
 pub mod reload;
 pub mod render;
 pub mod scene;
@@ -65,6 +68,11 @@ pub struct PreviewArgs {
     /// model's bounds).
     #[arg(long, value_name = "D,H[,TX,TY,TZ]", value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<CameraSpec>,
+    /// Measures the viewport: once the first model is on screen, turns the camera once
+    /// around it in N frames drawn as while dragging, then rests; prints where each frame's
+    /// time went to stderr and closes (after `--screenshot`, if given, of the resting frame).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub orbit_frames: Option<u32>,
     /// Seconds one generation may take.
     #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = crate::common::parse_seconds)]
     pub time_limit: f64,
@@ -143,6 +151,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
         log_fps: measuring,
         turntable: measuring,
         full_quality_motion: log == "full",
+        orbit_frames: args.orbit_frames,
     };
     let title = format!("PGE preview: {}", args.script.display());
     let native = eframe::NativeOptions {
@@ -176,6 +185,16 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
         let inner = failure.lock().ok().and_then(|mut f| f.take());
         inner.unwrap_or_else(|| anyhow!("cannot open the preview window: {e}"))
     })?;
+    if args.screenshot.is_none() && args.orbit_frames.is_some() {
+        // An orbit whose generation failed leaves its error here.
+        let result = screenshot_result
+            .lock()
+            .map_err(|_| anyhow!("orbit state poisoned"))?
+            .take();
+        if let Some(r) = result {
+            r?;
+        }
+    }
     if let Some(path) = &args.screenshot {
         let result = screenshot_result
             .lock()

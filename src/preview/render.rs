@@ -3,17 +3,28 @@
 //! Drawing into our own texture (with its own depth buffer) keeps the model's frame apart
 //! from egui's: the model is redrawn only when the camera, the model or a toggle changes, so
 //! panel interaction stays fast even with a large tree on a software renderer.
+//!
+//! A mesh is uploaded once ([`mesh`]); a forest's meshes draw the plan the planner thread
+//! made for a recent camera ([`forest`], [`super::planner`]); the grid and wireframe edges
+//! are lines ([`overlay`]).
+
+mod forest;
+mod mesh;
+mod overlay;
 
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use eframe::egui;
 use eframe::egui_wgpu::{self, wgpu};
-use glam::{Mat4, Vec3, Vec4};
-use wgpu::util::DeviceExt;
+use glam::{Mat4, Vec3};
 
-use super::forest::{self, Detail, Draw, ForestMesh, Source, View};
+use self::mesh::{GpuMesh, MeshPipelines, buffer_init, material_group};
+use self::overlay::grid_lines;
+use super::forest::{MOVING_MARGIN, MOVING_SHARE, View};
 use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines, material_uniform};
-use super::scene::{Environment, Scene, SceneMesh, TextureData};
+use super::planner::{ForestSet, Planned, Planner, Request};
+use super::scene::{Environment, Scene, TextureData};
 use super::texture::{Samplers, upload_texture};
 
 /// Background without an environment, sRGB-encoded.
@@ -41,7 +52,7 @@ pub struct Toggles {
     /// Leaves of meshes with levels of detail coloured by the level that created them.
     pub lod_colors: bool,
     /// A forest's leaf budget T: the most leaves its instances draw in a frame at rest (and
-    /// as many triangles of bark); a moving frame draws a 32nd of it ([`forest::MOVING_SHARE`]).
+    /// as many triangles of bark); a moving frame draws a 128th of it ([`MOVING_SHARE`]).
     pub leaf_budget: u64,
 }
 
@@ -54,46 +65,9 @@ impl Default for Toggles {
             grid: true,
             lod_percent: 100,
             lod_colors: false,
-            leaf_budget: forest::DEFAULT_LEAF_BUDGET,
+            leaf_budget: super::forest::DEFAULT_LEAF_BUDGET,
         }
     }
-}
-
-struct GpuMesh {
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    index_count: u32,
-    instances: wgpu::Buffer,
-    instance_count: u32,
-    material: wgpu::BindGroup,
-    lines: bool,
-    double_sided: bool,
-    is_leaf: bool,
-    /// Edge list for the wireframe, built when first needed.
-    edges: Option<(wgpu::Buffer, u32)>,
-    /// An eighth of the leaves or the largest eighth of a big bark mesh (vertices, indices,
-    /// index count), for frames drawn while the camera moves.
-    coarse: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
-    /// For leaves instanced by many trees (a forest's): the instances near the camera,
-    /// rewritten for each moving frame, and how many there are; far trees' leaves are not
-    /// drawn while the camera moves.
-    near: Option<(wgpu::Buffer, u32)>,
-    source: Arc<Scene>,
-    index_in_scene: usize,
-    /// Sequential quads over all of V, the vertices coloured by level and the LOD tables,
-    /// for a leaf mesh with levels.
-    lod: Option<(wgpu::Buffer, wgpu::Buffer, super::lod::LeafLod)>,
-    /// For a mesh placed by a forest: what it can draw, the instances of this frame's plan
-    /// (rewritten each frame, in band order) and the plan's draws.
-    forest: Option<ForestGpu>,
-}
-
-struct ForestGpu {
-    detail: Detail,
-    /// A leaf mesh's vertices with grown leaves ([`forest::GROWN`]), for far instances.
-    grown: Option<wgpu::Buffer>,
-    instances: wgpu::Buffer,
-    draws: Vec<Draw>,
 }
 
 struct Target {
@@ -130,6 +104,38 @@ pub struct Renderer {
     triangles: u64,
     /// Leaves a forest's leaf meshes with levels drew in the last frame.
     forest_leaves: u64,
+    /// Makes the forest's plans off the render thread.
+    planner: Planner,
+    /// The planner's plan that arrived but is not drawn yet.
+    ready: Option<Planned>,
+    /// Per entry of the planner's [`ForestSet`]: the index of its mesh in `meshes`.
+    forest_meshes: Vec<usize>,
+    /// The camera and budget of the last frame.
+    last_request: Option<Request>,
+    /// The centre of the model's bounds: camera motion is measured against the eye's
+    /// distance to it.
+    focus: Option<Vec3>,
+    /// Where the last frame's time went.
+    times: FrameTimes,
+    /// Wait for the GPU after each frame, to measure its share ([`FrameTimes::gpu`]).
+    measure_gpu: bool,
+}
+
+/// Where one frame's time went on the render thread (`--orbit-frames` prints them).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameTimes {
+    /// Planning the forest's draws (culling, levels, bands) of the plan that arrived for
+    /// this frame (zero if none did), on the planner thread.
+    pub plan: Duration,
+    /// Writing the changed instances of that plan into the instance buffers.
+    pub upload: Duration,
+    /// Instances written.
+    pub uploaded: usize,
+    /// Recording and submitting the draws.
+    pub submit: Duration,
+    /// Waiting for the GPU to finish them (measured only when asked:
+    /// [`Renderer::measure_gpu`]).
+    pub gpu: Duration,
 }
 
 /// The buffer of the shader's `Globals` and its bind group (group 0).
@@ -154,23 +160,11 @@ fn globals_binding(
     (globals, globals_group)
 }
 
-fn buffer_init(
-    device: &wgpu::Device,
-    label: &str,
-    bytes: &[u8],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytes,
-        usage,
-    })
-}
-
 impl Renderer {
-    /// Creates the pipelines on egui's device.
+    /// Creates the pipelines on egui's device; `wake` is called when a forest plan is ready
+    /// to be drawn (to ask the window for a frame).
     #[must_use]
-    pub fn new(state: &egui_wgpu::RenderState) -> Renderer {
+    pub fn new(state: &egui_wgpu::RenderState, wake: impl Fn() + Send + 'static) -> Renderer {
         let device = state.device.clone();
         let queue = state.queue.clone();
         let layouts = BindLayouts::new(&device);
@@ -207,10 +201,45 @@ impl Renderer {
             texture_id: None,
             triangles: 0,
             forest_leaves: 0,
+            planner: Planner::new(wake),
+            ready: None,
+            forest_meshes: Vec::new(),
+            last_request: None,
+            focus: None,
+            times: FrameTimes::default(),
+            measure_gpu: false,
         }
     }
 
-    /// Replaces the model on the GPU.
+    /// Makes every frame wait for the GPU to finish it, so that [`Renderer::times`] tells
+    /// the GPU's share apart (for measurements; it slows frames down on a real GPU).
+    pub fn measure_gpu(&mut self, on: bool) {
+        self.measure_gpu = on;
+    }
+
+    /// Where the last frame's time went.
+    #[must_use]
+    pub fn times(&self) -> FrameTimes {
+        self.times
+    }
+
+    /// Whether the last frame drew the forest plan made for its own camera and budget
+    /// (a frame that did not is drawn again when that plan arrives: [`Renderer::plan_ready`]).
+    #[must_use]
+    pub fn settled(&self) -> bool {
+        self.last_request
+            .is_none_or(|r| self.ready.is_none() && self.planner.settled(&r))
+    }
+
+    /// Whether a forest plan arrived that is not drawn yet: the viewport should be redrawn.
+    pub fn plan_ready(&mut self) -> bool {
+        if self.ready.is_none() {
+            self.ready = self.planner.poll();
+        }
+        self.ready.is_some()
+    }
+
+    /// Replaces the model on the GPU; plans made for the previous one are never drawn.
     pub fn upload(&mut self, scene: &Arc<Scene>) {
         self.environment = scene
             .environment
@@ -231,144 +260,22 @@ impl Renderer {
                 },
                 None => self.white.clone(),
             };
-            let uniform = material_uniform(
-                mesh.base_color,
-                mesh.alpha_cutoff,
-                mesh.double_sided,
-                mesh.transmission,
-            );
-            let uniform = buffer_init(
-                device,
-                "material",
-                bytemuck::cast_slice(&uniform),
-                wgpu::BufferUsages::UNIFORM,
-            );
-            let material = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("material"),
-                layout: &self.material_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniform.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::Sampler(&self.sampler),
-                    },
-                ],
-            });
-            self.meshes.push(GpuMesh {
-                vertices: buffer_init(
-                    device,
-                    "vertices",
-                    bytemuck::cast_slice(&mesh.vertices),
-                    wgpu::BufferUsages::VERTEX,
-                ),
-                indices: buffer_init(
-                    device,
-                    "indices",
-                    index_bytes(&mesh.indices),
-                    wgpu::BufferUsages::INDEX,
-                ),
-                index_count: mesh.indices.len() as u32,
-                lod: mesh.lod.as_ref().map(|lod| {
-                    let quads = lod.quad_indices();
-                    let colored = lod.level_colors(&mesh.vertices);
-                    (
-                        buffer_init(
-                            device,
-                            "lod quads",
-                            index_bytes(&quads),
-                            wgpu::BufferUsages::INDEX,
-                        ),
-                        buffer_init(
-                            device,
-                            "lod colours",
-                            bytemuck::cast_slice(&colored),
-                            wgpu::BufferUsages::VERTEX,
-                        ),
-                        lod.clone(),
-                    )
-                }),
-                instances: buffer_init(
-                    device,
-                    "instances",
-                    bytemuck::cast_slice(&mesh.instances),
-                    wgpu::BufferUsages::VERTEX,
-                ),
-                instance_count: mesh.instances.len() as u32,
-                material,
-                lines: mesh.lines,
-                double_sided: mesh.double_sided,
-                is_leaf: mesh.is_leaf,
-                edges: None,
-                coarse: mesh
-                    .coarse
-                    .as_ref()
-                    .filter(|(_, c)| !c.is_empty())
-                    .map(|(v, c)| {
-                        (
-                            buffer_init(
-                                device,
-                                "coarse leaves",
-                                bytemuck::cast_slice(v),
-                                wgpu::BufferUsages::VERTEX,
-                            ),
-                            buffer_init(
-                                device,
-                                "coarse leaves",
-                                index_bytes(c),
-                                wgpu::BufferUsages::INDEX,
-                            ),
-                            c.len() as u32,
-                        )
-                    }),
-                forest: mesh.forest.then(|| ForestGpu {
-                    grown: mesh.lod.as_ref().map(|lod| {
-                        buffer_init(
-                            device,
-                            "grown leaves",
-                            bytemuck::cast_slice(&lod.grown(&mesh.vertices, forest::GROWN)),
-                            wgpu::BufferUsages::VERTEX,
-                        )
-                    }),
-                    detail: match &mesh.lod {
-                        Some(lod) => Detail::leaves(lod),
-                        None => Detail::Rigid {
-                            full: mesh.indices.len() as u32,
-                            coarse: mesh
-                                .coarse
-                                .as_ref()
-                                .map(|(_, c)| c.len() as u32)
-                                .filter(|&c| c > 0),
-                        },
-                    },
-                    instances: device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("forest instances"),
-                        size: std::mem::size_of_val(mesh.instances.as_slice()).max(64) as u64,
-                        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    }),
-                    draws: Vec::new(),
-                }),
-                near: (mesh.is_leaf && !mesh.forest && mesh.instances.len() >= FAR_LEAVES_MIN)
-                    .then(|| {
-                        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some("near instances"),
-                            size: std::mem::size_of_val(mesh.instances.as_slice()) as u64,
-                            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-                            mapped_at_creation: false,
-                        });
-                        (buffer, 0)
-                    }),
-                source: scene.clone(),
-                index_in_scene: index,
-            });
+            let material =
+                material_group(device, &self.material_layout, mesh, &view, &self.sampler);
+            self.meshes
+                .push(GpuMesh::new(device, scene, index, material));
         }
+        let (forest_meshes, set): (Vec<usize>, Vec<_>) = self
+            .meshes
+            .iter()
+            .enumerate()
+            .filter_map(|(k, m)| Some((k, (m.index_in_scene, m.forest.as_ref()?.detail.clone()))))
+            .unzip();
+        self.forest_meshes = forest_meshes;
+        self.focus = scene.bounds.map(|(lo, hi)| (lo + hi) * 0.5);
+        self.ready = None;
+        self.planner
+            .reset(Some(Arc::new(ForestSet::new(scene.clone(), set))));
         let lines = |label: &str, data: Vec<f32>| {
             (!data.is_empty()).then(|| {
                 let count = (data.len() / 7) as u32;
@@ -392,88 +299,27 @@ impl Renderer {
         self.skeleton = lines("skeleton", skeleton);
     }
 
-    /// For a moving frame: the instances of many-times-instanced leaves (a forest's) that
-    /// are in view and in the nearest [`NEAR_FRACTION`] of their depth range.
-    fn pick_near(&mut self, view_proj: Mat4) {
-        for mesh in &mut self.meshes {
-            let Some((buffer, count)) = &mut mesh.near else {
-                continue;
-            };
-            let Some(all) = mesh.source.meshes.get(mesh.index_in_scene) else {
-                continue;
-            };
-            let clip: Vec<Vec4> = all
-                .instances
-                .iter()
-                .map(|m| view_proj * Vec4::new(m[12], m[13], m[14], 1.0))
-                .collect();
-            let (lo, hi) = clip
-                .iter()
-                .filter(|c| c.w > 0.0)
-                .fold((f32::INFINITY, 0.0f32), |(lo, hi), c| {
-                    (lo.min(c.w), hi.max(c.w))
-                });
-            let cut = lo + NEAR_FRACTION * (hi - lo);
-            // A crown reaches beyond its trunk: keep trunks a little outside the frame.
-            let near: Vec<[f32; 16]> = all
-                .instances
-                .iter()
-                .zip(&clip)
-                .filter(|(_, c)| {
-                    c.w > 0.0 && c.w <= cut && c.x.abs() <= 1.3 * c.w && c.y.abs() <= 1.3 * c.w
-                })
-                .map(|(m, _)| *m)
-                .collect();
-            if !near.is_empty() {
-                self.queue
-                    .write_buffer(buffer, 0, bytemuck::cast_slice(&near));
-            }
-            *count = near.len() as u32;
+    /// Draws `planned` from now on: its instances written to the forest meshes' buffers.
+    fn take_plan(&mut self, planned: Planned) {
+        if planned.epoch != self.planner.epoch() {
+            return; // of an earlier scene (the planner drops those already)
         }
-    }
-
-    /// Plans the forest meshes' draws for `view` within `leaf_budget`
-    /// ([`forest::plan`]) and writes each one's instances in band order.
-    fn plan_forest(&mut self, view: &View, leaf_budget: u64) {
-        let (meshes, sources): (Vec<ForestMesh>, Vec<usize>) = self
+        let t0 = Instant::now();
+        self.forest_leaves = planned.plan.leaves;
+        self.times.plan = planned.took;
+        let parts = planned
+            .plan
             .meshes
-            .iter()
-            .enumerate()
-            .filter_map(|(k, m)| {
-                let f = m.forest.as_ref()?;
-                let scene = m.source.meshes.get(m.index_in_scene)?;
-                Some((
-                    ForestMesh {
-                        instances: &scene.instances,
-                        centre: scene.sphere.0,
-                        radius: scene.sphere.1,
-                        detail: &f.detail,
-                    },
-                    k,
-                ))
-            })
-            .unzip();
-        if meshes.is_empty() {
-            return;
-        }
-        let plan = forest::plan(&meshes, view, leaf_budget);
-        self.forest_leaves = plan.leaves;
-        let matrices: Vec<Vec<[f32; 16]>> = meshes
-            .iter()
-            .zip(&plan.meshes)
-            .map(|(m, p)| p.order.iter().map(|&i| m.instances[i as usize]).collect())
-            .collect();
-        drop(meshes);
-        for ((k, p), matrices) in sources.into_iter().zip(plan.meshes).zip(matrices) {
-            let mesh = &mut self.meshes[k];
-            if let Some(f) = &mut mesh.forest {
-                if !matrices.is_empty() {
-                    self.queue
-                        .write_buffer(&f.instances, 0, bytemuck::cast_slice(&matrices));
-                }
-                f.draws = p.draws;
+            .into_iter()
+            .zip(&planned.matrices)
+            .zip(planned.changed);
+        for (&k, ((p, matrices), changed)) in self.forest_meshes.iter().zip(parts) {
+            if let Some(f) = self.meshes.get_mut(k).and_then(|m| m.forest.as_mut()) {
+                self.times.uploaded += changed.len();
+                f.take_plan(&self.queue, matrices, changed, p.draws);
             }
         }
+        self.times.upload = t0.elapsed();
     }
 
     /// Triangles drawn by the last frame, over every mesh and instance (lines not counted).
@@ -489,10 +335,11 @@ impl Renderer {
     }
 
     /// Draws the model seen by `view_proj` from `eye` into a `size` pixel texture and returns
-    /// the egui texture showing it. A forest's instances are drawn within its leaf budget
-    /// ([`forest::plan`]). While the camera is `moving`, an eighth of the leaves and of a big
-    /// bark mesh are drawn (software renderers cannot turn a 100 000-leaf tree smoothly
-    /// otherwise), and a forest a 32nd of its budget.
+    /// the egui texture showing it. A forest's instances are drawn within its leaf budget,
+    /// by the last plan the planner thread made ([`super::planner`]). While the camera is
+    /// `moving`, an eighth of the leaves and of a big bark mesh are drawn (software
+    /// renderers cannot turn a 100 000-leaf tree smoothly otherwise), and a forest a 128th
+    /// of its budget ([`MOVING_SHARE`]).
     pub fn render(
         &mut self,
         egui_renderer: &mut egui_wgpu::Renderer,
@@ -528,17 +375,50 @@ impl Renderer {
             }
         }
         if toggles.wireframe {
-            self.build_edges();
+            for mesh in &mut self.meshes {
+                mesh.build_edges(&self.device);
+            }
         }
         if moving {
-            self.pick_near(view_proj);
+            for mesh in &mut self.meshes {
+                mesh.pick_near(&self.queue, view_proj);
+            }
         }
         let budget = if moving {
-            toggles.leaf_budget / forest::MOVING_SHARE
+            toggles.leaf_budget / MOVING_SHARE
         } else {
             toggles.leaf_budget
         };
-        self.plan_forest(&View { eye, view_proj }, budget);
+        self.times = FrameTimes::default();
+        // The plan that arrived last is drawn; the next is asked for this camera.
+        if let Some(planned) = self.ready.take().or_else(|| self.planner.poll()) {
+            self.take_plan(planned);
+        }
+        // A moving frame's plan is drawn a little later, by then turned a little.
+        let plan_view_proj = if moving {
+            Mat4::from_scale(Vec3::new(1.0 / MOVING_MARGIN, 1.0 / MOVING_MARGIN, 1.0)) * view_proj
+        } else {
+            view_proj
+        };
+        let request = Request {
+            view: View {
+                eye,
+                view_proj: plan_view_proj,
+            },
+            budget,
+        };
+        // While moving, the plan asked for last is drawn on while the camera turns little.
+        let focus = self.focus.map_or(1.0, |f| f.distance(eye));
+        let reuse = moving
+            && self
+                .planner
+                .asked()
+                .is_some_and(|last| last.close_to(&request, focus));
+        if !reuse {
+            self.planner.ask(request);
+        }
+        self.last_request = Some(request);
+        let t0 = Instant::now();
         let mut triangles = 0u64;
         let sun = Vec3::new(0.45, 0.8, 0.35).normalize();
         let ambient = self.environment.as_ref().map_or([1.0; 3], |(_, a)| *a);
@@ -584,83 +464,20 @@ impl Renderer {
                 pass.draw(0..3, 0..1);
             }
             // Opaque first, then foliage.
+            let pipelines = MeshPipelines {
+                culled: &self.mesh_culled,
+                double: &self.mesh_double,
+                lines: &self.mesh_lines,
+            };
             for leaves_pass in [false, true] {
                 for mesh in self.meshes.iter().filter(|m| m.is_leaf == leaves_pass) {
                     if mesh.is_leaf && !toggles.leaves {
                         continue;
                     }
-                    if let Some(f) = &mesh.forest
-                        && !mesh.lines
-                    {
-                        let pipelines = (&self.mesh_culled, &self.mesh_double, &self.mesh_lines);
-                        triangles += draw_forest(&mut pass, mesh, f, pipelines, toggles);
-                        continue;
-                    }
-                    let mut vertices = &mesh.vertices;
-                    let (pipeline, indices, count) = if mesh.lines {
-                        (&self.mesh_lines, &mesh.indices, mesh.index_count)
-                    } else if toggles.wireframe {
-                        match &mesh.edges {
-                            Some((edges, n)) => (&self.mesh_lines, edges, *n),
-                            None => continue,
-                        }
-                    } else {
-                        let pipeline = if mesh.double_sided {
-                            &self.mesh_double
-                        } else {
-                            &self.mesh_culled
-                        };
-                        match (&mesh.coarse, moving) {
-                            (Some((coarse_vertices, coarse, n)), true) => {
-                                vertices = coarse_vertices;
-                                (pipeline, coarse, *n)
-                            }
-                            _ => (pipeline, &mesh.indices, mesh.index_count),
-                        }
+                    triangles += match &mesh.forest {
+                        Some(f) if !mesh.lines => f.draw(&mut pass, mesh, pipelines, toggles),
+                        _ => mesh.draw(&mut pass, pipelines, toggles, moving),
                     };
-                    if count == 0 {
-                        continue;
-                    }
-                    // A coarser level of detail, or leaves coloured by level: the two ranges
-                    // of V per sector over the sequential quads.
-                    if let Some((quads, colored, lod)) = &mesh.lod
-                        && (toggles.lod_percent < 100 || toggles.lod_colors)
-                        && !toggles.wireframe
-                        && std::ptr::eq(vertices, &mesh.vertices)
-                    {
-                        let vertices = if toggles.lod_colors {
-                            colored
-                        } else {
-                            vertices
-                        };
-                        pass.set_pipeline(pipeline);
-                        pass.set_bind_group(1, &mesh.material, &[]);
-                        pass.set_vertex_buffer(0, vertices.slice(..));
-                        pass.set_vertex_buffer(1, mesh.instances.slice(..));
-                        pass.set_index_buffer(quads.slice(..), wgpu::IndexFormat::Uint32);
-                        for range in lod.index_ranges(toggles.lod_percent) {
-                            triangles +=
-                                u64::from(range.len() as u32 / 3) * u64::from(mesh.instance_count);
-                            pass.draw_indexed(range, 0, 0..mesh.instance_count);
-                        }
-                        continue;
-                    }
-                    pass.set_pipeline(pipeline);
-                    pass.set_bind_group(1, &mesh.material, &[]);
-                    pass.set_vertex_buffer(0, vertices.slice(..));
-                    let (instances, instance_count) = match &mesh.near {
-                        Some((near, n)) if moving && !toggles.wireframe => (near, *n),
-                        _ => (&mesh.instances, mesh.instance_count),
-                    };
-                    if instance_count == 0 {
-                        continue;
-                    }
-                    pass.set_vertex_buffer(1, instances.slice(..));
-                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    if !mesh.lines && !toggles.wireframe {
-                        triangles += u64::from(count / 3) * u64::from(instance_count);
-                    }
-                    pass.draw_indexed(0..count, 0, 0..instance_count);
                 }
             }
             if toggles.grid
@@ -679,6 +496,13 @@ impl Renderer {
             }
         }
         self.queue.submit([encoder.finish()]);
+        self.times.submit = t0.elapsed();
+        if self.measure_gpu {
+            let t0 = Instant::now();
+            // A failed wait only spoils the measurement.
+            let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+            self.times.gpu = t0.elapsed();
+        }
         self.triangles = triangles;
         self.texture_id.unwrap_or_default()
     }
@@ -744,85 +568,7 @@ impl Renderer {
         .create_view(&Default::default());
         Target { color, depth, size }
     }
-
-    fn build_edges(&mut self) {
-        for mesh in &mut self.meshes {
-            if mesh.edges.is_some() || mesh.lines {
-                continue;
-            }
-            let source: &SceneMesh = &mesh.source.meshes[mesh.index_in_scene];
-            let edges = triangle_edges(&source.indices);
-            let buffer = buffer_init(
-                &self.device,
-                "edges",
-                index_bytes(&edges),
-                wgpu::BufferUsages::INDEX,
-            );
-            mesh.edges = Some((buffer, edges.len() as u32));
-        }
-    }
 }
-
-/// Issues the draws of a forest mesh's plan (the instances were written by
-/// [`Renderer::plan_forest`]) and returns the triangles drawn. In wireframe, only the
-/// instances drawn whole show their edges.
-fn draw_forest(
-    pass: &mut wgpu::RenderPass<'_>,
-    mesh: &GpuMesh,
-    f: &ForestGpu,
-    (culled, double, lines): (
-        &wgpu::RenderPipeline,
-        &wgpu::RenderPipeline,
-        &wgpu::RenderPipeline,
-    ),
-    toggles: Toggles,
-) -> u64 {
-    let pipeline = if mesh.double_sided { double } else { culled };
-    pass.set_bind_group(1, &mesh.material, &[]);
-    pass.set_vertex_buffer(1, f.instances.slice(..));
-    let mut triangles = 0;
-    for d in &f.draws {
-        let (pipeline, vertices, indices, range) = match d.source {
-            Source::Full if toggles.wireframe => match &mesh.edges {
-                Some((edges, n)) => (lines, &mesh.vertices, edges, 0..*n),
-                None => continue,
-            },
-            _ if toggles.wireframe => continue,
-            Source::Full => (pipeline, &mesh.vertices, &mesh.indices, d.indices.clone()),
-            Source::Coarse => match &mesh.coarse {
-                Some((v, i, _)) => (pipeline, v, i, d.indices.clone()),
-                None => continue,
-            },
-            Source::Quads | Source::Grown => match (&mesh.lod, &f.grown) {
-                (Some((quads, colored, _)), grown) => {
-                    let v = match (toggles.lod_colors, d.source, grown) {
-                        (true, _, _) => colored,
-                        (false, Source::Grown, Some(grown)) => grown,
-                        _ => &mesh.vertices,
-                    };
-                    (pipeline, v, quads, d.indices.clone())
-                }
-                _ => continue,
-            },
-        };
-        pass.set_pipeline(pipeline);
-        pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-        if !toggles.wireframe {
-            triangles += d.triangles();
-        }
-        pass.draw_indexed(range, 0, d.instances.clone());
-    }
-    triangles
-}
-
-/// Leaves instanced at least this many times (a forest's) are drawn for near trees only
-/// while the camera moves.
-const FAR_LEAVES_MIN: usize = 256;
-
-/// The share of their depth range, from the nearest, where such leaves are drawn while the
-/// camera moves.
-const NEAR_FRACTION: f32 = 0.3;
 
 /// Bytes of the shader's `Globals`: view_proj, sun, inv_view_proj, ambient.
 const GLOBALS_BYTES: u64 = (16 + 4 + 16 + 4) * 4;
@@ -834,72 +580,6 @@ const GLOBALS_BYTES: u64 = (16 + 4 + 16 + 4) * 4;
 pub fn ambient_tint(average: [f32; 3]) -> [f32; 3] {
     let luma = 0.2126 * average[0] + 0.7152 * average[1] + 0.0722 * average[2];
     average.map(|c| 0.5 + 0.5 * (c / luma.max(0.05)).min(2.5))
-}
-
-/// wgpu refuses empty buffers; an empty index list still gets one (unused) index.
-fn index_bytes(indices: &[u32]) -> &[u8] {
-    if indices.is_empty() {
-        bytemuck::cast_slice(&[0u32])
-    } else {
-        bytemuck::cast_slice(indices)
-    }
-}
-
-/// The three edges of every triangle as line pairs (shared edges are drawn twice, which
-/// costs less than finding them).
-#[must_use]
-pub fn triangle_edges(indices: &[u32]) -> Vec<u32> {
-    indices
-        .chunks_exact(3)
-        .flat_map(|t| [t[0], t[1], t[1], t[2], t[2], t[0]])
-        .collect()
-}
-
-/// A ground grid on y = 0 around the model's footprint: lines as `[x, y, z, r, g, b, a]`,
-/// spaced by a power of ten that gives 2 to 20 cells from the centre to the edge, every
-/// tenth line brighter;
-/// the X axis red and the Z axis blue.
-#[must_use]
-pub fn grid_lines(bounds: Option<(Vec3, Vec3)>) -> Vec<f32> {
-    let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
-    let half = ((hi - lo).length() * 0.75).max(1.0);
-    let spacing = 10f32.powf((half / 2.0).log10().floor());
-    let centre = (lo + hi) * 0.5;
-    let n = (half / spacing).ceil() as i64;
-    let (cx, cz) = (
-        (centre.x / spacing).round() as i64,
-        (centre.z / spacing).round() as i64,
-    );
-    let mut out = Vec::new();
-    let mut line = |a: [f32; 3], b: [f32; 3], c: [f32; 4]| {
-        out.extend_from_slice(&[a[0], a[1], a[2], c[0], c[1], c[2], c[3]]);
-        out.extend_from_slice(&[b[0], b[1], b[2], c[0], c[1], c[2], c[3]]);
-    };
-    let (x0, x1) = ((cx - n) as f32 * spacing, (cx + n) as f32 * spacing);
-    let (z0, z1) = ((cz - n) as f32 * spacing, (cz + n) as f32 * spacing);
-    for i in -n..=n {
-        let (x, z) = ((cx + i) as f32 * spacing, (cz + i) as f32 * spacing);
-        let colour = |k: i64, axis: [f32; 4]| {
-            if k == 0 {
-                axis
-            } else if k % 10 == 0 {
-                [0.5, 0.5, 0.5, 0.6]
-            } else {
-                [0.3, 0.3, 0.3, 0.45]
-            }
-        };
-        line(
-            [x, 0.0, z0],
-            [x, 0.0, z1],
-            colour(cx + i, [0.2, 0.3, 0.9, 0.9]),
-        );
-        line(
-            [x0, 0.0, z],
-            [x1, 0.0, z],
-            colour(cz + i, [0.9, 0.2, 0.2, 0.9]),
-        );
-    }
-    out
 }
 
 #[cfg(test)]
@@ -914,32 +594,5 @@ mod tests {
         assert!(blue[2] > 1.2 && blue[0] < 0.9, "{blue:?}");
         let black = ambient_tint([0.0; 3]);
         assert_eq!(black, [0.5; 3]);
-    }
-
-    #[test]
-    fn edges_of_two_triangles() {
-        assert_eq!(
-            triangle_edges(&[0, 1, 2, 2, 1, 3]),
-            vec![0, 1, 1, 2, 2, 0, 2, 1, 1, 3, 3, 2]
-        );
-    }
-
-    #[test]
-    fn the_grid_scales_with_the_model_and_marks_the_axes() {
-        let small = grid_lines(Some((Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 3.0, 1.0))));
-        let big = grid_lines(Some((
-            Vec3::new(-100.0, 0.0, -100.0),
-            Vec3::new(100.0, 30.0, 100.0),
-        )));
-        let lines = |g: &[f32]| g.len() / 14;
-        assert!((10..=110).contains(&lines(&small)), "{}", lines(&small));
-        assert!((10..=110).contains(&lines(&big)), "{}", lines(&big));
-        assert!(small.chunks(7).all(|v| v[1] == 0.0), "on the ground");
-        // The Z axis line (x = 0) is blue.
-        let z_axis = small
-            .chunks(14)
-            .find(|l| l[0] == 0.0 && l[7] == 0.0)
-            .expect("axis line");
-        assert_eq!(&z_axis[3..7], &[0.2, 0.3, 0.9, 0.9]);
     }
 }

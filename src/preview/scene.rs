@@ -658,6 +658,26 @@ mod tests {
         // Placed on its own, the same mesh is a plain mesh.
         let plain = Scene::new(&Model::from_mesh(model.meshes[1].clone()));
         assert!(!plain.meshes[0].forest && plain.meshes[0].lod.is_none());
+        // Leaves that carry their table (the species' or the forest's `lod`, as the glb's
+        // `extras.pge.lod`) are read as they are, not simplified again: four sectors here,
+        // where the preview's own levels would have one.
+        let options = pge_lod::LodOptions {
+            sectors: 4,
+            ..pge_lod::LodOptions::default()
+        };
+        let (with_table, _) = pge_lod::lod_mesh(&model.meshes[1], &options).expect("lod");
+        let table =
+            super::super::lod::LeafLod::from_extras(&with_table.extras, with_table.positions.len())
+                .expect("the table");
+        let mut model = model;
+        model.meshes[1] = Arc::new(with_table);
+        let scene = Scene::new(&model);
+        assert_eq!(scene.meshes[1].lod.as_ref(), Some(&table));
+        assert_ne!(
+            Some(&table),
+            Some(lod),
+            "the table is not the preview's own"
+        );
     }
 
     #[test]

@@ -300,7 +300,7 @@ impl PreviewApp {
         )
         .on_hover_text(
             "forest: the most leaves drawn in a frame, nearer trees finer; \
-             as many triangles again for bark; a 32nd of it while the camera moves",
+             as many triangles again for bark; a 128th of it while the camera moves",
         );
         if let Some(r) = &self.renderer {
             ui.label(RichText::new(format!("{} leaves drawn", r.forest_leaves())).small());
