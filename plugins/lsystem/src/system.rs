@@ -361,7 +361,7 @@ impl System {
 
     /// The number of modules one step would make of `src`, without keeping them (checking
     /// the module cap and every rule as [`System::step`] does). A system of fixed successors
-    /// is counted without rewriting.
+    /// is counted without rewriting; otherwise modules without rules are counted, not copied.
     ///
     /// # Panics
     /// If the rules changed since the last [`System::prepare`].
@@ -371,12 +371,19 @@ impl System {
         host: &mut H,
         opts: &StepOptions,
     ) -> Result<u64, H::Error> {
+        assert!(
+            self.prepared,
+            "System::prepare must be called after changing the rules"
+        );
         let deriver = self.deriver();
         if deriver.plain_fast_path(src, opts) {
             return Ok(deriver.plain_count(src, opts)?);
         }
-        let mut buf = ModuleString::new();
-        self.step_chunks(src, &mut buf, host, opts, 1 << 16, &mut |_| Ok(()))
+        if deriver.fixed_pass(src, opts) {
+            let mut buf = ModuleString::new();
+            return deriver.step_chunks(src, &mut buf, host, opts, 1 << 16, &mut |_| Ok(()));
+        }
+        deriver.count(src, host, opts)
     }
 
     fn deriver(&self) -> Deriver<'_> {
@@ -384,6 +391,12 @@ impl System {
             defs: &self.defs,
             globals: &self.global_values,
             tables: &self.tables,
+            args: self
+                .tables
+                .exprs
+                .iter()
+                .map(|e| e.bind(&self.global_values))
+                .collect(),
         }
     }
 }

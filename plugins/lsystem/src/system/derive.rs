@@ -5,6 +5,7 @@ use super::context::{match_left, match_right};
 use super::host::Host;
 use super::rule::RuleDef;
 use crate::error::LsError;
+use crate::expr::Arg;
 use crate::module_string::ModuleString;
 use crate::symbol::Sym;
 
@@ -130,6 +131,8 @@ pub(super) struct Deriver<'a> {
     pub(super) globals: &'a [f64],
     /// The compiled rules and dispatch tables.
     pub(super) tables: &'a Tables,
+    /// [`Tables::exprs`] bound to the globals' values.
+    pub(super) args: Vec<Arg<'a>>,
 }
 
 impl Deriver<'_> {
@@ -152,6 +155,7 @@ impl Deriver<'_> {
             return Ok(());
         }
         let matches = self.context_table(src, opts);
+        self.reserve(src, out, opts);
         let mut scratch = Scratch::default();
         self.step_range(
             src,
@@ -215,6 +219,107 @@ impl Deriver<'_> {
         Ok(total)
     }
 
+    /// Reserves room in `out` for the most modules and parameters a step can make of a long
+    /// `src` (see [`Tables::growth`]), so that the step's output is allocated once instead of
+    /// grown by copies; nothing when the bound passes the module cap or is unknown.
+    fn reserve(&self, src: &ModuleString, out: &mut ModuleString, opts: &StepOptions) {
+        let growth = &self.tables.growth;
+        if src.len() < 1 << 16 || growth.is_empty() {
+            return;
+        }
+        let (mut modules, mut params) = (0u64, src.param_count() as u64);
+        for i in 0..src.len() {
+            let (m, p) = growth.get(src.sym(i).index()).copied().unwrap_or((1, 0));
+            modules += u64::from(m);
+            params += u64::from(p);
+        }
+        if modules <= opts.max_modules as u64 {
+            out.reserve_with_params(modules as usize, params as usize);
+        }
+    }
+
+    /// The number of modules one step makes of `src`, without keeping them: runs of modules
+    /// without rules are counted, not copied, and the successors of rules are written to a
+    /// small scratch string only, their conditions and parameters evaluated in order as
+    /// [`Deriver::step`] evaluates them (the same random draws, the same errors, the same
+    /// module cap).
+    pub(super) fn count<H: Host>(
+        &self,
+        src: &ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+    ) -> Result<u64, H::Error> {
+        let max = opts.max_modules as u64;
+        let matches = self.bracket_matches(src);
+        let mut scratch = Scratch::default();
+        let mut successors = ModuleString::new();
+        let mut total = 0u64;
+        let n = src.len();
+        let mut i = 0;
+        let mut next_check = 0;
+        while i < n {
+            if i >= next_check {
+                host.check()?;
+                next_check = (i | 0xFFFF) + 1;
+            }
+            let mut bulk = false;
+            match self.tables.dispatch.get(src.sym(i).index()) {
+                Some(Dispatch::Plain { len, .. }) => {
+                    total += u64::from(*len);
+                    i += 1;
+                }
+                Some(Dispatch::Direct { rule }) => {
+                    total += self.count_direct(*rule as usize, src, i, host)?;
+                    i += 1;
+                }
+                Some(Dispatch::Rules { start, len }) => {
+                    if successors.len() > 4096 {
+                        successors.clear();
+                    }
+                    let before = successors.len();
+                    let list = &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
+                    let applied = self.apply_rules(
+                        list,
+                        src,
+                        &matches,
+                        i,
+                        &mut successors,
+                        host,
+                        &mut scratch.matched,
+                        &mut scratch.gathered,
+                    )?;
+                    total += if applied {
+                        (successors.len() - before) as u64
+                    } else {
+                        1
+                    };
+                    i += 1;
+                }
+                _ => {
+                    let mut j = i + 1;
+                    let stop = n.min(next_check);
+                    while j < stop
+                        && matches!(
+                            self.tables.dispatch.get(src.sym(j).index()),
+                            None | Some(Dispatch::Copy)
+                        )
+                    {
+                        j += 1;
+                    }
+                    total += (j - i) as u64;
+                    bulk = true;
+                    i = j;
+                }
+            }
+            if total > max {
+                // A run stops where a module-by-module copy would have.
+                let count = if bulk { total.min(max + 1) } else { total };
+                return Err(self.too_many(opts, count).into());
+            }
+        }
+        Ok(total)
+    }
+
     /// The number of modules one step of a plain system makes of `src` (see
     /// [`Deriver::plain_fast_path`]), failing over the module cap.
     pub(super) fn plain_count(
@@ -250,7 +355,7 @@ impl Deriver<'_> {
     }
 
     /// Whether a step of `src` takes the pass of [`Deriver::step_fixed`].
-    fn fixed_pass(&self, src: &ModuleString, opts: &StepOptions) -> bool {
+    pub(super) fn fixed_pass(&self, src: &ModuleString, opts: &StepOptions) -> bool {
         self.tables.all_fixed && src.is_flat() && !opts.stream
     }
 
@@ -330,6 +435,12 @@ impl Deriver<'_> {
                     out.extend_plain(
                         &self.tables.plain_pool[*start as usize..(*start + *len) as usize],
                     );
+                    i += 1;
+                }
+                Some(Dispatch::Direct { rule }) => {
+                    if !self.apply_direct(*rule as usize, src, i, out, host)? {
+                        out.push_from(src, i);
+                    }
                     i += 1;
                 }
                 Some(Dispatch::Rules { start, len }) => {
@@ -533,7 +644,8 @@ impl Deriver<'_> {
                     };
                     let globals = self.globals;
                     if let Some(c) = condition
-                        && c.eval(params, globals, &mut || host.random()) == 0.0
+                        && self.args[*c as usize].eval(params, globals, &mut || host.random())
+                            == 0.0
                     {
                         continue;
                     }
@@ -551,33 +663,131 @@ impl Deriver<'_> {
                         }
                         None => (successor, def),
                     };
-                    for item in succ.iter() {
-                        if item.args.is_empty() {
-                            out.push(item.sym, &[]);
-                            continue;
+                    let mark = out.param_count();
+                    out.push_modules(
+                        &succ.syms,
+                        &succ.ends,
+                        self.args[succ.arg_range()]
+                            .iter()
+                            .map(|a| a.eval(params, globals, &mut || host.random())),
+                    );
+                    if let Some(v) = out.params_since(mark).iter().find(|v| !v.is_finite()) {
+                        return Err(LsError::Rule {
+                            origin: def.origin,
+                            rule: def.text.clone(),
+                            message: format!("a parameter of the successor evaluated to {v}"),
                         }
-                        out.begin(item.sym);
-                        for a in item.args.iter() {
-                            let v = a.eval(params, globals, &mut || host.random());
-                            if !v.is_finite() {
-                                return Err(LsError::Rule {
-                                    origin: def.origin,
-                                    rule: def.text.clone(),
-                                    message: format!(
-                                        "a parameter of the successor evaluated to {v}"
-                                    ),
-                                }
-                                .into());
-                            }
-                            out.push_param(v);
-                        }
-                        out.end();
+                        .into());
                     }
                     return Ok(true);
                 }
             }
         }
         Ok(false)
+    }
+
+    /// The parameters rule `r` (without contexts) reads from module `i`, and whether its
+    /// condition holds for them.
+    #[inline]
+    fn direct_params<'s, H: Host>(
+        &self,
+        r: usize,
+        condition: Option<u32>,
+        src: &'s ModuleString,
+        i: usize,
+        host: &mut H,
+    ) -> Result<Option<&'s [f64]>, LsError> {
+        let def = &self.defs[r];
+        let params: &[f64] = match def.lhs.pred.arity {
+            None => &[],
+            Some(k) => {
+                self.check_arity(def, src, i, k)?;
+                src.params(i)
+            }
+        };
+        if let Some(c) = condition
+            && self.args[c as usize].eval(params, self.globals, &mut || host.random()) == 0.0
+        {
+            return Ok(None);
+        }
+        Ok(Some(params))
+    }
+
+    /// Applies [`Dispatch::Direct`] rule `r` to module `i` of `src` as
+    /// [`Deriver::apply_rules`] would: false when its condition fails.
+    #[inline]
+    fn apply_direct<H: Host>(
+        &self,
+        r: usize,
+        src: &ModuleString,
+        i: usize,
+        out: &mut ModuleString,
+        host: &mut H,
+    ) -> Result<bool, H::Error> {
+        let CKind::Classic {
+            condition,
+            successor,
+            ..
+        } = &self.tables.rules[r].kind
+        else {
+            return Ok(false);
+        };
+        let Some(params) = self.direct_params(r, *condition, src, i, host)? else {
+            return Ok(false);
+        };
+        let globals = self.globals;
+        let mark = out.param_count();
+        out.push_modules(
+            &successor.syms,
+            &successor.ends,
+            self.args[successor.arg_range()]
+                .iter()
+                .map(|a| a.eval(params, globals, &mut || host.random())),
+        );
+        if let Some(v) = out.params_since(mark).iter().find(|v| !v.is_finite()) {
+            return Err(self.not_finite(r, *v).into());
+        }
+        Ok(true)
+    }
+
+    /// The number of modules [`Deriver::apply_direct`] would append, its parameters evaluated
+    /// (the same random draws and errors) but not kept.
+    #[inline]
+    fn count_direct<H: Host>(
+        &self,
+        r: usize,
+        src: &ModuleString,
+        i: usize,
+        host: &mut H,
+    ) -> Result<u64, H::Error> {
+        let CKind::Classic {
+            condition,
+            successor,
+            ..
+        } = &self.tables.rules[r].kind
+        else {
+            return Ok(1);
+        };
+        let Some(params) = self.direct_params(r, *condition, src, i, host)? else {
+            return Ok(1);
+        };
+        for a in &self.args[successor.arg_range()] {
+            let v = a.eval(params, self.globals, &mut || host.random());
+            if !v.is_finite() {
+                return Err(self.not_finite(r, v).into());
+            }
+        }
+        Ok(successor.syms.len() as u64)
+    }
+
+    #[cold]
+    fn not_finite(&self, r: usize, v: f64) -> LsError {
+        let def = &self.defs[r];
+        LsError::Rule {
+            origin: def.origin,
+            rule: def.text.clone(),
+            message: format!("a parameter of the successor evaluated to {v}"),
+        }
     }
 
     #[cold]

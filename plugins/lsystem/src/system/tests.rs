@@ -508,6 +508,102 @@ fn a_step_in_pieces_joins_to_the_whole_step() {
     }
 }
 
+/// One step of `r` under the cap `max`, whole and counted: the module count or the error.
+fn whole_and_counted(r: &Run, max: usize) -> (Result<usize, LsError>, Result<u64, LsError>) {
+    let opts = StepOptions {
+        step: r.steps + 1,
+        max_modules: max,
+        stream: false,
+    };
+    let mut out = ModuleString::new();
+    let whole = r
+        .system
+        .step(
+            &r.string,
+            &mut out,
+            &mut NativeHost {
+                rng: &mut r.rng.clone(),
+            },
+            &opts,
+        )
+        .map(|()| out.len());
+    let counted = r.system.step_count(
+        &r.string,
+        &mut NativeHost {
+            rng: &mut r.rng.clone(),
+        },
+        &opts,
+    );
+    (whole, counted)
+}
+
+#[test]
+fn a_counted_step_has_the_length_and_the_errors_of_the_step() {
+    // Conditions, random arguments and conditions (the same draws in the same order),
+    // stochastic alternatives, rules applied without matching (one rule per symbol, no
+    // context) beside rules with contexts, modules without rules in runs.
+    let cases: [(&str, &[&str], &[f64]); 5] = [
+        (
+            "A(1,10)",
+            &[
+                "A(l,w) -> !(w)F(l)[&(45)B(l*0.6,w*0.7)]/(137.5)A(l*0.9,w*0.7)",
+                "B(l,w) : l > 0.2 -> !(w)F(l)[-(45)$B(l*0.6,w*0.7)]B(l*0.9,w*0.7)",
+            ],
+            &[],
+        ),
+        (
+            "A(1)",
+            &[
+                "A(x) : rand() < 0.6 -> A(x+rand()) [B(x)] C",
+                "B(x) -> B(x*2) C C",
+                "C < B(x) -> D(x)",
+            ],
+            &[],
+        ),
+        (
+            "A(1)",
+            &["A(x) -> A(x+1) B(x)", "A(x) -> B(x) A(x*2)"],
+            &[1.0, 3.0],
+        ),
+        // A parameter that overflows: the error of the step, from the count.
+        ("A(1)", &["A(x) -> A(x*1e80) F"], &[]),
+        // The wrong number of parameters.
+        ("A(1) F A(1,2)", &["A(x) -> A(x) A(x)"], &[]),
+    ];
+    let mut failed = Vec::new();
+    for (axiom, rules, weights) in cases {
+        let mut r = Run::with(axiom, &[], |system, symbols| {
+            for (k, rule) in rules.iter().enumerate() {
+                system
+                    .add_production(rule, weights.get(k).copied(), 0, symbols)
+                    .expect("rule");
+            }
+        });
+        for step in 0..6 {
+            let (whole, counted) = whole_and_counted(&r, r.max);
+            assert_eq!(
+                whole.clone().map(|n| n as u64),
+                counted,
+                "{axiom} at step {step}"
+            );
+            let Ok(len) = whole else {
+                failed.push(axiom);
+                break;
+            };
+            // Every cap below the length fails as the step fails.
+            for max in [0, 1, len / 3, len / 2, len.saturating_sub(1)] {
+                let (whole, counted) = whole_and_counted(&r, max);
+                assert_eq!(whole.map(|n| n as u64), counted, "{axiom} under {max}");
+            }
+            if r.step().is_err() {
+                break;
+            }
+        }
+    }
+    // The overflow and the wrong number of parameters were met.
+    assert_eq!(failed, ["A(1)", "A(1) F A(1,2)"]);
+}
+
 #[test]
 fn bad_rules_name_themselves() {
     let mut symbols = SymbolTable::new();
