@@ -86,6 +86,14 @@ impl ModuleString {
         &self.syms
     }
 
+    /// The symbol words of a string without parameters, to append parameterless modules to
+    /// (plain symbols only: a string without offsets has no external module either).
+    #[inline]
+    pub(crate) fn flat_syms_mut(&mut self) -> &mut Vec<u32> {
+        debug_assert!(self.starts.is_empty());
+        &mut self.syms
+    }
+
     /// Whether no module of the string has stored parameters.
     #[inline]
     #[must_use]

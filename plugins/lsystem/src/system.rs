@@ -4,6 +4,7 @@
 mod compile;
 mod context;
 mod derive;
+mod fixed;
 mod host;
 mod rule;
 

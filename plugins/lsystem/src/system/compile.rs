@@ -1,5 +1,6 @@
 //! Compilation: rules to bytecode, stochastic groups and the per-symbol dispatch tables.
 
+use super::fixed::FixedTables;
 use super::rule::{Kind, RuleDef};
 use crate::error::LsError;
 use crate::expr::{Expr, Operand};
@@ -84,11 +85,9 @@ pub(super) struct Tables {
     pub(super) ignored: Vec<bool>,
     pub(super) uses_context: bool,
     pub(super) all_plain: bool,
-    /// Every rule reached through [`Dispatch::Rules`] has a `fixed` successor: a step of a
-    /// string without parameters needs no rule matching beyond one-symbol contexts.
-    pub(super) all_fixed: bool,
-    /// When `all_fixed`: `rule_lists` as [`FixedRule`]s, entry for entry.
-    pub(super) fixed_lists: Vec<FixedRule>,
+    /// When every rule reached through [`Dispatch::Rules`] has a `fixed` successor, the
+    /// tables of the pass over strings without parameters (see [`super::fixed`]).
+    pub(super) fixed: Option<FixedTables>,
     /// For every symbol, the most modules and parameters a module of it becomes (a copied
     /// module's own parameters not included); empty when a rule function may apply (its
     /// successors are unbounded).
@@ -289,18 +288,22 @@ impl Tables {
                     })
                     .collect()
             };
+        let fixed = if all_fixed {
+            FixedTables::build(&dispatch, &ignored, &fixed_lists, &plain_pool)
+        } else {
+            None
+        };
         Ok(Tables {
             rules,
             exprs,
             growth,
+            fixed,
             dispatch,
             rule_lists,
             plain_pool,
             ignored,
             uses_context,
             all_plain,
-            all_fixed,
-            fixed_lists,
         })
     }
 }

@@ -1,6 +1,6 @@
 //! The derivation step: every module of a string rewritten by the first rule that applies.
 
-use super::compile::{CKind, Dispatch, FixedRule, Tables};
+use super::compile::{CKind, Dispatch, Tables};
 use super::context::{match_left, match_right};
 use super::host::Host;
 use super::rule::RuleDef;
@@ -65,62 +65,18 @@ fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usi
     None
 }
 
-/// No symbol (in [`Scratch::left`] and [`right_neighbours`]).
-const NONE: u32 = u32::MAX;
-
-/// For every module of `src`, the symbol a one-symbol right context of it matches, as
-/// [`right_neighbour`] finds it ([`NONE`]: none; `]` when the branch ends), in one backward
-/// pass: brackets pair up from the right as they do from the left.
-fn right_neighbours(ignored: &[bool], src: &ModuleString) -> Vec<u32> {
-    let syms = src.raw_syms();
-    let mut rights = vec![NONE; syms.len()];
-    // What a right context starting at the module after the current one sees, and the same
-    // after each `]` still waiting for its `[`.
-    let mut next = NONE;
-    let mut after_close: Vec<u32> = Vec::new();
-    for (i, &raw) in syms.iter().enumerate().rev() {
-        rights[i] = next;
-        let s = Sym(raw);
-        // Brackets pair up whether ignored or not; an ignored symbol is skipped.
-        let skipped = ignored.get(s.index()).copied().unwrap_or(false);
-        if s == Sym::PUSH {
-            let after = after_close.pop().unwrap_or(NONE);
-            if !skipped {
-                next = after;
-            }
-        } else {
-            if s == Sym::POP {
-                after_close.push(next);
-            }
-            if !skipped {
-                next = raw;
-            }
-        }
-    }
-    rights
-}
-
 /// Reused buffers of a step: the modules a rule matched and their gathered parameters; and,
 /// for the pass over a string without parameters, the left neighbour of the next module.
-struct Scratch {
+#[derive(Default)]
+pub(super) struct Scratch {
     matched: Vec<usize>,
     gathered: Vec<f64>,
-    /// The symbol a one-symbol left context of the next module matches ([`NONE`]: none),
-    /// kept as the modules go by rather than found by walking back.
-    left: u32,
+    /// The context code (see [`super::fixed::FixedTables`]) of the symbol a one-symbol left
+    /// context of the next module matches (0: none or no context's symbol), kept as the
+    /// modules go by rather than found by walking back.
+    pub(super) left: u32,
     /// `left` as each enclosing `[` found it, restored at its `]`.
-    left_stack: Vec<u32>,
-}
-
-impl Default for Scratch {
-    fn default() -> Scratch {
-        Scratch {
-            matched: Vec::new(),
-            gathered: Vec::new(),
-            left: NONE,
-            left_stack: Vec::new(),
-        }
-    }
+    pub(super) left_stack: Vec<u32>,
 }
 
 /// A compiled system's rules, ready to derive.
@@ -155,7 +111,9 @@ impl Deriver<'_> {
             return Ok(());
         }
         let matches = self.context_table(src, opts);
-        self.reserve(src, out, opts);
+        if !self.fixed_pass(src, opts) {
+            self.reserve(src, out, opts);
+        }
         let mut scratch = Scratch::default();
         self.step_range(
             src,
@@ -346,7 +304,7 @@ impl Deriver<'_> {
         self.tables.all_plain && src.is_flat() && !opts.stream
     }
 
-    fn too_many(&self, opts: &StepOptions, count: u64) -> LsError {
+    pub(super) fn too_many(&self, opts: &StepOptions, count: u64) -> LsError {
         LsError::TooManyModules {
             step: opts.step,
             count,
@@ -356,25 +314,23 @@ impl Deriver<'_> {
 
     /// Whether a step of `src` takes the pass of [`Deriver::step_fixed`].
     pub(super) fn fixed_pass(&self, src: &ModuleString, opts: &StepOptions) -> bool {
-        self.tables.all_fixed && src.is_flat() && !opts.stream
+        self.tables.fixed.is_some() && src.is_flat() && !opts.stream
     }
 
     /// What context matching reads during a step: the right neighbours of the modules for
     /// [`Deriver::step_fixed`] (when a rule has a right context), the bracket pairs for the
     /// general path (when a rule has a context).
     fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Vec<u32> {
-        if !self.fixed_pass(src, opts) {
-            return self.bracket_matches(src);
+        match &self.tables.fixed {
+            Some(fixed) if self.fixed_pass(src, opts) => {
+                if fixed.uses_right {
+                    fixed.right_codes(src)
+                } else {
+                    Vec::new()
+                }
+            }
+            _ => self.bracket_matches(src),
         }
-        if self
-            .tables
-            .fixed_lists
-            .iter()
-            .all(|r| r.right == FixedRule::ANY)
-        {
-            return Vec::new();
-        }
-        right_neighbours(&self.tables.ignored, src)
     }
 
     fn bracket_matches(&self, src: &ModuleString) -> Vec<u32> {
@@ -413,8 +369,11 @@ impl Deriver<'_> {
         opts: &StepOptions,
         scratch: &mut Scratch,
     ) -> Result<(), H::Error> {
-        if self.fixed_pass(src, opts) {
-            return self.step_fixed(src, range, matches, before, out, host, opts, scratch);
+        if let Some(fixed) = &self.tables.fixed
+            && self.fixed_pass(src, opts)
+            && out.is_flat()
+        {
+            return self.step_fixed(fixed, src, range, matches, before, out, host, opts, scratch);
         }
         let max = opts.max_modules as u64;
         let base = out.len() as u64;
@@ -487,77 +446,6 @@ impl Deriver<'_> {
                 host.interpret(out, from)?;
             }
         }
-        Ok(())
-    }
-
-    /// [`Deriver::step_range`] for a string without parameters whose rules all have fixed
-    /// successors (see [`Tables::all_fixed`]): one-symbol left contexts are compared with the
-    /// left neighbour kept in `scratch` as the modules go by (one linear pass, no walking
-    /// back), right contexts looked up in `rights` (see [`right_neighbours`]).
-    #[allow(clippy::too_many_arguments)]
-    fn step_fixed<H: Host>(
-        &self,
-        src: &ModuleString,
-        range: std::ops::Range<usize>,
-        rights: &[u32],
-        before: u64,
-        out: &mut ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-        scratch: &mut Scratch,
-    ) -> Result<(), H::Error> {
-        let tables = self.tables;
-        let syms = src.raw_syms();
-        let max = (opts.max_modules as u64).saturating_sub(before);
-        let base = out.len();
-        let mut left = scratch.left;
-        let stack = &mut scratch.left_stack;
-        let mut next_check = range.start;
-        for i in range {
-            if i >= next_check {
-                host.check()?;
-                next_check = (i | 0xFFFF) + 1;
-            }
-            let s = syms[i];
-            match tables.dispatch.get(s as usize) {
-                Some(Dispatch::Plain { start, len }) => {
-                    out.extend_plain(&tables.plain_pool[*start as usize..(*start + *len) as usize])
-                }
-                Some(Dispatch::Rules { start, len }) => {
-                    let list = &tables.fixed_lists[*start as usize..(*start + *len) as usize];
-                    let mut applied = false;
-                    for rule in list {
-                        if (rule.left == FixedRule::ANY || rule.left == left)
-                            && (rule.right == FixedRule::ANY || rule.right == rights[i])
-                        {
-                            out.extend_plain(
-                                &tables.plain_pool
-                                    [rule.start as usize..(rule.start + rule.len) as usize],
-                            );
-                            applied = true;
-                            break;
-                        }
-                    }
-                    if !applied {
-                        out.push_raw(s);
-                    }
-                }
-                _ => out.push_raw(s),
-            }
-            if (out.len() - base) as u64 > max {
-                return Err(self
-                    .too_many(opts, before + (out.len() - base) as u64)
-                    .into());
-            }
-            if s == Sym::PUSH.0 {
-                stack.push(left);
-            } else if s == Sym::POP.0 {
-                left = stack.pop().unwrap_or(NONE);
-            } else if !tables.ignored.get(s as usize).copied().unwrap_or(false) {
-                left = s;
-            }
-        }
-        scratch.left = left;
         Ok(())
     }
 
@@ -829,68 +717,5 @@ impl Deriver<'_> {
             return Err(self.arity_error(def, src, m, k));
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use crate::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
-    use rand_mt::Mt;
-
-    /// One step of `text` by `rules` (with `ignore` ignored), and the modules produced.
-    fn step(rules: &[&str], ignore: &str, text: &str) -> String {
-        let mut symbols = SymbolTable::new();
-        let mut system = System::new();
-        system.ignore(ignore, &mut symbols);
-        for r in rules {
-            system
-                .add_production(r, None, 0, &mut symbols)
-                .expect("rule");
-        }
-        system.prepare(&symbols).expect("prepare");
-        let src = system
-            .parse_string(text, &mut symbols, &mut || 0.0)
-            .expect("string");
-        let mut out = ModuleString::new();
-        let opts = StepOptions {
-            step: 1,
-            max_modules: 1_000_000,
-            stream: false,
-        };
-        let mut rng = Mt::new(1);
-        system
-            .step(&src, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
-            .expect("step");
-        out.to_text(&symbols, "")
-    }
-
-    #[test]
-    fn the_pass_for_fixed_successors_matches_contexts_as_the_general_one() {
-        let rules = [
-            "b < a -> b",
-            "b -> a",
-            "a > b -> c",
-            "c < c > a -> d",
-            "+ -> -",
-        ];
-        // A rule with a condition (on a symbol the strings lack) sends the same rules down
-        // the general path.
-        let general: Vec<&str> = rules.iter().copied().chain(["Z : 1 > 0 -> Z"]).collect();
-        let mut rng = Mt::new(5);
-        let alphabet = ['a', 'b', 'c', '+', '[', ']'];
-        for k in 0..600 {
-            let len = 1 + rng.next_u32() as usize % 40;
-            let text: String = (0..len)
-                .map(|_| alphabet[rng.next_u32() as usize % alphabet.len()])
-                .collect();
-            // Ignored brackets too: skipped by contexts, still paired.
-            let ignore = ["+ -", "+ [", "+ ]"][k % 3];
-            assert_eq!(
-                step(&rules, ignore, &text),
-                step(&general, ignore, &text),
-                "{text} ignoring {ignore}"
-            );
-        }
-        assert_eq!(step(&rules, "+ -", "ba[b]a]a[+a"), "ab[a]a]a[-a");
     }
 }
