@@ -84,6 +84,8 @@ pub(super) struct Tables {
     pub(super) plain_pool: Vec<u32>,
     pub(super) ignored: Vec<bool>,
     pub(super) uses_context: bool,
+    /// Some rule draws random numbers (a stochastic choice, `rand()` in an expression).
+    pub(super) random: bool,
     pub(super) all_plain: bool,
     /// When every rule reached through [`Dispatch::Rules`] has a `fixed` successor, the
     /// tables of the pass over strings without parameters (see [`super::fixed`]).
@@ -293,7 +295,18 @@ impl Tables {
         } else {
             None
         };
+        let random = exprs.iter().any(Expr::is_random)
+            || rules.iter().any(|r| {
+                matches!(
+                    r.kind,
+                    CKind::Classic {
+                        choices: Some(_),
+                        ..
+                    }
+                )
+            });
         Ok(Tables {
+            random,
             rules,
             exprs,
             growth,

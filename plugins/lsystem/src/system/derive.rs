@@ -207,10 +207,28 @@ impl Deriver<'_> {
         host: &mut H,
         opts: &StepOptions,
     ) -> Result<u64, H::Error> {
-        let max = opts.max_modules as u64;
         let matches = self.bracket_matches(src);
         let mut scratch = Scratch::default();
         let mut successors = ModuleString::new();
+        self.count_after(src, &matches, 0, host, opts, &mut scratch, &mut successors)
+    }
+
+    /// [`Deriver::count`] of the whole of `src`, a piece of a step of which `before` modules
+    /// were produced earlier (for the module cap); `matches` as [`Deriver::context_table`]
+    /// gives them, `scratch` and `successors` reused buffers. Returns the modules made of
+    /// `src`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn count_after<H: Host>(
+        &self,
+        src: &ModuleString,
+        matches: &[u32],
+        before: u64,
+        host: &mut H,
+        opts: &StepOptions,
+        scratch: &mut Scratch,
+        successors: &mut ModuleString,
+    ) -> Result<u64, H::Error> {
+        let max = (opts.max_modules as u64).saturating_sub(before);
         let mut total = 0u64;
         let n = src.len();
         let mut i = 0;
@@ -234,20 +252,20 @@ impl Deriver<'_> {
                     if successors.len() > 4096 {
                         successors.clear();
                     }
-                    let before = successors.len();
+                    let mark = successors.len();
                     let list = &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
                     let applied = self.apply_rules(
                         list,
                         src,
-                        &matches,
+                        matches,
                         i,
-                        &mut successors,
+                        successors,
                         host,
                         &mut scratch.matched,
                         &mut scratch.gathered,
                     )?;
                     total += if applied {
-                        (successors.len() - before) as u64
+                        (successors.len() - mark) as u64
                     } else {
                         1
                     };
@@ -272,7 +290,7 @@ impl Deriver<'_> {
             if total > max {
                 // A run stops where a module-by-module copy would have.
                 let count = if bulk { total.min(max + 1) } else { total };
-                return Err(self.too_many(opts, count).into());
+                return Err(self.too_many(opts, before + count).into());
             }
         }
         Ok(total)
@@ -358,7 +376,7 @@ impl Deriver<'_> {
     /// produced earlier in this step (for the module cap). The ranges of one step follow
     /// each other from the start of `src`.
     #[allow(clippy::too_many_arguments)]
-    fn step_range<H: Host>(
+    pub(super) fn step_range<H: Host>(
         &self,
         src: &ModuleString,
         range: std::ops::Range<usize>,
