@@ -79,6 +79,27 @@ pub(super) struct Scratch {
     pub(super) left_stack: Vec<u32>,
 }
 
+/// What context matching reads during a step: the bracket pairs (general loop; empty when
+/// no rule has a context), or the right neighbours' codes of the pass of
+/// [`super::fixed`] (empty when no rule has a right context).
+pub(super) enum Context {
+    Brackets(Vec<u32>),
+    Rights(Vec<u8>),
+}
+
+impl Context {
+    /// No context to read.
+    pub(super) const NONE: Context = Context::Brackets(Vec::new());
+
+    /// The bracket pairs (empty for the pass of [`super::fixed`]).
+    fn brackets(&self) -> &[u32] {
+        match self {
+            Context::Brackets(m) => m,
+            Context::Rights(_) => &[],
+        }
+    }
+}
+
 /// A compiled system's rules, ready to derive.
 pub(super) struct Deriver<'a> {
     /// The rules as added (left sides, origins and texts for errors).
@@ -142,7 +163,7 @@ impl Deriver<'_> {
         let chunk = chunk.max(1);
         let plain = self.plain_fast_path(src, opts);
         let matches = if plain {
-            Vec::new()
+            Context::NONE
         } else {
             self.context_table(src, opts)
         };
@@ -338,16 +359,14 @@ impl Deriver<'_> {
     /// What context matching reads during a step: the right neighbours of the modules for
     /// [`Deriver::step_fixed`] (when a rule has a right context), the bracket pairs for the
     /// general path (when a rule has a context).
-    fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Vec<u32> {
+    fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Context {
         match &self.tables.fixed {
-            Some(fixed) if self.fixed_pass(src, opts) => {
-                if fixed.uses_right {
-                    fixed.right_codes(src)
-                } else {
-                    Vec::new()
-                }
-            }
-            _ => self.bracket_matches(src),
+            Some(fixed) if self.fixed_pass(src, opts) => Context::Rights(if fixed.uses_right {
+                fixed.right_codes(src)
+            } else {
+                Vec::new()
+            }),
+            _ => Context::Brackets(self.bracket_matches(src)),
         }
     }
 
@@ -380,7 +399,7 @@ impl Deriver<'_> {
         &self,
         src: &ModuleString,
         range: std::ops::Range<usize>,
-        matches: &[u32],
+        context: &Context,
         before: u64,
         out: &mut ModuleString,
         host: &mut H,
@@ -388,11 +407,13 @@ impl Deriver<'_> {
         scratch: &mut Scratch,
     ) -> Result<(), H::Error> {
         if let Some(fixed) = &self.tables.fixed
+            && let Context::Rights(rights) = context
             && self.fixed_pass(src, opts)
             && out.is_flat()
         {
-            return self.step_fixed(fixed, src, range, matches, before, out, host, opts, scratch);
+            return self.step_fixed(fixed, src, range, rights, before, out, host, opts, scratch);
         }
+        let matches = context.brackets();
         let max = opts.max_modules as u64;
         let base = out.len() as u64;
         let end = range.end;

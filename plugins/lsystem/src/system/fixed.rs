@@ -26,23 +26,45 @@ const IGNORED: u8 = 8;
 /// none): a symbol with rules has `codes * codes` entries in the table of successors.
 const MAX_CODES: usize = 16;
 
+/// What the pass reads of one symbol.
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    /// [`COPY`], [`PLAIN`], [`RULES`], [`PUSH`] or [`POP`], with [`IGNORED`].
+    class: u8,
+    /// Its context code: from 1 for the symbols some context names, else 0.
+    code: u8,
+    /// Its successor ([`PLAIN`], see [`Successor`]), or where its successors start in
+    /// `successors` ([`RULES`]).
+    at: u32,
+}
+
+/// A successor as the pass reads it: one symbol's raw word, or with [`MANY`] set the index
+/// of its (start, length) in `spans` (the symbols in `pool`).
+type Successor = u32;
+/// Flag of a [`Successor`] of several symbols (raw symbol words of strings without
+/// parameters never have the top bit set).
+const MANY: u32 = 1 << 31;
+
+/// What the backward pass reads of one symbol: its context code, or one of these flags.
+const BACK_PUSH: u8 = 0x10;
+const BACK_POP: u8 = 0x20;
+const BACK_IGNORED: u8 = 0x40;
+
 /// The tables of the pass, built when every rule reached has a fixed successor.
 #[derive(Clone, Debug, Default)]
 pub(super) struct FixedTables {
-    /// Every symbol's class: [`COPY`], [`PLAIN`], [`RULES`], [`PUSH`] or [`POP`], with
-    /// [`IGNORED`].
-    class: Vec<u8>,
-    /// Every symbol's context code: from 1 for the symbols some context names, else 0.
-    code: Vec<u8>,
+    /// Every symbol's entry.
+    entries: Vec<Entry>,
+    /// Every symbol's context code with the flags of the backward pass.
+    back: Vec<u8>,
     /// The number of context codes.
     codes: usize,
-    /// For every symbol: its successor in `pool` ([`PLAIN`]), or where its table starts in
-    /// `successors` ([`RULES`]).
-    span: Vec<(u32, u32)>,
-    /// For every symbol with rules and every (left code, right code): its successor in
-    /// `pool` (itself when no rule applies).
-    successors: Vec<(u32, u32)>,
-    /// The symbols of every successor.
+    /// For every symbol with rules and every (left code, right code): its successor
+    /// (itself when no rule applies).
+    successors: Vec<Successor>,
+    /// Successors of several symbols: (start, length) in `pool`.
+    spans: Vec<(u32, u32)>,
+    /// The symbols of those successors.
     pool: Vec<u32>,
     /// Whether some rule has a right context (the backward pass is needed).
     pub(super) uses_right: bool,
@@ -79,93 +101,107 @@ impl FixedTables {
             }
         }
         let mut t = FixedTables {
-            class: Vec::with_capacity(n),
-            code,
+            entries: Vec::with_capacity(n),
+            back: Vec::with_capacity(n),
             codes,
-            span: vec![(0, 0); n],
             successors: Vec::new(),
+            spans: Vec::new(),
             pool: pool.to_vec(),
             uses_right: lists.iter().any(|r| r.right != FixedRule::ANY),
         };
-        let fits = |side: u32, code: &[u8], c: usize| {
-            side == FixedRule::ANY || usize::from(code[side as usize]) == c
-        };
+        let fits =
+            |side: u32, c: usize| side == FixedRule::ANY || usize::from(code[side as usize]) == c;
         for (s, d) in dispatch.iter().enumerate() {
+            let mut e = Entry {
+                code: code[s],
+                ..Entry::default()
+            };
             let kind = match *d {
                 _ if s == Sym::PUSH.index() => PUSH,
                 _ if s == Sym::POP.index() => POP,
                 Dispatch::Copy => COPY,
                 Dispatch::Plain { start, len } => {
-                    t.span[s] = (start, len);
+                    e.at = t.successor(start, len);
                     PLAIN
                 }
                 Dispatch::Rules { start, len } => {
                     let list = &lists[start as usize..(start + len) as usize];
-                    let itself = (t.pool.len() as u32, 1);
-                    t.pool.push(s as u32);
-                    t.span[s] = (t.successors.len() as u32, 0);
+                    e.at = t.successors.len() as u32;
                     for left in 0..codes {
                         for right in 0..codes {
-                            let rule = list.iter().find(|r| {
-                                fits(r.left, &t.code, left) && fits(r.right, &t.code, right)
-                            });
-                            t.successors.push(rule.map_or(itself, |r| (r.start, r.len)));
+                            let rule = list
+                                .iter()
+                                .find(|r| fits(r.left, left) && fits(r.right, right));
+                            let succ = match rule {
+                                Some(r) => t.successor(r.start, r.len),
+                                None => s as u32,
+                            };
+                            t.successors.push(succ);
                         }
                     }
                     RULES
                 }
                 Dispatch::Direct { .. } => return None,
             };
-            t.class.push(kind | if ignored[s] { IGNORED } else { 0 });
+            e.class = kind | if ignored[s] { IGNORED } else { 0 };
+            t.entries.push(e);
+            t.back.push(if ignored[s] {
+                BACK_IGNORED
+            } else if kind == PUSH {
+                BACK_PUSH
+            } else if kind == POP {
+                BACK_POP
+            } else {
+                code[s]
+            });
         }
         Some(t)
     }
 
-    /// The class of raw symbol word `s` (symbols interned after the tables were built have
-    /// no rules and are nobody's context: copied).
-    #[inline]
-    fn class_of(&self, s: u32) -> u8 {
-        self.class.get(s as usize).copied().unwrap_or(COPY)
+    /// The successor `pool[start..start + len]` as the pass reads it.
+    fn successor(&mut self, start: u32, len: u32) -> Successor {
+        match &self.pool[start as usize..(start + len) as usize] {
+            [one] if one & MANY == 0 => *one,
+            _ => {
+                self.spans.push((start, len));
+                (self.spans.len() - 1) as u32 | MANY
+            }
+        }
     }
 
-    /// The context code of raw symbol word `s`.
+    /// The entry of raw symbol word `s` (symbols interned after the tables were built have
+    /// no rules and are nobody's context: copied).
     #[inline]
-    fn code_of(&self, s: u32) -> u32 {
-        u32::from(self.code.get(s as usize).copied().unwrap_or(0))
+    fn entry(&self, s: u32) -> Entry {
+        self.entries.get(s as usize).copied().unwrap_or_default()
     }
 
     /// For every module of `src`, the context code of the symbol a one-symbol right context
     /// of it matches (0 when none, or `]` at the end of the branch), as
     /// [`super::context::match_right`] walks (skipping branches and ignored symbols), in one
     /// backward pass: brackets pair up from the right as they do from the left.
-    pub(super) fn right_codes(&self, src: &ModuleString) -> Vec<u32> {
+    pub(super) fn right_codes(&self, src: &ModuleString) -> Vec<u8> {
         let syms = src.raw_syms();
         let mut rights = vec![0; syms.len()];
         // What a right context starting at the module after the current one sees, and the
         // same after each `]` still waiting for its `[`.
         let mut next = 0;
-        let mut after_close: Vec<u32> = Vec::new();
+        let mut after_close: Vec<u8> = Vec::new();
         for (right, &raw) in rights.iter_mut().zip(syms).rev() {
             *right = next;
-            let c = self.class_of(raw);
             // Brackets pair up whether ignored or not; an ignored symbol is skipped.
-            match c & !IGNORED {
-                PUSH => {
-                    let after = after_close.pop().unwrap_or(0);
-                    if c & IGNORED == 0 {
-                        next = after;
-                    }
+            let b = self.back.get(raw as usize).copied().unwrap_or(0);
+            if b < BACK_PUSH {
+                next = b;
+            } else if raw == Sym::PUSH.0 {
+                let after = after_close.pop().unwrap_or(0);
+                if b != BACK_IGNORED {
+                    next = after;
                 }
-                POP => {
-                    after_close.push(next);
-                    if c & IGNORED == 0 {
-                        next = 0;
-                    }
-                }
-                _ => {
-                    if c & IGNORED == 0 {
-                        next = self.code_of(raw);
-                    }
+            } else if raw == Sym::POP.0 {
+                after_close.push(next);
+                if b != BACK_IGNORED {
+                    next = 0;
                 }
             }
         }
@@ -180,47 +216,49 @@ impl FixedTables {
     fn run(
         &self,
         syms: &[u32],
-        rights: &[u32],
+        rights: &[u8],
         range: std::ops::Range<usize>,
         o: &mut Vec<u32>,
         limit: u64,
         scratch: &mut Scratch,
     ) -> bool {
-        let mut left = scratch.left;
+        let mut left = scratch.left as usize;
         let stack = &mut scratch.left_stack;
         for (&s, k) in syms[range.clone()].iter().zip(range) {
-            let c = self.class_of(s);
-            let kind = c & !IGNORED;
+            let e = self.entry(s);
+            let kind = e.class & !IGNORED;
             if kind == RULES || kind == PLAIN {
-                let (mut start, mut len) = self.span[s as usize];
-                if kind == RULES {
-                    let right = rights.get(k).copied().unwrap_or(0);
-                    let at = start as usize + left as usize * self.codes + right as usize;
-                    (start, len) = self.successors[at];
+                let succ = if kind == RULES {
+                    let right = usize::from(rights.get(k).copied().unwrap_or(0));
+                    self.successors[e.at as usize + left * self.codes + right]
+                } else {
+                    e.at
+                };
+                if succ & MANY == 0 {
+                    o.push(succ);
+                } else {
+                    let (start, len) = self.spans[(succ & !MANY) as usize];
+                    o.extend_from_slice(&self.pool[start as usize..(start + len) as usize]);
                 }
-                match &self.pool[start as usize..(start + len) as usize] {
-                    [one] => o.push(*one),
-                    many => o.extend_from_slice(many),
-                }
-                if c & IGNORED == 0 {
-                    left = self.code_of(s);
+                if e.class & IGNORED == 0 {
+                    left = usize::from(e.code);
                 }
             } else {
                 o.push(s);
                 if kind == PUSH {
-                    stack.push(left);
+                    stack.push(left as u32);
                 } else if kind == POP {
-                    left = stack.pop().unwrap_or(0);
-                } else if c & IGNORED == 0 {
-                    left = self.code_of(s);
+                    left = stack.pop().unwrap_or(0) as usize;
+                } else if e.class & IGNORED == 0 {
+                    left = usize::from(e.code);
                 }
             }
             if o.len() as u64 > limit {
-                scratch.left = left;
+                scratch.left = left as u32;
                 return false;
             }
         }
-        scratch.left = left;
+        scratch.left = left as u32;
         true
     }
 }
@@ -235,7 +273,7 @@ impl Deriver<'_> {
         fixed: &FixedTables,
         src: &ModuleString,
         range: std::ops::Range<usize>,
-        rights: &[u32],
+        rights: &[u8],
         before: u64,
         out: &mut ModuleString,
         host: &mut H,
@@ -311,14 +349,15 @@ mod tests {
             "b < a -> b",
             "b -> a",
             "a > b -> c",
-            "c < c > a -> d",
+            "c < c > a -> dd",
+            "d -> d[c]",
             "+ -> -",
         ];
         // A rule with a condition (on a symbol the strings lack) sends the same rules down
         // the general path.
         let general: Vec<&str> = rules.iter().copied().chain(["Z : 1 > 0 -> Z"]).collect();
         let mut rng = Mt::new(5);
-        let alphabet = ['a', 'b', 'c', '+', '[', ']'];
+        let alphabet = ['a', 'b', 'c', 'd', '+', '[', ']'];
         for k in 0..600 {
             let len = 1 + rng.next_u32() as usize % 40;
             let text: String = (0..len)

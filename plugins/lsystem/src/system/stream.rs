@@ -5,7 +5,7 @@
 //! that draw no random numbers (the draws would interleave), without rule functions, and
 //! not made of fixed strings only (those have a pass of their own).
 
-use super::derive::{Deriver, Scratch, StepOptions};
+use super::derive::{Context, Deriver, Scratch, StepOptions};
 use super::host::Host;
 use crate::module_string::ModuleString;
 
@@ -47,7 +47,7 @@ impl Deriver<'_> {
             self.step_range(
                 src,
                 start..end,
-                &[],
+                &Context::NONE,
                 made,
                 &mut between,
                 host,
@@ -101,7 +101,7 @@ impl Deriver<'_> {
             self.step_range(
                 src,
                 start..end,
-                &[],
+                &Context::NONE,
                 made,
                 &mut between,
                 host,
@@ -115,7 +115,7 @@ impl Deriver<'_> {
                 self.step_range(
                     &between,
                     from..to,
-                    &[],
+                    &Context::NONE,
                     written,
                     buf,
                     host,
