@@ -56,6 +56,16 @@ impl ModuleString {
         }
     }
 
+    /// Reserves room for `modules` more modules holding `params` more parameters in all
+    /// (their offsets included, should the string have none yet).
+    pub fn reserve_with_params(&mut self, modules: usize, params: usize) {
+        self.syms.reserve(modules);
+        if params > 0 || !self.starts.is_empty() {
+            self.starts.reserve(modules + 1);
+        }
+        self.params.reserve(params);
+    }
+
     /// Bytes allocated by the string's buffers.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
@@ -74,6 +84,14 @@ impl ModuleString {
     #[must_use]
     pub fn raw_syms(&self) -> &[u32] {
         &self.syms
+    }
+
+    /// The symbol words of a string without parameters, to append parameterless modules to
+    /// (plain symbols only: a string without offsets has no external module either).
+    #[inline]
+    pub(crate) fn flat_syms_mut(&mut self) -> &mut Vec<u32> {
+        debug_assert!(self.starts.is_empty());
+        &mut self.syms
     }
 
     /// Whether no module of the string has stored parameters.
@@ -113,7 +131,8 @@ impl ModuleString {
     /// The offsets of a string whose modules had no parameters so far.
     #[cold]
     fn first_starts(&mut self) {
-        self.starts = vec![0; self.syms.len() + 1];
+        // Keeps the allocation of a string cleared before.
+        self.starts.resize(self.syms.len() + 1, 0);
     }
 
     /// Appends a module with numeric parameters.
@@ -128,6 +147,45 @@ impl ModuleString {
         self.syms.push(sym.0);
         self.params.extend_from_slice(params);
         self.starts.push(self.params.len() as u32);
+    }
+
+    /// Appends the modules `syms` (raw symbol words, no external ones) with the parameters
+    /// `values`, of which module `k` takes those up to `ends[k]` (cumulative counts, so
+    /// `ends.len() == syms.len()` and `values` yields `ends[last]` numbers): a compiled
+    /// successor written with one copy of its symbols and offsets.
+    #[inline]
+    pub fn push_modules(
+        &mut self,
+        syms: &[u32],
+        ends: &[u32],
+        values: impl ExactSizeIterator<Item = f64>,
+    ) {
+        debug_assert_eq!(syms.len(), ends.len());
+        debug_assert_eq!(ends.last().map_or(0, |e| *e as usize), values.len());
+        if values.len() == 0 {
+            self.extend_plain(syms);
+            return;
+        }
+        self.make_starts();
+        self.syms.extend_from_slice(syms);
+        let base = self.params.len() as u32;
+        self.params.extend(values);
+        self.starts.extend(ends.iter().map(|e| base + e));
+    }
+
+    /// The parameters from offset `from` to the end of the string's parameter array (those
+    /// of the modules appended since the array had `from` numbers).
+    #[inline]
+    #[must_use]
+    pub fn params_since(&self, from: usize) -> &[f64] {
+        self.params.get(from..).unwrap_or(&[])
+    }
+
+    /// The number of parameters stored (a mark for [`ModuleString::params_since`]).
+    #[inline]
+    #[must_use]
+    pub fn param_count(&self) -> usize {
+        self.params.len()
     }
 
     /// Appends a module whose parameters are entry `slot` of the host's side table.
@@ -201,6 +259,7 @@ impl ModuleString {
 
     /// Appends a copy of the modules `range` of `other` (external modules keep their slots),
     /// with bulk copies of symbols, parameters and offsets.
+    #[inline]
     pub fn extend_from(&mut self, other: &ModuleString, range: std::ops::Range<usize>) {
         if other.starts.is_empty() {
             self.extend_plain(&other.syms[range]);

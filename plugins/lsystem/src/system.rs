@@ -4,8 +4,10 @@
 mod compile;
 mod context;
 mod derive;
+mod fixed;
 mod host;
 mod rule;
+mod stream;
 
 use self::compile::Tables;
 use self::derive::Deriver;
@@ -361,7 +363,7 @@ impl System {
 
     /// The number of modules one step would make of `src`, without keeping them (checking
     /// the module cap and every rule as [`System::step`] does). A system of fixed successors
-    /// is counted without rewriting.
+    /// is counted without rewriting; otherwise modules without rules are counted, not copied.
     ///
     /// # Panics
     /// If the rules changed since the last [`System::prepare`].
@@ -371,12 +373,85 @@ impl System {
         host: &mut H,
         opts: &StepOptions,
     ) -> Result<u64, H::Error> {
+        assert!(
+            self.prepared,
+            "System::prepare must be called after changing the rules"
+        );
         let deriver = self.deriver();
         if deriver.plain_fast_path(src, opts) {
             return Ok(deriver.plain_count(src, opts)?);
         }
-        let mut buf = ModuleString::new();
-        self.step_chunks(src, &mut buf, host, opts, 1 << 16, &mut |_| Ok(()))
+        if deriver.fixed_pass(src, opts) {
+            let mut buf = ModuleString::new();
+            return deriver.step_chunks(src, &mut buf, host, opts, 1 << 16, &mut |_| Ok(()));
+        }
+        deriver.count(src, host, opts)
+    }
+
+    /// Whether [`System::count_two_steps`] and [`System::step_chunks_two`] take the steps
+    /// depth first, piece by piece, never keeping the string between them: rules without
+    /// contexts that draw no random numbers, no rule functions, no streaming interpretation.
+    #[must_use]
+    pub fn two_steps_depth_first(&self, first: &StepOptions, second: &StepOptions) -> bool {
+        self.prepared && self.deriver().depth_first(first, second)
+    }
+
+    /// The number of modules the steps `first` and then `second` make of `src`: the first
+    /// step's and the second's, the second counted as [`System::step_count`] counts. The
+    /// errors (module caps, rules, the host's checks) are those of the two steps taken one
+    /// after the other.
+    ///
+    /// # Panics
+    /// If the rules changed since the last [`System::prepare`].
+    pub fn count_two_steps<H: Host>(
+        &self,
+        src: &ModuleString,
+        host: &mut H,
+        first: &StepOptions,
+        second: &StepOptions,
+    ) -> Result<(u64, u64), H::Error> {
+        assert!(
+            self.prepared,
+            "System::prepare must be called after changing the rules"
+        );
+        let deriver = self.deriver();
+        if deriver.depth_first(first, second) {
+            return deriver.count_two(src, host, first, second);
+        }
+        let mut between = ModuleString::new();
+        deriver.step(src, &mut between, host, first)?;
+        let n = self.step_count(&between, host, second)?;
+        Ok((between.len() as u64, n))
+    }
+
+    /// The steps `first` and then `second` of `src` delivered in pieces of the second step,
+    /// as [`System::step_chunks`] delivers one step (`chunk` modules between the steps per
+    /// piece). Returns the number of modules of the second step.
+    ///
+    /// # Panics
+    /// If the rules changed since the last [`System::prepare`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_chunks_two<H: Host>(
+        &self,
+        src: &ModuleString,
+        buf: &mut ModuleString,
+        host: &mut H,
+        first: &StepOptions,
+        second: &StepOptions,
+        chunk: usize,
+        sink: &mut dyn FnMut(&ModuleString) -> Result<(), H::Error>,
+    ) -> Result<u64, H::Error> {
+        assert!(
+            self.prepared,
+            "System::prepare must be called after changing the rules"
+        );
+        let deriver = self.deriver();
+        if deriver.depth_first(first, second) {
+            return deriver.step_chunks_two(src, buf, host, first, second, chunk, sink);
+        }
+        let mut between = ModuleString::new();
+        deriver.step(src, &mut between, host, first)?;
+        deriver.step_chunks(&between, buf, host, second, chunk, sink)
     }
 
     fn deriver(&self) -> Deriver<'_> {
@@ -384,6 +459,12 @@ impl System {
             defs: &self.defs,
             globals: &self.global_values,
             tables: &self.tables,
+            args: self
+                .tables
+                .exprs
+                .iter()
+                .map(|e| e.bind(&self.global_values))
+                .collect(),
         }
     }
 }

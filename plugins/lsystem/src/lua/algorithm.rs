@@ -116,7 +116,8 @@ impl LSystemAlgorithm {
     /// Derives like [`pge_engine::algorithm::grow`] for `pge derive`. When nothing of Lua
     /// takes part in the last step (no interpretation, rule functions or callbacks), that
     /// step is only counted, checking every limit, and returned to be streamed: the current
-    /// string is then the one before it.
+    /// string is then the one before it (before the last two steps, when the system lets
+    /// them be taken depth first: see [`crate::System::two_steps_depth_first`]).
     pub(crate) fn grow_for_output(
         &mut self,
         ctx: &RunContext,
@@ -127,7 +128,24 @@ impl LSystemAlgorithm {
             && self.skip_interpretation
             && !self.lua_involved
             && !self.cfg.system.has_external();
-        let before = if stream { target - 1 } else { target };
+        let last_opts = |step: u32| StepOptions {
+            step,
+            max_modules: self.max_modules,
+            stream: false,
+        };
+        // The last two steps of a system that allows it are taken depth first: the string
+        // between them is never kept either.
+        let two = stream
+            && target >= 2
+            && self
+                .cfg
+                .system
+                .two_steps_depth_first(&last_opts(target - 1), &last_opts(target));
+        let before = match (stream, two) {
+            (true, true) => target - 2,
+            (true, false) => target - 1,
+            _ => target,
+        };
         while self.done < before {
             if self.step(ctx)? == Step::Done {
                 break;
@@ -150,12 +168,26 @@ impl LSystemAlgorithm {
                 rng: &mut me.rng,
                 limits: Some((ctx, &location)),
             };
-            let len = me.cfg.system.step_count(&me.string, &mut host, &opts)?;
-            me.done += 1;
+            let (first, opts, len) = if two {
+                let second = StepOptions {
+                    step: opts.step + 1,
+                    ..opts
+                };
+                let (_, len) = me
+                    .cfg
+                    .system
+                    .count_two_steps(&me.string, &mut host, &opts, &second)?;
+                (Some(opts), second, len)
+            } else {
+                let len = me.cfg.system.step_count(&me.string, &mut host, &opts)?;
+                (None, opts, len)
+            };
+            me.done = opts.step;
             Ok(Some(LastStep {
                 system: me.cfg.system.clone(),
                 rng,
                 opts,
+                first,
                 len,
             }))
         })

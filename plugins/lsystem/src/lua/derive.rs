@@ -23,6 +23,9 @@ pub(crate) struct LastStep {
     pub(crate) rng: Mt,
     /// The step's number and module cap.
     pub(crate) opts: StepOptions,
+    /// The step before it, when the two are streamed depth first (see
+    /// [`System::step_chunks_two`]): the derivation then holds the string before both.
+    pub(crate) first: Option<StepOptions>,
     /// The number of modules the step makes (counted once, checking every limit).
     pub(crate) len: u64,
 }
@@ -67,10 +70,11 @@ impl Host for StreamHost<'_> {
 
 /// The result of a derivation: the final string with its symbol names and parameters. The
 /// last step of a system without Lua is not kept: it is derived again, piece by piece, while
-/// the string is written, so a derivation holds the string of the step before.
+/// the string is written, so a derivation holds the string of the step before (of the two
+/// steps before, for systems whose last two steps are taken depth first).
 #[derive(Clone, Debug)]
 pub struct Derivation {
-    /// The final string, or the one before the last step when `last` is set.
+    /// The final string, or the one before the streamed steps when `last` is set.
     string: ModuleString,
     last: Option<LastStep>,
     symbols: SymbolTable,
@@ -182,21 +186,33 @@ impl Derivation {
         };
         let mut buf = ModuleString::new();
         let mut failed = None;
-        let result = last.system.step_chunks(
-            &self.string,
-            &mut buf,
-            &mut host,
-            &last.opts,
-            PIECE,
-            &mut |piece| {
-                f(piece).map_err(|e| {
-                    failed = Some(e);
-                    HostError::Engine(Error::Cancelled {
-                        location: Location::default(),
-                    })
+        let mut sink = |piece: &ModuleString| {
+            f(piece).map_err(|e| {
+                failed = Some(e);
+                HostError::Engine(Error::Cancelled {
+                    location: Location::default(),
                 })
-            },
-        );
+            })
+        };
+        let result = match &last.first {
+            Some(first) => last.system.step_chunks_two(
+                &self.string,
+                &mut buf,
+                &mut host,
+                first,
+                &last.opts,
+                PIECE,
+                &mut sink,
+            ),
+            None => last.system.step_chunks(
+                &self.string,
+                &mut buf,
+                &mut host,
+                &last.opts,
+                PIECE,
+                &mut sink,
+            ),
+        };
         match (result, failed) {
             (_, Some(e)) => Err(e),
             (Ok(_), None) => Ok(()),

@@ -1,23 +1,43 @@
 //! Compilation: rules to bytecode, stochastic groups and the per-symbol dispatch tables.
 
+use super::fixed::FixedTables;
 use super::rule::{Kind, RuleDef};
 use crate::error::LsError;
 use crate::expr::{Expr, Operand};
 use crate::symbol::{Sym, SymbolTable};
 
-/// One module of a compiled successor.
+/// A compiled successor: its modules' symbols and, for each module, where its parameters
+/// end among the successor's (cumulative counts), the expressions of which lie one after the
+/// other in [`Tables::exprs`] from `args` on. A successor is written with one copy of its
+/// symbols and offsets ([`ModuleString::push_modules`](crate::ModuleString::push_modules)).
 #[derive(Clone, Debug)]
-pub(super) struct Succ {
-    pub(super) sym: Sym,
-    pub(super) args: Box<[Expr]>,
+pub(super) struct Successor {
+    pub(super) syms: Box<[u32]>,
+    pub(super) ends: Box<[u32]>,
+    pub(super) args: u32,
+}
+
+impl Successor {
+    /// The number of parameter expressions.
+    #[inline]
+    pub(super) fn arg_count(&self) -> usize {
+        self.ends.last().map_or(0, |e| *e as usize)
+    }
+
+    /// The range of its parameter expressions in [`Tables::exprs`].
+    #[inline]
+    pub(super) fn arg_range(&self) -> std::ops::Range<usize> {
+        self.args as usize..self.args as usize + self.arg_count()
+    }
 }
 
 /// A compiled rule's successor.
 #[derive(Clone, Debug)]
 pub(super) enum CKind {
     Classic {
-        condition: Option<Expr>,
-        successor: Box<[Succ]>,
+        /// The condition's place in [`Tables::exprs`].
+        condition: Option<u32>,
+        successor: Successor,
         /// Stochastic alternatives (cumulative normalised weight, rule), on the group's head.
         choices: Option<Box<[(f64, usize)]>>,
     },
@@ -40,30 +60,40 @@ pub(super) struct Compiled {
     pub(super) fixed: Option<(u32, u32)>,
 }
 
-/// What a symbol turns into: itself, a fixed string of symbols (`plain_pool[start..]`), or
-/// the first applicable of some rules (`rule_lists[start..]`).
+/// What a symbol turns into: itself, a fixed string of symbols (`plain_pool[start..]`), the
+/// first applicable of some rules (`rule_lists[start..]`), or the successor of its one
+/// classic rule without contexts or alternatives when the condition holds (`Direct`:
+/// applied without the general matching).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Dispatch {
     Copy,
     Plain { start: u32, len: u32 },
     Rules { start: u32, len: u32 },
+    Direct { rule: u32 },
 }
 
 /// The compiled form of a system's rules, rebuilt by [`Tables::build`] after every change.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Tables {
     pub(super) rules: Vec<Compiled>,
+    /// Every rule's condition and parameter expressions, bound to the globals' values at
+    /// each step (see [`crate::expr::Arg`]).
+    pub(super) exprs: Vec<Expr>,
     pub(super) dispatch: Vec<Dispatch>,
     pub(super) rule_lists: Vec<u32>,
     pub(super) plain_pool: Vec<u32>,
     pub(super) ignored: Vec<bool>,
     pub(super) uses_context: bool,
+    /// Some rule draws random numbers (a stochastic choice, `rand()` in an expression).
+    pub(super) random: bool,
     pub(super) all_plain: bool,
-    /// Every rule reached through [`Dispatch::Rules`] has a `fixed` successor: a step of a
-    /// string without parameters needs no rule matching beyond one-symbol contexts.
-    pub(super) all_fixed: bool,
-    /// When `all_fixed`: `rule_lists` as [`FixedRule`]s, entry for entry.
-    pub(super) fixed_lists: Vec<FixedRule>,
+    /// When every rule reached through [`Dispatch::Rules`] has a `fixed` successor, the
+    /// tables of the pass over strings without parameters (see [`super::fixed`]).
+    pub(super) fixed: Option<FixedTables>,
+    /// For every symbol, the most modules and parameters a module of it becomes (a copied
+    /// module's own parameters not included); empty when a rule function may apply (its
+    /// successors are unbounded).
+    pub(super) growth: Vec<(u32, u32)>,
 }
 
 /// A rule with a fixed successor, as the pass over a string without parameters reads it.
@@ -94,8 +124,9 @@ impl Tables {
     ) -> Result<Tables, LsError> {
         let n = symbols.len();
         let mut rules = Vec::with_capacity(defs.len());
+        let mut exprs = Vec::new();
         for def in defs {
-            rules.push(compile(def, global_names, symbols)?);
+            rules.push(compile(def, global_names, symbols, &mut exprs)?);
         }
         // Stochastic groups: alternatives with the same left side; the first is the head.
         let mut seen: Vec<(String, usize)> = Vec::new();
@@ -147,11 +178,11 @@ impl Tables {
             } = &rule.kind
                 && simple_lhs
                 && !rule.skip
-                && successor.iter().all(|s| s.args.is_empty())
+                && successor.arg_count() == 0
             {
                 let start = plain_pool.len() as u32;
-                plain_pool.extend(successor.iter().map(|s| s.sym.0));
-                rule.fixed = Some((start, successor.len() as u32));
+                plain_pool.extend_from_slice(&successor.syms);
+                rule.fixed = Some((start, successor.syms.len() as u32));
             }
         }
         let mut ignored = vec![false; n];
@@ -178,17 +209,23 @@ impl Tables {
                 && def.lhs.right.is_empty()
                 && def.lhs.pred.arity.is_none()
                 && matches!(&rules[r].kind, CKind::Classic { condition: None, successor, choices: None }
-                    if successor.iter().all(|s| s.args.is_empty()));
+                    if successor.arg_count() == 0);
             if plain {
                 let CKind::Classic { successor, .. } = &rules[r].kind else {
                     continue;
                 };
                 let start = plain_pool.len() as u32;
-                plain_pool.extend(successor.iter().map(|s| s.sym.0));
+                plain_pool.extend_from_slice(&successor.syms);
                 *slot = Dispatch::Plain {
                     start,
-                    len: successor.len() as u32,
+                    len: successor.syms.len() as u32,
                 };
+            } else if list.len() == 1
+                && def.lhs.left.is_empty()
+                && def.lhs.right.is_empty()
+                && matches!(&rules[r].kind, CKind::Classic { choices: None, .. })
+            {
+                *slot = Dispatch::Direct { rule: r as u32 };
             } else {
                 let start = rule_lists.len() as u32;
                 rule_lists.extend(&list);
@@ -200,10 +237,13 @@ impl Tables {
         }
         let all_plain = dispatch
             .iter()
-            .all(|d| !matches!(d, Dispatch::Rules { .. }));
-        let all_fixed = rule_lists
+            .all(|d| matches!(d, Dispatch::Copy | Dispatch::Plain { .. }));
+        let all_fixed = !dispatch
             .iter()
-            .all(|&r| rules[r as usize].fixed.is_some());
+            .any(|d| matches!(d, Dispatch::Direct { .. }))
+            && rule_lists
+                .iter()
+                .all(|&r| rules[r as usize].fixed.is_some());
         let fixed_lists = if all_fixed {
             rule_lists
                 .iter()
@@ -221,25 +261,90 @@ impl Tables {
         } else {
             Vec::new()
         };
+        let growth =
+            if rules.iter().any(|r| matches!(r.kind, CKind::External(_))) {
+                Vec::new()
+            } else {
+                (0..n)
+                    .map(|s| match dispatch[s] {
+                        Dispatch::Copy => (1, 0),
+                        Dispatch::Plain { len, .. } => (len, 0),
+                        Dispatch::Direct { rule } => alternatives(&rules, rule as usize)
+                            .iter()
+                            .fold((1, 0), |(m, p), succ| {
+                                (
+                                    m.max(succ.syms.len() as u32),
+                                    p.max(succ.arg_count() as u32),
+                                )
+                            }),
+                        Dispatch::Rules { start, len } => rule_lists
+                            [start as usize..(start + len) as usize]
+                            .iter()
+                            .flat_map(|&r| alternatives(&rules, r as usize))
+                            .fold((1, 0), |(m, p), succ| {
+                                (
+                                    m.max(succ.syms.len() as u32),
+                                    p.max(succ.arg_count() as u32),
+                                )
+                            }),
+                    })
+                    .collect()
+            };
+        let fixed = if all_fixed {
+            FixedTables::build(&dispatch, &ignored, &fixed_lists, &plain_pool)
+        } else {
+            None
+        };
+        let random = exprs.iter().any(Expr::is_random)
+            || rules.iter().any(|r| {
+                matches!(
+                    r.kind,
+                    CKind::Classic {
+                        choices: Some(_),
+                        ..
+                    }
+                )
+            });
         Ok(Tables {
+            random,
             rules,
+            exprs,
+            growth,
+            fixed,
             dispatch,
             rule_lists,
             plain_pool,
             ignored,
             uses_context,
             all_plain,
-            all_fixed,
-            fixed_lists,
         })
     }
 }
 
-/// Compiles one rule; names resolve against its formals, then `global_names`.
+/// The successors rule `r` may write: its own and its stochastic alternatives'.
+fn alternatives(rules: &[Compiled], r: usize) -> Vec<&Successor> {
+    let CKind::Classic {
+        successor, choices, ..
+    } = &rules[r].kind
+    else {
+        return Vec::new();
+    };
+    let mut all = vec![successor];
+    for &(_, alt) in choices.iter().flatten() {
+        if let CKind::Classic { successor, .. } = &rules[alt].kind {
+            all.push(successor);
+        }
+    }
+    all
+}
+
+/// Compiles one rule, appending its expressions to `exprs`; names resolve against its
+/// formals, then `global_names`.
 fn compile(
     def: &RuleDef,
     global_names: &[String],
     symbols: &SymbolTable,
+    exprs: &mut Vec<Expr>,
 ) -> Result<Compiled, LsError> {
     let err = |message: String| LsError::Rule {
         origin: def.origin,
@@ -263,12 +368,18 @@ fn compile(
                     .map(|i| Operand::Global(i as u16))
             };
             let condition = match condition {
-                Some(c) => Some(
-                    Expr::compile(c, &mut resolve).map_err(|e| err(format!("condition: {e}")))?,
-                ),
+                Some(c) => {
+                    exprs.push(
+                        Expr::compile(c, &mut resolve)
+                            .map_err(|e| err(format!("condition: {e}")))?,
+                    );
+                    Some(exprs.len() as u32 - 1)
+                }
                 None => None,
             };
-            let mut succ = Vec::with_capacity(successor.len());
+            let args = exprs.len() as u32;
+            let mut syms = Vec::with_capacity(successor.len());
+            let mut ends = Vec::with_capacity(successor.len());
             for m in successor {
                 let sym = symbols
                     .get(&m.name)
@@ -276,16 +387,19 @@ fn compile(
                 if (sym == Sym::PUSH || sym == Sym::POP) && !m.args.is_empty() {
                     return Err(err(format!("'{}' takes no parameters", m.name)));
                 }
-                let args = m
-                    .args
-                    .iter()
-                    .map(|a| Expr::compile(a, &mut resolve).map_err(|e| err(e.to_string())))
-                    .collect::<Result<Box<[Expr]>, LsError>>()?;
-                succ.push(Succ { sym, args });
+                for a in &m.args {
+                    exprs.push(Expr::compile(a, &mut resolve).map_err(|e| err(e.to_string()))?);
+                }
+                syms.push(sym.0);
+                ends.push(exprs.len() as u32 - args);
             }
             CKind::Classic {
                 condition,
-                successor: succ.into_boxed_slice(),
+                successor: Successor {
+                    syms: syms.into_boxed_slice(),
+                    ends: ends.into_boxed_slice(),
+                    args,
+                },
                 choices: None,
             }
         }

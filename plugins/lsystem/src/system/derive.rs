@@ -1,10 +1,11 @@
 //! The derivation step: every module of a string rewritten by the first rule that applies.
 
-use super::compile::{CKind, Dispatch, FixedRule, Tables};
+use super::compile::{CKind, Dispatch, Tables};
 use super::context::{match_left, match_right};
 use super::host::Host;
 use super::rule::RuleDef;
 use crate::error::LsError;
+use crate::expr::Arg;
 use crate::module_string::ModuleString;
 use crate::symbol::Sym;
 
@@ -64,60 +65,37 @@ fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usi
     None
 }
 
-/// No symbol (in [`Scratch::left`] and [`right_neighbours`]).
-const NONE: u32 = u32::MAX;
-
-/// For every module of `src`, the symbol a one-symbol right context of it matches, as
-/// [`right_neighbour`] finds it ([`NONE`]: none; `]` when the branch ends), in one backward
-/// pass: brackets pair up from the right as they do from the left.
-fn right_neighbours(ignored: &[bool], src: &ModuleString) -> Vec<u32> {
-    let syms = src.raw_syms();
-    let mut rights = vec![NONE; syms.len()];
-    // What a right context starting at the module after the current one sees, and the same
-    // after each `]` still waiting for its `[`.
-    let mut next = NONE;
-    let mut after_close: Vec<u32> = Vec::new();
-    for (i, &raw) in syms.iter().enumerate().rev() {
-        rights[i] = next;
-        let s = Sym(raw);
-        // Brackets pair up whether ignored or not; an ignored symbol is skipped.
-        let skipped = ignored.get(s.index()).copied().unwrap_or(false);
-        if s == Sym::PUSH {
-            let after = after_close.pop().unwrap_or(NONE);
-            if !skipped {
-                next = after;
-            }
-        } else {
-            if s == Sym::POP {
-                after_close.push(next);
-            }
-            if !skipped {
-                next = raw;
-            }
-        }
-    }
-    rights
-}
-
 /// Reused buffers of a step: the modules a rule matched and their gathered parameters; and,
 /// for the pass over a string without parameters, the left neighbour of the next module.
-struct Scratch {
+#[derive(Default)]
+pub(super) struct Scratch {
     matched: Vec<usize>,
     gathered: Vec<f64>,
-    /// The symbol a one-symbol left context of the next module matches ([`NONE`]: none),
-    /// kept as the modules go by rather than found by walking back.
-    left: u32,
+    /// The context code (see [`super::fixed::FixedTables`]) of the symbol a one-symbol left
+    /// context of the next module matches (0: none or no context's symbol), kept as the
+    /// modules go by rather than found by walking back.
+    pub(super) left: u32,
     /// `left` as each enclosing `[` found it, restored at its `]`.
-    left_stack: Vec<u32>,
+    pub(super) left_stack: Vec<u32>,
 }
 
-impl Default for Scratch {
-    fn default() -> Scratch {
-        Scratch {
-            matched: Vec::new(),
-            gathered: Vec::new(),
-            left: NONE,
-            left_stack: Vec::new(),
+/// What context matching reads during a step: the bracket pairs (general loop; empty when
+/// no rule has a context), or the right neighbours' codes of the pass of
+/// [`super::fixed`] (empty when no rule has a right context).
+pub(super) enum Context {
+    Brackets(Vec<u32>),
+    Rights(Vec<u8>),
+}
+
+impl Context {
+    /// No context to read.
+    pub(super) const NONE: Context = Context::Brackets(Vec::new());
+
+    /// The bracket pairs (empty for the pass of [`super::fixed`]).
+    fn brackets(&self) -> &[u32] {
+        match self {
+            Context::Brackets(m) => m,
+            Context::Rights(_) => &[],
         }
     }
 }
@@ -130,6 +108,8 @@ pub(super) struct Deriver<'a> {
     pub(super) globals: &'a [f64],
     /// The compiled rules and dispatch tables.
     pub(super) tables: &'a Tables,
+    /// [`Tables::exprs`] bound to the globals' values.
+    pub(super) args: Vec<Arg<'a>>,
 }
 
 impl Deriver<'_> {
@@ -152,6 +132,9 @@ impl Deriver<'_> {
             return Ok(());
         }
         let matches = self.context_table(src, opts);
+        if !self.fixed_pass(src, opts) {
+            self.reserve(src, out, opts);
+        }
         let mut scratch = Scratch::default();
         self.step_range(
             src,
@@ -180,7 +163,7 @@ impl Deriver<'_> {
         let chunk = chunk.max(1);
         let plain = self.plain_fast_path(src, opts);
         let matches = if plain {
-            Vec::new()
+            Context::NONE
         } else {
             self.context_table(src, opts)
         };
@@ -215,6 +198,125 @@ impl Deriver<'_> {
         Ok(total)
     }
 
+    /// Reserves room in `out` for the most modules and parameters a step can make of a long
+    /// `src` (see [`Tables::growth`]), so that the step's output is allocated once instead of
+    /// grown by copies; nothing when the bound passes the module cap or is unknown.
+    fn reserve(&self, src: &ModuleString, out: &mut ModuleString, opts: &StepOptions) {
+        let growth = &self.tables.growth;
+        if src.len() < 1 << 16 || growth.is_empty() {
+            return;
+        }
+        let (mut modules, mut params) = (0u64, src.param_count() as u64);
+        for i in 0..src.len() {
+            let (m, p) = growth.get(src.sym(i).index()).copied().unwrap_or((1, 0));
+            modules += u64::from(m);
+            params += u64::from(p);
+        }
+        if modules <= opts.max_modules as u64 {
+            out.reserve_with_params(modules as usize, params as usize);
+        }
+    }
+
+    /// The number of modules one step makes of `src`, without keeping them: runs of modules
+    /// without rules are counted, not copied, and the successors of rules are written to a
+    /// small scratch string only, their conditions and parameters evaluated in order as
+    /// [`Deriver::step`] evaluates them (the same random draws, the same errors, the same
+    /// module cap).
+    pub(super) fn count<H: Host>(
+        &self,
+        src: &ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+    ) -> Result<u64, H::Error> {
+        let matches = self.bracket_matches(src);
+        let mut scratch = Scratch::default();
+        let mut successors = ModuleString::new();
+        self.count_after(src, &matches, 0, host, opts, &mut scratch, &mut successors)
+    }
+
+    /// [`Deriver::count`] of the whole of `src`, a piece of a step of which `before` modules
+    /// were produced earlier (for the module cap); `matches` as [`Deriver::context_table`]
+    /// gives them, `scratch` and `successors` reused buffers. Returns the modules made of
+    /// `src`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn count_after<H: Host>(
+        &self,
+        src: &ModuleString,
+        matches: &[u32],
+        before: u64,
+        host: &mut H,
+        opts: &StepOptions,
+        scratch: &mut Scratch,
+        successors: &mut ModuleString,
+    ) -> Result<u64, H::Error> {
+        let max = (opts.max_modules as u64).saturating_sub(before);
+        let mut total = 0u64;
+        let n = src.len();
+        let mut i = 0;
+        let mut next_check = 0;
+        while i < n {
+            if i >= next_check {
+                host.check()?;
+                next_check = (i | 0xFFFF) + 1;
+            }
+            let mut bulk = false;
+            match self.tables.dispatch.get(src.sym(i).index()) {
+                Some(Dispatch::Plain { len, .. }) => {
+                    total += u64::from(*len);
+                    i += 1;
+                }
+                Some(Dispatch::Direct { rule }) => {
+                    total += self.count_direct(*rule as usize, src, i, host)?;
+                    i += 1;
+                }
+                Some(Dispatch::Rules { start, len }) => {
+                    if successors.len() > 4096 {
+                        successors.clear();
+                    }
+                    let mark = successors.len();
+                    let list = &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
+                    let applied = self.apply_rules(
+                        list,
+                        src,
+                        matches,
+                        i,
+                        successors,
+                        host,
+                        &mut scratch.matched,
+                        &mut scratch.gathered,
+                    )?;
+                    total += if applied {
+                        (successors.len() - mark) as u64
+                    } else {
+                        1
+                    };
+                    i += 1;
+                }
+                _ => {
+                    let mut j = i + 1;
+                    let stop = n.min(next_check);
+                    while j < stop
+                        && matches!(
+                            self.tables.dispatch.get(src.sym(j).index()),
+                            None | Some(Dispatch::Copy)
+                        )
+                    {
+                        j += 1;
+                    }
+                    total += (j - i) as u64;
+                    bulk = true;
+                    i = j;
+                }
+            }
+            if total > max {
+                // A run stops where a module-by-module copy would have.
+                let count = if bulk { total.min(max + 1) } else { total };
+                return Err(self.too_many(opts, before + count).into());
+            }
+        }
+        Ok(total)
+    }
+
     /// The number of modules one step of a plain system makes of `src` (see
     /// [`Deriver::plain_fast_path`]), failing over the module cap.
     pub(super) fn plain_count(
@@ -241,7 +343,7 @@ impl Deriver<'_> {
         self.tables.all_plain && src.is_flat() && !opts.stream
     }
 
-    fn too_many(&self, opts: &StepOptions, count: u64) -> LsError {
+    pub(super) fn too_many(&self, opts: &StepOptions, count: u64) -> LsError {
         LsError::TooManyModules {
             step: opts.step,
             count,
@@ -250,26 +352,22 @@ impl Deriver<'_> {
     }
 
     /// Whether a step of `src` takes the pass of [`Deriver::step_fixed`].
-    fn fixed_pass(&self, src: &ModuleString, opts: &StepOptions) -> bool {
-        self.tables.all_fixed && src.is_flat() && !opts.stream
+    pub(super) fn fixed_pass(&self, src: &ModuleString, opts: &StepOptions) -> bool {
+        self.tables.fixed.is_some() && src.is_flat() && !opts.stream
     }
 
     /// What context matching reads during a step: the right neighbours of the modules for
     /// [`Deriver::step_fixed`] (when a rule has a right context), the bracket pairs for the
     /// general path (when a rule has a context).
-    fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Vec<u32> {
-        if !self.fixed_pass(src, opts) {
-            return self.bracket_matches(src);
+    fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Context {
+        match &self.tables.fixed {
+            Some(fixed) if self.fixed_pass(src, opts) => Context::Rights(if fixed.uses_right {
+                fixed.right_codes(src)
+            } else {
+                Vec::new()
+            }),
+            _ => Context::Brackets(self.bracket_matches(src)),
         }
-        if self
-            .tables
-            .fixed_lists
-            .iter()
-            .all(|r| r.right == FixedRule::ANY)
-        {
-            return Vec::new();
-        }
-        right_neighbours(&self.tables.ignored, src)
     }
 
     fn bracket_matches(&self, src: &ModuleString) -> Vec<u32> {
@@ -297,20 +395,25 @@ impl Deriver<'_> {
     /// produced earlier in this step (for the module cap). The ranges of one step follow
     /// each other from the start of `src`.
     #[allow(clippy::too_many_arguments)]
-    fn step_range<H: Host>(
+    pub(super) fn step_range<H: Host>(
         &self,
         src: &ModuleString,
         range: std::ops::Range<usize>,
-        matches: &[u32],
+        context: &Context,
         before: u64,
         out: &mut ModuleString,
         host: &mut H,
         opts: &StepOptions,
         scratch: &mut Scratch,
     ) -> Result<(), H::Error> {
-        if self.fixed_pass(src, opts) {
-            return self.step_fixed(src, range, matches, before, out, host, opts, scratch);
+        if let Some(fixed) = &self.tables.fixed
+            && let Context::Rights(rights) = context
+            && self.fixed_pass(src, opts)
+            && out.is_flat()
+        {
+            return self.step_fixed(fixed, src, range, rights, before, out, host, opts, scratch);
         }
+        let matches = context.brackets();
         let max = opts.max_modules as u64;
         let base = out.len() as u64;
         let end = range.end;
@@ -330,6 +433,12 @@ impl Deriver<'_> {
                     out.extend_plain(
                         &self.tables.plain_pool[*start as usize..(*start + *len) as usize],
                     );
+                    i += 1;
+                }
+                Some(Dispatch::Direct { rule }) => {
+                    if !self.apply_direct(*rule as usize, src, i, out, host)? {
+                        out.push_from(src, i);
+                    }
                     i += 1;
                 }
                 Some(Dispatch::Rules { start, len }) => {
@@ -376,77 +485,6 @@ impl Deriver<'_> {
                 host.interpret(out, from)?;
             }
         }
-        Ok(())
-    }
-
-    /// [`Deriver::step_range`] for a string without parameters whose rules all have fixed
-    /// successors (see [`Tables::all_fixed`]): one-symbol left contexts are compared with the
-    /// left neighbour kept in `scratch` as the modules go by (one linear pass, no walking
-    /// back), right contexts looked up in `rights` (see [`right_neighbours`]).
-    #[allow(clippy::too_many_arguments)]
-    fn step_fixed<H: Host>(
-        &self,
-        src: &ModuleString,
-        range: std::ops::Range<usize>,
-        rights: &[u32],
-        before: u64,
-        out: &mut ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-        scratch: &mut Scratch,
-    ) -> Result<(), H::Error> {
-        let tables = self.tables;
-        let syms = src.raw_syms();
-        let max = (opts.max_modules as u64).saturating_sub(before);
-        let base = out.len();
-        let mut left = scratch.left;
-        let stack = &mut scratch.left_stack;
-        let mut next_check = range.start;
-        for i in range {
-            if i >= next_check {
-                host.check()?;
-                next_check = (i | 0xFFFF) + 1;
-            }
-            let s = syms[i];
-            match tables.dispatch.get(s as usize) {
-                Some(Dispatch::Plain { start, len }) => {
-                    out.extend_plain(&tables.plain_pool[*start as usize..(*start + *len) as usize])
-                }
-                Some(Dispatch::Rules { start, len }) => {
-                    let list = &tables.fixed_lists[*start as usize..(*start + *len) as usize];
-                    let mut applied = false;
-                    for rule in list {
-                        if (rule.left == FixedRule::ANY || rule.left == left)
-                            && (rule.right == FixedRule::ANY || rule.right == rights[i])
-                        {
-                            out.extend_plain(
-                                &tables.plain_pool
-                                    [rule.start as usize..(rule.start + rule.len) as usize],
-                            );
-                            applied = true;
-                            break;
-                        }
-                    }
-                    if !applied {
-                        out.push_raw(s);
-                    }
-                }
-                _ => out.push_raw(s),
-            }
-            if (out.len() - base) as u64 > max {
-                return Err(self
-                    .too_many(opts, before + (out.len() - base) as u64)
-                    .into());
-            }
-            if s == Sym::PUSH.0 {
-                stack.push(left);
-            } else if s == Sym::POP.0 {
-                left = stack.pop().unwrap_or(NONE);
-            } else if !tables.ignored.get(s as usize).copied().unwrap_or(false) {
-                left = s;
-            }
-        }
-        scratch.left = left;
         Ok(())
     }
 
@@ -533,7 +571,8 @@ impl Deriver<'_> {
                     };
                     let globals = self.globals;
                     if let Some(c) = condition
-                        && c.eval(params, globals, &mut || host.random()) == 0.0
+                        && self.args[*c as usize].eval(params, globals, &mut || host.random())
+                            == 0.0
                     {
                         continue;
                     }
@@ -551,33 +590,131 @@ impl Deriver<'_> {
                         }
                         None => (successor, def),
                     };
-                    for item in succ.iter() {
-                        if item.args.is_empty() {
-                            out.push(item.sym, &[]);
-                            continue;
+                    let mark = out.param_count();
+                    out.push_modules(
+                        &succ.syms,
+                        &succ.ends,
+                        self.args[succ.arg_range()]
+                            .iter()
+                            .map(|a| a.eval(params, globals, &mut || host.random())),
+                    );
+                    if let Some(v) = out.params_since(mark).iter().find(|v| !v.is_finite()) {
+                        return Err(LsError::Rule {
+                            origin: def.origin,
+                            rule: def.text.clone(),
+                            message: format!("a parameter of the successor evaluated to {v}"),
                         }
-                        out.begin(item.sym);
-                        for a in item.args.iter() {
-                            let v = a.eval(params, globals, &mut || host.random());
-                            if !v.is_finite() {
-                                return Err(LsError::Rule {
-                                    origin: def.origin,
-                                    rule: def.text.clone(),
-                                    message: format!(
-                                        "a parameter of the successor evaluated to {v}"
-                                    ),
-                                }
-                                .into());
-                            }
-                            out.push_param(v);
-                        }
-                        out.end();
+                        .into());
                     }
                     return Ok(true);
                 }
             }
         }
         Ok(false)
+    }
+
+    /// The parameters rule `r` (without contexts) reads from module `i`, and whether its
+    /// condition holds for them.
+    #[inline]
+    fn direct_params<'s, H: Host>(
+        &self,
+        r: usize,
+        condition: Option<u32>,
+        src: &'s ModuleString,
+        i: usize,
+        host: &mut H,
+    ) -> Result<Option<&'s [f64]>, LsError> {
+        let def = &self.defs[r];
+        let params: &[f64] = match def.lhs.pred.arity {
+            None => &[],
+            Some(k) => {
+                self.check_arity(def, src, i, k)?;
+                src.params(i)
+            }
+        };
+        if let Some(c) = condition
+            && self.args[c as usize].eval(params, self.globals, &mut || host.random()) == 0.0
+        {
+            return Ok(None);
+        }
+        Ok(Some(params))
+    }
+
+    /// Applies [`Dispatch::Direct`] rule `r` to module `i` of `src` as
+    /// [`Deriver::apply_rules`] would: false when its condition fails.
+    #[inline]
+    fn apply_direct<H: Host>(
+        &self,
+        r: usize,
+        src: &ModuleString,
+        i: usize,
+        out: &mut ModuleString,
+        host: &mut H,
+    ) -> Result<bool, H::Error> {
+        let CKind::Classic {
+            condition,
+            successor,
+            ..
+        } = &self.tables.rules[r].kind
+        else {
+            return Ok(false);
+        };
+        let Some(params) = self.direct_params(r, *condition, src, i, host)? else {
+            return Ok(false);
+        };
+        let globals = self.globals;
+        let mark = out.param_count();
+        out.push_modules(
+            &successor.syms,
+            &successor.ends,
+            self.args[successor.arg_range()]
+                .iter()
+                .map(|a| a.eval(params, globals, &mut || host.random())),
+        );
+        if let Some(v) = out.params_since(mark).iter().find(|v| !v.is_finite()) {
+            return Err(self.not_finite(r, *v).into());
+        }
+        Ok(true)
+    }
+
+    /// The number of modules [`Deriver::apply_direct`] would append, its parameters evaluated
+    /// (the same random draws and errors) but not kept.
+    #[inline]
+    fn count_direct<H: Host>(
+        &self,
+        r: usize,
+        src: &ModuleString,
+        i: usize,
+        host: &mut H,
+    ) -> Result<u64, H::Error> {
+        let CKind::Classic {
+            condition,
+            successor,
+            ..
+        } = &self.tables.rules[r].kind
+        else {
+            return Ok(1);
+        };
+        let Some(params) = self.direct_params(r, *condition, src, i, host)? else {
+            return Ok(1);
+        };
+        for a in &self.args[successor.arg_range()] {
+            let v = a.eval(params, self.globals, &mut || host.random());
+            if !v.is_finite() {
+                return Err(self.not_finite(r, v).into());
+            }
+        }
+        Ok(successor.syms.len() as u64)
+    }
+
+    #[cold]
+    fn not_finite(&self, r: usize, v: f64) -> LsError {
+        let def = &self.defs[r];
+        LsError::Rule {
+            origin: def.origin,
+            rule: def.text.clone(),
+            message: format!("a parameter of the successor evaluated to {v}"),
+        }
     }
 
     #[cold]
@@ -619,68 +756,5 @@ impl Deriver<'_> {
             return Err(self.arity_error(def, src, m, k));
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use crate::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
-    use rand_mt::Mt;
-
-    /// One step of `text` by `rules` (with `ignore` ignored), and the modules produced.
-    fn step(rules: &[&str], ignore: &str, text: &str) -> String {
-        let mut symbols = SymbolTable::new();
-        let mut system = System::new();
-        system.ignore(ignore, &mut symbols);
-        for r in rules {
-            system
-                .add_production(r, None, 0, &mut symbols)
-                .expect("rule");
-        }
-        system.prepare(&symbols).expect("prepare");
-        let src = system
-            .parse_string(text, &mut symbols, &mut || 0.0)
-            .expect("string");
-        let mut out = ModuleString::new();
-        let opts = StepOptions {
-            step: 1,
-            max_modules: 1_000_000,
-            stream: false,
-        };
-        let mut rng = Mt::new(1);
-        system
-            .step(&src, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
-            .expect("step");
-        out.to_text(&symbols, "")
-    }
-
-    #[test]
-    fn the_pass_for_fixed_successors_matches_contexts_as_the_general_one() {
-        let rules = [
-            "b < a -> b",
-            "b -> a",
-            "a > b -> c",
-            "c < c > a -> d",
-            "+ -> -",
-        ];
-        // A rule with a condition (on a symbol the strings lack) sends the same rules down
-        // the general path.
-        let general: Vec<&str> = rules.iter().copied().chain(["Z : 1 > 0 -> Z"]).collect();
-        let mut rng = Mt::new(5);
-        let alphabet = ['a', 'b', 'c', '+', '[', ']'];
-        for k in 0..600 {
-            let len = 1 + rng.next_u32() as usize % 40;
-            let text: String = (0..len)
-                .map(|_| alphabet[rng.next_u32() as usize % alphabet.len()])
-                .collect();
-            // Ignored brackets too: skipped by contexts, still paired.
-            let ignore = ["+ -", "+ [", "+ ]"][k % 3];
-            assert_eq!(
-                step(&rules, ignore, &text),
-                step(&general, ignore, &text),
-                "{text} ignoring {ignore}"
-            );
-        }
-        assert_eq!(step(&rules, "+ -", "ba[b]a]a[+a"), "ab[a]a]a[-a");
     }
 }

@@ -6,6 +6,8 @@ use pge_engine::random::uniform;
 use rand_mt::Mt;
 use std::collections::HashMap;
 
+mod counting;
+
 struct Run {
     symbols: SymbolTable,
     system: System,
