@@ -197,7 +197,7 @@ pub fn leaf_set(params: &LeafParams) -> Result<TextureSet, TreeError> {
 /// the domed blade and its sunken veins; roughness.
 pub fn leaf_maps(params: &LeafParams) -> Maps {
     let n = params.size.clamp(16, 4096) as usize;
-    let mottle = Fractal::new(8, 8, 2, 61);
+    let mottle = Fractal::new(8, 8, 2, 61).for_pixels(n);
     let needles = Needles::new();
     let mut heights = vec![0.0f32; n * n];
     let mut color = vec![0u8; n * n * 4];
@@ -215,7 +215,7 @@ pub fn leaf_maps(params: &LeafParams) -> Maps {
             for xi in 0..n {
                 let u = (xi as f32 + 0.5) / n as f32;
                 let p = leaf_pixel(params.shape, u - 0.5, v, w, &needles);
-                let mottle = 0.05 * (mottle.at(u) - 0.5);
+                let mottle = 0.05 * (mottle.pixel(xi) - 0.5);
                 let g = srgb.byte(p.shade + mottle);
                 c[xi * 4..xi * 4 + 4].copy_from_slice(&[g, g, g, if p.inside { 255 } else { 0 }]);
                 h[xi] = p.height;

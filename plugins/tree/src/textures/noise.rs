@@ -59,6 +59,17 @@ pub(super) struct Lattice {
     px: u32,
     py: u32,
     values: Vec<f32>,
+    /// Where the pixel columns fall on the lattice (see [`Lattice::for_pixels`]).
+    columns: Vec<Column>,
+}
+
+/// Where one pixel column's `u` falls on a lattice: the lattice columns either side and the
+/// smoothed blend between them, as [`LatticeRow::at`] finds them.
+#[derive(Clone, Copy)]
+struct Column {
+    ix: u32,
+    jx: u32,
+    tx: f32,
 }
 
 impl Lattice {
@@ -66,7 +77,44 @@ impl Lattice {
         let values = (0..py)
             .flat_map(|y| (0..px).map(move |x| unit(hash(x, y, seed))))
             .collect();
-        Lattice { px, py, values }
+        Lattice {
+            px,
+            py,
+            values,
+            columns: Vec::new(),
+        }
+    }
+
+    /// The lattice with the columns of an `n`-pixel row found once, at the pixel centres
+    /// `u = (x + 0.5) / n`, for [`LatticeRow::pixel`]: every row of a map shares them.
+    pub(super) fn for_pixels(mut self, n: usize) -> Lattice {
+        self.columns = (0..n)
+            .map(|x| {
+                let u = (x as f32 + 0.5) / n as f32;
+                let (ix, jx, tx) = self.column(u);
+                Column {
+                    ix: ix as u32,
+                    jx: jx as u32,
+                    tx,
+                }
+            })
+            .collect();
+        self
+    }
+
+    /// The lattice columns either side of `u` and the smoothed blend between them.
+    #[inline]
+    fn column(&self, u: f32) -> (usize, usize, f32) {
+        let x = u * self.px as f32;
+        let fx = floor(x);
+        let tx = smooth(x - fx as f32);
+        let ix = wrap(fx, self.px) as usize;
+        let jx = if ix + 1 == self.px as usize {
+            0
+        } else {
+            ix + 1
+        };
+        (ix, jx, tx)
     }
 
     /// The noise along the row at `v`: its two lattice rows and the blend between them
@@ -78,7 +126,7 @@ impl Lattice {
         let jy = if iy + 1 == self.py { 0 } else { iy + 1 };
         let px = self.px as usize;
         LatticeRow {
-            px: self.px,
+            lattice: self,
             top: &self.values[iy as usize * px..][..px],
             bottom: &self.values[jy as usize * px..][..px],
             ty: smooth(y - fy as f32),
@@ -88,24 +136,30 @@ impl Lattice {
 
 /// One row of a [`Lattice`] (see [`Lattice::row`]).
 pub(super) struct LatticeRow<'a> {
-    px: u32,
+    lattice: &'a Lattice,
     top: &'a [f32],
     bottom: &'a [f32],
     ty: f32,
 }
 
 impl LatticeRow<'_> {
+    /// The noise at `u`.
     #[inline]
     pub(super) fn at(&self, u: f32) -> f32 {
-        let x = u * self.px as f32;
-        let fx = floor(x);
-        let tx = smooth(x - fx as f32);
-        let ix = wrap(fx, self.px) as usize;
-        let jx = if ix + 1 == self.px as usize {
-            0
-        } else {
-            ix + 1
-        };
+        let (ix, jx, tx) = self.lattice.column(u);
+        self.blend(ix, jx, tx)
+    }
+
+    /// The noise at the centre of pixel column `x`, the same number as [`LatticeRow::at`]
+    /// gives there, from the columns found once (the lattice made [`Lattice::for_pixels`]).
+    #[inline]
+    pub(super) fn pixel(&self, x: usize) -> f32 {
+        let c = self.lattice.columns[x];
+        self.blend(c.ix as usize, c.jx as usize, c.tx)
+    }
+
+    #[inline]
+    fn blend(&self, ix: usize, jx: usize, tx: f32) -> f32 {
         let top = self.top[ix] + (self.top[jx] - self.top[ix]) * tx;
         let bottom = self.bottom[ix] + (self.bottom[jx] - self.bottom[ix]) * tx;
         top + (bottom - top) * self.ty
@@ -131,6 +185,14 @@ impl Fractal {
         }
     }
 
+    /// The noise with every octave's pixel columns found once (see [`Lattice::for_pixels`]).
+    pub(super) fn for_pixels(self, n: usize) -> Fractal {
+        Fractal {
+            octaves: self.octaves.into_iter().map(|o| o.for_pixels(n)).collect(),
+            norm: self.norm,
+        }
+    }
+
     /// The noise along the row at `v` (see [`Lattice::row`]).
     pub(super) fn row(&self, v: f32) -> FractalRow<'_> {
         FractalRow {
@@ -152,6 +214,17 @@ impl FractalRow<'_> {
         let (mut sum, mut amp) = (0.0, 1.0);
         for octave in &self.octaves {
             sum += amp * octave.at(u);
+            amp *= 0.5;
+        }
+        sum * self.norm
+    }
+
+    /// The noise at the centre of pixel column `x` (see [`LatticeRow::pixel`]).
+    #[inline]
+    pub(super) fn pixel(&self, x: usize) -> f32 {
+        let (mut sum, mut amp) = (0.0, 1.0);
+        for octave in &self.octaves {
+            sum += amp * octave.pixel(x);
             amp *= 0.5;
         }
         sum * self.norm
@@ -386,6 +459,23 @@ mod tests {
         let fractal = Fractal::new(6, 6, 3, 31);
         let row = fractal.row(0.3);
         assert!((0..100).all(|i| (0.0..=1.0).contains(&row.at(i as f32 / 99.0))));
+    }
+
+    #[test]
+    fn pixel_columns_give_the_same_numbers_as_lookups() {
+        for n in [16usize, 100, 512] {
+            let lattice = Lattice::new(5, 5, 21).for_pixels(n);
+            let fractal = Fractal::new(64, 6, 6, 14).for_pixels(n);
+            for j in 0..20 {
+                let v = (j as f32 + 0.5) / 20.0;
+                let (row, frow) = (lattice.row(v), fractal.row(v));
+                for x in 0..n {
+                    let u = (x as f32 + 0.5) / n as f32;
+                    assert_eq!(row.pixel(x).to_bits(), row.at(u).to_bits(), "{n} {x} {v}");
+                    assert_eq!(frow.pixel(x).to_bits(), frow.at(u).to_bits(), "{n} {x}");
+                }
+            }
+        }
     }
 
     #[test]
