@@ -5,7 +5,7 @@ use std::f32::consts::TAU;
 use rayon::prelude::*;
 
 use super::maps::{Maps, Srgb, encode_maps, normal_map};
-use super::noise::{Cells, Fractal, Lattice, floor, hash, smoothstep, unit, wrap};
+use super::noise::{Cells, Fractal, Lattice, centre, floor, hash, smoothstep, unit, wrap};
 use super::{BarkParams, TextureSet};
 use crate::TreeError;
 use crate::options::BarkStyle;
@@ -39,9 +39,9 @@ where
         .zip(rough.par_chunks_mut(n * 3))
         .enumerate()
         .for_each(|(y, ((h, c), r))| {
-            let sample = row((y as f32 + 0.5) / n as f32);
+            let sample = row(centre(y, n));
             for x in 0..n {
-                let s = sample(x, (x as f32 + 0.5) / n as f32);
+                let s = sample(x, centre(x, n));
                 h[x] = s.height;
                 for i in 0..3 {
                     c[x * 3 + i] = srgb.byte(s.shade[i]);
@@ -69,12 +69,14 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let light = grey(1.5);
             fill_bark(n, |v| {
                 let (warp, fibre) = (warp.row(v), fibre.row(v));
-                let (ridges, cracks) = (ridges.row(v), cracks.row(v));
-                move |x, u| {
-                    let wu = u + 0.05 * (warp.pixel(x) - 0.5);
-                    let (f1, f2, id) = ridges.at(wu);
+                let ridges = ridges
+                    .row(v)
+                    .many((0..n).map(|x| centre(x, n) + 0.05 * (warp.pixel(x) - 0.5)));
+                let cracks = cracks.row(v).many((0..n).map(|x| centre(x, n)));
+                move |x, _| {
+                    let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.02, 0.6, f2 - f1);
-                    let (g1, g2, _) = cracks.at(u);
+                    let (g1, g2, _) = cracks.at(x);
                     let crack = smoothstep(0.0, 0.1, g2 - g1);
                     let height =
                         (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre.pixel(x))
@@ -99,13 +101,21 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let light = grey(1.3);
             fill_bark(n, |v| {
                 let (warp_u, warp_v, grain) = (warp_u.row(v), warp_v.row(v), grain.row(v));
-                let (plates, scales) = (&plates, &scales);
-                move |x, u| {
-                    let wu = u + 0.04 * (warp_u.pixel(x) - 0.5);
-                    let wv = v + 0.04 * (warp_v.pixel(x) - 0.5);
-                    let (f1, f2, id) = plates.at(wu, wv);
+                // The row's warped points, and both cellular noises at them.
+                let (wu, wv): (Vec<f32>, Vec<f32>) = (0..n)
+                    .map(|x| {
+                        let u = centre(x, n);
+                        (
+                            u + 0.04 * (warp_u.pixel(x) - 0.5),
+                            v + 0.04 * (warp_v.pixel(x) - 0.5),
+                        )
+                    })
+                    .unzip();
+                let (plates, scales) = (plates.many(&wu, &wv), scales.many(&wu, &wv));
+                move |x, _| {
+                    let (f1, f2, id) = plates.at(x);
                     let crack = smoothstep(0.0, 0.14, f2 - f1);
-                    let (g1, g2, sub) = scales.at(wu, wv);
+                    let (g1, g2, sub) = scales.at(x);
                     let scale = smoothstep(0.0, 0.08, g2 - g1);
                     let tilt = 0.15 * (1.0 - f1);
                     let grain = grain.pixel(x);
@@ -170,12 +180,14 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let fibres = Fractal::new(96, 4, 3, 43);
             let light = grey(1.4);
             fill_bark(n, |v| {
-                let (warp, fibres, ridges) = (warp.row(v), fibres.row(v), ridges.row(v));
+                let (warp, fibres) = (warp.row(v), fibres.row(v));
                 let sway = 0.03 * (v * TAU * 2.0).sin();
                 let wave = 0.01 * (v * 40.0).sin();
+                let ridges = ridges
+                    .row(v)
+                    .many((0..n).map(|x| centre(x, n) + 0.06 * (warp.pixel(x) - 0.5) + sway));
                 move |x, u| {
-                    let wu = u + 0.06 * (warp.pixel(x) - 0.5) + sway;
-                    let (f1, f2, id) = ridges.at(wu);
+                    let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.0, 0.35, f2 - f1);
                     let fibres = fibres.at(u + wave);
                     let height =

@@ -1,6 +1,8 @@
 //! Noise: hashed, periodic, cheap. Value noise from lattice tables read row by row, and
 //! cellular (Worley) noise from a table of feature points.
 
+use std::ops::Range;
+
 /// A 32-bit hash of a lattice point and a seed (integer mixing, no tables).
 pub(super) fn hash(x: u32, y: u32, seed: u32) -> u32 {
     let mut h =
@@ -10,6 +12,12 @@ pub(super) fn hash(x: u32, y: u32, seed: u32) -> u32 {
     h ^= h >> 12;
     h = h.wrapping_mul(0x297a_2d39);
     h ^ (h >> 15)
+}
+
+/// The `u` (or `v`) of the centre of pixel `i` of `n`.
+#[inline]
+pub(super) fn centre(i: usize, n: usize) -> f32 {
+    (i as f32 + 0.5) / n as f32
 }
 
 /// A hash as a number in `[0, 1)`.
@@ -90,8 +98,7 @@ impl Lattice {
     pub(super) fn for_pixels(mut self, n: usize) -> Lattice {
         self.columns = (0..n)
             .map(|x| {
-                let u = (x as f32 + 0.5) / n as f32;
-                let (ix, jx, tx) = self.column(u);
+                let (ix, jx, tx) = self.column(centre(x, n));
                 Column {
                     ix: ix as u32,
                     jx: jx as u32,
@@ -256,9 +263,60 @@ impl Cells {
     }
 
     /// The nearest and second-nearest feature distances at `(u, v)` and the nearest cell's
-    /// hash.
-    #[inline]
+    /// hash: one lookup, the definition [`Cells::many`] is held to.
+    #[cfg(test)]
     pub(super) fn at(&self, u: f32, v: f32) -> (f32, f32, u32) {
+        self.nearest(u, v).distances()
+    }
+
+    /// [`Cells::at`] of every `(us[i], vs[i])`, the same numbers as one lookup at a time,
+    /// for points that mostly follow each other in the same cell (a row of pixels): every
+    /// run of points in one cell is measured against that cell's nine feature points, loaded
+    /// once, in a loop the compiler vectorizes; square roots four at a time at the end.
+    pub(super) fn many(&self, us: &[f32], vs: &[f32]) -> Distances {
+        let stride = self.nx as usize + 2;
+        let (mut cell, mut rxs, mut rys) = (Vec::new(), Vec::new(), Vec::new());
+        for (&u, &v) in us.iter().zip(vs) {
+            let (x, y) = (
+                u.rem_euclid_unit() * self.nx as f32,
+                v.rem_euclid_unit() * self.ny as f32,
+            );
+            let cx = (x as u32).min(self.nx - 1);
+            let cy = (y as u32).min(self.ny - 1);
+            cell.push(cy as usize * stride + cx as usize);
+            rxs.push(x - cx as f32);
+            rys.push(y - cy as f32);
+        }
+        let mut at = Distances::new(cell.len());
+        for run in runs(&cell) {
+            let corner = cell[run.start];
+            let points: [(f32, f32, u32); 9] =
+                std::array::from_fn(|k| self.points[corner + k / 3 * stride + k % 3]);
+            let (f1, f2, ids) = at.run(run.clone());
+            for ((((&rx, &ry), f1), f2), id) in rxs[run.clone()]
+                .iter()
+                .zip(&rys[run])
+                .zip(f1)
+                .zip(f2)
+                .zip(ids)
+            {
+                // As `nearest` measures, in the same order.
+                let mut nearest = Nearest::new();
+                for (k, &(px, py, h)) in points.iter().enumerate() {
+                    let oy = (k / 3) as f32 - 1.0 - ry;
+                    let ex = (k % 3) as f32 - 1.0 - rx + px;
+                    let ey = oy + py;
+                    nearest.add(ex * ex + ey * ey, h);
+                }
+                (*f1, *f2, *id) = (nearest.f1, nearest.f2, nearest.id);
+            }
+        }
+        at.roots();
+        at
+    }
+
+    #[cfg(test)]
+    fn nearest(&self, u: f32, v: f32) -> Nearest {
         let (x, y) = (
             u.rem_euclid_unit() * self.nx as f32,
             v.rem_euclid_unit() * self.ny as f32,
@@ -277,7 +335,7 @@ impl Cells {
                 nearest.add(ex * ex + ey * ey, h);
             }
         }
-        nearest.distances()
+        nearest
     }
 
     /// The noise along the row at `v`: the squared `v` distances from the row to the
@@ -314,9 +372,45 @@ pub(super) struct CellsRow {
 }
 
 impl CellsRow {
-    /// The nearest and second-nearest feature distances at `u` and the nearest cell's hash.
-    #[inline]
+    /// The nearest and second-nearest feature distances at `u` and the nearest cell's hash:
+    /// one lookup, the definition [`CellsRow::many`] is held to.
+    #[cfg(test)]
     pub(super) fn at(&self, u: f32) -> (f32, f32, u32) {
+        self.nearest(u).distances()
+    }
+
+    /// [`CellsRow::at`] of every `us[i]`, the same numbers as one lookup at a time (see
+    /// [`Cells::many`]).
+    pub(super) fn many(&self, us: impl IntoIterator<Item = f32>) -> Distances {
+        let stride = self.nx as usize + 2;
+        let (mut cell, mut rxs) = (Vec::new(), Vec::new());
+        for u in us {
+            let x = u.rem_euclid_unit() * self.nx as f32;
+            let cx = (x as u32).min(self.nx - 1);
+            cell.push(cx as usize);
+            rxs.push(x - cx as f32);
+        }
+        let mut at = Distances::new(cell.len());
+        for run in runs(&cell) {
+            let cx = cell[run.start];
+            let points: [(f32, f32, u32); 9] =
+                std::array::from_fn(|k| self.points[k / 3 * stride + cx + k % 3]);
+            let (f1, f2, ids) = at.run(run.clone());
+            for (((&rx, f1), f2), id) in rxs[run].iter().zip(f1).zip(f2).zip(ids) {
+                let mut nearest = Nearest::new();
+                for (k, &(px, ey2, h)) in points.iter().enumerate() {
+                    let ex = (k % 3) as f32 - 1.0 - rx + px;
+                    nearest.add(ex * ex + ey2, h);
+                }
+                (*f1, *f2, *id) = (nearest.f1, nearest.f2, nearest.id);
+            }
+        }
+        at.roots();
+        at
+    }
+
+    #[cfg(test)]
+    fn nearest(&self, u: f32) -> Nearest {
         let x = u.rem_euclid_unit() * self.nx as f32;
         let cx = (x as u32).min(self.nx - 1) as usize;
         let rx = x - cx as f32;
@@ -329,7 +423,62 @@ impl CellsRow {
                 nearest.add(ex * ex + ey2, h);
             }
         }
-        nearest.distances()
+        nearest
+    }
+}
+
+/// The runs of equal values in `cells`, in order.
+fn runs(cells: &[usize]) -> impl Iterator<Item = Range<usize>> + '_ {
+    let mut start = 0;
+    std::iter::from_fn(move || {
+        let first = *cells.get(start)?;
+        let len = cells[start..]
+            .iter()
+            .position(|&c| c != first)
+            .unwrap_or(cells.len() - start);
+        start += len;
+        Some(start - len..start)
+    })
+}
+
+/// Cellular noise at many points (see [`Cells::many`]): squared distances until
+/// [`Distances::roots`].
+pub(super) struct Distances {
+    f1: Vec<f32>,
+    f2: Vec<f32>,
+    ids: Vec<u32>,
+}
+
+impl Distances {
+    fn new(n: usize) -> Distances {
+        Distances {
+            f1: vec![0.0; n],
+            f2: vec![0.0; n],
+            ids: vec![0; n],
+        }
+    }
+
+    /// The nearest, second-nearest and nearest hash of the points in `run`.
+    fn run(&mut self, run: Range<usize>) -> (&mut [f32], &mut [f32], &mut [u32]) {
+        (
+            &mut self.f1[run.clone()],
+            &mut self.f2[run.clone()],
+            &mut self.ids[run],
+        )
+    }
+
+    /// Squared distances to distances.
+    fn roots(&mut self) {
+        for d in self.f1.iter_mut().chain(&mut self.f2) {
+            *d = d.sqrt();
+        }
+    }
+
+    /// The nearest and second-nearest feature distances at point `i` and the nearest cell's
+    /// hash, as [`Cells::at`] gives them.
+    #[inline]
+    pub(super) fn at(&self, i: usize) -> (f32, f32, u32) {
+        (self.f1[i], self.f2[i], self.ids[i])
     }
 }
 
@@ -362,7 +511,7 @@ impl Nearest {
         self.id = if closer { h } else { self.id };
     }
 
-    #[inline]
+    #[cfg(test)]
     fn distances(&self) -> (f32, f32, u32) {
         (self.f1.sqrt(), self.f2.sqrt(), self.id)
     }
@@ -440,6 +589,22 @@ mod tests {
                     assert_eq!(row.at(u), cells.at(u, v), "{u} {v}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn many_lookups_give_the_same_numbers_as_one_at_a_time() {
+        let cells = Cells::new(5, 4, 23);
+        let us: Vec<f32> = (0..300).map(|i| i as f32 / 281.0 - 0.03).collect();
+        let vs: Vec<f32> = (0..300)
+            .map(|i| (i * 37 % 300) as f32 / 290.0 - 0.02)
+            .collect();
+        let many = cells.many(&us, &vs);
+        let row = cells.row(0.37);
+        let row_many = row.many(us.iter().copied());
+        for (i, (&u, &v)) in us.iter().zip(&vs).enumerate() {
+            assert_eq!(many.at(i), cells.at(u, v), "{u} {v}");
+            assert_eq!(row_many.at(i), row.at(u), "{u}");
         }
     }
 
