@@ -68,19 +68,19 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let fibre = Fractal::new(64, 6, 2, 14).for_pixels(n);
             let light = grey(1.5);
             fill_bark(n, |v| {
-                let (warp, fibre) = (warp.row(v), fibre.row(v));
+                let (warp, fibre) = (warp.row(v).values(), fibre.row(v).values());
                 let ridges = ridges
                     .row(v)
-                    .many((0..n).map(|x| centre(x, n) + 0.05 * (warp.pixel(x) - 0.5)));
+                    .many((0..n).map(|x| centre(x, n) + 0.05 * (warp[x] - 0.5)));
                 let cracks = cracks.row(v).many((0..n).map(|x| centre(x, n)));
+                #[inline(always)]
                 move |x, _| {
                     let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.02, 0.6, f2 - f1);
                     let (g1, g2, _) = cracks.at(x);
                     let crack = smoothstep(0.0, 0.1, g2 - g1);
-                    let height =
-                        (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre.pixel(x))
-                            * (0.94 + 0.06 * crack);
+                    let height = (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre[x])
+                        * (0.94 + 0.06 * crack);
                     let top = mix(c, light, 0.35 * smoothstep(0.6, 0.95, height));
                     Sample {
                         height,
@@ -100,25 +100,24 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let warm = [c[0] * 1.35, c[1] * 1.05, c[2] * 0.85];
             let light = grey(1.3);
             fill_bark(n, |v| {
-                let (warp_u, warp_v, grain) = (warp_u.row(v), warp_v.row(v), grain.row(v));
+                let (warp_u, warp_v) = (warp_u.row(v).values(), warp_v.row(v).values());
+                let grain = grain.row(v).values();
                 // The row's warped points, and both cellular noises at them.
                 let (wu, wv): (Vec<f32>, Vec<f32>) = (0..n)
                     .map(|x| {
                         let u = centre(x, n);
-                        (
-                            u + 0.04 * (warp_u.pixel(x) - 0.5),
-                            v + 0.04 * (warp_v.pixel(x) - 0.5),
-                        )
+                        (u + 0.04 * (warp_u[x] - 0.5), v + 0.04 * (warp_v[x] - 0.5))
                     })
                     .unzip();
                 let (plates, scales) = (plates.many(&wu, &wv), scales.many(&wu, &wv));
+                #[inline(always)]
                 move |x, _| {
                     let (f1, f2, id) = plates.at(x);
                     let crack = smoothstep(0.0, 0.14, f2 - f1);
                     let (g1, g2, sub) = scales.at(x);
                     let scale = smoothstep(0.0, 0.08, g2 - g1);
                     let tilt = 0.15 * (1.0 - f1);
-                    let grain = grain.pixel(x);
+                    let grain = grain[x];
                     let height = crack
                         * (0.5
                             + 0.2 * unit(id)
@@ -147,11 +146,12 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let light = grey(1.25);
             let dark = [c[0] * 0.18, c[1] * 0.15, c[2] * 0.13];
             fill_bark(n, |v| {
-                let mottle = mottle.row(v);
+                let mottle = mottle.row(v).values();
                 let gy = v * 22.0;
                 let cy = floor(gy) as f32;
+                #[inline(always)]
                 move |x, u| {
-                    let mottle = mottle.pixel(x);
+                    let mottle = mottle[x];
                     let gx = u * 7.0;
                     let cx = floor(gx) as f32;
                     let h = hash(wrap(cx as i64, 7), wrap(cy as i64, 22), 32);
@@ -180,12 +180,13 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             let fibres = Fractal::new(96, 4, 3, 43);
             let light = grey(1.4);
             fill_bark(n, |v| {
-                let (warp, fibres) = (warp.row(v), fibres.row(v));
+                let (warp, fibres) = (warp.row(v).values(), fibres.row(v));
                 let sway = 0.03 * (v * TAU * 2.0).sin();
                 let wave = 0.01 * (v * 40.0).sin();
                 let ridges = ridges
                     .row(v)
-                    .many((0..n).map(|x| centre(x, n) + 0.06 * (warp.pixel(x) - 0.5) + sway));
+                    .many((0..n).map(|x| centre(x, n) + 0.06 * (warp[x] - 0.5) + sway));
+                #[inline(always)]
                 move |x, u| {
                     let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.0, 0.35, f2 - f1);

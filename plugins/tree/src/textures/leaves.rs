@@ -211,11 +211,11 @@ pub fn leaf_maps(params: &LeafParams) -> Maps {
         .for_each(|(y, ((h, c), r))| {
             let v = (y as f32 + 0.5) / n as f32;
             let w = blade_half_width(params.shape, (v - 0.12) / 0.86);
-            let mottle = mottle.row(v);
+            let mottle = mottle.row(v).values();
             for xi in 0..n {
                 let u = (xi as f32 + 0.5) / n as f32;
                 let p = leaf_pixel(params.shape, u - 0.5, v, w, &needles);
-                let mottle = 0.05 * (mottle.pixel(xi) - 0.5);
+                let mottle = 0.05 * (mottle[xi] - 0.5);
                 let g = srgb.byte(p.shade + mottle);
                 c[xi * 4..xi * 4 + 4].copy_from_slice(&[g, g, g, if p.inside { 255 } else { 0 }]);
                 h[xi] = p.height;

@@ -69,6 +69,10 @@ pub(super) struct Lattice {
     values: Vec<f32>,
     /// Where the pixel columns fall on the lattice (see [`Lattice::for_pixels`]).
     columns: Vec<Column>,
+    /// The same as runs of pixel columns between the same two lattice columns, and every
+    /// column's blend, for [`LatticeRow::values`].
+    runs: Vec<(Range<usize>, u32, u32)>,
+    tx: Vec<f32>,
 }
 
 /// Where one pixel column's `u` falls on a lattice: the lattice columns either side and the
@@ -90,6 +94,8 @@ impl Lattice {
             py,
             values,
             columns: Vec::new(),
+            runs: Vec::new(),
+            tx: Vec::new(),
         }
     }
 
@@ -106,6 +112,14 @@ impl Lattice {
                 }
             })
             .collect();
+        self.tx = self.columns.iter().map(|c| c.tx).collect();
+        self.runs.clear();
+        for (x, c) in self.columns.iter().enumerate() {
+            match self.runs.last_mut() {
+                Some((run, ix, jx)) if (*ix, *jx) == (c.ix, c.jx) => run.end = x + 1,
+                _ => self.runs.push((x..x + 1, c.ix, c.jx)),
+            }
+        }
         self
     }
 
@@ -158,11 +172,38 @@ impl LatticeRow<'_> {
     }
 
     /// The noise at the centre of pixel column `x`, the same number as [`LatticeRow::at`]
-    /// gives there, from the columns found once (the lattice made [`Lattice::for_pixels`]).
-    #[inline]
+    /// gives there, from the columns found once (the lattice made [`Lattice::for_pixels`]):
+    /// the definition [`LatticeRow::values`] is held to.
+    #[cfg(test)]
     pub(super) fn pixel(&self, x: usize) -> f32 {
         let c = self.lattice.columns[x];
         self.blend(c.ix as usize, c.jx as usize, c.tx)
+    }
+
+    /// The noise at every pixel column (the lattice made [`Lattice::for_pixels`]), the same
+    /// numbers as [`LatticeRow::pixel`]: each run of columns between the same two lattice
+    /// columns in a loop the compiler vectorizes.
+    pub(super) fn values(&self) -> Vec<f32> {
+        let mut out = vec![0.0; self.lattice.tx.len()];
+        self.each(&mut out, |o, value| *o = value);
+        out
+    }
+
+    /// Calls `put` with every pixel column's slot in `out` and the noise there.
+    #[inline(always)]
+    fn each(&self, out: &mut [f32], put: impl Fn(&mut f32, f32)) {
+        for (run, ix, jx) in &self.lattice.runs {
+            let (ix, jx) = (*ix as usize, *jx as usize);
+            // As `blend` finds them.
+            let (top0, top_d) = (self.top[ix], self.top[jx] - self.top[ix]);
+            let (bottom0, bottom_d) = (self.bottom[ix], self.bottom[jx] - self.bottom[ix]);
+            let tx = &self.lattice.tx[run.clone()];
+            for (o, &tx) in out[run.clone()].iter_mut().zip(tx) {
+                let top = top0 + top_d * tx;
+                let bottom = bottom0 + bottom_d * tx;
+                put(o, top + (bottom - top) * self.ty);
+            }
+        }
     }
 
     #[inline]
@@ -227,7 +268,7 @@ impl FractalRow<'_> {
     }
 
     /// The noise at the centre of pixel column `x` (see [`LatticeRow::pixel`]).
-    #[inline]
+    #[cfg(test)]
     pub(super) fn pixel(&self, x: usize) -> f32 {
         let (mut sum, mut amp) = (0.0, 1.0);
         for octave in &self.octaves {
@@ -235,6 +276,21 @@ impl FractalRow<'_> {
             amp *= 0.5;
         }
         sum * self.norm
+    }
+
+    /// The noise at every pixel column, the same numbers as [`FractalRow::pixel`] (see
+    /// [`LatticeRow::values`]).
+    pub(super) fn values(&self) -> Vec<f32> {
+        let n = self.octaves.first().map_or(0, |o| o.lattice.tx.len());
+        let (mut sum, mut amp) = (vec![0.0f32; n], 1.0f32);
+        for octave in &self.octaves {
+            octave.each(&mut sum, |s, value| *s += amp * value);
+            amp *= 0.5;
+        }
+        for s in &mut sum {
+            *s *= self.norm;
+        }
+        sum
     }
 }
 
@@ -638,6 +694,12 @@ mod tests {
                     let u = (x as f32 + 0.5) / n as f32;
                     assert_eq!(row.pixel(x).to_bits(), row.at(u).to_bits(), "{n} {x} {v}");
                     assert_eq!(frow.pixel(x).to_bits(), frow.at(u).to_bits(), "{n} {x}");
+                }
+                let (values, fvalues) = (row.values(), frow.values());
+                assert_eq!(values.len(), n);
+                for x in 0..n {
+                    assert_eq!(values[x].to_bits(), row.pixel(x).to_bits(), "{n} {x}");
+                    assert_eq!(fvalues[x].to_bits(), frow.pixel(x).to_bits(), "{n} {x}");
                 }
             }
         }
