@@ -186,11 +186,13 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
                 let ridges = ridges
                     .row(v)
                     .many((0..n).map(|x| centre(x, n) + 0.06 * (warp[x] - 0.5) + sway));
+                let wavy: Vec<f32> = (0..n).map(|x| centre(x, n) + wave).collect();
+                let fibres = fibres.values_at(&wavy);
                 #[inline(always)]
-                move |x, u| {
+                move |x, _| {
                     let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.0, 0.35, f2 - f1);
-                    let fibres = fibres.at(u + wave);
+                    let fibres = fibres[x];
                     let height =
                         0.55 * ridge + 0.35 * fibres * (0.4 + 0.6 * ridge) + 0.1 * unit(id);
                     Sample {
