@@ -4,7 +4,7 @@ use std::f32::consts::TAU;
 
 use rayon::prelude::*;
 
-use super::maps::{Maps, Srgb, encode_maps, normal_map};
+use super::maps::{Maps, Srgb, Surface};
 use super::noise::{Cells, Fractal, Lattice, centre, floor, hash, smoothstep, unit, wrap};
 use super::{BarkParams, TextureSet};
 use crate::TreeError;
@@ -217,30 +217,35 @@ fn relief(style: BarkStyle) -> f32 {
     }
 }
 
-/// The bark set of `params`: its maps generated ([`bark_maps`]) and PNG-encoded.
+/// The bark set of `params`: its maps generated (as [`bark_maps`]) and PNG-encoded.
 pub fn bark_set(params: &BarkParams) -> Result<TextureSet, TreeError> {
-    encode_maps("bark", bark_maps(params))
+    bark_surface(params).encode("bark")
 }
 
 /// The bark maps of `params`: every pixel's sample in parallel rows, the normal map from
 /// the height field (wrapping, as the texture tiles).
 pub fn bark_maps(params: &BarkParams) -> Maps {
+    bark_surface(params).maps()
+}
+
+fn bark_surface(params: &BarkParams) -> Surface {
     let n = params.size.clamp(16, 4096) as usize;
-    let (heights, color, rough) = bark_pixels(params.style, params.color, n);
-    let strength = relief(params.style) * params.depth * n as f32 / 512.0;
-    let normal = normal_map(&heights, n, strength, true);
-    Maps {
-        size: n as u32,
+    let (heights, color, roughness) = bark_pixels(params.style, params.color, n);
+    Surface {
+        n,
+        heights,
+        strength: relief(params.style) * params.depth * n as f32 / 512.0,
+        wrap: true,
         color,
         channels: 3,
-        normal,
-        roughness: rough,
+        roughness,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::textures::encode_maps;
     use crate::textures::test_support::{bark, decode};
 
     #[test]
@@ -306,6 +311,28 @@ mod tests {
         }
         colors.dedup();
         assert_eq!(colors.len(), 4, "four different patterns");
+    }
+
+    #[test]
+    fn a_set_is_its_maps_encoded() {
+        for style in [BarkStyle::Plated, BarkStyle::Smooth] {
+            let params = bark(style, 48);
+            let (set, maps) = (bark_set(&params).expect("set"), bark_maps(&params));
+            assert_eq!(
+                set,
+                encode_maps("bark", maps).expect("encodes"),
+                "{style:?}"
+            );
+        }
+        let leaf = crate::LeafParams {
+            shape: crate::LeafShape::Lobed,
+            size: 48,
+        };
+        let (set, maps) = (
+            crate::leaf_set(&leaf).expect("set"),
+            crate::leaf_maps(&leaf),
+        );
+        assert_eq!(set, encode_maps("leaf", maps).expect("encodes"));
     }
 
     #[test]

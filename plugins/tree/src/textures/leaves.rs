@@ -4,7 +4,7 @@ use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use rayon::prelude::*;
 
-use super::maps::{Maps, Srgb, encode_maps, normal_map};
+use super::maps::{Maps, Srgb, Surface};
 use super::needles::Needles;
 use super::noise::{Fractal, floor, smoothstep};
 use super::{LeafParams, TextureSet};
@@ -187,15 +187,19 @@ fn atan2(y: f32, x: f32) -> f32 {
     if y < 0.0 { -a } else { a }
 }
 
-/// The leaf set of `params`: its maps generated ([`leaf_maps`]) and PNG-encoded.
+/// The leaf set of `params`: its maps generated (as [`leaf_maps`]) and PNG-encoded.
 pub fn leaf_set(params: &LeafParams) -> Result<TextureSet, TreeError> {
-    encode_maps("leaf", leaf_maps(params))
+    leaf_surface(params).encode("leaf")
 }
 
 /// The leaf maps of `params`: a near-white silhouette (each leaf's vertex colour gives the
 /// hue) with lighter veins, alpha 255 inside and 0 outside for masking; the normal map of
 /// the domed blade and its sunken veins; roughness.
 pub fn leaf_maps(params: &LeafParams) -> Maps {
+    leaf_surface(params).maps()
+}
+
+fn leaf_surface(params: &LeafParams) -> Surface {
     let n = params.size.clamp(16, 4096) as usize;
     let mottle = Fractal::new(8, 8, 2, 61).for_pixels(n);
     let needles = Needles::new();
@@ -222,12 +226,13 @@ pub fn leaf_maps(params: &LeafParams) -> Maps {
                 r[xi * 3 + 1] = (p.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
             }
         });
-    let normal = normal_map(&heights, n, 3.0 * n as f32 / 512.0, false);
-    Maps {
-        size: n as u32,
+    Surface {
+        n,
+        heights,
+        strength: 3.0 * n as f32 / 512.0,
+        wrap: false,
         color,
         channels: 4,
-        normal,
         roughness: rough,
     }
 }
