@@ -129,6 +129,26 @@ macro_rules! species {
 
 species!(oak, poplar, conifer, willow, bush, vase, topiary);
 
+/// Every script in `scripts/species/`, including those the tests above do not run: bark and
+/// leaves each carry base colour, normal and roughness maps of 512 px or more (issue 17).
+#[test]
+fn every_species_carries_normal_and_roughness_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut scripts: Vec<String> = std::fs::read_dir(common::root().join("scripts/species"))
+        .expect("scripts/species")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lua"))
+        .filter_map(|p| Some(format!("scripts/species/{}", p.file_name()?.to_str()?)))
+        .collect();
+    scripts.sort();
+    assert!(scripts.len() >= 7, "{scripts:?}");
+    for script in &scripts {
+        let (_, glb) = run_tree(script, dir.path(), &[]);
+        check_tree_glb(script, &glb);
+    }
+}
+
 /// The skeleton in the oak's glb: one tree rooted at node 0, parents before children, tips
 /// at the tip radius and the pipe model `r^n = sum of r_child^n` at every fork (n = 2.2 in
 /// oak.lua).

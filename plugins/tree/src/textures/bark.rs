@@ -4,8 +4,8 @@ use std::f32::consts::TAU;
 
 use rayon::prelude::*;
 
-use super::maps::{Maps, Srgb, encode_maps, normal_map};
-use super::noise::{Cells, Fractal, Lattice, floor, hash, smoothstep, unit, wrap};
+use super::maps::{Maps, Srgb, Surface};
+use super::noise::{Cells, Fractal, Lattice, centre, floor, hash, smoothstep, unit, wrap};
 use super::{BarkParams, TextureSet};
 use crate::TreeError;
 use crate::options::BarkStyle;
@@ -23,11 +23,11 @@ fn mix(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {
 }
 
 /// Fills the bark maps of an `n x n` tile in parallel rows: `row(v)` prepares what a row
-/// shares and returns the sample at each `u` of it.
+/// shares and returns the sample at each pixel column `x` (at `u`) of it.
 fn fill_bark<R, S>(n: usize, row: R) -> (Vec<f32>, Vec<u8>, Vec<u8>)
 where
     R: Fn(f32) -> S + Sync,
-    S: Fn(f32) -> Sample,
+    S: Fn(usize, f32) -> Sample,
 {
     let mut heights = vec![0.0f32; n * n];
     let mut color = vec![0u8; n * n * 3];
@@ -39,9 +39,9 @@ where
         .zip(rough.par_chunks_mut(n * 3))
         .enumerate()
         .for_each(|(y, ((h, c), r))| {
-            let sample = row((y as f32 + 0.5) / n as f32);
+            let sample = row(centre(y, n));
             for x in 0..n {
-                let s = sample((x as f32 + 0.5) / n as f32);
+                let s = sample(x, centre(x, n));
                 h[x] = s.height;
                 for i in 0..3 {
                     c[x * 3 + i] = srgb.byte(s.shade[i]);
@@ -63,21 +63,24 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
             // Oak: long ridges between deep vertical furrows. Cells 3.5 times taller than
             // wide, their borders wandering with a low noise, are the ridges; the furrows are
             // the borders (F2 - F1 small), with small cross-cracks on the ridges.
-            let (warp, ridges) = (Lattice::new(4, 3, 11), Cells::new(8, 2, 12));
-            let (cracks, fibre) = (Cells::new(16, 6, 13), Fractal::new(64, 6, 2, 14));
+            let (warp, ridges) = (Lattice::new(4, 3, 11).for_pixels(n), Cells::new(8, 2, 12));
+            let cracks = Cells::new(16, 6, 13);
+            let fibre = Fractal::new(64, 6, 2, 14).for_pixels(n);
             let light = grey(1.5);
             fill_bark(n, |v| {
-                let (warp, fibre) = (warp.row(v), fibre.row(v));
-                let (ridges, cracks) = (ridges.row(v), cracks.row(v));
-                move |u| {
-                    let wu = u + 0.05 * (warp.at(u) - 0.5);
-                    let (f1, f2, id) = ridges.at(wu);
+                let (warp, fibre) = (warp.row(v).values(), fibre.row(v).values());
+                let ridges = ridges
+                    .row(v)
+                    .many((0..n).map(|x| centre(x, n) + 0.05 * (warp[x] - 0.5)));
+                let cracks = cracks.row(v).many((0..n).map(|x| centre(x, n)));
+                #[inline(always)]
+                move |x, _| {
+                    let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.02, 0.6, f2 - f1);
-                    let (g1, g2, _) = cracks.at(u);
+                    let (g1, g2, _) = cracks.at(x);
                     let crack = smoothstep(0.0, 0.1, g2 - g1);
-                    let height =
-                        (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre.at(u))
-                            * (0.94 + 0.06 * crack);
+                    let height = (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre[x])
+                        * (0.94 + 0.06 * crack);
                     let top = mix(c, light, 0.35 * smoothstep(0.6, 0.95, height));
                     Sample {
                         height,
@@ -90,23 +93,31 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
         BarkStyle::Plated => {
             // Pine: irregular flat plates split by narrow dark cracks, each plate its own
             // tint and tilt, flaking into smaller scales.
-            let (warp_u, warp_v) = (Lattice::new(5, 5, 21), Lattice::new(5, 5, 22));
+            let warp_u = Lattice::new(5, 5, 21).for_pixels(n);
+            let warp_v = Lattice::new(5, 5, 22).for_pixels(n);
             let (plates, scales) = (Cells::new(5, 4, 23), Cells::new(12, 9, 24));
-            let grain = Fractal::new(32, 32, 2, 25);
+            let grain = Fractal::new(32, 32, 2, 25).for_pixels(n);
             let warm = [c[0] * 1.35, c[1] * 1.05, c[2] * 0.85];
             let light = grey(1.3);
             fill_bark(n, |v| {
-                let (warp_u, warp_v, grain) = (warp_u.row(v), warp_v.row(v), grain.row(v));
-                let (plates, scales) = (&plates, &scales);
-                move |u| {
-                    let wu = u + 0.04 * (warp_u.at(u) - 0.5);
-                    let wv = v + 0.04 * (warp_v.at(u) - 0.5);
-                    let (f1, f2, id) = plates.at(wu, wv);
+                let (warp_u, warp_v) = (warp_u.row(v).values(), warp_v.row(v).values());
+                let grain = grain.row(v).values();
+                // The row's warped points, and both cellular noises at them.
+                let (wu, wv): (Vec<f32>, Vec<f32>) = (0..n)
+                    .map(|x| {
+                        let u = centre(x, n);
+                        (u + 0.04 * (warp_u[x] - 0.5), v + 0.04 * (warp_v[x] - 0.5))
+                    })
+                    .unzip();
+                let (plates, scales) = (plates.many(&wu, &wv), scales.many(&wu, &wv));
+                #[inline(always)]
+                move |x, _| {
+                    let (f1, f2, id) = plates.at(x);
                     let crack = smoothstep(0.0, 0.14, f2 - f1);
-                    let (g1, g2, sub) = scales.at(wu, wv);
+                    let (g1, g2, sub) = scales.at(x);
                     let scale = smoothstep(0.0, 0.08, g2 - g1);
                     let tilt = 0.15 * (1.0 - f1);
-                    let grain = grain.at(u);
+                    let grain = grain[x];
                     let height = crack
                         * (0.5
                             + 0.2 * unit(id)
@@ -131,15 +142,16 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
         BarkStyle::Smooth => {
             // Beech, birch: smooth mottled bark with lenticels, short dark horizontal marks,
             // one per cell at a random place and length.
-            let mottle = Fractal::new(6, 6, 3, 31);
+            let mottle = Fractal::new(6, 6, 3, 31).for_pixels(n);
             let light = grey(1.25);
             let dark = [c[0] * 0.18, c[1] * 0.15, c[2] * 0.13];
             fill_bark(n, |v| {
-                let mottle = mottle.row(v);
+                let mottle = mottle.row(v).values();
                 let gy = v * 22.0;
                 let cy = floor(gy) as f32;
-                move |u| {
-                    let mottle = mottle.at(u);
+                #[inline(always)]
+                move |x, u| {
+                    let mottle = mottle[x];
                     let gx = u * 7.0;
                     let cx = floor(gx) as f32;
                     let h = hash(wrap(cx as i64, 7), wrap(cy as i64, 22), 32);
@@ -164,18 +176,23 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
         BarkStyle::Fibrous => {
             // Willow: interlaced fibrous ridges, long diamond-shaped furrows and fine
             // vertical fibres.
-            let (warp, ridges) = (Lattice::new(3, 2, 41), Cells::new(11, 2, 42));
+            let (warp, ridges) = (Lattice::new(3, 2, 41).for_pixels(n), Cells::new(11, 2, 42));
             let fibres = Fractal::new(96, 4, 3, 43);
             let light = grey(1.4);
             fill_bark(n, |v| {
-                let (warp, fibres, ridges) = (warp.row(v), fibres.row(v), ridges.row(v));
+                let (warp, fibres) = (warp.row(v).values(), fibres.row(v));
                 let sway = 0.03 * (v * TAU * 2.0).sin();
                 let wave = 0.01 * (v * 40.0).sin();
-                move |u| {
-                    let wu = u + 0.06 * (warp.at(u) - 0.5) + sway;
-                    let (f1, f2, id) = ridges.at(wu);
+                let ridges = ridges
+                    .row(v)
+                    .many((0..n).map(|x| centre(x, n) + 0.06 * (warp[x] - 0.5) + sway));
+                let wavy: Vec<f32> = (0..n).map(|x| centre(x, n) + wave).collect();
+                let fibres = fibres.values_at(&wavy);
+                #[inline(always)]
+                move |x, _| {
+                    let (f1, f2, id) = ridges.at(x);
                     let ridge = smoothstep(0.0, 0.35, f2 - f1);
-                    let fibres = fibres.at(u + wave);
+                    let fibres = fibres[x];
                     let height =
                         0.55 * ridge + 0.35 * fibres * (0.4 + 0.6 * ridge) + 0.1 * unit(id);
                     Sample {
@@ -200,30 +217,35 @@ fn relief(style: BarkStyle) -> f32 {
     }
 }
 
-/// The bark set of `params`: its maps generated ([`bark_maps`]) and PNG-encoded.
+/// The bark set of `params`: its maps generated (as [`bark_maps`]) and PNG-encoded.
 pub fn bark_set(params: &BarkParams) -> Result<TextureSet, TreeError> {
-    encode_maps("bark", bark_maps(params))
+    bark_surface(params).encode("bark")
 }
 
 /// The bark maps of `params`: every pixel's sample in parallel rows, the normal map from
 /// the height field (wrapping, as the texture tiles).
 pub fn bark_maps(params: &BarkParams) -> Maps {
+    bark_surface(params).maps()
+}
+
+fn bark_surface(params: &BarkParams) -> Surface {
     let n = params.size.clamp(16, 4096) as usize;
-    let (heights, color, rough) = bark_pixels(params.style, params.color, n);
-    let strength = relief(params.style) * params.depth * n as f32 / 512.0;
-    let normal = normal_map(&heights, n, strength, true);
-    Maps {
-        size: n as u32,
+    let (heights, color, roughness) = bark_pixels(params.style, params.color, n);
+    Surface {
+        n,
+        heights,
+        strength: relief(params.style) * params.depth * n as f32 / 512.0,
+        wrap: true,
         color,
         channels: 3,
-        normal,
-        roughness: rough,
+        roughness,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::textures::encode_maps;
     use crate::textures::test_support::{bark, decode};
 
     #[test]
@@ -289,6 +311,28 @@ mod tests {
         }
         colors.dedup();
         assert_eq!(colors.len(), 4, "four different patterns");
+    }
+
+    #[test]
+    fn a_set_is_its_maps_encoded() {
+        for style in [BarkStyle::Plated, BarkStyle::Smooth] {
+            let params = bark(style, 48);
+            let (set, maps) = (bark_set(&params).expect("set"), bark_maps(&params));
+            assert_eq!(
+                set,
+                encode_maps("bark", maps).expect("encodes"),
+                "{style:?}"
+            );
+        }
+        let leaf = crate::LeafParams {
+            shape: crate::LeafShape::Lobed,
+            size: 48,
+        };
+        let (set, maps) = (
+            crate::leaf_set(&leaf).expect("set"),
+            crate::leaf_maps(&leaf),
+        );
+        assert_eq!(set, encode_maps("leaf", maps).expect("encodes"));
     }
 
     #[test]

@@ -117,4 +117,53 @@ mod tests {
         assert_eq!(again.color.png, sets[1][0].color.png);
         assert_eq!(again.normal.png, sets[1][0].normal.png);
     }
+
+    #[test]
+    fn a_forest_of_24_variants_built_in_parallel_shares_one_set_per_parameter_set() {
+        use crate::{LeafOptions, MeshOptions, TreeOptions, build_tree};
+        use glam::Vec3;
+        use pge_engine::geometry::Skeleton;
+
+        let mut skeleton = Skeleton::new();
+        let root = skeleton.push(Vec3::ZERO, None, 0.0, 0);
+        let fork = skeleton.push(Vec3::Y, Some(root), 0.0, 0);
+        skeleton.push(Vec3::new(-0.4, 1.6, 0.0), Some(fork), 0.0, 1);
+        skeleton.push(Vec3::new(0.4, 1.6, 0.1), Some(fork), 0.0, 1);
+        // Two bark colours among the variants; sizes no other test asks for, so this test
+        // sees its own sets in the process's cache.
+        let options = |i: usize| TreeOptions {
+            mesh: MeshOptions {
+                color: [0.31, 0.2 + 0.1 * (i % 2) as f32, 0.1, 1.0],
+                texture_size: 40,
+                ..MeshOptions::default()
+            },
+            leaves: Some(LeafOptions {
+                texture_size: 40,
+                ..LeafOptions::default()
+            }),
+            lod: None,
+        };
+        // Every variant through build_tree, in parallel as a forest builds them.
+        let trees: Vec<_> = (0..24)
+            .into_par_iter()
+            .map(|i| build_tree(&skeleton, &options(i), i as u64).expect("tree"))
+            .collect();
+        let maps = |i: usize, mesh: usize| {
+            let m = &trees[i].meshes[mesh].material;
+            [&m.texture, &m.normal_texture, &m.metallic_roughness_texture]
+                .map(|t| t.clone().expect("a procedural map"))
+        };
+        for i in 0..24 {
+            for (a, b) in maps(i, 0).iter().zip(maps(i % 2, 0).iter()) {
+                assert!(Arc::ptr_eq(a, b), "variant {i}: its colour's one bark set");
+            }
+            for (a, b) in maps(i, 1).iter().zip(maps(0, 1).iter()) {
+                assert!(Arc::ptr_eq(a, b), "variant {i}: the one leaf set");
+            }
+        }
+        assert!(
+            !Arc::ptr_eq(&maps(0, 0)[0], &maps(1, 0)[0]),
+            "two colours, two sets"
+        );
+    }
 }

@@ -4,7 +4,7 @@ use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use rayon::prelude::*;
 
-use super::maps::{Maps, Srgb, encode_maps, normal_map};
+use super::maps::{Maps, Srgb, Surface};
 use super::needles::Needles;
 use super::noise::{Fractal, floor, smoothstep};
 use super::{LeafParams, TextureSet};
@@ -187,17 +187,21 @@ fn atan2(y: f32, x: f32) -> f32 {
     if y < 0.0 { -a } else { a }
 }
 
-/// The leaf set of `params`: its maps generated ([`leaf_maps`]) and PNG-encoded.
+/// The leaf set of `params`: its maps generated (as [`leaf_maps`]) and PNG-encoded.
 pub fn leaf_set(params: &LeafParams) -> Result<TextureSet, TreeError> {
-    encode_maps("leaf", leaf_maps(params))
+    leaf_surface(params).encode("leaf")
 }
 
 /// The leaf maps of `params`: a near-white silhouette (each leaf's vertex colour gives the
 /// hue) with lighter veins, alpha 255 inside and 0 outside for masking; the normal map of
 /// the domed blade and its sunken veins; roughness.
 pub fn leaf_maps(params: &LeafParams) -> Maps {
+    leaf_surface(params).maps()
+}
+
+fn leaf_surface(params: &LeafParams) -> Surface {
     let n = params.size.clamp(16, 4096) as usize;
-    let mottle = Fractal::new(8, 8, 2, 61);
+    let mottle = Fractal::new(8, 8, 2, 61).for_pixels(n);
     let needles = Needles::new();
     let mut heights = vec![0.0f32; n * n];
     let mut color = vec![0u8; n * n * 4];
@@ -211,23 +215,24 @@ pub fn leaf_maps(params: &LeafParams) -> Maps {
         .for_each(|(y, ((h, c), r))| {
             let v = (y as f32 + 0.5) / n as f32;
             let w = blade_half_width(params.shape, (v - 0.12) / 0.86);
-            let mottle = mottle.row(v);
+            let mottle = mottle.row(v).values();
             for xi in 0..n {
                 let u = (xi as f32 + 0.5) / n as f32;
                 let p = leaf_pixel(params.shape, u - 0.5, v, w, &needles);
-                let mottle = 0.05 * (mottle.at(u) - 0.5);
+                let mottle = 0.05 * (mottle[xi] - 0.5);
                 let g = srgb.byte(p.shade + mottle);
                 c[xi * 4..xi * 4 + 4].copy_from_slice(&[g, g, g, if p.inside { 255 } else { 0 }]);
                 h[xi] = p.height;
                 r[xi * 3 + 1] = (p.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
             }
         });
-    let normal = normal_map(&heights, n, 3.0 * n as f32 / 512.0, false);
-    Maps {
-        size: n as u32,
+    Surface {
+        n,
+        heights,
+        strength: 3.0 * n as f32 / 512.0,
+        wrap: false,
         color,
         channels: 4,
-        normal,
         roughness: rough,
     }
 }

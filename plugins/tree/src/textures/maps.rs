@@ -25,6 +25,63 @@ pub struct Maps {
     pub roughness: Vec<u8>,
 }
 
+/// A set's pixels before its normal map: the height field the normal map is made from,
+/// base colour and roughness.
+pub(super) struct Surface {
+    /// Side of every map in pixels.
+    pub(super) n: usize,
+    /// Heights, `n x n`.
+    pub(super) heights: Vec<f32>,
+    /// Normal-map strength and whether the height field wraps (see [`normal_map`]).
+    pub(super) strength: f32,
+    pub(super) wrap: bool,
+    /// Base colour pixels, `channels` bytes each.
+    pub(super) color: Vec<u8>,
+    pub(super) channels: u8,
+    /// Metallic-roughness pixels, RGB.
+    pub(super) roughness: Vec<u8>,
+}
+
+impl Surface {
+    /// The three maps as pixels.
+    pub(super) fn maps(self) -> Maps {
+        Maps {
+            size: self.n as u32,
+            normal: normal_map(&self.heights, self.n, self.strength, self.wrap),
+            color: self.color,
+            channels: self.channels,
+            roughness: self.roughness,
+        }
+    }
+
+    /// The three maps PNG-encoded, named as [`encode_maps`] names them: the base colour and
+    /// roughness maps are encoded while the normal map is made (its rows shared by whichever
+    /// threads are free) and then encoded, so no core waits for the last encoder alone.
+    pub(super) fn encode(self, what: &str) -> Result<TextureSet, TreeError> {
+        let n = self.n as u32;
+        let encode = |map: &str, channels: u8, px: &[u8]| {
+            Texture::from_pixels_fast(format!("{what} {map}"), n, n, channels, px).map(Arc::new)
+        };
+        let ((color, roughness), normal) = rayon::join(
+            || {
+                rayon::join(
+                    || encode("color", self.channels, &self.color),
+                    || encode("roughness", 3, &self.roughness),
+                )
+            },
+            || {
+                let normal = normal_map(&self.heights, self.n, self.strength, self.wrap);
+                encode("normal", 3, &normal)
+            },
+        );
+        Ok(TextureSet {
+            color: color?,
+            normal: normal?,
+            roughness: roughness?,
+        })
+    }
+}
+
 /// A tangent-space normal map of an `n x n` height field: central differences (wrapping
 /// around the edges when `wrap`, else clamped), `strength` times the height change per texel.
 pub(super) fn normal_map(h: &[f32], n: usize, strength: f32, wrap: bool) -> Vec<u8> {

@@ -1,6 +1,8 @@
 //! Noise: hashed, periodic, cheap. Value noise from lattice tables read row by row, and
 //! cellular (Worley) noise from a table of feature points.
 
+use std::ops::Range;
+
 /// A 32-bit hash of a lattice point and a seed (integer mixing, no tables).
 pub(super) fn hash(x: u32, y: u32, seed: u32) -> u32 {
     let mut h =
@@ -10,6 +12,12 @@ pub(super) fn hash(x: u32, y: u32, seed: u32) -> u32 {
     h ^= h >> 12;
     h = h.wrapping_mul(0x297a_2d39);
     h ^ (h >> 15)
+}
+
+/// The `u` (or `v`) of the centre of pixel `i` of `n`.
+#[inline]
+pub(super) fn centre(i: usize, n: usize) -> f32 {
+    (i as f32 + 0.5) / n as f32
 }
 
 /// A hash as a number in `[0, 1)`.
@@ -59,6 +67,21 @@ pub(super) struct Lattice {
     px: u32,
     py: u32,
     values: Vec<f32>,
+    /// Where the pixel columns fall on the lattice (see [`Lattice::for_pixels`]).
+    columns: Vec<Column>,
+    /// The same as runs of pixel columns between the same two lattice columns, and every
+    /// column's blend, for [`LatticeRow::values`].
+    runs: Vec<(Range<usize>, u32, u32)>,
+    tx: Vec<f32>,
+}
+
+/// Where one pixel column's `u` falls on a lattice: the lattice columns either side and the
+/// smoothed blend between them, as [`LatticeRow::at`] finds them.
+#[derive(Clone, Copy)]
+struct Column {
+    ix: u32,
+    jx: u32,
+    tx: f32,
 }
 
 impl Lattice {
@@ -66,7 +89,53 @@ impl Lattice {
         let values = (0..py)
             .flat_map(|y| (0..px).map(move |x| unit(hash(x, y, seed))))
             .collect();
-        Lattice { px, py, values }
+        Lattice {
+            px,
+            py,
+            values,
+            columns: Vec::new(),
+            runs: Vec::new(),
+            tx: Vec::new(),
+        }
+    }
+
+    /// The lattice with the columns of an `n`-pixel row found once, at the pixel centres
+    /// `u = (x + 0.5) / n`, for [`LatticeRow::pixel`]: every row of a map shares them.
+    pub(super) fn for_pixels(mut self, n: usize) -> Lattice {
+        self.columns = (0..n)
+            .map(|x| {
+                let (ix, jx, tx) = self.column(centre(x, n));
+                Column {
+                    ix: ix as u32,
+                    jx: jx as u32,
+                    tx,
+                }
+            })
+            .collect();
+        self.tx = self.columns.iter().map(|c| c.tx).collect();
+        self.runs.clear();
+        for (x, c) in self.columns.iter().enumerate() {
+            match self.runs.last_mut() {
+                Some((run, ix, jx)) if (*ix, *jx) == (c.ix, c.jx) => run.end = x + 1,
+                _ => self.runs.push((x..x + 1, c.ix, c.jx)),
+            }
+        }
+        self
+    }
+
+    /// The lattice columns either side of `u` and the smoothed blend between them.
+    #[inline]
+    fn column(&self, u: f32) -> (usize, usize, f32) {
+        let x = u * self.px as f32;
+        let fx = floor(x);
+        let tx = smooth(x - fx as f32);
+        let ix = wrap(fx, self.px) as usize;
+        let jx = if ix + 1 == self.px as usize {
+            0
+        } else {
+            ix + 1
+        };
+        (ix, jx, tx)
     }
 
     /// The noise along the row at `v`: its two lattice rows and the blend between them
@@ -78,7 +147,7 @@ impl Lattice {
         let jy = if iy + 1 == self.py { 0 } else { iy + 1 };
         let px = self.px as usize;
         LatticeRow {
-            px: self.px,
+            lattice: self,
             top: &self.values[iy as usize * px..][..px],
             bottom: &self.values[jy as usize * px..][..px],
             ty: smooth(y - fy as f32),
@@ -88,24 +157,57 @@ impl Lattice {
 
 /// One row of a [`Lattice`] (see [`Lattice::row`]).
 pub(super) struct LatticeRow<'a> {
-    px: u32,
+    lattice: &'a Lattice,
     top: &'a [f32],
     bottom: &'a [f32],
     ty: f32,
 }
 
 impl LatticeRow<'_> {
+    /// The noise at `u`.
     #[inline]
     pub(super) fn at(&self, u: f32) -> f32 {
-        let x = u * self.px as f32;
-        let fx = floor(x);
-        let tx = smooth(x - fx as f32);
-        let ix = wrap(fx, self.px) as usize;
-        let jx = if ix + 1 == self.px as usize {
-            0
-        } else {
-            ix + 1
-        };
+        let (ix, jx, tx) = self.lattice.column(u);
+        self.blend(ix, jx, tx)
+    }
+
+    /// The noise at the centre of pixel column `x`, the same number as [`LatticeRow::at`]
+    /// gives there, from the columns found once (the lattice made [`Lattice::for_pixels`]):
+    /// the definition [`LatticeRow::values`] is held to.
+    #[cfg(test)]
+    pub(super) fn pixel(&self, x: usize) -> f32 {
+        let c = self.lattice.columns[x];
+        self.blend(c.ix as usize, c.jx as usize, c.tx)
+    }
+
+    /// The noise at every pixel column (the lattice made [`Lattice::for_pixels`]), the same
+    /// numbers as [`LatticeRow::pixel`]: each run of columns between the same two lattice
+    /// columns in a loop the compiler vectorizes.
+    pub(super) fn values(&self) -> Vec<f32> {
+        let mut out = vec![0.0; self.lattice.tx.len()];
+        self.each(&mut out, |o, value| *o = value);
+        out
+    }
+
+    /// Calls `put` with every pixel column's slot in `out` and the noise there.
+    #[inline(always)]
+    fn each(&self, out: &mut [f32], put: impl Fn(&mut f32, f32)) {
+        for (run, ix, jx) in &self.lattice.runs {
+            let (ix, jx) = (*ix as usize, *jx as usize);
+            // As `blend` finds them.
+            let (top0, top_d) = (self.top[ix], self.top[jx] - self.top[ix]);
+            let (bottom0, bottom_d) = (self.bottom[ix], self.bottom[jx] - self.bottom[ix]);
+            let tx = &self.lattice.tx[run.clone()];
+            for (o, &tx) in out[run.clone()].iter_mut().zip(tx) {
+                let top = top0 + top_d * tx;
+                let bottom = bottom0 + bottom_d * tx;
+                put(o, top + (bottom - top) * self.ty);
+            }
+        }
+    }
+
+    #[inline]
+    fn blend(&self, ix: usize, jx: usize, tx: f32) -> f32 {
         let top = self.top[ix] + (self.top[jx] - self.top[ix]) * tx;
         let bottom = self.bottom[ix] + (self.bottom[jx] - self.bottom[ix]) * tx;
         top + (bottom - top) * self.ty
@@ -131,6 +233,14 @@ impl Fractal {
         }
     }
 
+    /// The noise with every octave's pixel columns found once (see [`Lattice::for_pixels`]).
+    pub(super) fn for_pixels(self, n: usize) -> Fractal {
+        Fractal {
+            octaves: self.octaves.into_iter().map(|o| o.for_pixels(n)).collect(),
+            norm: self.norm,
+        }
+    }
+
     /// The noise along the row at `v` (see [`Lattice::row`]).
     pub(super) fn row(&self, v: f32) -> FractalRow<'_> {
         FractalRow {
@@ -147,7 +257,8 @@ pub(super) struct FractalRow<'a> {
 }
 
 impl FractalRow<'_> {
-    #[inline]
+    /// The noise at `u`: one lookup, the definition the row's values are held to.
+    #[cfg(test)]
     pub(super) fn at(&self, u: f32) -> f32 {
         let (mut sum, mut amp) = (0.0, 1.0);
         for octave in &self.octaves {
@@ -155,6 +266,48 @@ impl FractalRow<'_> {
             amp *= 0.5;
         }
         sum * self.norm
+    }
+
+    /// The noise at the centre of pixel column `x` (see [`LatticeRow::pixel`]).
+    #[cfg(test)]
+    pub(super) fn pixel(&self, x: usize) -> f32 {
+        let (mut sum, mut amp) = (0.0, 1.0);
+        for octave in &self.octaves {
+            sum += amp * octave.pixel(x);
+            amp *= 0.5;
+        }
+        sum * self.norm
+    }
+
+    /// The noise at every `us[i]`, the same numbers as [`FractalRow::at`], an octave at a
+    /// time (a tight loop per octave).
+    pub(super) fn values_at(&self, us: &[f32]) -> Vec<f32> {
+        let (mut sum, mut amp) = (vec![0.0f32; us.len()], 1.0f32);
+        for octave in &self.octaves {
+            for (s, &u) in sum.iter_mut().zip(us) {
+                *s += amp * octave.at(u);
+            }
+            amp *= 0.5;
+        }
+        for s in &mut sum {
+            *s *= self.norm;
+        }
+        sum
+    }
+
+    /// The noise at every pixel column, the same numbers as [`FractalRow::pixel`] (see
+    /// [`LatticeRow::values`]).
+    pub(super) fn values(&self) -> Vec<f32> {
+        let n = self.octaves.first().map_or(0, |o| o.lattice.tx.len());
+        let (mut sum, mut amp) = (vec![0.0f32; n], 1.0f32);
+        for octave in &self.octaves {
+            octave.each(&mut sum, |s, value| *s += amp * value);
+            amp *= 0.5;
+        }
+        for s in &mut sum {
+            *s *= self.norm;
+        }
+        sum
     }
 }
 
@@ -183,9 +336,60 @@ impl Cells {
     }
 
     /// The nearest and second-nearest feature distances at `(u, v)` and the nearest cell's
-    /// hash.
-    #[inline]
+    /// hash: one lookup, the definition [`Cells::many`] is held to.
+    #[cfg(test)]
     pub(super) fn at(&self, u: f32, v: f32) -> (f32, f32, u32) {
+        self.nearest(u, v).distances()
+    }
+
+    /// [`Cells::at`] of every `(us[i], vs[i])`, the same numbers as one lookup at a time,
+    /// for points that mostly follow each other in the same cell (a row of pixels): every
+    /// run of points in one cell is measured against that cell's nine feature points, loaded
+    /// once, in a loop the compiler vectorizes; square roots four at a time at the end.
+    pub(super) fn many(&self, us: &[f32], vs: &[f32]) -> Distances {
+        let stride = self.nx as usize + 2;
+        let (mut cell, mut rxs, mut rys) = (Vec::new(), Vec::new(), Vec::new());
+        for (&u, &v) in us.iter().zip(vs) {
+            let (x, y) = (
+                u.rem_euclid_unit() * self.nx as f32,
+                v.rem_euclid_unit() * self.ny as f32,
+            );
+            let cx = (x as u32).min(self.nx - 1);
+            let cy = (y as u32).min(self.ny - 1);
+            cell.push(cy as usize * stride + cx as usize);
+            rxs.push(x - cx as f32);
+            rys.push(y - cy as f32);
+        }
+        let mut at = Distances::new(cell.len());
+        for run in runs(&cell) {
+            let corner = cell[run.start];
+            let points: [(f32, f32, u32); 9] =
+                std::array::from_fn(|k| self.points[corner + k / 3 * stride + k % 3]);
+            let (f1, f2, ids) = at.run(run.clone());
+            for ((((&rx, &ry), f1), f2), id) in rxs[run.clone()]
+                .iter()
+                .zip(&rys[run])
+                .zip(f1)
+                .zip(f2)
+                .zip(ids)
+            {
+                // As `nearest` measures, in the same order.
+                let mut nearest = Nearest::new();
+                for (k, &(px, py, h)) in points.iter().enumerate() {
+                    let oy = (k / 3) as f32 - 1.0 - ry;
+                    let ex = (k % 3) as f32 - 1.0 - rx + px;
+                    let ey = oy + py;
+                    nearest.add(ex * ex + ey * ey, h);
+                }
+                (*f1, *f2, *id) = (nearest.f1, nearest.f2, nearest.id);
+            }
+        }
+        at.roots();
+        at
+    }
+
+    #[cfg(test)]
+    fn nearest(&self, u: f32, v: f32) -> Nearest {
         let (x, y) = (
             u.rem_euclid_unit() * self.nx as f32,
             v.rem_euclid_unit() * self.ny as f32,
@@ -204,7 +408,7 @@ impl Cells {
                 nearest.add(ex * ex + ey * ey, h);
             }
         }
-        nearest.distances()
+        nearest
     }
 
     /// The noise along the row at `v`: the squared `v` distances from the row to the
@@ -241,9 +445,45 @@ pub(super) struct CellsRow {
 }
 
 impl CellsRow {
-    /// The nearest and second-nearest feature distances at `u` and the nearest cell's hash.
-    #[inline]
+    /// The nearest and second-nearest feature distances at `u` and the nearest cell's hash:
+    /// one lookup, the definition [`CellsRow::many`] is held to.
+    #[cfg(test)]
     pub(super) fn at(&self, u: f32) -> (f32, f32, u32) {
+        self.nearest(u).distances()
+    }
+
+    /// [`CellsRow::at`] of every `us[i]`, the same numbers as one lookup at a time (see
+    /// [`Cells::many`]).
+    pub(super) fn many(&self, us: impl IntoIterator<Item = f32>) -> Distances {
+        let stride = self.nx as usize + 2;
+        let (mut cell, mut rxs) = (Vec::new(), Vec::new());
+        for u in us {
+            let x = u.rem_euclid_unit() * self.nx as f32;
+            let cx = (x as u32).min(self.nx - 1);
+            cell.push(cx as usize);
+            rxs.push(x - cx as f32);
+        }
+        let mut at = Distances::new(cell.len());
+        for run in runs(&cell) {
+            let cx = cell[run.start];
+            let points: [(f32, f32, u32); 9] =
+                std::array::from_fn(|k| self.points[k / 3 * stride + cx + k % 3]);
+            let (f1, f2, ids) = at.run(run.clone());
+            for (((&rx, f1), f2), id) in rxs[run].iter().zip(f1).zip(f2).zip(ids) {
+                let mut nearest = Nearest::new();
+                for (k, &(px, ey2, h)) in points.iter().enumerate() {
+                    let ex = (k % 3) as f32 - 1.0 - rx + px;
+                    nearest.add(ex * ex + ey2, h);
+                }
+                (*f1, *f2, *id) = (nearest.f1, nearest.f2, nearest.id);
+            }
+        }
+        at.roots();
+        at
+    }
+
+    #[cfg(test)]
+    fn nearest(&self, u: f32) -> Nearest {
         let x = u.rem_euclid_unit() * self.nx as f32;
         let cx = (x as u32).min(self.nx - 1) as usize;
         let rx = x - cx as f32;
@@ -256,7 +496,62 @@ impl CellsRow {
                 nearest.add(ex * ex + ey2, h);
             }
         }
-        nearest.distances()
+        nearest
+    }
+}
+
+/// The runs of equal values in `cells`, in order.
+fn runs(cells: &[usize]) -> impl Iterator<Item = Range<usize>> + '_ {
+    let mut start = 0;
+    std::iter::from_fn(move || {
+        let first = *cells.get(start)?;
+        let len = cells[start..]
+            .iter()
+            .position(|&c| c != first)
+            .unwrap_or(cells.len() - start);
+        start += len;
+        Some(start - len..start)
+    })
+}
+
+/// Cellular noise at many points (see [`Cells::many`]): squared distances until
+/// [`Distances::roots`].
+pub(super) struct Distances {
+    f1: Vec<f32>,
+    f2: Vec<f32>,
+    ids: Vec<u32>,
+}
+
+impl Distances {
+    fn new(n: usize) -> Distances {
+        Distances {
+            f1: vec![0.0; n],
+            f2: vec![0.0; n],
+            ids: vec![0; n],
+        }
+    }
+
+    /// The nearest, second-nearest and nearest hash of the points in `run`.
+    fn run(&mut self, run: Range<usize>) -> (&mut [f32], &mut [f32], &mut [u32]) {
+        (
+            &mut self.f1[run.clone()],
+            &mut self.f2[run.clone()],
+            &mut self.ids[run],
+        )
+    }
+
+    /// Squared distances to distances.
+    fn roots(&mut self) {
+        for d in self.f1.iter_mut().chain(&mut self.f2) {
+            *d = d.sqrt();
+        }
+    }
+
+    /// The nearest and second-nearest feature distances at point `i` and the nearest cell's
+    /// hash, as [`Cells::at`] gives them.
+    #[inline]
+    pub(super) fn at(&self, i: usize) -> (f32, f32, u32) {
+        (self.f1[i], self.f2[i], self.ids[i])
     }
 }
 
@@ -289,7 +584,7 @@ impl Nearest {
         self.id = if closer { h } else { self.id };
     }
 
-    #[inline]
+    #[cfg(test)]
     fn distances(&self) -> (f32, f32, u32) {
         (self.f1.sqrt(), self.f2.sqrt(), self.id)
     }
@@ -371,6 +666,22 @@ mod tests {
     }
 
     #[test]
+    fn many_lookups_give_the_same_numbers_as_one_at_a_time() {
+        let cells = Cells::new(5, 4, 23);
+        let us: Vec<f32> = (0..300).map(|i| i as f32 / 281.0 - 0.03).collect();
+        let vs: Vec<f32> = (0..300)
+            .map(|i| (i * 37 % 300) as f32 / 290.0 - 0.02)
+            .collect();
+        let many = cells.many(&us, &vs);
+        let row = cells.row(0.37);
+        let row_many = row.many(us.iter().copied());
+        for (i, (&u, &v)) in us.iter().zip(&vs).enumerate() {
+            assert_eq!(many.at(i), cells.at(u, v), "{u} {v}");
+            assert_eq!(row_many.at(i), row.at(u), "{u}");
+        }
+    }
+
+    #[test]
     fn lattice_noise_interpolates_its_hashes_and_tiles() {
         let lattice = Lattice::new(4, 3, 11);
         for (x, y) in [(0u32, 0u32), (3, 2), (1, 2)] {
@@ -386,6 +697,34 @@ mod tests {
         let fractal = Fractal::new(6, 6, 3, 31);
         let row = fractal.row(0.3);
         assert!((0..100).all(|i| (0.0..=1.0).contains(&row.at(i as f32 / 99.0))));
+    }
+
+    #[test]
+    fn pixel_columns_give_the_same_numbers_as_lookups() {
+        for n in [16usize, 100, 512] {
+            let lattice = Lattice::new(5, 5, 21).for_pixels(n);
+            let fractal = Fractal::new(64, 6, 6, 14).for_pixels(n);
+            for j in 0..20 {
+                let v = (j as f32 + 0.5) / 20.0;
+                let (row, frow) = (lattice.row(v), fractal.row(v));
+                for x in 0..n {
+                    let u = (x as f32 + 0.5) / n as f32;
+                    assert_eq!(row.pixel(x).to_bits(), row.at(u).to_bits(), "{n} {x} {v}");
+                    assert_eq!(frow.pixel(x).to_bits(), frow.at(u).to_bits(), "{n} {x}");
+                }
+                let shifted: Vec<f32> = (0..n).map(|x| centre(x, n) + 0.3 * v).collect();
+                let at = frow.values_at(&shifted);
+                for (x, &u) in shifted.iter().enumerate() {
+                    assert_eq!(at[x].to_bits(), frow.at(u).to_bits(), "{n} {x} {u}");
+                }
+                let (values, fvalues) = (row.values(), frow.values());
+                assert_eq!(values.len(), n);
+                for x in 0..n {
+                    assert_eq!(values[x].to_bits(), row.pixel(x).to_bits(), "{n} {x}");
+                    assert_eq!(fvalues[x].to_bits(), frow.pixel(x).to_bits(), "{n} {x}");
+                }
+            }
+        }
     }
 
     #[test]
