@@ -1,9 +1,9 @@
 //! Finding the triangles no client can use: degenerate ones and repeats of an earlier one.
 //!
-//! Each triangle's key (its three corners' bits, starting from the smallest) is hashed in
-//! parallel; the hashes are then dealt into shards, in increasing order of their
-//! triangles, and each shard finds its repeats with a small table of its own (on the rayon
-//! pool). A
+//! Each triangle's key (its three corners' bits, starting from the smallest) is hashed and
+//! dealt into a shard by its hash, in runs of triangles in parallel; then each shard, in
+//! parallel, finds its repeats with a small table of its own, reading its triangles from
+//! the runs in order. A
 //! repeat and the triangle it repeats share a hash, hence a shard, and a shard meets its
 //! triangles in order, so the first of equal triangles is the one kept, whatever the number
 //! of shards or threads.
@@ -15,7 +15,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Triangles a thread keys at a time.
-const KEY_CHUNK: usize = 1 << 13;
+const KEY_CHUNK: usize = 1 << 15;
 
 /// Below this many triangles, one shard (the tables are small anyway).
 const SHARDED_FROM: usize = 1 << 15;
@@ -24,12 +24,9 @@ const SHARDED_FROM: usize = 1 << 15;
 /// holds about 16 k hashes (about 0.5 MB), which stays in the cache.
 const SHARD_BITS: u32 = 7;
 
-/// The hash of a degenerate triangle.
-const DEGENERATE: u64 = 0;
-
-/// The hash of a triangle with a corner past the vertices: kept, never a repeat (validation
-/// rejects the mesh).
-const OUT_OF_RANGE: u64 = u64::MAX;
+/// A run of triangles after pass 1: each shard's hashes with their triangles, and the
+/// degenerate triangles, in increasing order.
+type Run = (Vec<Vec<(u64, u32)>>, Vec<usize>);
 
 /// The triangles of `indices` (three a triangle) that no client can use, in increasing
 /// order: degenerate ones (two corners at the same place, or all three on a line: zero
@@ -37,47 +34,42 @@ const OUT_OF_RANGE: u64 = u64::MAX;
 /// turning order; a back face is not a repeat).
 pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     let (triangles, _) = indices.as_chunks::<3>();
-    // Pass 1, in order and in parallel: each triangle's hash.
-    let hashes: Vec<u64> = triangles
-        .par_iter()
-        .with_min_len(KEY_CHUNK)
-        .map(|tri| match corners(positions, tri) {
-            None => OUT_OF_RANGE,
-            Some(c) if degenerate(c) => DEGENERATE,
-            // A real hash is never one of the two markers.
-            Some(c) => hash(&key(c)).clamp(DEGENERATE + 1, OUT_OF_RANGE - 1),
-        })
-        .collect();
     let shard_bits = if triangles.len() < SHARDED_FROM {
         0
     } else {
         SHARD_BITS
     };
-    // Pass 2: the hashes dealt into shards with their triangles, in increasing order. The
-    // shard of a hash comes from its middle bits, since a table uses the low bits for its
-    // slot and the high ones for its tags.
-    let shard = |h: u64| ((h >> 32) & ((1 << shard_bits) - 1)) as usize;
     let shards = 1usize << shard_bits;
-    let keyed = |h: u64| h != DEGENERATE && h != OUT_OF_RANGE;
-    let mut starts = vec![0usize; shards + 1];
-    for &h in hashes.iter().filter(|&&h| keyed(h)) {
-        starts[shard(h) + 1] += 1;
-    }
-    for s in 0..shards {
-        starts[s + 1] += starts[s];
-    }
-    let mut dealt = vec![(0u64, 0u32); starts[shards]];
-    let mut next = starts.clone();
-    for (t, &h) in hashes.iter().enumerate() {
-        if keyed(h) {
-            let s = shard(h);
-            dealt[next[s]] = (h, t as u32);
-            next[s] += 1;
-        }
-    }
-    // Pass 3, a shard a task: the first triangle of each hash in a table small enough for
-    // the cache; a later one with the same hash is compared by its corners (a repeat, or,
-    // very rarely, another triangle with the same hash).
+    // The shard of a hash comes from its middle bits, since a table uses the low bits for
+    // its slot and the high ones for its tags.
+    let shard = |h: u64| ((h >> 32) & ((1 << shard_bits) - 1)) as usize;
+    // Pass 1, a run of triangles a task: each triangle's hash, dealt into its shard's list
+    // with the triangle's number (in increasing order), and the degenerate triangles.
+    let runs: Vec<Run> = triangles
+        .par_chunks(KEY_CHUNK)
+        .enumerate()
+        .map(|(c, run)| {
+            let mut dealt = vec![Vec::new(); shards];
+            let mut degenerate_ones = Vec::new();
+            for (k, tri) in run.iter().enumerate() {
+                let t = c * KEY_CHUNK + k;
+                match corners(positions, tri) {
+                    // Kept: validation rejects the mesh.
+                    None => {}
+                    Some(c) if degenerate(c) => degenerate_ones.push(t),
+                    Some(c) => {
+                        let h = hash(&key(c));
+                        dealt[shard(h)].push((h, t as u32));
+                    }
+                }
+            }
+            (dealt, degenerate_ones)
+        })
+        .collect();
+    // Pass 2, a shard a task, meeting its triangles in increasing order: the first
+    // triangle of each hash in a table small enough for the cache; a later one with the
+    // same hash is compared by its corners (a repeat, or, very rarely, another triangle
+    // with the same hash).
     let same = |a: u32, b: u32| {
         let key_of = |t: u32| corners(positions, &triangles[t as usize]).map(key);
         key_of(a) == key_of(b)
@@ -85,13 +77,13 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     let repeats: Vec<Vec<usize>> = (0..shards)
         .into_par_iter()
         .map(|s| {
-            let run = &dealt[starts[s]..starts[s + 1]];
+            let len = runs.iter().map(|(dealt, _)| dealt[s].len()).sum();
             let mut first: HashMap<u64, u32, BuildHasherDefault<Stored>> =
-                HashMap::with_capacity_and_hasher(run.len(), BuildHasherDefault::default());
+                HashMap::with_capacity_and_hasher(len, BuildHasherDefault::default());
             // Triangles whose hash an earlier, different triangle has.
             let mut others: Vec<(u64, u32)> = Vec::new();
             let mut repeats = Vec::new();
-            for &(h, t) in run {
+            for &(h, t) in runs.iter().flat_map(|(dealt, _)| &dealt[s]) {
                 let Some(&f) = first.get(&h) else {
                     first.insert(h, t);
                     continue;
@@ -107,11 +99,10 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
             repeats
         })
         .collect();
-    let mut unusable: Vec<usize> = hashes
+    let mut unusable: Vec<usize> = runs
         .iter()
-        .enumerate()
-        .filter(|&(_, &h)| h == DEGENERATE)
-        .map(|(t, _)| t)
+        .flat_map(|(_, degenerate_ones)| degenerate_ones)
+        .copied()
         .chain(repeats.into_iter().flatten())
         .collect();
     unusable.sort_unstable();
