@@ -89,6 +89,41 @@ fn export(c: &mut Criterion) {
     });
     g.bench_function("memcpy_same_bytes", |b| b.iter(|| source.clone()));
     g.finish();
+
+    // Finding degenerate and repeated triangles (done before every export of a generated
+    // model), on every core and on one thread.
+    let mesh = &model.meshes[0];
+    let mut g = c.benchmark_group("unusable_triangles_2m");
+    g.throughput(Throughput::Elements(mesh.triangle_count() as u64));
+    g.sample_size(10);
+    g.bench_function("every_core", |b| b.iter(|| mesh.unusable_triangles()));
+    g.bench_function("1_thread", |b| {
+        b.iter(|| one.install(|| mesh.unusable_triangles()))
+    });
+    g.bench_function("siphash_set_before", |b| b.iter(|| siphash_set(mesh)));
+    g.finish();
+}
+
+/// The triangles to remove as the engine found them before its sharded search: one SipHash
+/// set of every triangle's corners (the peer of `unusable_triangles_2m`).
+fn siphash_set(mesh: &Mesh) -> Vec<usize> {
+    let mut seen = std::collections::HashSet::with_capacity(mesh.indices.len() / 3);
+    let mut dropped = Vec::new();
+    for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+        let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| mesh.positions[i as usize]);
+        let twice_area = (b - a).cross(c - a).length();
+        let longest = (b - a)
+            .length_squared()
+            .max((c - b).length_squared())
+            .max((a - c).length_squared());
+        let keys = [a, b, c].map(|p| (p + Vec3::ZERO).to_array().map(f32::to_bits));
+        let first = (0..3).min_by_key(|&k| keys[k]).unwrap_or(0);
+        let key = [keys[first], keys[(first + 1) % 3], keys[(first + 2) % 3]];
+        if twice_area <= 1e-6 * longest || !seen.insert(key) {
+            dropped.push(t);
+        }
+    }
+    dropped
 }
 
 fn script(c: &mut Criterion) {

@@ -160,7 +160,12 @@ pub fn run(
         }
     }
     let mut model = algorithm.finish(ctx)?;
+    let cleaning = Instant::now();
     model.remove_unusable_triangles();
+    // Part of making the meshes: `--stats` counts it in the meshing phase.
+    model
+        .stats
+        .add_phase("meshing", cleaning.elapsed().as_secs_f64());
     Ok(model)
 }
 

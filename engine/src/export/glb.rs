@@ -15,7 +15,7 @@ use crate::{Error, Result};
 
 use super::glb_container::glb_file;
 pub use super::glb_container::{GLB_LIMIT, glb_container};
-use super::glb_extras::{Extra, MeshExtras};
+use super::glb_extras::{Extra, JsonText, MeshExtras};
 use super::glb_layout::{Attribute, Data, Layout};
 pub use super::glb_sky::UNLIT;
 use super::glb_sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
@@ -69,6 +69,9 @@ struct Builder {
     transmissive: Vec<(usize, DiffuseTransmission)>,
     /// The shared variants a tile's instance groups refer to (`glb_bytes_shared`).
     shared: Option<shared::Shared>,
+    /// The meshes whose skeletons the JSON text marks, formatted when it is written (see
+    /// [`JsonText`]).
+    skeletons: Vec<Arc<Mesh>>,
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -322,7 +325,7 @@ impl Builder {
         let extras = if pge.0.is_empty() {
             None
         } else {
-            pge.extras()?
+            pge.extras(&mut self.skeletons)?
         };
         Ok(self.root.push(json::Mesh {
             extensions: None,
@@ -354,7 +357,7 @@ impl Builder {
         let extras = if merged.0.is_empty() {
             None
         } else {
-            merged.extras()?
+            merged.extras(&mut self.skeletons)?
         };
         Ok(self.root.push(json::Mesh {
             extensions: None,
@@ -402,8 +405,8 @@ impl Builder {
         // The skeleton first, the mesh's own extras after it (one named `skeleton` replaces
         // it in place), as a map of them would keep them.
         let mut pge = MeshExtras::default();
-        if let Some(s) = &mesh.skeleton {
-            pge.0.push(("skeleton", Extra::Skeleton(s)));
+        if mesh.skeleton.is_some() {
+            pge.0.push(("skeleton", Extra::Skeleton(mesh)));
         }
         for (k, v) in &mesh.extras {
             match pge.0.iter_mut().find(|(key, _)| key == k) {
@@ -741,91 +744,28 @@ impl Builder {
             });
         }
         b.push_shared_buffer();
-        let mut text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty()
-        {
+        let text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty() {
             b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
         } else {
-            with_extensions(&b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
+            with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
         };
-        while !text.len().is_multiple_of(4) {
-            text.push(b' ');
-        }
-        glb_file(&text, bin_len, GLB_LIMIT, |bin| b.layout.write(bin))
+        let json = JsonText::new(text, &b.skeletons)?;
+        // The JSON chunk is padded with spaces to 4 bytes.
+        let chunk = json.len().next_multiple_of(4);
+        let write_json = |dst: &mut [u8]| {
+            json.write(dst);
+            dst[json.len()..].fill(b' ');
+        };
+        glb_file(chunk, write_json, bin_len, GLB_LIMIT, |bin| {
+            b.layout.write(bin)
+        })
     }
 }
 
-/// The name of the glTF extension of materials that let light through (leaves): declared in
-/// `extensionsUsed`, not required (a client without it draws the material as it would
-/// without the extension).
-pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
-
-/// The root's JSON with `EXT_mesh_gpu_instancing` on the given nodes (index, [TRANSLATION,
-/// ROTATION, SCALE] accessors), `KHR_materials_unlit` and
-/// `KHR_materials_diffuse_transmission` on the given materials, and the extensions used
-/// declared in `extensionsUsed` (gltf-json has no fields for them without its extension
-/// features).
-fn with_extensions(
-    root: &json::Root,
-    nodes: &[(usize, [usize; 3])],
-    unlit: &[usize],
-    transmissive: &[(usize, DiffuseTransmission)],
-) -> Result<Vec<u8>> {
-    let export = |e: serde_json::Error| Error::Export(e.to_string());
-    let mut value = serde_json::to_value(root).map_err(export)?;
-    let mut material_extension = |index: usize, name: &str, ext: JsonValue| -> Result<()> {
-        let material = value
-            .get_mut("materials")
-            .and_then(|m| m.get_mut(index))
-            .and_then(JsonValue::as_object_mut)
-            .ok_or_else(|| Error::Export(format!("a material with {name} is missing")))?;
-        let extensions = material
-            .entry("extensions")
-            .or_insert_with(|| json!({}))
-            .as_object_mut()
-            .ok_or_else(|| Error::Export("a material's extensions are not an object".into()))?;
-        extensions.insert(name.into(), ext);
-        Ok(())
-    };
-    for &index in unlit {
-        material_extension(index, UNLIT, json!({}))?;
-    }
-    for &(index, t) in transmissive {
-        material_extension(
-            index,
-            DIFFUSE_TRANSMISSION,
-            json!({
-                "diffuseTransmissionFactor": t.factor,
-                "diffuseTransmissionColorFactor": t.color,
-            }),
-        )?;
-    }
-    for &(index, [t, r, s]) in nodes {
-        let node = value
-            .get_mut("nodes")
-            .and_then(|n| n.get_mut(index))
-            .and_then(JsonValue::as_object_mut)
-            .ok_or_else(|| Error::Export("an instancing node is missing".into()))?;
-        node.insert(
-            "extensions".into(),
-            json!({ GPU_INSTANCING: { "attributes": {
-                "TRANSLATION": t, "ROTATION": r, "SCALE": s } } }),
-        );
-    }
-    let mut used = Vec::new();
-    if !nodes.is_empty() {
-        used.push(GPU_INSTANCING);
-    }
-    if !unlit.is_empty() {
-        used.push(UNLIT);
-    }
-    if !transmissive.is_empty() {
-        used.push(DIFFUSE_TRANSMISSION);
-    }
-    if let Some(root) = value.as_object_mut() {
-        root.insert("extensionsUsed".into(), json!(used));
-    }
-    serde_json::to_vec(&value).map_err(export)
-}
+#[path = "glb_extensions.rs"]
+mod extensions;
+pub use extensions::DIFFUSE_TRANSMISSION;
+use extensions::with_extensions;
 
 #[path = "glb_shared.rs"]
 pub(super) mod shared;

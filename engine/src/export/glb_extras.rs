@@ -1,40 +1,75 @@
-//! A mesh's `extras.pge` (its skeleton and own extras), serialized in one pass from borrowed
-//! views of the model.
+//! A mesh's `extras.pge` (its skeleton and own extras), serialized from borrowed views of
+//! the model. A skeleton (most of a tree's JSON: four numbers a node) is not serialized
+//! with the rest: its place holds a marker, and its text is formatted in parallel pieces
+//! when the file is written ([`JsonText`]), straight into the file's JSON chunk.
+
+use std::ops::Range;
+use std::sync::Arc;
 
 use gltf_json as json;
+use rayon::prelude::*;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 use serde_json::Value as JsonValue;
+use serde_json::ser::{CompactFormatter, Formatter};
+use serde_json::value::RawValue;
 
-use crate::geometry::Skeleton;
+use crate::geometry::{Mesh, Skeleton};
 use crate::{Error, Result};
 
-/// One value of a mesh's `extras.pge`: its skeleton, written straight from the model, or one
-/// of the mesh's own extras.
+/// Numbers of a skeleton's array a thread formats at a time.
+const PIECE_NUMBERS: usize = 1 << 13;
+
+/// One value of a mesh's `extras.pge`: the skeleton of a mesh, or one of the mesh's own
+/// extras.
 #[derive(Clone, Copy)]
 pub(super) enum Extra<'m> {
-    Skeleton(&'m Skeleton),
+    Skeleton(&'m Arc<Mesh>),
     Value(&'m JsonValue),
 }
 
-/// A mesh's `extras.pge` in order, borrowed from the model and serialized in one pass.
+/// A mesh's `extras.pge` in order, borrowed from the model.
 #[derive(Default)]
 pub(super) struct MeshExtras<'m>(pub(super) Vec<(&'m str, Extra<'m>)>);
 
 impl MeshExtras<'_> {
-    /// `{"pge": {...}}` as the mesh's extras, serialized in one pass (no `Value` tree).
-    pub(super) fn extras(&self) -> Result<json::Extras> {
-        serde_json::value::to_raw_value(&Entries([("pge", self)]))
+    /// `{"pge": {...}}` as the mesh's extras, serialized in one pass (no `Value` tree), a
+    /// skeleton as the marker of its place in `skeletons` (which it joins).
+    pub(super) fn extras(&self, skeletons: &mut Vec<Arc<Mesh>>) -> Result<json::Extras> {
+        let export = |e: serde_json::Error| Error::Export(e.to_string());
+        let mut markers = Vec::new();
+        for (_, value) in &self.0 {
+            if let Extra::Skeleton(mesh) = value {
+                markers.push(RawValue::from_string(marker(skeletons.len())).map_err(export)?);
+                skeletons.push(Arc::clone(mesh));
+            }
+        }
+        let entries = Entries([("pge", Marked(self, &markers))]);
+        serde_json::value::to_raw_value(&entries)
             .map(Some)
-            .map_err(|e| Error::Export(e.to_string()))
+            .map_err(export)
     }
 }
 
-impl Serialize for MeshExtras<'_> {
+/// The marker of skeleton `k` in the JSON text: an array of its number after a line feed.
+/// Compact JSON has no line feed anywhere else (one in a string is written `\n`), so the
+/// markers are found by that byte, and a marker is still valid JSON.
+fn marker(k: usize) -> String {
+    format!("[\n{k}]")
+}
+
+/// A mesh's extras with the markers of its skeletons, in order.
+struct Marked<'a, 'm>(&'a MeshExtras<'m>, &'a [Box<RawValue>]);
+
+impl Serialize for Marked<'_, '_> {
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(self.0.len()))?;
-        for (key, value) in &self.0 {
+        let mut map = s.serialize_map(Some(self.0.0.len()))?;
+        let mut markers = self.1.iter();
+        for (key, value) in &self.0.0 {
             match value {
-                Extra::Skeleton(skeleton) => map.serialize_entry(key, &SkeletonJson(skeleton))?,
+                Extra::Skeleton(_) => match markers.next() {
+                    Some(m) => map.serialize_entry(key, m)?,
+                    None => map.serialize_entry(key, &JsonValue::Null)?,
+                },
                 Extra::Value(value) => map.serialize_entry(key, value)?,
             }
         }
@@ -55,39 +90,198 @@ impl<const N: usize, T: Serialize> Serialize for Entries<N, T> {
     }
 }
 
-/// The skeleton as `{parents, positions, radii, orders}` (API.md §7), serialized straight
-/// from its arrays: a root's parent is -1; floats are written as the `f64` they widen to
-/// (`null` when not finite), as a `serde_json::Value` of them would be.
-pub(super) struct SkeletonJson<'m>(&'m Skeleton);
+/// The glTF JSON text with the skeletons in place of their markers, formatted in pieces on
+/// the rayon pool. A skeleton is `{parents, positions, radii, orders}` (API.md §7): a root's
+/// parent is -1; floats are written as the `f64` they widen to (`null` when not finite), as
+/// serde_json writes them, so the text is the same as one serialized in one pass.
+pub(super) struct JsonText {
+    /// The text with the markers.
+    text: Vec<u8>,
+    /// The text around the markers, and the skeletons' pieces, in order.
+    parts: Vec<Part>,
+    /// The length of the whole text.
+    len: usize,
+}
 
-/// The items of an iterator, serialized as one JSON array.
-struct Items<F>(F);
+/// A part of a [`JsonText`].
+enum Part {
+    /// Bytes of the text around the markers.
+    Text(Range<usize>),
+    /// A fixed piece of a skeleton's text.
+    Fixed(&'static [u8]),
+    /// Formatted numbers of a skeleton.
+    Numbers(Vec<u8>),
+}
 
-impl<I: Iterator<Item: Serialize>, F: Fn() -> I> Serialize for Items<F> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        s.collect_seq((self.0)())
+/// The arrays of a skeleton, in the order they are written.
+#[derive(Clone, Copy)]
+enum Array {
+    Parents,
+    Positions,
+    Radii,
+    Orders,
+}
+
+impl Array {
+    const ALL: [Array; 4] = [
+        Array::Parents,
+        Array::Positions,
+        Array::Radii,
+        Array::Orders,
+    ];
+
+    /// What comes before the array's numbers.
+    fn opening(self) -> &'static [u8] {
+        match self {
+            Array::Parents => br#"{"parents":["#,
+            Array::Positions => br#"],"positions":["#,
+            Array::Radii => br#"],"radii":["#,
+            Array::Orders => br#"],"orders":["#,
+        }
+    }
+
+    fn len(self, sk: &Skeleton) -> usize {
+        match self {
+            Array::Parents => sk.parents.len(),
+            Array::Positions => 3 * sk.positions.len(),
+            Array::Radii => sk.radii.len(),
+            Array::Orders => sk.orders.len(),
+        }
+    }
+
+    /// The numbers `range` of the array, each after a comma but the array's first.
+    fn format(self, sk: &Skeleton, range: Range<usize>) -> std::io::Result<Vec<u8>> {
+        let mut out = Vec::with_capacity(12 * range.len());
+        let mut f = CompactFormatter;
+        for k in range {
+            if k > 0 {
+                out.push(b',');
+            }
+            match self {
+                Array::Parents => f.write_i64(&mut out, sk.parents[k].map_or(-1, i64::from))?,
+                Array::Positions => float(&mut out, sk.positions[k / 3][k % 3])?,
+                Array::Radii => float(&mut out, sk.radii[k])?,
+                Array::Orders => f.write_u32(&mut out, sk.orders[k])?,
+            }
+        }
+        Ok(out)
     }
 }
 
-impl Serialize for SkeletonJson<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let sk = self.0;
-        let mut map = s.serialize_map(Some(4))?;
-        map.serialize_entry(
-            "parents",
-            &Items(|| sk.parents.iter().map(|p| p.map_or(-1, i64::from))),
-        )?;
-        map.serialize_entry(
-            "positions",
-            &Items(|| {
-                sk.positions
-                    .iter()
-                    .flat_map(|p| p.to_array())
-                    .map(f64::from)
-            }),
-        )?;
-        map.serialize_entry("radii", &Items(|| sk.radii.iter().map(|&r| f64::from(r))))?;
-        map.serialize_entry("orders", &sk.orders)?;
-        map.end()
+/// A float as the `f64` it widens to, `null` when not finite (as serde_json writes it).
+fn float(out: &mut Vec<u8>, v: f32) -> std::io::Result<()> {
+    if v.is_finite() {
+        CompactFormatter.write_f64(out, f64::from(v))
+    } else {
+        CompactFormatter.write_null(out)
+    }
+}
+
+impl JsonText {
+    /// `text` with each skeleton marker replaced by the skeleton of that mesh of
+    /// `skeletons` (an empty one if it has none).
+    pub(super) fn new(text: Vec<u8>, skeletons: &[Arc<Mesh>]) -> Result<JsonText> {
+        let bad = || Error::Export("a skeleton marker in the glTF JSON is damaged".into());
+        // The markers, in order: skeleton k's is the k-th (the meshes are written in the
+        // order their extras were), found by the next line feed that is part of it (one in
+        // a raw extra read from a file is skipped).
+        let mut markers = Vec::with_capacity(skeletons.len());
+        let mut at = 0;
+        while markers.len() < skeletons.len() {
+            let k = markers.len();
+            let want = marker(k);
+            let start = (at + 1..text.len())
+                .filter(|&p| text[p] == b'\n')
+                .map(|p| p - 1)
+                .find(|&p| text[p..].starts_with(want.as_bytes()))
+                .ok_or_else(bad)?;
+            markers.push((start..start + want.len(), k));
+            at = start + want.len();
+        }
+        let empty = Skeleton::default();
+        let skeleton = |k: usize| -> Result<&Skeleton> {
+            let mesh = skeletons.get(k).ok_or_else(bad)?;
+            Ok(mesh.skeleton.as_deref().unwrap_or(&empty))
+        };
+        // Every skeleton's pieces, formatted in parallel.
+        let mut jobs = Vec::new();
+        for &(_, k) in &markers {
+            let sk = skeleton(k)?;
+            for array in Array::ALL {
+                let n = array.len(sk);
+                jobs.extend(
+                    (0..n)
+                        .step_by(PIECE_NUMBERS)
+                        .map(|s| (sk, array, s..(s + PIECE_NUMBERS).min(n))),
+                );
+            }
+        }
+        let mut formatted = jobs
+            .into_par_iter()
+            .map(|(sk, array, range)| array.format(sk, range))
+            .collect::<std::io::Result<Vec<_>>>()
+            .map_err(|e| Error::Export(e.to_string()))?
+            .into_iter();
+        let mut parts = Vec::with_capacity(2 * markers.len() + 1);
+        let mut from = 0;
+        for (range, k) in markers {
+            parts.push(Part::Text(from..range.start));
+            from = range.end;
+            let sk = skeleton(k)?;
+            for array in Array::ALL {
+                parts.push(Part::Fixed(array.opening()));
+                let pieces = array.len(sk).div_ceil(PIECE_NUMBERS);
+                parts.extend(formatted.by_ref().take(pieces).map(Part::Numbers));
+            }
+            parts.push(Part::Fixed(b"]}"));
+        }
+        parts.push(Part::Text(from..text.len()));
+        let mut json = JsonText {
+            text,
+            parts,
+            len: 0,
+        };
+        json.len = json.slices().map(<[u8]>::len).sum();
+        Ok(json)
+    }
+
+    /// The text's bytes, part by part.
+    fn slices(&self) -> impl Iterator<Item = &[u8]> {
+        self.parts.iter().map(|p| match p {
+            Part::Text(range) => &self.text[range.clone()],
+            Part::Fixed(bytes) => bytes,
+            Part::Numbers(bytes) => bytes.as_slice(),
+        })
+    }
+
+    /// The length of the text in bytes.
+    pub(super) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Writes the text at the start of `dst` (at least [`JsonText::len`] bytes), its parts
+    /// copied in parallel.
+    pub(super) fn write(&self, dst: &mut [u8]) {
+        let mut rest = dst;
+        let mut copies = Vec::with_capacity(self.parts.len());
+        for bytes in self.slices() {
+            let (head, tail) = rest.split_at_mut(bytes.len());
+            copies.push((head, bytes));
+            rest = tail;
+        }
+        copies
+            .into_par_iter()
+            .with_min_len(8)
+            .for_each(|(dst, src)| dst.copy_from_slice(src));
+    }
+
+    /// The whole text.
+    pub(super) fn into_vec(self) -> Vec<u8> {
+        if let [Part::Text(_)] = self.parts.as_slice() {
+            return self.text;
+        }
+        let mut out = vec![0; self.len];
+        self.write(&mut out);
+        out
     }
 }

@@ -14,7 +14,8 @@
 use serde_json::{Map, Value as JsonValue, json};
 
 use super::{
-    Builder, DIFFUSE_TRANSMISSION, ExportMeta, Instancing, json as gltf, raw, with_extensions,
+    Builder, DIFFUSE_TRANSMISSION, ExportMeta, Instancing, JsonText, json as gltf, raw,
+    with_extensions,
 };
 use crate::geometry::{DiffuseTransmission, Model};
 use crate::{Error, Result};
@@ -221,8 +222,9 @@ pub fn variants_files(
     let text = if b.unlit.is_empty() && b.transmissive.is_empty() {
         b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
     } else {
-        with_extensions(&b.root, &[], &b.unlit, &b.transmissive)?
+        with_extensions(&mut b.root, &[], &b.unlit, &b.transmissive)?
     };
+    let text = JsonText::new(text, &b.skeletons)?.into_vec();
     let mut bin = vec![0; bin_len];
     b.layout.write(&mut bin);
     Ok((text, bin))

@@ -108,14 +108,36 @@ fn streamed_mesh_extras_match_a_value_tree() {
         let mut b = Builder::new();
         let mesh = Arc::new(mesh.clone());
         let (_, pge) = b.primitive(&mesh).expect("primitive");
-        pge.extras()
-            .expect("extras")
-            .expect("some")
-            .get()
-            .to_string()
+        let mut skeletons = Vec::new();
+        let marked = pge.extras(&mut skeletons).expect("extras").expect("some");
+        let text = JsonText::new(marked.get().as_bytes().to_vec(), &skeletons).expect("text");
+        String::from_utf8(text.into_vec()).expect("utf-8")
     };
     assert_eq!(streamed(&mesh), expected(&mesh));
     assert!(streamed(&mesh).contains("[-1,0,1]"), "{}", streamed(&mesh));
+    // A skeleton of many pieces, with floats that are not finite (written `null`).
+    let mut big = mesh.clone();
+    let n = 20_000;
+    let mut s = Skeleton::new();
+    for k in 0..n {
+        let parent = (k > 0).then(|| (k - 1) / 2);
+        let radius = if k == 9_999 {
+            f32::NAN
+        } else {
+            1.0 / (k + 1) as f32
+        };
+        s.push(
+            Vec3::new(k as f32 * 0.1, (k as f32).sqrt(), -1e-7 * k as f32),
+            parent,
+            radius,
+            k % 5,
+        );
+    }
+    s.positions[12_345].y = f32::INFINITY;
+    big.skeleton = Some(Arc::new(s));
+    big.extras.shift_remove("skeleton");
+    assert_eq!(streamed(&big), expected(&big));
+    assert!(streamed(&big).contains("null"));
     // A mesh extra named `skeleton` replaces the skeleton where it stands.
     mesh.extras.insert("skeleton".into(), json!(1));
     assert_eq!(streamed(&mesh), expected(&mesh));

@@ -3,7 +3,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::{Material, Skeleton};
+use super::{Material, Skeleton, triangles};
 
 /// Elements a thread checks at a time when a mesh is validated.
 const CHECK_CHUNK: usize = 1 << 15;
@@ -257,31 +257,35 @@ impl Mesh {
     /// were removed. Vertices are left as they are, and so are line meshes and meshes whose
     /// `extras` describe their index buffer (foliage LOD tables count indices).
     pub fn remove_unusable_triangles(&mut self) -> usize {
-        if !self.may_drop_triangles() {
-            return 0;
-        }
-        let before = self.indices.len() / 3;
-        let mut seen = std::collections::HashSet::with_capacity(before);
-        let mut kept = Vec::with_capacity(self.indices.len());
-        for tri in self.indices.chunks_exact(3) {
-            if triangle_key(&self.positions, tri).is_some_and(|key| seen.insert(key)) {
-                kept.extend_from_slice(tri);
-            }
-        }
-        self.indices = kept;
-        before - self.indices.len() / 3
+        let dropped = self.unusable_triangles();
+        self.remove_triangles(&dropped);
+        dropped.len()
     }
 
     /// Whether [`Mesh::remove_unusable_triangles`] would remove anything.
     #[must_use]
     pub fn has_unusable_triangles(&self) -> bool {
+        !self.unusable_triangles().is_empty()
+    }
+
+    /// The triangles (numbered from 0) that [`Mesh::remove_unusable_triangles`] removes, in
+    /// increasing order; found in parallel on the current rayon pool, the same for any
+    /// number of threads.
+    #[must_use]
+    pub fn unusable_triangles(&self) -> Vec<usize> {
         if !self.may_drop_triangles() {
-            return false;
+            return Vec::new();
         }
-        let mut seen = std::collections::HashSet::with_capacity(self.indices.len() / 3);
-        self.indices
-            .chunks_exact(3)
-            .any(|tri| !triangle_key(&self.positions, tri).is_some_and(|key| seen.insert(key)))
+        triangles::unusable(&self.positions, &self.indices)
+    }
+
+    /// Removes the triangles listed in `dropped` (numbers from 0, in increasing order, as
+    /// [`Mesh::unusable_triangles`] gives them; a number out of order or past the last
+    /// triangle is ignored).
+    pub fn remove_triangles(&mut self, dropped: &[usize]) {
+        if !dropped.is_empty() {
+            self.indices = triangles::without(&self.indices, dropped);
+        }
     }
 
     fn may_drop_triangles(&self) -> bool {
@@ -304,22 +308,6 @@ impl Mesh {
 /// the same triangle whichever corner its indices start at), or `None` when it is degenerate:
 /// its area is below a millionth of its longest edge squared (coincident or collinear
 /// corners). Indices must be in range (validated meshes).
-fn triangle_key(positions: &[Vec3], tri: &[u32]) -> Option<[[u32; 3]; 3]> {
-    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| positions[i as usize]);
-    let twice_area = (b - a).cross(c - a).length();
-    let longest = (b - a)
-        .length_squared()
-        .max((c - b).length_squared())
-        .max((a - c).length_squared());
-    if twice_area <= 1e-6 * longest {
-        return None;
-    }
-    // `+ 0.0` turns -0.0 into 0.0, so both spell the same position.
-    let keys = [a, b, c].map(|p| (p + Vec3::ZERO).to_array().map(f32::to_bits));
-    let first = (0..3).min_by_key(|&k| keys[k]).unwrap_or(0);
-    Some([keys[first], keys[(first + 1) % 3], keys[(first + 2) % 3]])
-}
-
 fn fill_attribute<T: Copy>(
     mine: &mut Vec<T>,
     theirs: &[T],

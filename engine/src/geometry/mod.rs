@@ -8,6 +8,7 @@ mod material;
 mod mesh;
 mod model;
 mod skeleton;
+mod triangles;
 
 pub use material::{AlphaMode, DiffuseTransmission, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};

@@ -234,8 +234,10 @@ impl Model {
     pub fn remove_unusable_triangles(&mut self) -> usize {
         let mut removed = 0;
         for mesh in &mut self.meshes {
-            if mesh.has_unusable_triangles() {
-                removed += Arc::make_mut(mesh).remove_unusable_triangles();
+            let dropped = mesh.unusable_triangles();
+            if !dropped.is_empty() {
+                Arc::make_mut(mesh).remove_triangles(&dropped);
+                removed += dropped.len();
             }
         }
         removed

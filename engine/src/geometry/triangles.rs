@@ -1,0 +1,270 @@
+//! Finding the triangles no client can use: degenerate ones and repeats of an earlier one.
+//!
+//! Each triangle's key (its three corners' bits, starting from the smallest) is hashed and
+//! dealt into a shard by its hash, in runs of triangles in parallel; then each shard, in
+//! parallel, finds its repeats with a small table of its own, reading its triangles from
+//! the runs in order. A
+//! repeat and the triangle it repeats share a hash, hence a shard, and a shard meets its
+//! triangles in order, so the first of equal triangles is the one kept, whatever the number
+//! of shards or threads.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Triangles a thread keys at a time.
+const KEY_CHUNK: usize = 1 << 15;
+
+/// Below this many triangles, one shard (the tables are small anyway).
+const SHARDED_FROM: usize = 1 << 15;
+
+/// Shards of a large mesh, as a power of two: each shard's table of a 2 M-triangle mesh
+/// holds about 16 k hashes (about 0.5 MB), which stays in the cache.
+const SHARD_BITS: u32 = 7;
+
+/// A run of triangles after pass 1: each shard's hashes with their triangles, and the
+/// degenerate triangles, in increasing order.
+type Run = (Vec<Vec<(u64, u32)>>, Vec<usize>);
+
+/// The triangles of `indices` (three a triangle) that no client can use, in increasing
+/// order: degenerate ones (two corners at the same place, or all three on a line: zero
+/// area) and repeats of an earlier triangle (the same three corner positions in the same
+/// turning order; a back face is not a repeat).
+pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
+    let (triangles, _) = indices.as_chunks::<3>();
+    let shard_bits = if triangles.len() < SHARDED_FROM {
+        0
+    } else {
+        SHARD_BITS
+    };
+    let shards = 1usize << shard_bits;
+    // The shard of a hash comes from its middle bits, since a table uses the low bits for
+    // its slot and the high ones for its tags.
+    let shard = |h: u64| ((h >> 32) & ((1 << shard_bits) - 1)) as usize;
+    // Pass 1, a run of triangles a task: each triangle's hash, dealt into its shard's list
+    // with the triangle's number (in increasing order), and the degenerate triangles.
+    let runs: Vec<Run> = triangles
+        .par_chunks(KEY_CHUNK)
+        .enumerate()
+        .map(|(c, run)| {
+            let mut dealt = vec![Vec::new(); shards];
+            let mut degenerate_ones = Vec::new();
+            for (k, tri) in run.iter().enumerate() {
+                let t = c * KEY_CHUNK + k;
+                match corners(positions, tri) {
+                    // Kept: validation rejects the mesh.
+                    None => {}
+                    Some(c) if degenerate(c) => degenerate_ones.push(t),
+                    Some(c) => {
+                        let h = hash(&key(c));
+                        dealt[shard(h)].push((h, t as u32));
+                    }
+                }
+            }
+            (dealt, degenerate_ones)
+        })
+        .collect();
+    // Pass 2, a shard a task, meeting its triangles in increasing order: the first
+    // triangle of each hash in a table small enough for the cache; a later one with the
+    // same hash is compared by its corners (a repeat, or, very rarely, another triangle
+    // with the same hash).
+    let same = |a: u32, b: u32| {
+        let key_of = |t: u32| corners(positions, &triangles[t as usize]).map(key);
+        key_of(a) == key_of(b)
+    };
+    let repeats: Vec<Vec<usize>> = (0..shards)
+        .into_par_iter()
+        .map(|s| {
+            let len = runs.iter().map(|(dealt, _)| dealt[s].len()).sum();
+            let mut first: HashMap<u64, u32, BuildHasherDefault<Stored>> =
+                HashMap::with_capacity_and_hasher(len, BuildHasherDefault::default());
+            // Triangles whose hash an earlier, different triangle has.
+            let mut others: Vec<(u64, u32)> = Vec::new();
+            let mut repeats = Vec::new();
+            for &(h, t) in runs.iter().flat_map(|(dealt, _)| &dealt[s]) {
+                let Some(&f) = first.get(&h) else {
+                    first.insert(h, t);
+                    continue;
+                };
+                let earlier = std::iter::once(f)
+                    .chain(others.iter().filter(|&&(oh, _)| oh == h).map(|&(_, o)| o));
+                if earlier.into_iter().any(|e| same(e, t)) {
+                    repeats.push(t as usize);
+                } else {
+                    others.push((h, t));
+                }
+            }
+            repeats
+        })
+        .collect();
+    let mut unusable: Vec<usize> = runs
+        .iter()
+        .flat_map(|(_, degenerate_ones)| degenerate_ones)
+        .copied()
+        .chain(repeats.into_iter().flatten())
+        .collect();
+    unusable.sort_unstable();
+    unusable
+}
+
+/// `indices` without the triangles listed in `dropped` (in increasing order; a number out
+/// of order or past the last triangle is ignored).
+pub(super) fn without(indices: &[u32], dropped: &[usize]) -> Vec<u32> {
+    let mut kept = Vec::with_capacity(indices.len().saturating_sub(3 * dropped.len()));
+    let mut from = 0;
+    for &t in dropped {
+        let start = t.saturating_mul(3);
+        if start < from || start.saturating_add(3) > indices.len() {
+            continue;
+        }
+        kept.extend_from_slice(&indices[from..start]);
+        from = start + 3;
+    }
+    kept.extend_from_slice(&indices[from..]);
+    kept
+}
+
+/// The corners of a triangle, `None` if one is past the vertices.
+fn corners(positions: &[Vec3], tri: &[u32; 3]) -> Option<[Vec3; 3]> {
+    let [a, b, c] = tri.map(|i| positions.get(i as usize).copied());
+    Some([a?, b?, c?])
+}
+
+/// Whether a triangle has no area: twice its area at most a millionth of its longest side
+/// squared.
+fn degenerate([a, b, c]: [Vec3; 3]) -> bool {
+    let twice_area = (b - a).cross(c - a).length();
+    let longest = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    twice_area <= 1e-6 * longest
+}
+
+/// The corners' bits in turning order, starting from the smallest (`+ 0.0` turns -0.0 into
+/// 0.0, so both spell the same position).
+fn key(corners: [Vec3; 3]) -> [u32; 9] {
+    let keys = corners.map(|p| (p + Vec3::ZERO).to_array().map(f32::to_bits));
+    let first = (0..3).min_by_key(|&k| keys[k]).unwrap_or(0);
+    let mut out = [0; 9];
+    for k in 0..3 {
+        out[3 * k..3 * k + 3].copy_from_slice(&keys[(first + k) % 3]);
+    }
+    out
+}
+
+/// A 64-bit hash of a key (multiply and rotate over its words, then a final mix so that
+/// every bit depends on every word).
+fn hash(key: &[u32; 9]) -> u64 {
+    let mut h = 0u64;
+    for &w in key {
+        h = (h.rotate_left(26) ^ u64::from(w)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+    h ^= h >> 31;
+    h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    h ^ (h >> 29)
+}
+
+/// The hasher of a shard's table, whose keys are hashes already: hands them on as they are.
+#[derive(Default)]
+struct Stored(u64);
+
+impl Hasher for Stored {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+
+    fn write_u64(&mut self, h: u64) {
+        self.0 = h;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The definition, one triangle at a time with a set of the keys seen.
+    fn unusable_by_definition(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
+        let mut seen = std::collections::HashSet::new();
+        let (triangles, _) = indices.as_chunks::<3>();
+        (0..triangles.len())
+            .filter(|&t| match corners(positions, &triangles[t]) {
+                None => false,
+                Some(c) => degenerate(c) || !seen.insert(key(c)),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn repeats_and_degenerate_triangles_of_a_large_mesh_are_found_in_every_shard() {
+        // A grid of 200 x 200 quads (80 k triangles: sharded), with every 7th triangle
+        // repeated later (some rotated), every 11th made degenerate, a back face of every
+        // 13th, and -0.0 spelling a corner at 0.0.
+        let n = 201;
+        let mut positions: Vec<Vec3> = (0..n * n)
+            .map(|k| Vec3::new((k % n) as f32, 0.0, (k / n) as f32))
+            .collect();
+        positions.push(Vec3::new(-0.0, 0.0, 1.0));
+        let mut indices = Vec::new();
+        for z in 0..n - 1 {
+            for x in 0..n - 1 {
+                let v = (z * n + x) as u32;
+                let n = n as u32;
+                indices.extend([v, v + n, v + 1, v + 1, v + n, v + n + 1]);
+            }
+        }
+        let triangles = indices.len() / 3;
+        for t in (0..triangles).step_by(7) {
+            let [a, b, c] = [0, 1, 2].map(|k| indices[3 * t + k]);
+            indices.extend(if t % 2 == 0 { [a, b, c] } else { [b, c, a] });
+        }
+        for t in (0..triangles).step_by(11) {
+            indices[3 * t + 2] = indices[3 * t];
+        }
+        for t in (0..triangles).step_by(13) {
+            let [a, b, c] = [0, 1, 2].map(|k| indices[3 * t + k]);
+            indices.extend([a, c, b]);
+        }
+        // The second triangle, through the corner spelled -0.0.
+        indices.extend([1, (n * n) as u32, n as u32 + 1]);
+        indices.extend([2, 9, (n * n + 1) as u32]); // past the vertices: kept
+        assert!(indices.len() / 3 >= SHARDED_FROM);
+        let found = unusable(&positions, &indices);
+        assert_eq!(found, unusable_by_definition(&positions, &indices));
+        // The repeats of the 7th triangles (not made degenerate), the degenerate ones, and
+        // the one at -0.0.
+        let degenerate = triangles.div_ceil(11);
+        assert!(found.len() > triangles / 7 + degenerate - triangles / 77 - 2);
+        assert!(found.contains(&(indices.len() / 3 - 2)));
+        let kept = without(&indices, &found);
+        assert_eq!(kept.len(), indices.len() - 3 * found.len());
+        assert!(unusable(&positions, &kept).is_empty());
+    }
+
+    #[test]
+    fn the_same_triangles_are_found_on_one_thread_and_on_four() {
+        let positions: Vec<Vec3> = (0..500)
+            .map(|k| Vec3::new((k % 7) as f32, (k % 5) as f32, (k % 3) as f32))
+            .collect();
+        let indices: Vec<u32> = (0..3 * 60_000u32).map(|i| (i * 7919) % 500).collect();
+        let on = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool")
+                .install(|| unusable(&positions, &indices))
+        };
+        let one = on(1);
+        assert_eq!(one, on(4));
+        assert_eq!(one, unusable_by_definition(&positions, &indices));
+        assert!(!one.is_empty());
+    }
+}
