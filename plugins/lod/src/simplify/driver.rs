@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::grid::{EMPTY, Grid};
 use super::queue::Queue;
-use super::search::{CANDIDATES, RETRIES, Search};
+use super::search::{RETRIES, Search};
 use super::{Axis, Selection, Weights};
 use crate::leaf::Leaf;
 
@@ -16,12 +16,6 @@ pub(super) struct Simplifier {
     pub(super) children: Vec<[u32; 2]>,
     pub(super) alive: Vec<bool>,
     pub(super) alive_count: usize,
-    /// Per label, the last partner whose pair with it was refused by the area bounds
-    /// (`EMPTY`: none). Refusal is symmetric and final while both leaves live, so the
-    /// partner's own attempt at the pair is skipped instead of building the new leaf again.
-    pub(super) refused_by: Vec<u32>,
-    /// `CANDIDATES` keys per label (only the first `len` of each are meaningful).
-    pub(super) candidates: Vec<u64>,
     pub(super) searches: Vec<Search>,
     pub(super) grid: Grid,
     pub(super) built_with: usize,
@@ -64,8 +58,6 @@ impl Simplifier {
             children: Vec::with_capacity(leaves.len()),
             alive: Vec::with_capacity(capacity),
             alive_count: leaves.len(),
-            refused_by: Vec::with_capacity(capacity),
-            candidates: Vec::with_capacity(capacity * CANDIDATES),
             searches: Vec::with_capacity(capacity),
             grid: Grid::default(),
             built_with: 0,
@@ -87,8 +79,6 @@ impl Simplifier {
             inv_crown: if crown > 0.0 { 1.0 / crown } else { 0.0 },
         };
         s.alive.resize(leaves.len(), true);
-        s.refused_by.resize(leaves.len(), EMPTY);
-        s.candidates.resize(leaves.len() * CANDIDATES, 0);
         s.searches.resize(leaves.len(), Search::FRESH);
         s.rebuild_grid();
         s
@@ -113,13 +103,13 @@ impl Simplifier {
             }
             let b = key as u32;
             let dead = !self.alive[b as usize];
-            if !dead && self.refused_by[a as usize] != b {
+            if !dead && self.searches[a as usize].refused_by != b {
                 let new = Leaf::collapse(&self.leaves[a as usize], &self.leaves[b as usize]);
                 if self.allowed(a, b, &new) {
                     self.collapse(a, b, new);
                     continue;
                 }
-                self.refused_by[b as usize] = a;
+                self.searches[b as usize].refused_by = a;
             }
             self.advance(a, key, dead);
         }
@@ -136,8 +126,6 @@ impl Simplifier {
         self.children.push([a.min(b), a.max(b)]);
         self.leaves.push(new);
         self.alive.push(true);
-        self.refused_by.push(EMPTY);
-        self.candidates.extend_from_slice(&[0; CANDIDATES]);
         self.searches.push(Search::FRESH);
         self.alive_count -= 1;
         if self.alive_count * 2 <= self.built_with {
@@ -156,15 +144,14 @@ impl Simplifier {
         let s = &mut self.searches[a as usize];
         s.floor = s.floor.max(consumed);
         s.died |= dead;
-        let base = a as usize * CANDIDATES;
         while s.next < s.len {
-            let key = self.candidates[base + s.next as usize];
+            let key = s.list[s.next as usize];
             s.next += 1;
             let b = key as u32;
             if !self.alive[b as usize] {
                 s.floor = s.floor.max(key);
                 s.died = true;
-            } else if self.refused_by[a as usize] == b {
+            } else if s.refused_by == b {
                 // Refused from `b`'s side already: consumed without queueing it.
                 s.floor = s.floor.max(key);
             } else {

@@ -50,6 +50,10 @@ impl Traits {
 pub(super) struct Cell {
     pub(super) start: u32,
     pub(super) len: u32,
+    /// At least the largest radius of its leaves (leaves that left it are not forgotten
+    /// until the next layout), for the searches to skip a cell whose every leaf is beyond
+    /// the distance bound.
+    pub(super) radius: f32,
 }
 
 /// A dense uniform grid of living leaves over the box of their centres; points outside the
@@ -63,6 +67,9 @@ pub(super) struct Grid {
     pub(super) origin: Vec3,
     pub(super) cell: f32,
     pub(super) inv_cell: f32,
+    /// How much [`Grid::gap`] and [`Grid::beyond`] take off their distances, so that
+    /// rounding never makes them more than the distance of a point they bound.
+    pub(super) slack: f32,
     pub(super) dims: [i32; 3],
     /// One per cell, and one past the last that marks the end of the slots.
     pub(super) cells: Vec<Cell>,
@@ -100,6 +107,11 @@ impl Grid {
         self.origin = lo;
         self.cell = cell;
         self.inv_cell = 1.0 / cell;
+        // Rounding in `coords` and `gap` is a few units in the last place of the coordinates
+        // and of the cell indices: a thousandth of a cell is far more in any grid.
+        let scale = lo.abs().max(hi.abs()).max_element();
+        let most_cells = self.dims.iter().copied().max().unwrap_or(1) as f32;
+        self.slack = cell * (1e-3 + 1e-6 * most_cells) + 8.0 * f32::EPSILON * scale;
     }
 
     /// Number of cells.
@@ -132,7 +144,11 @@ impl Grid {
         let mut start = 0u32;
         for cell in &mut self.cells {
             let len = cell.len;
-            *cell = Cell { start, len: 0 };
+            *cell = Cell {
+                start,
+                len: 0,
+                radius: 0.0,
+            };
             start += len + len / 2 + 1;
         }
         let slots = start as usize;
@@ -143,8 +159,10 @@ impl Grid {
         for (k, &l) in labels.iter().enumerate() {
             let cell = &mut self.cells[self.cell_of[k] as usize];
             let slot = (cell.start + cell.len) as usize;
+            let traits = Traits::of(l, &leaves[l as usize]);
             cell.len += 1;
-            self.put(slot, Traits::of(l, &leaves[l as usize]));
+            cell.radius = cell.radius.max(traits.radius);
+            self.put(slot, traits);
         }
     }
 
@@ -178,15 +196,17 @@ impl Grid {
         if cell.start + cell.len >= end {
             return false;
         }
+        let traits = Traits::of(label, leaf);
         self.cells[i].len += 1;
-        self.put((cell.start + cell.len) as usize, Traits::of(label, leaf));
+        self.cells[i].radius = cell.radius.max(traits.radius);
+        self.put((cell.start + cell.len) as usize, traits);
         true
     }
 
     /// Removes the leaf `label` at `p` from its cell (the cell's last leaf takes its slot).
     pub(super) fn remove(&mut self, label: u32, p: Vec3) {
         let i = self.index(self.coords(p));
-        let Cell { start, len } = self.cells[i];
+        let Cell { start, len, .. } = self.cells[i];
         let (start, end) = (start as usize, (start + len) as usize);
         if let Some(k) = self.traits[start..end]
             .iter()
@@ -205,28 +225,81 @@ impl Grid {
         (0..3).any(|k| c[k] - ring >= 0 || c[k] + ring < self.dims[k])
     }
 
-    /// Calls `visit` on the slots of the cells exactly `ring` cells away from `c` (Chebyshev
-    /// distance) within the grid: once per run of cells adjacent in memory.
-    pub(super) fn ring(&self, c: [i32; 3], ring: i32, mut visit: impl FnMut(Range<usize>)) {
+    /// How far `p` is, at least, from the points the cell at `i` along axis `k` holds: 0
+    /// inside it, and the border cells reach to infinity (they hold the points beyond the
+    /// box). Less the grid's slack, so that rounding in [`Grid::coords`] never makes it
+    /// more than the distance of a point of the cell.
+    fn gap(&self, k: usize, i: i32, p: f32) -> f32 {
+        let lo = if i == 0 {
+            f32::NEG_INFINITY
+        } else {
+            self.origin[k] + i as f32 * self.cell
+        };
+        let hi = if i == self.dims[k] - 1 {
+            f32::INFINITY
+        } else {
+            self.origin[k] + (i + 1) as f32 * self.cell
+        };
+        ((lo - p).max(p - hi) - self.slack).max(0.0)
+    }
+
+    /// How far `p`, whose cell is `c`, is at least from every point of the cells more than
+    /// `ring` cells away from `c` (infinity when there are none): at least `ring` cells, and
+    /// more when `p` is far from its cell's faces.
+    pub(super) fn beyond(&self, c: [i32; 3], ring: i32, p: Vec3) -> f32 {
+        (0..3)
+            .map(|k| {
+                let below = if c[k] - ring > 0 {
+                    p[k] - (self.origin[k] + (c[k] - ring) as f32 * self.cell)
+                } else {
+                    f32::INFINITY
+                };
+                let above = if c[k] + ring + 1 < self.dims[k] {
+                    self.origin[k] + (c[k] + ring + 1) as f32 * self.cell - p[k]
+                } else {
+                    f32::INFINITY
+                };
+                below.min(above)
+            })
+            .fold(f32::INFINITY, f32::min)
+            .max(ring as f32 * self.cell)
+            - self.slack
+    }
+
+    /// Calls `visit` on the slots of each non-empty cell exactly `ring` cells away from `c`
+    /// (Chebyshev distance) within the grid, in memory order (x fastest), with the cell's
+    /// largest radius and the least squared distance from `p` to a point it may hold.
+    pub(super) fn ring(
+        &self,
+        c: [i32; 3],
+        ring: i32,
+        p: Vec3,
+        mut visit: impl FnMut(Range<usize>, f32, f32),
+    ) {
         let lo = [0, 1, 2].map(|k| (c[k] - ring).max(0));
         let hi = [0, 1, 2].map(|k| (c[k] + ring).min(self.dims[k] - 1));
-        let mut run = |x0: i32, x1: i32, y: i32, z: i32| {
+        let mut run = |x0: i32, x1: i32, y: i32, z: i32, yz2: f32| {
             let (first, last) = (self.index([x0, y, z]), self.index([x1, y, z]));
-            for cell in &self.cells[first..=last] {
+            for (x, cell) in (x0..).zip(&self.cells[first..=last]) {
                 if cell.len > 0 {
-                    visit(cell.start as usize..(cell.start + cell.len) as usize);
+                    let dx = self.gap(0, x, p.x);
+                    let slots = cell.start as usize..(cell.start + cell.len) as usize;
+                    visit(slots, cell.radius, dx * dx + yz2);
                 }
             }
         };
         for z in lo[2]..=hi[2] {
+            let dz = self.gap(2, z, p.z);
             for y in lo[1]..=hi[1] {
+                let dy = self.gap(1, y, p.y);
+                let yz2 = dy * dy + dz * dz;
                 if ring == 0 || (z - c[2]).abs() == ring || (y - c[1]).abs() == ring {
-                    run(lo[0], hi[0], y, z);
+                    run(lo[0], hi[0], y, z, yz2);
                 } else {
                     // Off the ring's faces in y and z only the two x ends are on it.
                     for x in [c[0] - ring, c[0] + ring] {
                         if x >= 0 && x < self.dims[0] {
-                            run(x, x, y, z);
+                            run(x, x, y, z, yz2);
                         }
                     }
                 }
@@ -271,7 +344,7 @@ mod tests {
         assert!(grid.insert(2, &leaves[2]));
         grid.fill(&leaves, &labels);
         let mut seen = Vec::new();
-        grid.ring([0, 0, 0], 0, |slots| {
+        grid.ring([0, 0, 0], 0, Vec3::ZERO, |slots, _, _| {
             seen.extend(grid.traits[slots].iter().map(|t| t.label));
         });
         assert_eq!(seen, labels);
