@@ -97,14 +97,18 @@ impl Simplifier {
                 self.search(i, false);
             }
         }
-        while let Some((key, a)) = self.queue.pop() {
+        while let Some(&(key, a)) = self.queue.peek() {
+            let b = key as u32;
+            // Both leaves are read before the heap's sift-down, so that their loads (random
+            // accesses into a large array) overlap with it.
+            let (la, lb) = (self.leaves[a as usize], self.leaves[b as usize]);
+            self.queue.pop();
             if !self.alive[a as usize] {
                 continue;
             }
-            let b = key as u32;
             let dead = !self.alive[b as usize];
             if !dead && self.searches[a as usize].refused_by != b {
-                let new = Leaf::collapse(&self.leaves[a as usize], &self.leaves[b as usize]);
+                let new = Leaf::collapse(&la, &lb);
                 if self.allowed(a, b, &new) {
                     self.collapse(a, b, new);
                     continue;

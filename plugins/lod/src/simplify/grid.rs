@@ -2,7 +2,7 @@
 
 use std::ops::Range;
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 
 use crate::leaf::Leaf;
 
@@ -58,10 +58,12 @@ pub(super) struct Cell {
 
 /// A dense uniform grid of living leaves over the box of their centres; points outside the
 /// box (new leaves may stray a little) go to the nearest border cell. The slots of all cells
-/// lie in two arrays, cell after cell (x fastest, so a row of cells is one run of memory):
-/// `spheres` holds each leaf's centre and radius, all the distance test reads, and `traits`
-/// the rest the cost needs. Each cell keeps room for half as many leaves again as it was
-/// laid out with, for the new leaves of collapses.
+/// lie in one array, cell after cell (x fastest, so a row of cells is one run of memory),
+/// each slot a copy of everything the distance test and the cost read of its leaf (one
+/// array rather than a narrow one for the distance test beside it: a cell's slots are few,
+/// and the pairs that pass the test then need no second run of memory). Each cell keeps
+/// room for half as many leaves again as it was laid out with, for the new leaves of
+/// collapses.
 #[derive(Default)]
 pub(super) struct Grid {
     pub(super) origin: Vec3,
@@ -73,7 +75,6 @@ pub(super) struct Grid {
     pub(super) dims: [i32; 3],
     /// One per cell, and one past the last that marks the end of the slots.
     pub(super) cells: Vec<Cell>,
-    pub(super) spheres: Vec<Vec4>,
     pub(super) traits: Vec<Traits>,
     /// Scratch: the cell of each leaf being laid out.
     pub(super) cell_of: Vec<u32>,
@@ -152,8 +153,6 @@ impl Grid {
             start += len + len / 2 + 1;
         }
         let slots = start as usize;
-        self.spheres.clear();
-        self.spheres.resize(slots, Vec4::ZERO);
         self.traits.clear();
         self.traits.resize(slots, Traits::NONE);
         for (k, &l) in labels.iter().enumerate() {
@@ -167,7 +166,6 @@ impl Grid {
     }
 
     pub(super) fn put(&mut self, slot: usize, traits: Traits) {
-        self.spheres[slot] = traits.center.extend(traits.radius);
         self.traits[slot] = traits;
     }
 
@@ -213,7 +211,6 @@ impl Grid {
             .position(|t| t.label == label)
         {
             let last = end - 1;
-            self.spheres[start + k] = self.spheres[last];
             self.traits[start + k] = self.traits[last];
             self.traits[last] = Traits::NONE;
             self.cells[i].len -= 1;

@@ -15,11 +15,14 @@
 //! the cheapest in the queue, which then becomes the new leaf itself. Nothing is allocated
 //! per collapse; the result is deterministic (ties go to the lower label).
 //!
-//! The search is bound by memory latency, so its data is laid out to be read in runs: the
-//! grid's cells lie one after the other in two arrays (centres and radii, then what the cost
-//! needs), each with room for new leaves; the queue is a 4-ary heap (half the levels of a
-//! binary one); and a refused pair is remembered by the partner, whose own attempt at the
-//! same pair (refusal is symmetric) is then skipped without building the new leaf again.
+//! The work is bound by memory latency, so its data is laid out to be read in runs: the
+//! grid's cells lie one after the other in one array of what the cost reads of each leaf,
+//! with room for new leaves, and a search skips the cells that cannot hold a partner (by
+//! the cell's box and largest radius); the queue is a 4-ary heap (half the levels of a
+//! binary one), and the two leaves of the pair on top are read before it sifts down; a
+//! leaf's candidates and search state lie in one record; and a refused pair is remembered
+//! by the partner, whose own attempt at the same pair (refusal is symmetric) is then
+//! skipped without building the new leaf again.
 
 use glam::Vec3;
 

@@ -28,6 +28,11 @@ impl Queue {
         self.items[i] = item;
     }
 
+    /// The least item, left in the queue.
+    pub(super) fn peek(&self) -> Option<&(u64, u32)> {
+        self.items.first()
+    }
+
     pub(super) fn pop(&mut self) -> Option<(u64, u32)> {
         let last = self.items.pop()?;
         let Some(&top) = self.items.first() else {

@@ -83,15 +83,13 @@ impl Simplifier {
                 if least > limit * limit || (len == CANDIDATES && least >= near[CANDIDATES - 1].0) {
                     return;
                 }
-                // Only the centre and radius are read for the distance test (16 bytes a
-                // slot, contiguous); the rest only for the pairs within the bound.
-                for (i, sphere) in slots.clone().zip(&grid.spheres[slots]) {
-                    let d2 = centre_of_me.distance_squared(sphere.truncate());
-                    let limit = self.max_distance * (me.radius + sphere.w);
+                // The cost only for the pairs within the bound.
+                for other in &grid.traits[slots] {
+                    let d2 = centre_of_me.distance_squared(other.center);
+                    let limit = self.max_distance * (me.radius + other.radius);
                     if d2 > limit * limit || (len == CANDIDATES && d2 >= near[CANDIDATES - 1].0) {
                         continue;
                     }
-                    let other = &grid.traits[i];
                     if other.label == a {
                         continue;
                     }
