@@ -241,7 +241,9 @@ impl Share {
 }
 
 /// Adds one leaf to (or, `farthest`, takes one from) each of the `left` nearest (farthest)
-/// instances whose count is `eligible`, in the order of (distance, index) (reversed).
+/// instances whose count is `eligible`, in the order of (distance, index) (reversed): the
+/// radix selection finds the distance of the last one, then one pass walks the instances in
+/// index order (reversed) and changes those before that distance and the first ones at it.
 fn spread(
     distances: &[f32],
     counts: &mut [u32],
@@ -249,32 +251,62 @@ fn spread(
     eligible: impl Fn(u32) -> bool + Copy,
     farthest: bool,
 ) {
-    let candidates = counts.iter().filter(|&&c| eligible(c)).count();
-    let n = (left as usize).min(candidates);
-    if n == 0 {
+    let Some((last, mut ties)) = radix(distances, counts, eligible, left, farthest) else {
         return;
-    }
-    let last = nth_key(distances, counts, eligible, n, farthest);
-    for (i, c) in counts.iter_mut().enumerate() {
-        let k = (u64::from(distances[i].to_bits()) << 32) | i as u64;
-        if eligible(*c) && (if farthest { k >= last } else { k <= last }) {
+    };
+    let mut visit = |(&d, c): (&f32, &mut u32)| {
+        if !eligible(*c) {
+            return;
+        }
+        let bits = d.to_bits();
+        let before = if farthest { bits > last } else { bits < last };
+        if before || (bits == last && ties > 0) {
+            ties -= usize::from(bits == last);
             *c = if farthest { *c - 1 } else { *c + 1 };
         }
+    };
+    if farthest {
+        distances.iter().zip(counts).rev().for_each(&mut visit);
+    } else {
+        distances.iter().zip(counts).for_each(&mut visit);
     }
 }
 
 /// The key `(distance bits << 32) | index` of the `n`-th (from 1) instance whose count is
-/// `eligible`, in increasing order of keys (decreasing when `farthest`): a radix selection,
-/// three counting passes over the distance's bits (11, 11 and 10 at a time), then one pass
-/// for the ties of equal distance. `n` is at most the number of eligible instances.
+/// `eligible`, in increasing order of keys (decreasing when `farthest`). `n` is at least 1
+/// and at most the number of eligible instances.
 fn nth_key(
     distances: &[f32],
     counts: &[u32],
-    eligible: impl Fn(u32) -> bool,
+    eligible: impl Fn(u32) -> bool + Copy,
     n: usize,
     farthest: bool,
 ) -> u64 {
-    let (mut prefix, mut mask, mut rank) = (0u32, 0u32, n);
+    let (bits, rank) = radix(distances, counts, eligible, n as u64, farthest).unwrap_or((0, 1));
+    // The `rank`-th instance at exactly this distance, by index (decreasing when `farthest`).
+    let mut at =
+        (0..distances.len()).filter(|&i| eligible(counts[i]) && distances[i].to_bits() == bits);
+    let i = if farthest {
+        at.rev().nth(rank - 1)
+    } else {
+        at.nth(rank - 1)
+    };
+    (u64::from(bits) << 32) | i.unwrap_or(0) as u64
+}
+
+/// A radix selection of the `n`-th (from 1; fewer when fewer are eligible) instance whose
+/// count is `eligible`, by increasing distance (decreasing when `farthest`): three counting
+/// passes over the distance's bits, 11, 11 and 10 at a time. Its distance's bits, and how
+/// many of the instances at exactly that distance are among the first `n`; `None` when
+/// `n` is 0 or none is eligible.
+fn radix(
+    distances: &[f32],
+    counts: &[u32],
+    eligible: impl Fn(u32) -> bool,
+    n: u64,
+    farthest: bool,
+) -> Option<(u32, usize)> {
+    let (mut prefix, mut mask, mut rank) = (0u32, 0u32, 0usize);
     let mut histogram = [0u32; 1 << 11];
     for (shift, width) in [(21u32, 11u32), (10, 11), (0, 10)] {
         let digits = &mut histogram[..1 << width];
@@ -284,6 +316,14 @@ fn nth_key(
             let bits = d.to_bits();
             if eligible(c) && bits & mask == prefix {
                 digits[((bits >> shift) & digit_mask) as usize] += 1;
+            }
+        }
+        if mask == 0 {
+            // The first pass counted every eligible instance.
+            let total: u64 = digits.iter().map(|&c| u64::from(c)).sum();
+            rank = n.min(total) as usize;
+            if rank == 0 {
+                return None;
             }
         }
         let mut pick = |digit: usize, count: u32| {
@@ -302,15 +342,7 @@ fn nth_key(
         }
         mask |= digit_mask << shift;
     }
-    // `rank` instances at exactly this distance, by index (decreasing when `farthest`).
-    let mut at =
-        (0..distances.len()).filter(|&i| eligible(counts[i]) && distances[i].to_bits() == prefix);
-    let i = if farthest {
-        at.rev().nth(rank - 1)
-    } else {
-        at.nth(rank - 1)
-    };
-    (u64::from(prefix) << 32) | i.unwrap_or(0) as u64
+    Some((prefix, rank))
 }
 
 #[cfg(test)]
