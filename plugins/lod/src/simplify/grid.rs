@@ -346,4 +346,45 @@ mod tests {
         });
         assert_eq!(seen, labels);
     }
+
+    #[test]
+    fn cell_and_ring_bounds_never_exceed_a_leafs_distance() {
+        let mut x = 7u64;
+        let mut r = move || {
+            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        // A box smaller than the leaves' spread: some leaves lie in the border cells from
+        // beyond it, as new leaves may.
+        let leaves: Vec<Leaf> = (0..400)
+            .map(|_| leaf(Vec3::new(r() * 10.0 - 1.0, r() * 5.0, r() * 3.0 - 0.5)))
+            .collect();
+        let labels: Vec<u32> = (0..400).collect();
+        let mut grid = Grid::default();
+        grid.shape(Vec3::ZERO, Vec3::new(8.0, 4.0, 2.0), 0.7, leaves.len());
+        grid.fill(&leaves, &labels);
+        let mut visited = 0;
+        for probe in leaves.iter().step_by(7) {
+            let p = probe.center;
+            let c = grid.coords(p);
+            for ring in 0..5 {
+                grid.ring(c, ring, p, |slots, radius, least| {
+                    for t in &grid.traits[slots] {
+                        assert!(least <= p.distance_squared(t.center), "{p} {}", t.center);
+                        assert!(t.radius <= radius);
+                        visited += 1;
+                    }
+                });
+                let beyond = grid.beyond(c, ring, p).max(0.0);
+                for t in grid.traits.iter().filter(|t| t.label != EMPTY) {
+                    let tc = grid.coords(t.center);
+                    if (0..3).any(|k| (tc[k] - c[k]).abs() > ring) {
+                        assert!(beyond * beyond <= p.distance_squared(t.center));
+                    }
+                }
+            }
+        }
+        // Each probe at least saw its own leaf.
+        assert!(visited >= 400 / 7);
+    }
 }
