@@ -99,23 +99,34 @@ impl Simplifier {
         }
         while let Some(&(key, a)) = self.queue.peek() {
             let b = key as u32;
-            // Both leaves are read before the heap's sift-down, so that their loads (random
-            // accesses into a large array) overlap with it.
+            // Both leaves are read first: their loads (random accesses into a large array)
+            // overlap with the work on the queue.
             let (la, lb) = (self.leaves[a as usize], self.leaves[b as usize]);
-            self.queue.pop();
             if !self.alive[a as usize] {
+                self.queue.pop();
                 continue;
             }
             let dead = !self.alive[b as usize];
             if !dead && self.searches[a as usize].refused_by != b {
                 let new = Leaf::collapse(&la, &lb);
                 if self.allowed(a, b, &new) {
+                    self.queue.pop();
                     self.collapse(a, b, new);
                     continue;
                 }
                 self.searches[b as usize].refused_by = a;
             }
-            self.advance(a, key, dead);
+            // `a`'s next candidate takes the place of the consumed one on top of the queue:
+            // one sift-down from the top (short, its key is close to the least) instead of
+            // a pop and a push. The queue holds one entry per leaf, all distinct, so the
+            // order of the pops is the same.
+            match self.advance(a, key, dead) {
+                Some(next) => self.queue.replace_top((next, a)),
+                None => {
+                    self.queue.pop();
+                    self.retry(a);
+                }
+            }
         }
     }
 
@@ -142,9 +153,9 @@ impl Simplifier {
         self.search(label, false);
     }
 
-    /// `a`'s candidate `consumed` is `dead` or refused: queue its next living candidate, or
-    /// search again when the list is used up and one of its candidates had died.
-    fn advance(&mut self, a: u32, consumed: u64, dead: bool) {
+    /// `a`'s candidate `consumed` is `dead` or refused: its next living candidate not
+    /// refused already, to queue; `None` when its list is used up.
+    fn advance(&mut self, a: u32, consumed: u64, dead: bool) -> Option<u64> {
         let s = &mut self.searches[a as usize];
         s.floor = s.floor.max(consumed);
         s.died |= dead;
@@ -159,12 +170,17 @@ impl Simplifier {
                 // Refused from `b`'s side already: consumed without queueing it.
                 s.floor = s.floor.max(key);
             } else {
-                self.queue.push((key, a));
-                return;
+                return Some(key);
             }
         }
-        // A list whose every candidate was refused by the bounds looks farther only
-        // `RETRIES` times, then retires its leaf; new leaves near it still find it.
+        None
+    }
+
+    /// `a`'s list is used up: it searches again when one of its candidates had died, and
+    /// a list whose every candidate was refused by the bounds looks farther only `RETRIES`
+    /// times, then retires its leaf (new leaves near it still find it).
+    fn retry(&mut self, a: u32) {
+        let s = &mut self.searches[a as usize];
         if s.died || s.refused < RETRIES {
             s.refused += u8::from(!s.died);
             self.search(a, true);

@@ -38,7 +38,21 @@ impl Queue {
         let Some(&top) = self.items.first() else {
             return Some(last);
         };
-        // Sift `last` down from the root.
+        self.sift_down(last);
+        Some(top)
+    }
+
+    /// Replaces the least item with `item` (a pop then a push, in one sift-down).
+    pub(super) fn replace_top(&mut self, item: (u64, u32)) {
+        if self.items.is_empty() {
+            self.items.push(item);
+        } else {
+            self.sift_down(item);
+        }
+    }
+
+    /// Puts `item` in the root's place and moves it down to where it belongs.
+    fn sift_down(&mut self, item: (u64, u32)) {
         let n = self.items.len();
         let mut i = 0;
         loop {
@@ -53,14 +67,13 @@ impl Queue {
                     child = c;
                 }
             }
-            if self.items[child] >= last {
+            if self.items[child] >= item {
                 break;
             }
             self.items[i] = self.items[child];
             i = child;
         }
-        self.items[i] = last;
-        Some(top)
+        self.items[i] = item;
     }
 }
 
@@ -80,5 +93,26 @@ mod tests {
         items.sort_unstable();
         let popped: Vec<(u64, u32)> = std::iter::from_fn(|| queue.pop()).collect();
         assert_eq!(popped, items);
+    }
+
+    #[test]
+    fn replacing_the_top_is_a_pop_then_a_push() {
+        let mut a = Queue::with_capacity(4);
+        let mut b = Queue::with_capacity(4);
+        for i in 0..300u32 {
+            let item = (u64::from(i.wrapping_mul(2_654_435_761) % 1000), i);
+            a.push(item);
+            b.push(item);
+        }
+        for i in 0..200u32 {
+            let item = (u64::from(i.wrapping_mul(40_503) % 1500), 1000 + i);
+            assert_eq!(a.pop(), b.peek().copied());
+            a.push(item);
+            b.replace_top(item);
+        }
+        let rest_a: Vec<_> = std::iter::from_fn(|| a.pop()).collect();
+        let rest_b: Vec<_> = std::iter::from_fn(|| b.pop()).collect();
+        assert_eq!(rest_a, rest_b);
+        assert_eq!(rest_a.len(), 300);
     }
 }
