@@ -93,8 +93,10 @@ impl Simplifier {
         // read (the queue pops by key alone, so the order of pushes does not matter).
         let order: Vec<u32> = self.grid.traits.iter().map(|t| t.label).collect();
         for i in order {
-            if i != EMPTY {
-                self.search(i, false);
+            if i != EMPTY
+                && let Some(item) = self.search(i, false)
+            {
+                self.queue.push(item);
             }
         }
         while let Some(&(key, a)) = self.queue.peek() {
@@ -110,28 +112,37 @@ impl Simplifier {
             if !dead && self.searches[a as usize].refused_by != b {
                 let new = Leaf::collapse(&la, &lb);
                 if self.allowed(a, b, &new) {
-                    self.queue.pop();
-                    self.collapse(a, b, new);
+                    let next = self.collapse(a, b, new);
+                    self.replace_top(next);
                     continue;
                 }
                 self.searches[b as usize].refused_by = a;
             }
-            // `a`'s next candidate takes the place of the consumed one on top of the queue:
-            // one sift-down from the top (short, its key is close to the least) instead of
-            // a pop and a push. The queue holds one entry per leaf, all distinct, so the
-            // order of the pops is the same.
-            match self.advance(a, key, dead) {
-                Some(next) => self.queue.replace_top((next, a)),
-                None => {
-                    self.queue.pop();
-                    self.retry(a);
-                }
+            let next = match self.advance(a, key, dead) {
+                Some(next) => Some((next, a)),
+                None => self.retry(a),
+            };
+            self.replace_top(next);
+        }
+    }
+
+    /// The pair on top of the queue is consumed: what comes of it (`a`'s next candidate,
+    /// or the first of a new search) takes its place, in one sift-down from the top (short:
+    /// its key is close to the least) instead of a pop and a push. Nothing else touches the
+    /// queue in between and it holds one entry per leaf, all distinct, so the pops come in
+    /// the same order.
+    fn replace_top(&mut self, next: Option<(u64, u32)>) {
+        match next {
+            Some(item) => self.queue.replace_top(item),
+            None => {
+                self.queue.pop();
             }
         }
     }
 
-    /// Joins `a` and `b` into `new`, which searches for its own partners.
-    fn collapse(&mut self, a: u32, b: u32, new: Leaf) {
+    /// Joins `a` and `b` into `new`, which searches for its own partners: the first of them
+    /// is returned, to queue.
+    fn collapse(&mut self, a: u32, b: u32, new: Leaf) -> Option<(u64, u32)> {
         let label = self.leaves.len() as u32;
         for old in [a, b] {
             self.alive[old as usize] = false;
@@ -150,7 +161,7 @@ impl Simplifier {
             self.collect_living();
             self.grid.fill(&self.leaves, &self.living);
         }
-        self.search(label, false);
+        self.search(label, false)
     }
 
     /// `a`'s candidate `consumed` is `dead` or refused: its next living candidate not
@@ -178,12 +189,15 @@ impl Simplifier {
 
     /// `a`'s list is used up: it searches again when one of its candidates had died, and
     /// a list whose every candidate was refused by the bounds looks farther only `RETRIES`
-    /// times, then retires its leaf (new leaves near it still find it).
-    fn retry(&mut self, a: u32) {
+    /// times, then retires its leaf (new leaves near it still find it). The first
+    /// candidate found is returned, to queue.
+    fn retry(&mut self, a: u32) -> Option<(u64, u32)> {
         let s = &mut self.searches[a as usize];
         if s.died || s.refused < RETRIES {
             s.refused += u8::from(!s.died);
-            self.search(a, true);
+            self.search(a, true)
+        } else {
+            None
         }
     }
 

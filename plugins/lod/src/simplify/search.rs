@@ -54,12 +54,13 @@ impl Search {
 
 impl Simplifier {
     /// Fills `a`'s candidate list with its `CANDIDATES` nearest partners allowed by the
-    /// distance and angle bounds, cheapest first, and queues the first. The grid is searched
+    /// distance and angle bounds, cheapest first, and returns the first (to queue). The grid
+    /// is searched
     /// in rings of cells around `a` until the ring is farther than the farthest of them, or
     /// than the distance bound to a partner as large as `a`. A repeated search (`again`)
     /// skips the partners consumed before (keys up to the floor) unless they were made after
     /// the last search.
-    pub(super) fn search(&mut self, a: u32, again: bool) {
+    pub(super) fn search(&mut self, a: u32, again: bool) -> Option<(u64, u32)> {
         let me = Traits::of(a, &self.leaves[a as usize]);
         let (floor, seen_below) = {
             let s = &self.searches[a as usize];
@@ -131,9 +132,7 @@ impl Simplifier {
         s.len = len as u8;
         s.next = u8::from(len > 0);
         s.seen_below = self.leaves.len() as u32;
-        if len > 0 {
-            self.queue.push((best[0], a));
-        }
+        (len > 0).then_some((best[0], a))
     }
 
     /// The weighted distance of seed 003 §2.4.1 between two leaves within the distance
