@@ -3,7 +3,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
-use pge_lod::{Budget, Leaf, LodTable, Selection, assign, simplify};
+use pge_lod::{Budget, Chain, Leaf, LodTable, Selection, assign, assign_into, simplify};
 use rand_mt::Mt64;
 
 /// `n` leaves of a round crown: random points in a spherical shell, random orientations.
@@ -30,6 +30,54 @@ fn crown(n: usize) -> Vec<Leaf> {
         .collect()
 }
 
+/// FNV-1a over the chain's children and every leaf's fields: equal hashes, same chain.
+fn chain_hash(chain: &Chain) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |x: u32| {
+        for b in x.to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for pair in &chain.children {
+        pair.iter().for_each(|&c| eat(c));
+    }
+    for l in &chain.leaves {
+        let v = [l.center, l.normal, l.axis, l.lo, l.hi];
+        v.iter()
+            .flat_map(|v| v.to_array())
+            .for_each(|f| eat(f.to_bits()));
+        [l.half_length, l.half_width, l.leaf_area]
+            .iter()
+            .for_each(|f| eat(f.to_bits()));
+        eat(l.count);
+    }
+    h
+}
+
+/// CPU time this thread has run, in nanoseconds (`/proc/thread-self/schedstat`; 0 where
+/// there is none): under load, wall time counts the time other processes hold the core.
+fn cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}
+
+/// The CPU time of a call of `f` in milliseconds: the least, over 3 batches of `calls`, of
+/// the batch's time over `calls` (the kernel updates the count at scheduler ticks, so a
+/// batch should last well over a tick).
+fn cpu_ms<T>(calls: usize, mut f: impl FnMut() -> T) -> f64 {
+    (0..3)
+        .map(|_| {
+            let start = cpu_ns();
+            for _ in 0..calls {
+                std::hint::black_box(f());
+            }
+            (cpu_ns() - start) as f64 * 1e-6 / calls as f64
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 fn bench(c: &mut Criterion) {
     let leaves = crown(100_000);
     let mut g = c.benchmark_group("lod");
@@ -39,9 +87,10 @@ fn bench(c: &mut Criterion) {
     });
     let chain = simplify(&leaves, &Selection::default());
     eprintln!(
-        "100k leaves: {} collapses, {} roots",
+        "100k leaves: {} collapses, {} roots, chain hash {:016x}",
         chain.children.len(),
-        chain.roots().len()
+        chain.roots().len(),
+        chain_hash(&chain)
     );
     g.bench_function("V and table, 100k leaves", |b| {
         b.iter(|| LodTable::new(&chain))
@@ -56,6 +105,23 @@ fn bench(c: &mut Criterion) {
     };
     g.bench_function("budget 100k instances", |b| {
         b.iter(|| assign(&distances, 5000, 40, &budget).expect("budget"))
+    });
+    let mut counts = Vec::new();
+    eprintln!(
+        "CPU time per call (least of 3 batches; schedstat): simplify 100k leaves {:.0} ms; budget 100k \
+         instances {:.2} ms, reused buffers {:.2} ms",
+        cpu_ms(1, || simplify(&leaves, &Selection::default())),
+        cpu_ms(200, || assign(&distances, 5000, 40, &budget)),
+        cpu_ms(200, || assign_into(
+            &distances,
+            5000,
+            40,
+            &budget,
+            &mut counts
+        )),
+    );
+    g.bench_function("budget 100k instances, reused buffers", |b| {
+        b.iter(|| assign_into(&distances, 5000, 40, &budget, &mut counts).expect("budget"))
     });
     g.finish();
 }

@@ -46,7 +46,7 @@ mod simplify;
 mod vector;
 
 pub use atlas::{ATLAS_SIZE, Atlas, CLUSTER_COUNTS, CLUSTER_DENSITIES, Cell};
-pub use budget::{Budget, BudgetError, assign};
+pub use budget::{Budget, BudgetError, assign, assign_into};
 pub use foliage::{
     LodError, LodOptions, MAX_SECTORS, Sector, leaves_of, lod_extras, lod_mesh, simplify_sectors,
 };
