@@ -4,7 +4,8 @@
 //! (the leaves' area over the cell's), rendered procedurally from the leaf texture with
 //! random placements. A collapsed leaf takes the cell that best matches how many leaves it
 //! stands for and how densely they cover it, so coarse levels show clusters, not giant
-//! leaves.
+//! leaves. The leaf's normal and metallic-roughness maps get atlases of their own, drawn with
+//! the same placements, so that the three line up.
 
 use std::sync::Arc;
 
@@ -40,30 +41,59 @@ impl Cell {
     }
 }
 
-/// The atlas texture and its cells; cell 0 is the single leaf.
+/// The atlas textures and their cells; cell 0 is the single leaf. The normal and
+/// metallic-roughness atlases, when made, show the same leaves at the same pixels as the
+/// colour atlas, so one set of texture coordinates serves all three.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Atlas {
     /// The RGBA texture (PNG) to put in the leaf material.
     pub texture: Arc<Texture>,
+    /// The tangent-space normal atlas (RGB PNG, +Y up in the image), when the leaf had a
+    /// normal map: each leaf's normals turned with the leaf, the flat normal elsewhere.
+    pub normal: Option<Arc<Texture>>,
+    /// The metallic-roughness atlas (RGB PNG), when the leaf had a metallic-roughness map:
+    /// the leaf's texels, elsewhere the mean of the texels inside its silhouette.
+    pub roughness: Option<Arc<Texture>>,
     /// The cells: the single leaf, then one per count of [`CLUSTER_COUNTS`] and density
     /// of [`CLUSTER_DENSITIES`], counts outermost.
     pub cells: Vec<Cell>,
 }
 
 impl Atlas {
-    /// Builds the atlas from the leaf texture (any size; alpha is the silhouette). The
-    /// same texture gives the same atlas, bytes included.
+    /// Builds the colour atlas from the leaf texture (any size; alpha is the silhouette),
+    /// without normal or roughness atlases. The same texture gives the same atlas, bytes
+    /// included.
     pub fn new(leaf: &Texture) -> Result<Atlas, GeometryError> {
-        let img = image::load_from_memory_with_format(&leaf.png, image::ImageFormat::Png)
-            .map_err(|e| GeometryError::Texture(e.to_string()))?
-            .to_rgba8();
-        let sprite = Sprite {
-            width: img.width(),
-            height: img.height(),
-            rgba: img.into_raw(),
-        };
+        Atlas::with_maps(leaf, None, None)
+    }
+
+    /// Builds the colour atlas from the leaf texture and, for each of the leaf's normal and
+    /// metallic-roughness maps given (any size each, covering the same leaf), the atlas of
+    /// that map: the placements are drawn once and every layer is drawn with them, so the
+    /// three atlases line up texel for texel and share the colour atlas' coverage (a pixel
+    /// is a leaf's where the colour texture's alpha is at least half). The same textures
+    /// give the same atlases, bytes included.
+    pub fn with_maps(
+        leaf: &Texture,
+        normal: Option<&Texture>,
+        roughness: Option<&Texture>,
+    ) -> Result<Atlas, GeometryError> {
+        let sprite = Sprite::decode(leaf)?;
+        let normal = normal.map(Sprite::decode).transpose()?;
+        let roughness = roughness.map(Sprite::decode).transpose()?;
         let n = ATLAS_SIZE as usize;
-        let mut rgba = vec![0u8; n * n * 4];
+        let mut layers = Layers {
+            rgba: vec![0u8; n * n * 4],
+            normal: normal.as_ref().map(|_| FLAT_NORMAL.repeat(n * n)),
+            roughness: roughness
+                .as_ref()
+                .map(|r| r.mean_inside(&sprite).repeat(n * n)),
+        };
+        let maps = Maps {
+            color: &sprite,
+            normal: normal.as_ref(),
+            roughness: roughness.as_ref(),
+        };
         let half = ATLAS_SIZE / 2;
         let quarter = ATLAS_SIZE / 4;
         let mut rects = vec![(0, 0, half)];
@@ -93,7 +123,7 @@ impl Atlas {
             } else {
                 cluster(count, density, sprite.coverage(), i as u64)
             };
-            draw(&mut rgba, n, (x0, y0, size), &sprite, &placements);
+            draw(&mut layers, n, (x0, y0, size), &maps, &placements);
             // Half a texel inside, so that filtering never reads the neighbouring cell.
             let inset = 0.5 / ATLAS_SIZE as f32;
             let s = ATLAS_SIZE as f32;
@@ -107,9 +137,18 @@ impl Atlas {
                 density,
             });
         }
-        let texture = Texture::from_rgba("leaf atlas", ATLAS_SIZE, ATLAS_SIZE, &rgba)?;
+        let texture = Texture::from_rgba("leaf atlas", ATLAS_SIZE, ATLAS_SIZE, &layers.rgba)?;
+        let rgb = |name: &str, pixels: Option<Vec<u8>>| {
+            pixels
+                .map(|px| {
+                    Texture::from_pixels_fast(name, ATLAS_SIZE, ATLAS_SIZE, 3, &px).map(Arc::new)
+                })
+                .transpose()
+        };
         Ok(Atlas {
             texture: Arc::new(texture),
+            normal: rgb("leaf atlas normal", layers.normal)?,
+            roughness: rgb("leaf atlas roughness", layers.roughness)?,
             cells,
         })
     }
@@ -143,6 +182,10 @@ impl Atlas {
     }
 }
 
+/// The flat tangent-space normal, +Z, as normal-map bytes.
+const FLAT_NORMAL: [u8; 3] = [128, 128, 255];
+
+/// A decoded leaf map, RGBA.
 struct Sprite {
     width: u32,
     height: u32,
@@ -150,6 +193,17 @@ struct Sprite {
 }
 
 impl Sprite {
+    fn decode(texture: &Texture) -> Result<Sprite, GeometryError> {
+        let img = image::load_from_memory_with_format(&texture.png, image::ImageFormat::Png)
+            .map_err(|e| GeometryError::Texture(format!("{}: {e}", texture.name)))?
+            .to_rgba8();
+        Ok(Sprite {
+            width: img.width(),
+            height: img.height(),
+            rgba: img.into_raw(),
+        })
+    }
+
     /// The pixel at texture coordinates `uv` in `[0, 1)²` (nearest).
     fn at(&self, uv: Vec2) -> [u8; 4] {
         let x = ((uv.x * self.width as f32) as u32).min(self.width.saturating_sub(1));
@@ -169,6 +223,65 @@ impl Sprite {
         let inside = self.rgba.chunks_exact(4).filter(|p| p[3] >= 128).count();
         (inside as f32 / pixels as f32).max(0.05)
     }
+
+    /// The mean RGB of this map's pixels inside `silhouette`'s (rounded; all pixels when
+    /// none is inside): what the atlas holds between leaves, so that filtering at a leaf's
+    /// edge blends with values like the leaf's own.
+    fn mean_inside(&self, silhouette: &Sprite) -> [u8; 3] {
+        let mut sum = [0u64; 3];
+        let mut count = 0u64;
+        for pass in [true, false] {
+            for y in 0..self.height {
+                for x in 0..self.width {
+                    let uv = Vec2::new(
+                        (x as f32 + 0.5) / self.width as f32,
+                        (y as f32 + 0.5) / self.height as f32,
+                    );
+                    if pass && silhouette.at(uv)[3] < 128 {
+                        continue;
+                    }
+                    let i = (y as usize * self.width as usize + x as usize) * 4;
+                    for (total, &b) in sum.iter_mut().zip(&self.rgba[i..i + 3]) {
+                        *total += u64::from(b);
+                    }
+                    count += 1;
+                }
+            }
+            if count > 0 {
+                break;
+            }
+        }
+        let count = count.max(1);
+        sum.map(|s| ((s + count / 2) / count) as u8)
+    }
+}
+
+/// The leaf's maps the atlas layers are drawn from.
+struct Maps<'a> {
+    color: &'a Sprite,
+    normal: Option<&'a Sprite>,
+    roughness: Option<&'a Sprite>,
+}
+
+/// The atlas' pixels: RGBA colour, and RGB normal and metallic-roughness layers when made.
+struct Layers {
+    rgba: Vec<u8>,
+    normal: Option<Vec<u8>>,
+    roughness: Option<Vec<u8>>,
+}
+
+/// A normal-map texel turned by `angle` as the leaf is: the drawn leaf is its texture
+/// rotated by `angle` in image coordinates (rows growing downwards), so the normal's
+/// `(x, y)`, whose +Y points up the image, turns by `-angle`; Z is kept.
+fn rotate_normal(texel: [u8; 4], (sin, cos): (f32, f32)) -> [u8; 3] {
+    let decode = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
+    let encode = |v: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * 255.0 + 0.5) as u8;
+    let (x, y) = (decode(texel[0]), decode(texel[1]));
+    [
+        encode(cos * x + sin * y),
+        encode(-sin * x + cos * y),
+        texel[2],
+    ]
 }
 
 /// One leaf drawn in a cell: its centre and size in cell units, its rotation and a shade.
@@ -203,13 +316,14 @@ fn cluster(count: u32, density: f32, coverage: f32, seed: u64) -> Vec<Placement>
         .collect()
 }
 
-/// Draws the placements into the cell `(x0, y0, size)` of an `n`-pixel-wide RGBA image,
-/// later ones over earlier ones where their silhouette is opaque.
+/// Draws the placements into the cell `(x0, y0, size)` of every layer of an `n`-pixel-wide
+/// atlas, later ones over earlier ones where their silhouette (the colour's alpha) is
+/// opaque: a pixel takes all its layers from the same leaf at the same texture coordinates.
 fn draw(
-    rgba: &mut [u8],
+    layers: &mut Layers,
     n: usize,
     (x0, y0, size): (u32, u32, u32),
-    sprite: &Sprite,
+    maps: &Maps,
     placements: &[Placement],
 ) {
     for py in 0..size {
@@ -218,7 +332,8 @@ fn draw(
                 (px as f32 + 0.5) / size as f32,
                 (py as f32 + 0.5) / size as f32,
             );
-            let i = ((y0 + py) as usize * n + (x0 + px) as usize) * 4;
+            let pixel = (y0 + py) as usize * n + (x0 + px) as usize;
+            let i = pixel * 4;
             for leaf in placements {
                 let (sin, cos) = leaf.angle.sin_cos();
                 let d = p - leaf.center;
@@ -227,12 +342,19 @@ fn draw(
                 if !(0.0..1.0).contains(&local.x) || !(0.0..1.0).contains(&local.y) {
                     continue;
                 }
-                let texel = sprite.at(local);
+                let texel = maps.color.at(local);
                 if texel[3] >= 128 {
-                    for c in 0..3 {
-                        rgba[i + c] = (f32::from(texel[c]) * leaf.shade) as u8;
+                    for (out, &b) in layers.rgba[i..i + 3].iter_mut().zip(&texel) {
+                        *out = (f32::from(b) * leaf.shade) as u8;
                     }
-                    rgba[i + 3] = 255;
+                    layers.rgba[i + 3] = 255;
+                    if let (Some(out), Some(map)) = (&mut layers.normal, maps.normal) {
+                        out[pixel * 3..pixel * 3 + 3]
+                            .copy_from_slice(&rotate_normal(map.at(local), (sin, cos)));
+                    }
+                    if let (Some(out), Some(map)) = (&mut layers.roughness, maps.roughness) {
+                        out[pixel * 3..pixel * 3 + 3].copy_from_slice(&map.at(local)[..3]);
+                    }
                 }
             }
         }
@@ -289,6 +411,144 @@ mod tests {
             assert!(opaque_fraction(&atlas, dense) > opaque_fraction(&atlas, sparse));
         }
         assert_eq!(Atlas::new(&disc()).expect("again"), atlas);
+    }
+
+    /// A texture of `n`² pixels from a function of the pixel's centre in `[0, 1)²`.
+    fn texture(name: &str, n: u32, pixel: impl Fn(Vec2) -> [u8; 4]) -> Texture {
+        let mut rgba = Vec::new();
+        for y in 0..n {
+            for x in 0..n {
+                let uv = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) / n as f32;
+                rgba.extend_from_slice(&pixel(uv));
+            }
+        }
+        Texture::from_rgba(name, n, n, &rgba).expect("png")
+    }
+
+    fn decode(texture: &Texture) -> image::RgbaImage {
+        image::load_from_memory(&texture.png)
+            .expect("decode")
+            .to_rgba8()
+    }
+
+    /// A normal-map byte triple's `(x, y)`, +Y up the image.
+    fn normal_xy(p: &[u8]) -> Vec2 {
+        Vec2::new(f32::from(p[0]), f32::from(p[1])) / 255.0 * 2.0 - Vec2::ONE
+    }
+
+    #[test]
+    fn a_turned_leaf_has_its_normals_turned_with_it() {
+        // Only the right half of the leaf is opaque, and its normals lean towards the right
+        // (+X): wherever the leaf is turned, they must lean towards where that half went.
+        let color = texture("leaf", 32, |uv| {
+            [90, 160, 60, if uv.x > 0.5 { 255 } else { 0 }]
+        });
+        let normal = texture("normal", 32, |_| [230, 128, 220, 255]);
+        let sprites = (
+            Sprite::decode(&color).expect("color"),
+            Sprite::decode(&normal).expect("normal"),
+        );
+        let maps = Maps {
+            color: &sprites.0,
+            normal: Some(&sprites.1),
+            roughness: None,
+        };
+        let n = 64usize;
+        for degrees in [0.0f32, 90.0, -90.0, 180.0, 35.0] {
+            let mut layers = Layers {
+                rgba: vec![0; n * n * 4],
+                normal: Some(FLAT_NORMAL.repeat(n * n)),
+                roughness: None,
+            };
+            let leaf = Placement {
+                center: Vec2::splat(0.5),
+                size: 0.7,
+                angle: degrees.to_radians(),
+                shade: 1.0,
+            };
+            draw(&mut layers, n, (0, 0, n as u32), &maps, &[leaf]);
+            let normals = layers.normal.expect("normal layer");
+            // Where the opaque half lies from the leaf's centre, +Y up the image.
+            let (mut sum, mut count) = (Vec2::ZERO, 0);
+            for y in 0..n {
+                for x in 0..n {
+                    if layers.rgba[(y * n + x) * 4 + 3] == 255 {
+                        sum += Vec2::new(x as f32 + 0.5 - 32.0, 32.0 - (y as f32 + 0.5));
+                        count += 1;
+                        let tilt = normal_xy(&normals[(y * n + x) * 3..]);
+                        assert!(tilt.length() > 0.7, "{degrees}: {tilt}");
+                    }
+                }
+            }
+            let side = (sum / count as f32).normalize();
+            for y in 0..n {
+                for x in 0..n {
+                    let p = &normals[(y * n + x) * 3..(y * n + x) * 3 + 3];
+                    if layers.rgba[(y * n + x) * 4 + 3] == 255 {
+                        let tilt = normal_xy(p).normalize();
+                        assert!(
+                            tilt.dot(side) > 0.98,
+                            "{degrees} degrees: the normal leans {tilt}, the half lies {side}"
+                        );
+                        assert_eq!(p[2], 220, "Z is kept");
+                    } else {
+                        assert_eq!(p, FLAT_NORMAL, "flat outside the leaf");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_three_layers_share_coverage_and_are_deterministic() {
+        let color = disc();
+        // A tilted normal everywhere (never flat, however turned) at another size; roughness
+        // 60 on the left, 100 on the right, 250 outside the disc (at twice the disc's
+        // resolution, each of its texels inside or outside as the disc's texel there).
+        let normal = texture("normal", 16, |_| [200, 90, 225, 255]);
+        let roughness = texture("roughness", 64, |uv| {
+            let texel = ((uv * 32.0).floor() + Vec2::splat(0.5)) / 32.0;
+            let inside = (texel - Vec2::splat(0.5)).length() < 0.4;
+            let g = match (inside, uv.x < 0.5) {
+                (false, _) => 250,
+                (true, true) => 60,
+                (true, false) => 100,
+            };
+            [0, g, 0, 255]
+        });
+        let atlas = Atlas::with_maps(&color, Some(&normal), Some(&roughness)).expect("atlas");
+        let (c, nm, r) = (
+            decode(&atlas.texture),
+            decode(atlas.normal.as_deref().expect("normal atlas")),
+            decode(atlas.roughness.as_deref().expect("roughness atlas")),
+        );
+        assert_eq!((nm.width(), r.width()), (ATLAS_SIZE, ATLAS_SIZE));
+        // Between leaves, the mean roughness inside the leaf: about halfway.
+        let fill = r.get_pixel(0, 0)[1];
+        assert!((75..=85).contains(&fill), "{fill}");
+        let mut covered = 0;
+        for (x, y, p) in c.enumerate_pixels() {
+            let (n, g) = (nm.get_pixel(x, y), r.get_pixel(x, y)[1]);
+            if p[3] >= 128 {
+                covered += 1;
+                assert_ne!(&n.0[..3], &FLAT_NORMAL, "({x}, {y})");
+                assert!(g == 60 || g == 100, "({x}, {y}): {g}");
+            } else {
+                assert_eq!((&n.0[..3], g), (&FLAT_NORMAL[..], fill), "({x}, {y})");
+            }
+        }
+        assert!(covered > 512 * 512 / 8, "{covered}");
+        // The colour atlas is the same with or without the maps, and the same textures give
+        // the same bytes.
+        let plain = Atlas::new(&color).expect("plain");
+        assert_eq!(plain.texture, atlas.texture);
+        assert_eq!((plain.normal, plain.roughness), (None, None));
+        let again = Atlas::with_maps(&color, Some(&normal), Some(&roughness)).expect("again");
+        assert_eq!(again, atlas);
+        // The single-leaf cell shows the leaf unturned: its normals are the leaf's.
+        let cell = &atlas.cells[0];
+        let centre = ((cell.map(Vec2::splat(0.5)) * ATLAS_SIZE as f32).as_uvec2()).to_array();
+        assert_eq!(&nm.get_pixel(centre[0], centre[1]).0[..3], &[200, 90, 225]);
     }
 
     #[test]

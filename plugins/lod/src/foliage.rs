@@ -153,7 +153,8 @@ pub fn simplify_sectors(leaves: &[Leaf], options: &LodOptions) -> Vec<(Chain, Ve
 /// keep their vertices; a collapsed leaf gets its rectangle, its normal, the mean colour of
 /// the leaves it stands for, and texture coordinates covering the whole leaf texture or,
 /// with `options.atlas`, the atlas cell chosen by its count and density (the material then
-/// carries the atlas and original leaves map into its single-leaf cell).
+/// carries the atlas, and the atlases of its normal and metallic-roughness maps where it had
+/// them, and original leaves map into its single-leaf cell).
 ///
 /// The mesh's `extras.pge.lod` is `{leaves = |O|, roots = |R|, table = [[a, b, c], ...]}`
 /// (one sector) or `{leaves, roots, sectors = [{offset, leaves, roots, table}, ...]}` with
@@ -164,8 +165,13 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
     }
     let leaves = leaves_of(mesh)?;
     let atlas = if options.atlas {
-        let texture = mesh.material.texture.as_ref().ok_or(LodError::NoTexture)?;
-        Some(Atlas::new(texture)?)
+        let m = &mesh.material;
+        let texture = m.texture.as_ref().ok_or(LodError::NoTexture)?;
+        Some(Atlas::with_maps(
+            texture,
+            m.normal_texture.as_deref(),
+            m.metallic_roughness_texture.as_deref(),
+        )?)
     } else {
         None
     };
@@ -174,11 +180,11 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
     let mut out = Mesh {
         name: mesh.name.clone(),
         material: match &atlas {
-            // The leaf's normal and roughness maps do not line up with the atlas' UVs.
+            // The atlases of the leaf's maps line up with the colour atlas' cells.
             Some(a) => Arc::new(Material {
                 texture: Some(a.texture.clone()),
-                normal_texture: None,
-                metallic_roughness_texture: None,
+                normal_texture: a.normal.clone(),
+                metallic_roughness_texture: a.roughness.clone(),
                 ..(*mesh.material).clone()
             }),
             None => mesh.material.clone(),
@@ -312,6 +318,7 @@ pub fn lod_extras(sectors: &[Sector]) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::geometry::Texture;
 
     /// A ring of `n` small square leaves around the Y axis, facing outwards, coloured by
     /// index.
@@ -424,6 +431,42 @@ mod tests {
             .collect();
         let drawn: Vec<u32> = out.indices.chunks(6).map(|q| q[0] / 4).collect();
         assert_eq!(drawn, finest);
+    }
+
+    #[test]
+    fn the_atlas_material_keeps_the_maps_the_leaf_had() {
+        let square = |name: &str, px: [u8; 4]| {
+            Arc::new(Texture::from_rgba(name, 8, 8, &px.repeat(64)).expect("png"))
+        };
+        let leaf = Material {
+            texture: Some(square("color", [40, 120, 30, 255])),
+            normal_texture: Some(square("normal", [150, 110, 240, 255])),
+            metallic_roughness_texture: Some(square("roughness", [0, 140, 0, 255])),
+            ..Material::default()
+        };
+        let options = LodOptions {
+            atlas: true,
+            ..LodOptions::default()
+        };
+        let mut mesh = ring(40);
+        mesh.material = Arc::new(leaf.clone());
+        let (out, _) = lod_mesh(&mesh, &options).expect("lod");
+        let m = &out.material;
+        let size = |t: &Option<Arc<Texture>>| t.as_ref().map(|t| (t.width, t.height));
+        let atlas = Some((crate::ATLAS_SIZE, crate::ATLAS_SIZE));
+        assert_eq!(size(&m.texture), atlas);
+        assert_eq!(size(&m.normal_texture), atlas);
+        assert_eq!(size(&m.metallic_roughness_texture), atlas);
+        // A leaf without the maps gets none.
+        mesh.material = Arc::new(Material {
+            normal_texture: None,
+            metallic_roughness_texture: None,
+            ..leaf
+        });
+        let (out, _) = lod_mesh(&mesh, &options).expect("lod");
+        assert_eq!(size(&out.material.texture), atlas);
+        assert_eq!(out.material.normal_texture, None);
+        assert_eq!(out.material.metallic_roughness_texture, None);
     }
 
     #[test]
