@@ -298,6 +298,89 @@ fn sectors_and_the_atlas_are_written() {
     );
 }
 
+/// Pixel `i` of a decoded glTF image as RGBA (RGB images opaque).
+fn rgba(image: &gltf::image::Data, i: usize) -> [u8; 4] {
+    match image.format {
+        gltf::image::Format::R8G8B8A8 => {
+            let p = &image.pixels[4 * i..4 * i + 4];
+            [p[0], p[1], p[2], p[3]]
+        }
+        gltf::image::Format::R8G8B8 => {
+            let p = &image.pixels[3 * i..3 * i + 3];
+            [p[0], p[1], p[2], 255]
+        }
+        other => panic!("unexpected image format {other:?}"),
+    }
+}
+
+#[test]
+fn the_atlas_keeps_the_leaf_normal_and_roughness_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let args = ["--set", "points=600", "--set", "atlas=1"];
+    let (glb, _) = run("scripts/examples/lod.lua", dir.path(), "maps", &args);
+    let (doc, _, images) = gltf::import_slice(&glb).expect("glb");
+    let material = doc
+        .meshes()
+        .find(|m| m.name() == Some("leaves"))
+        .and_then(|m| m.primitives().next())
+        .map(|p| p.material())
+        .expect("a leaf material");
+    let pbr = material.pbr_metallic_roughness();
+    let image = |t: Option<gltf::Texture>, what: &str| {
+        let index = t.unwrap_or_else(|| panic!("no {what}")).source().index();
+        (index, &images[index])
+    };
+    let (ci, color) = image(pbr.base_color_texture().map(|t| t.texture()), "base colour");
+    let (ni, normal) = image(
+        material.normal_texture().map(|t| t.texture()),
+        "normalTexture",
+    );
+    let (ri, rough) = image(
+        pbr.metallic_roughness_texture().map(|t| t.texture()),
+        "metallicRoughnessTexture",
+    );
+    assert!(ci != ni && ni != ri && ci != ri, "three images");
+    for img in [color, normal, rough] {
+        assert_eq!(
+            (img.width, img.height),
+            (pge_lod::ATLAS_SIZE, pge_lod::ATLAS_SIZE),
+            "every map is an atlas"
+        );
+    }
+    // The three line up: between leaves (the colour's alpha below half) the flat normal and
+    // one roughness; on the leaves, the leaf's normals and roughness.
+    let pixels = (color.width * color.height) as usize;
+    let fill = rgba(rough, 0);
+    let (mut covered, mut tilted, mut varied) = (0, 0, 0);
+    for i in 0..pixels {
+        let (n, r) = (rgba(normal, i), rgba(rough, i));
+        if rgba(color, i)[3] < 128 {
+            assert_eq!(&n[..3], &[128, 128, 255], "pixel {i}: flat between leaves");
+            assert_eq!(r, fill, "pixel {i}: one roughness between leaves");
+        } else {
+            covered += 1;
+            tilted += usize::from(n[..3] != [128, 128, 255]);
+            varied += usize::from(r != fill);
+        }
+    }
+    assert!(
+        covered > pixels / 8,
+        "{covered} of {pixels} pixels show leaves"
+    );
+    assert!(
+        tilted > covered / 4,
+        "{tilted} of {covered} leaf pixels tilted"
+    );
+    assert!(
+        varied > covered / 4,
+        "{varied} of {covered} leaf pixels rough"
+    );
+    let path = dir.path().join("maps.glb");
+    let (passed, report) = common::run_validator(&[path]);
+    assert!(passed, "the glTF validator found errors:\n{report}");
+    assert!(report.contains(": 0 errors"), "{report}");
+}
+
 #[test]
 fn the_budget_runs_from_a_script() {
     let dir = tempfile::tempdir().expect("tempdir");
