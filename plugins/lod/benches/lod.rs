@@ -54,6 +54,50 @@ fn chain_hash(chain: &Chain) -> u64 {
     h
 }
 
+/// The chain's quality: the mean weighted distance of its collapses (seed 003 §2.4.1 with
+/// the default weights, the vertical axis through the centre of the leaves' box, as
+/// `simplify` takes it) and the mean relative area error of the coarsest level's leaves
+/// (`|area - represented leaf area| / represented leaf area`).
+fn quality(chain: &Chain) -> (f64, f64) {
+    let originals = &chain.leaves[..chain.originals];
+    let (lo, hi) = originals.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), l| (lo.min(l.center), hi.max(l.center)),
+    );
+    let mid = (lo + hi) * 0.5;
+    let axis = |p: Vec3| Vec3::new(p.x - mid.x, 0.0, p.z - mid.z).length();
+    let crown = originals
+        .iter()
+        .map(|l| axis(l.center))
+        .fold(0.0f32, f32::max);
+    let w = pge_lod::Weights::default();
+    let mut cost = 0.0f64;
+    for &[a, b] in &chain.children {
+        let (a, b) = (&chain.leaves[a as usize], &chain.leaves[b as usize]);
+        let cos = a.normal.dot(b.normal).abs().min(1.0);
+        let (na, nb) = (a.count as f32, b.count as f32);
+        let (aa, ab) = (a.area(), b.area());
+        let c = w.distance * a.center.distance(b.center) / (a.radius() + b.radius())
+            + w.coplanarity * (1.0 - cos)
+            + w.count * (na - nb).abs() / (na + nb)
+            + w.area * (aa - ab).abs() / (aa + ab)
+            + w.interiority * axis((a.center + b.center) * 0.5) / crown;
+        cost += f64::from(c);
+    }
+    let roots = chain.roots();
+    let error: f64 = roots
+        .iter()
+        .map(|&r| {
+            let l = &chain.leaves[r as usize];
+            f64::from((l.area() - l.leaf_area).abs() / l.leaf_area)
+        })
+        .sum();
+    (
+        cost / chain.children.len().max(1) as f64,
+        error / roots.len().max(1) as f64,
+    )
+}
+
 /// CPU time this thread has run, in nanoseconds (`/proc/thread-self/schedstat`; 0 where
 /// there is none): under load, wall time counts the time other processes hold the core.
 fn cpu_ns() -> u64 {
@@ -86,8 +130,10 @@ fn bench(c: &mut Criterion) {
         b.iter(|| simplify(&leaves, &Selection::default()))
     });
     let chain = simplify(&leaves, &Selection::default());
+    let (cost, error) = quality(&chain);
     eprintln!(
-        "100k leaves: {} collapses, {} roots, chain hash {:016x}",
+        "100k leaves: {} collapses, {} roots, chain hash {:016x}; mean collapse cost {cost:.4}, \
+         coarsest level's mean area error {error:.4}",
         chain.children.len(),
         chain.roots().len(),
         chain_hash(&chain)
