@@ -6,7 +6,8 @@ use glam::{Mat3, Mat4, Quat, Vec3};
 use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model, PlacementLeaves};
 use serde_json::json;
 
-use crate::layout::{Forest, Layout, Variants};
+use crate::layer::Variants;
+use crate::layout::{Forest, Layout};
 
 /// The grown variants of one layer (for `"unique"`, one per instance of the layout, in
 /// order).
@@ -284,7 +285,7 @@ pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::layout::Layer;
+    use crate::layer::Layer;
 
     #[test]
     fn variants_with_levels_carry_their_table_and_their_instances_counts() {

@@ -25,6 +25,8 @@
 mod assemble;
 mod cache;
 mod codec;
+mod jittered;
+mod layer;
 mod layout;
 mod lod;
 #[cfg(feature = "lua")]
@@ -33,13 +35,12 @@ mod poisson;
 mod rng;
 mod shared;
 mod terrain;
+mod trunks;
 
 pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
 pub use cache::{GrownVariant, VariantCache, VariantKey};
-pub use layout::{
-    Density, Forest, Instance, Layer, Layout, MAX_INSTANCES, Method, Tile, Variants, unique_seed,
-    variant_seed,
-};
+pub use layer::{Density, Layer, Method, Variants};
+pub use layout::{Forest, Instance, Layout, MAX_INSTANCES, Tile, unique_seed, variant_seed};
 pub use lod::{
     Camera, ForestLod, VariantLod, check_budget, instance_leaves, variant_extras, variant_lod,
     with_lod,

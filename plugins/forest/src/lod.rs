@@ -12,7 +12,8 @@ use pge_tree::lod::{self as pge_lod, Axis, Budget, LodError, LodOptions};
 use serde_json::{Value, json};
 
 use crate::ForestError;
-use crate::layout::{Forest, Layout, Variants};
+use crate::layer::Variants;
+use crate::layout::{Forest, Layout};
 
 /// A forest's `lod` option: levels for the variants and a leaf budget for one camera.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -262,7 +263,7 @@ fn budget(layout: &Layout, lods: &[Vec<Option<VariantLod>>], camera: &Camera) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::layout::Layer;
+    use crate::layer::Layer;
 
     fn camera(total: u64) -> Camera {
         Camera {

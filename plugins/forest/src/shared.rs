@@ -12,7 +12,8 @@ use serde_json::json;
 
 use crate::Grown;
 use crate::assemble::baked;
-use crate::layout::{Forest, Variants};
+use crate::layer::Variants;
+use crate::layout::Forest;
 
 /// What a forest run does with the variants of its layers of a few variants.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,7 +89,7 @@ pub fn variants_model(forest: &Forest, grown: &[Grown]) -> Model {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::layout::Layer;
+    use crate::layer::Layer;
     use glam::Vec3;
     use pge_engine::geometry::Mesh;
 
