@@ -26,6 +26,29 @@ pub fn transform(position: [f32; 3], yaw: f32, scale: f32) -> InstanceTransform 
         scale,
     }
 }
+/// Adds a variant's parts to `model` as meshes, each baked by its transform, and returns
+/// their indices. The group's mesh takes the first `lod` of its parts: the first leaf part
+/// carries the variant's levels of detail (`extras.pge.lod` with `primitives`).
+pub(crate) fn push_variant_meshes(model: &mut Model, variant: &Model) -> Vec<usize> {
+    let mut meshes = Vec::new();
+    let mut lod = crate::variant_extras(variant);
+    for inst in &variant.instances {
+        let mesh = &variant.meshes[inst.mesh];
+        let mut mesh = if inst.transform == Mat4::IDENTITY {
+            mesh.clone()
+        } else {
+            Arc::new(baked(mesh, &inst.transform))
+        };
+        if mesh.extras.contains_key("lod")
+            && let Some(lod) = lod.take()
+        {
+            Arc::make_mut(&mut mesh).extras.insert("lod".into(), lod);
+        }
+        model.meshes.push(mesh);
+        meshes.push(model.meshes.len() - 1);
+    }
+    meshes
+}
 
 /// A copy of `mesh` moved by `m` (for variants whose parts are not at the origin).
 pub(crate) fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
@@ -153,25 +176,7 @@ fn build(
             Vec::new()
         };
         for (v, variant) in g.variants.iter().enumerate() {
-            let mut meshes = Vec::new();
-            let mut lod = crate::variant_extras(variant);
-            for inst in &variant.instances {
-                let mesh = &variant.meshes[inst.mesh];
-                let mut mesh = if inst.transform == Mat4::IDENTITY {
-                    mesh.clone()
-                } else {
-                    Arc::new(baked(mesh, &inst.transform))
-                };
-                // The group's mesh takes the first `lod` of its parts: the first leaf part
-                // carries the variant's.
-                if mesh.extras.contains_key("lod")
-                    && let Some(lod) = lod.take()
-                {
-                    Arc::make_mut(&mut mesh).extras.insert("lod".into(), lod);
-                }
-                model.meshes.push(mesh);
-                meshes.push(model.meshes.len() - 1);
-            }
+            let meshes = push_variant_meshes(&mut model, variant);
             model.groups.push(InstanceGroup {
                 name: format!("{name}/{}", ids.get(v).copied().unwrap_or(v as u32)),
                 meshes,

@@ -4,14 +4,11 @@
 //! places its trees by the variants' names. Layers of `"unique"` trees are grown by each tile
 //! as before (their trees are its own).
 
-use std::sync::Arc;
-
-use glam::Mat4;
 use pge_engine::geometry::{InstanceGroup, Model};
 use serde_json::json;
 
 use crate::Grown;
-use crate::assemble::baked;
+use crate::assemble::push_variant_meshes;
 use crate::layer::Variants;
 use crate::layout::Forest;
 
@@ -50,25 +47,8 @@ pub fn variants_model(forest: &Forest, grown: &[Grown]) -> Model {
         }
         let name = forest.layers.get(l).map_or("layer", |x| x.name.as_str());
         for (v, variant) in g.variants.iter().enumerate() {
-            let mut meshes = Vec::new();
-            // As `assemble` writes a variant: its first leaf part carries the variant's
-            // levels of detail (`extras.pge.lod` with `primitives`).
-            let mut lod = crate::variant_extras(variant);
-            for inst in &variant.instances {
-                let mesh = &variant.meshes[inst.mesh];
-                let mut mesh = if inst.transform == Mat4::IDENTITY {
-                    mesh.clone()
-                } else {
-                    Arc::new(baked(mesh, &inst.transform))
-                };
-                if mesh.extras.contains_key("lod")
-                    && let Some(lod) = lod.take()
-                {
-                    Arc::make_mut(&mut mesh).extras.insert("lod".into(), lod);
-                }
-                model.meshes.push(mesh);
-                meshes.push(model.meshes.len() - 1);
-            }
+            // As `assemble` writes a variant.
+            let meshes = push_variant_meshes(&mut model, variant);
             model.groups.push(InstanceGroup {
                 name: format!("{name}/{v}"),
                 meshes,
@@ -90,7 +70,7 @@ pub fn variants_model(forest: &Forest, grown: &[Grown]) -> Model {
 mod tests {
     use super::*;
     use crate::layer::Layer;
-    use glam::Vec3;
+    use glam::{Mat4, Vec3};
     use pge_engine::geometry::Mesh;
 
     #[test]
