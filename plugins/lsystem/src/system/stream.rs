@@ -36,28 +36,14 @@ impl Deriver<'_> {
         first: &StepOptions,
         second: &StepOptions,
     ) -> Result<(u64, u64), H::Error> {
-        let mut between = ModuleString::new();
-        let (mut scratch, mut counting) = (Scratch::default(), Scratch::default());
+        let mut counting = Scratch::default();
         let mut successors = ModuleString::new();
-        let (mut made, mut counted) = (0u64, 0u64);
+        let mut counted = 0u64;
         let mut deferred = None;
-        for start in (0..src.len()).step_by(PIECE) {
-            let end = (start + PIECE).min(src.len());
-            between.clear();
-            self.step_range(
-                src,
-                start..end,
-                &Context::NONE,
-                made,
-                &mut between,
-                host,
-                first,
-                &mut scratch,
-            )?;
-            made += between.len() as u64;
+        let made = self.first_step_pieces(src, host, first, |between, host| {
             if deferred.is_none() {
                 match self.count_after(
-                    &between,
+                    between,
                     &[],
                     counted,
                     host,
@@ -69,7 +55,8 @@ impl Deriver<'_> {
                     Err(e) => deferred = Some(e),
                 }
             }
-        }
+            Ok(())
+        })?;
         match deferred {
             Some(e) => Err(e),
             None => Ok((made, counted)),
@@ -92,9 +79,42 @@ impl Deriver<'_> {
         sink: &mut dyn FnMut(&ModuleString) -> Result<(), H::Error>,
     ) -> Result<u64, H::Error> {
         let chunk = chunk.max(1);
+        let mut writing = Scratch::default();
+        let mut written = 0u64;
+        self.first_step_pieces(src, host, first, |between, host| {
+            for from in (0..between.len()).step_by(chunk) {
+                let to = (from + chunk).min(between.len());
+                buf.clear();
+                self.step_range(
+                    between,
+                    from..to,
+                    &Context::NONE,
+                    written,
+                    buf,
+                    host,
+                    second,
+                    &mut writing,
+                )?;
+                written += buf.len() as u64;
+                sink(buf)?;
+            }
+            Ok(())
+        })?;
+        Ok(written)
+    }
+
+    /// Takes the step `first` of `src` one piece of [`PIECE`] modules at a time, handing
+    /// each piece's successors to `then`. Returns the number of modules the step made.
+    fn first_step_pieces<H: Host>(
+        &self,
+        src: &ModuleString,
+        host: &mut H,
+        first: &StepOptions,
+        mut then: impl FnMut(&ModuleString, &mut H) -> Result<(), H::Error>,
+    ) -> Result<u64, H::Error> {
         let mut between = ModuleString::new();
-        let (mut scratch, mut writing) = (Scratch::default(), Scratch::default());
-        let (mut made, mut written) = (0u64, 0u64);
+        let mut scratch = Scratch::default();
+        let mut made = 0u64;
         for start in (0..src.len()).step_by(PIECE) {
             let end = (start + PIECE).min(src.len());
             between.clear();
@@ -109,23 +129,8 @@ impl Deriver<'_> {
                 &mut scratch,
             )?;
             made += between.len() as u64;
-            for from in (0..between.len()).step_by(chunk) {
-                let to = (from + chunk).min(between.len());
-                buf.clear();
-                self.step_range(
-                    &between,
-                    from..to,
-                    &Context::NONE,
-                    written,
-                    buf,
-                    host,
-                    second,
-                    &mut writing,
-                )?;
-                written += buf.len() as u64;
-                sink(buf)?;
-            }
+            then(&between, host)?;
         }
-        Ok(written)
+        Ok(made)
     }
 }
