@@ -216,14 +216,17 @@ class Clock:
 
 def _process_start():
     """This process's start as a Unix time: from /proc on Linux, else when this module was
-    imported."""
+    imported. The age comes from the system's uptime (hundredths of a second), not from
+    /proc/stat's boot time, which is rounded to the second and put the start up to a second
+    early."""
     try:
         with open("/proc/self/stat", encoding="ascii") as f:
             ticks = int(f.read().rsplit(")", 1)[1].split()[19])
-        with open("/proc/stat", encoding="ascii") as f:
-            boot = next(int(line.split()[1]) for line in f if line.startswith("btime "))
-        return boot + ticks / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError, StopIteration):
+        with open("/proc/uptime", encoding="ascii") as f:
+            uptime = float(f.read().split()[0])
+        age = uptime - ticks / os.sysconf("SC_CLK_TCK")
+        return time.time() - max(age, 0.0)
+    except (OSError, ValueError, IndexError):
         return _IMPORTED
 
 
