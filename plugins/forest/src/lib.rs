@@ -3,7 +3,7 @@
 //!
 //! The algorithm is plain Rust: a [`Forest`] holds the [`Terrain`] and the [`Layer`]s;
 //! [`Forest::layout`] places the trees of the whole world or of one tile (tiles agree with
-//! the whole, instance for instance); [`assemble`] turns a layout and the grown variants into
+//! the whole, instance for instance); [`assemble()`] turns a layout and the grown variants into
 //! a [`Model`](pge_engine::geometry::Model) with one instance group per variant. Variants
 //! with foliage levels of detail keep their LOD tables ([`variant_extras`]; [`with_lod`]
 //! gives them levels), and [`instance_leaves`] budgets each instance's leaves for a

@@ -51,7 +51,7 @@ fn count(lod: &Value, key: &str) -> Option<u32> {
 
 /// The leaf meshes of a variant with a LOD table, as `(primitive, extras.pge.lod)`: the
 /// primitive is the mesh's place among the variant's parts (its instances, in order, as
-/// [`assemble`](crate::assemble) writes them).
+/// [`assemble()`](crate::assemble()) writes them).
 fn lod_parts(model: &Model) -> Vec<(usize, &Value)> {
     model
         .instances

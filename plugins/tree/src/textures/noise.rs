@@ -100,7 +100,7 @@ impl Lattice {
     }
 
     /// The lattice with the columns of an `n`-pixel row found once, at the pixel centres
-    /// `u = (x + 0.5) / n`, for [`LatticeRow::pixel`]: every row of a map shares them.
+    /// `u = (x + 0.5) / n`, for `LatticeRow::pixel` (tests only): every row of a map shares them.
     pub(super) fn for_pixels(mut self, n: usize) -> Lattice {
         self.columns = (0..n)
             .map(|x| {
@@ -181,7 +181,7 @@ impl LatticeRow<'_> {
     }
 
     /// The noise at every pixel column (the lattice made [`Lattice::for_pixels`]), the same
-    /// numbers as [`LatticeRow::pixel`]: each run of columns between the same two lattice
+    /// numbers as `LatticeRow::pixel` (tests only): each run of columns between the same two lattice
     /// columns in a loop the compiler vectorizes.
     pub(super) fn values(&self) -> Vec<f32> {
         let mut out = vec![0.0; self.lattice.tx.len()];
@@ -268,7 +268,7 @@ impl FractalRow<'_> {
         sum * self.norm
     }
 
-    /// The noise at the centre of pixel column `x` (see [`LatticeRow::pixel`]).
+    /// The noise at the centre of pixel column `x` (see `LatticeRow::pixel` (tests only)).
     #[cfg(test)]
     pub(super) fn pixel(&self, x: usize) -> f32 {
         let (mut sum, mut amp) = (0.0, 1.0);
@@ -279,7 +279,7 @@ impl FractalRow<'_> {
         sum * self.norm
     }
 
-    /// The noise at every `us[i]`, the same numbers as [`FractalRow::at`], an octave at a
+    /// The noise at every `us[i]`, the same numbers as `FractalRow::at` (tests only), an octave at a
     /// time (a tight loop per octave).
     pub(super) fn values_at(&self, us: &[f32]) -> Vec<f32> {
         let (mut sum, mut amp) = (vec![0.0f32; us.len()], 1.0f32);
@@ -295,7 +295,7 @@ impl FractalRow<'_> {
         sum
     }
 
-    /// The noise at every pixel column, the same numbers as [`FractalRow::pixel`] (see
+    /// The noise at every pixel column, the same numbers as `FractalRow::pixel` (tests only) (see
     /// [`LatticeRow::values`]).
     pub(super) fn values(&self) -> Vec<f32> {
         let n = self.octaves.first().map_or(0, |o| o.lattice.tx.len());
@@ -342,7 +342,7 @@ impl Cells {
         self.nearest(u, v).distances()
     }
 
-    /// [`Cells::at`] of every `(us[i], vs[i])`, the same numbers as one lookup at a time,
+    /// `Cells::at` (tests only) of every `(us[i], vs[i])`, the same numbers as one lookup at a time,
     /// for points that mostly follow each other in the same cell (a row of pixels): every
     /// run of points in one cell is measured against that cell's nine feature points, loaded
     /// once, in a loop the compiler vectorizes; square roots four at a time at the end.
@@ -412,8 +412,8 @@ impl Cells {
     }
 
     /// The noise along the row at `v`: the squared `v` distances from the row to the
-    /// feature points of its three lattice rows found once, so a lookup ([`CellsRow::at`])
-    /// is nine multiply-adds (the same numbers as [`Cells::at`]).
+    /// feature points of its three lattice rows found once, so a lookup (`CellsRow::at` (tests only))
+    /// is nine multiply-adds (the same numbers as `Cells::at` (tests only)).
     pub(super) fn row(&self, v: f32) -> CellsRow {
         let y = v.rem_euclid_unit() * self.ny as f32;
         let cy = (y as u32).min(self.ny - 1) as usize;
@@ -452,7 +452,7 @@ impl CellsRow {
         self.nearest(u).distances()
     }
 
-    /// [`CellsRow::at`] of every `us[i]`, the same numbers as one lookup at a time (see
+    /// `CellsRow::at` (tests only) of every `us[i]`, the same numbers as one lookup at a time (see
     /// [`Cells::many`]).
     pub(super) fn many(&self, us: impl IntoIterator<Item = f32>) -> Distances {
         let stride = self.nx as usize + 2;
@@ -548,7 +548,7 @@ impl Distances {
     }
 
     /// The nearest and second-nearest feature distances at point `i` and the nearest cell's
-    /// hash, as [`Cells::at`] gives them.
+    /// hash, as `Cells::at` (tests only) gives them.
     #[inline]
     pub(super) fn at(&self, i: usize) -> (f32, f32, u32) {
         (self.f1[i], self.f2[i], self.ids[i])
