@@ -4,8 +4,6 @@
 //! or `nil` (a rule that does not apply). Each run derives 100 steps of a 1,000-module string
 //! (100,000 rule calls; `three`: 20 steps) in the session's usual limits (instruction-count
 //! hook included). It prints the rule calls made and the CPU time of the thread per call.
-//! `LUA_RULES_SETUP` is Lua run on the object `l` before it is returned (for instance
-//! `l:interpretEveryStep(false)`, which lets the rules run in runs: see `src/lua/run.rs`).
 
 use pge_engine::{Engine, Location, SessionOptions};
 
@@ -30,11 +28,9 @@ fn main() {
         _ => ("string.rep('A(1)', 1000)", 100, 0),
     };
     let prelude = std::env::var("LUA_RULES_PRELUDE").unwrap_or_default();
-    // Calls on `l` after the rule, e.g. `l:interpretEveryStep(false)`.
-    let setup = std::env::var("LUA_RULES_SETUP").unwrap_or_default();
     let code = format!(
         "{prelude}\nlocal l = pge.LSystem('bench')\nl:axiom({axiom})\nl:RRule('A', {rule})\n\
-         l:iterations({steps})\nl:maxModules(100000000)\n{setup}\nreturn l"
+         l:iterations({steps})\nl:maxModules(100000000)\nreturn l"
     );
     let engine = match Engine::builder().plugin(pge_lsystem::LSystemPlugin).build() {
         Ok(e) => e,

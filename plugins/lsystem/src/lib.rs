@@ -39,4 +39,4 @@ pub use error::LsError;
 pub use lua::{Derivation, LSystemAlgorithm, LSystemPlugin, LuaLSystem, derive_value};
 pub use module_string::ModuleString;
 pub use symbol::{Sym, SymbolTable};
-pub use system::{Host, NativeHost, RunEnd, StepOptions, System};
+pub use system::{Host, NativeHost, StepOptions, System};

@@ -19,7 +19,7 @@ use crate::module_string::ModuleString;
 use crate::symbol::{Sym, SymbolTable};
 
 pub use self::derive::StepOptions;
-pub use self::host::{Host, NativeHost, RunEnd};
+pub use self::host::{Host, NativeHost};
 
 ///
 /// ```

@@ -285,8 +285,6 @@ impl LSystemAlgorithm {
             track_brackets: self.cfg.irules.iter().any(|r| !r.left.is_empty()),
             imatched: Vec::new(),
             name: String::new(),
-            run_loop: tags(lua).borrow().run_loop.clone(),
-            run_packed: (Vec::new(), Vec::new()),
         };
         f(&mut host, &self.cfg.system, &self.string, &mut self.scratch)
     }

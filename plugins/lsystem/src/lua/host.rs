@@ -12,7 +12,7 @@ use rand_mt::Mt;
 
 use super::config::{Config, LuaRule};
 use super::symbols::SymbolTags;
-use crate::{Host, LsError, ModuleString, RunEnd, Sym, SymbolTable, System};
+use crate::{Host, LsError, ModuleString, Sym, SymbolTable, System};
 use pge_engine::random::uniform;
 
 /// How deeply a successor's arrays may nest (each level is a branch).
@@ -124,10 +124,6 @@ pub(crate) struct LuaHost<'a> {
     pub(crate) track_brackets: bool,
     pub(crate) imatched: Vec<usize>,
     pub(crate) name: String,
-    /// The loop of runs of rule calls (see [`super::run`]); none: module by module.
-    pub(crate) run_loop: Option<(Function, Function)>,
-    /// The packed inputs of a run (format, data), reused.
-    pub(crate) run_packed: (Vec<u8>, Vec<u8>),
 }
 
 impl LuaHost<'_> {
@@ -261,7 +257,7 @@ impl LuaHost<'_> {
 }
 
 /// Names a rule's successor in error messages (formatted only when one is raised).
-pub(crate) struct SuccessorOf<'a>(pub(crate) &'a str);
+struct SuccessorOf<'a>(&'a str);
 
 impl std::fmt::Display for SuccessorOf<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -334,28 +330,12 @@ impl Host for LuaHost<'_> {
             r.func.call::<Value>(MultiValue::from_vec(args))
         };
         self.read_only.leave();
-        let v = result.map_err(|e| self.locate(e, r.origin))?;
+        let v = result?;
         if v.is_nil() {
             return Ok(false);
         }
         self.push_value(&v, out, r.origin, &SuccessorOf(&r.text), 0)?;
         Ok(true)
-    }
-
-    fn runs(&self) -> bool {
-        self.runs_allowed()
-    }
-
-    fn apply_run(
-        &mut self,
-        rule: u32,
-        jobs: &[usize],
-        more: bool,
-        src: &ModuleString,
-        out: &mut ModuleString,
-        budget: u64,
-    ) -> Result<RunEnd, HostError> {
-        self.apply_run_lua(rule, jobs, more, src, out, budget)
     }
 
     fn interpret(&mut self, out: &ModuleString, from: usize) -> Result<(), HostError> {

@@ -8,7 +8,6 @@ mod derive;
 mod host;
 mod interpret;
 mod object;
-mod run;
 mod symbols;
 
 use std::cell::RefCell;

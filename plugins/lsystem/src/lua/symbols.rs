@@ -38,10 +38,6 @@ impl std::hash::Hasher for PointerHasher {
 pub(crate) struct SymbolTags {
     by_meta: HashMap<usize, Sym, std::hash::BuildHasherDefault<PointerHasher>>,
     constructors: HashMap<Sym, (Table, Function)>,
-    /// The same metatables as keys of a Lua table (value `true`), for the run loop.
-    marks: Option<Table>,
-    /// The loop that applies a rule to a run of modules (see [`super::run`]).
-    pub(crate) run_loop: Option<(Function, Function)>,
 }
 
 impl SymbolTags {
@@ -106,9 +102,6 @@ pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
         Ok(t)
     })?;
     let mut t = tags.borrow_mut();
-    if let Some(marks) = &t.marks {
-        marks.raw_set(&meta, true)?;
-    }
     t.by_meta.insert(meta.to_pointer() as usize, sym);
     t.constructors.insert(sym, (meta, f.clone()));
     Ok(f)
@@ -124,14 +117,6 @@ fn lua_type_name(v: &Value) -> &'static str {
 }
 
 pub(crate) fn register(lua: &Lua, pge: &mlua::Table) -> mlua::Result<()> {
-    {
-        let marks = lua.create_table()?;
-        let run_loop = super::run::run_loop(lua, &marks)?;
-        let tags = tags(lua);
-        let mut t = tags.borrow_mut();
-        t.marks = Some(marks);
-        t.run_loop = Some(run_loop);
-    }
     pge.set(
         "sym",
         lua.create_function(|lua, (name, params): (String, Value)| {

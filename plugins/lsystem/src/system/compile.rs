@@ -94,19 +94,6 @@ pub(super) struct Tables {
     /// module's own parameters not included); empty when a rule function may apply (its
     /// successors are unbounded).
     pub(super) growth: Vec<(u32, u32)>,
-    /// For every symbol whose first rule is an external rule without context (a Lua RRule),
-    /// that rule's external id and whether more rules follow it: runs of such modules may be
-    /// handed to [`super::host::Host::apply_run`] at once.
-    pub(super) runs: Vec<Option<RunRule>>,
-}
-
-/// The first rule of a symbol, when it is an external rule without context.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct RunRule {
-    /// The external rule's id.
-    pub(super) id: u32,
-    /// Whether other rules of the symbol follow it (tried when it does not apply).
-    pub(super) more: bool,
 }
 
 /// A rule with a fixed successor, as the pass over a string without parameters reads it.
@@ -206,7 +193,6 @@ impl Tables {
             .iter()
             .any(|d| !d.lhs.left.is_empty() || !d.lhs.right.is_empty());
         let mut dispatch = vec![Dispatch::Copy; n];
-        let mut runs = vec![None; n];
         let mut rule_lists = Vec::new();
         for (s, slot) in dispatch.iter_mut().enumerate() {
             let list: Vec<u32> = (0..defs.len())
@@ -218,15 +204,6 @@ impl Tables {
             }
             let r = list[0] as usize;
             let def = &defs[r];
-            if let CKind::External(id) = rules[r].kind
-                && def.lhs.left.is_empty()
-                && def.lhs.right.is_empty()
-            {
-                runs[s] = Some(RunRule {
-                    id,
-                    more: list.len() > 1,
-                });
-            }
             let plain = list.len() == 1
                 && def.lhs.left.is_empty()
                 && def.lhs.right.is_empty()
@@ -340,7 +317,6 @@ impl Tables {
             ignored,
             uses_context,
             all_plain,
-            runs,
         })
     }
 }

@@ -1,16 +1,13 @@
 //! The derivation step: every module of a string rewritten by the first rule that applies.
 
-use super::compile::{CKind, Dispatch, RunRule, Tables};
+use super::compile::{CKind, Dispatch, Tables};
 use super::context::{match_left, match_right};
-use super::host::{Host, RunEnd};
+use super::host::Host;
 use super::rule::RuleDef;
 use crate::error::LsError;
 use crate::expr::Arg;
 use crate::module_string::ModuleString;
 use crate::symbol::Sym;
-
-/// The most jobs one run hands to [`Host::apply_run`].
-const MAX_RUN: usize = 4096;
 
 /// Options of one derivation step.
 #[derive(Clone, Copy, Debug)]
@@ -73,8 +70,6 @@ fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usi
 #[derive(Default)]
 pub(super) struct Scratch {
     matched: Vec<usize>,
-    /// The jobs of a run handed to [`Host::apply_run`].
-    jobs: Vec<usize>,
     gathered: Vec<f64>,
     /// The context code (see [`super::fixed::FixedTables`]) of the symbol a one-symbol left
     /// context of the next module matches (0: none or no context's symbol), kept as the
@@ -419,9 +414,6 @@ impl Deriver<'_> {
             return self.step_fixed(fixed, src, range, rights, before, out, host, opts, scratch);
         }
         let matches = context.brackets();
-        // Runs of modules whose first rule is external go to the host at once when it
-        // allows (see [`Host::runs`]); its interpretation does nothing then.
-        let runs = host.runs();
         let max = opts.max_modules as u64;
         let base = out.len() as u64;
         let end = range.end;
@@ -450,42 +442,21 @@ impl Deriver<'_> {
                     i += 1;
                 }
                 Some(Dispatch::Rules { start, len }) => {
-                    let mut list =
-                        &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
-                    let mut each = true;
-                    if runs && let Some(Some(run)) = self.tables.runs.get(s.index()) {
-                        let count = before + out.len() as u64 - base;
-                        let ended = self.run(
-                            *run,
-                            src,
-                            i,
-                            end.min(next_check),
-                            out,
-                            host,
-                            max.saturating_sub(count),
-                            &mut scratch.jobs,
-                        )?;
-                        i = ended.next;
-                        // The run's rule did not apply to module `i`: the rules after it.
-                        each = ended.fell_through;
-                        list = &list[1..];
+                    let list = &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
+                    let applied = self.apply_rules(
+                        list,
+                        src,
+                        matches,
+                        i,
+                        out,
+                        host,
+                        &mut scratch.matched,
+                        &mut scratch.gathered,
+                    )?;
+                    if !applied {
+                        out.push_from(src, i);
                     }
-                    if each {
-                        let applied = self.apply_rules(
-                            list,
-                            src,
-                            matches,
-                            i,
-                            out,
-                            host,
-                            &mut scratch.matched,
-                            &mut scratch.gathered,
-                        )?;
-                        if !applied {
-                            out.push_from(src, i);
-                        }
-                        i += 1;
-                    }
+                    i += 1;
                 }
                 _ => {
                     // A run of modules without rules: copied in bulk.
@@ -515,46 +486,6 @@ impl Deriver<'_> {
             }
         }
         Ok(())
-    }
-
-    /// Hands the run of modules from `i` (a module whose first rule is `run`) to
-    /// [`Host::apply_run`]: the following modules of the same symbol and those without rules
-    /// between them, up to `stop` (not past the last of the symbol's modules) and
-    /// [`MAX_RUN`] jobs.
-    #[allow(clippy::too_many_arguments)]
-    fn run<H: Host>(
-        &self,
-        run: RunRule,
-        src: &ModuleString,
-        i: usize,
-        stop: usize,
-        out: &mut ModuleString,
-        host: &mut H,
-        budget: u64,
-        jobs: &mut Vec<usize>,
-    ) -> Result<RunEnd, H::Error> {
-        let s = src.sym(i);
-        jobs.clear();
-        jobs.push(i);
-        let mut j = i + 1;
-        while j < stop && jobs.len() < MAX_RUN {
-            let t = src.sym(j);
-            if t == s {
-                jobs.push(j);
-            } else if !matches!(
-                self.tables.dispatch.get(t.index()),
-                None | Some(Dispatch::Copy)
-            ) {
-                break;
-            }
-            j += 1;
-        }
-        let ended = host.apply_run(run.id, jobs, run.more, src, out, budget)?;
-        debug_assert!(
-            ended.next > i || ended.fell_through,
-            "a run rewrites its first job"
-        );
-        Ok(ended)
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -37,68 +37,6 @@ pub trait Host {
         let _ = (out, from);
         Ok(())
     }
-
-    /// Whether runs of modules may be handed to [`Host::apply_run`] in this step: only when
-    /// nothing can tell a run from the modules applied one by one (the host interprets
-    /// nothing while the step runs, or its interpretation does nothing).
-    fn runs(&self) -> bool {
-        false
-    }
-
-    /// Rewrites a run of modules of `src` at once, appending to `out` what the step would
-    /// append module by module. `jobs` are the modules, in increasing order, whose first rule
-    /// is external rule `rule` (without context); the modules between two jobs have no
-    /// rules and are copied. When `more` is true other rules follow `rule`: the run stops at
-    /// the first job `rule` does not apply to, with [`RunEnd::fell_through`]. At most
-    /// `budget` modules may be appended: the run stops after the module whose successor
-    /// passes it, or before the copies that would (the caller reports the module cap).
-    ///
-    /// The default applies the jobs one by one with [`Host::apply`].
-    fn apply_run(
-        &mut self,
-        rule: u32,
-        jobs: &[usize],
-        more: bool,
-        src: &ModuleString,
-        out: &mut ModuleString,
-        budget: u64,
-    ) -> Result<RunEnd, Self::Error> {
-        let start = out.len();
-        let mut next = jobs[0];
-        for &m in jobs {
-            if (out.len() - start + m - next) as u64 > budget {
-                break;
-            }
-            out.extend_from(src, next..m);
-            if !self.apply(rule, &[m], src, out)? {
-                if more {
-                    return Ok(RunEnd {
-                        next: m,
-                        fell_through: true,
-                    });
-                }
-                out.push_from(src, m);
-            }
-            next = m + 1;
-            if (out.len() - start) as u64 > budget {
-                break;
-            }
-        }
-        Ok(RunEnd {
-            next,
-            fell_through: false,
-        })
-    }
-}
-
-/// Where [`Host::apply_run`] stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RunEnd {
-    /// The first module of `src` not rewritten yet.
-    pub next: usize,
-    /// Module `next` is a job the run's rule did not apply to: the rules after it are to be
-    /// tried.
-    pub fell_through: bool,
 }
 
 /// A host for systems without external rules: randomness from a Mersenne Twister.
