@@ -294,6 +294,11 @@ impl Host for LuaHost<'_> {
             .map_err(HostError::Engine)
     }
 
+    // Developer note: one protected call a module is the fastest path measured. A Lua loop
+    // calling the rule for a whole run of modules in one protected call (commit 21100b6,
+    // reverted) was 1.0-1.6x slower: its own Lua instructions, each trapped by the
+    // instruction-count hook, cost more than the calls it saved (benches/README.md, "The
+    // batched step").
     fn apply(
         &mut self,
         rule: u32,
