@@ -120,7 +120,7 @@ impl Lines {
         self.colors.clear();
     }
 
-    /// The mesh: with a width, [`Lines::tubes`]; else a [`Primitive::Lines`] mesh with one
+    /// The mesh: with a width, `Lines::tubes`; else a [`Primitive::Lines`] mesh with one
     /// vertex per segment end and vertex colours.
     #[must_use]
     pub fn mesh(&self) -> Mesh {

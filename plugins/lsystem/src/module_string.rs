@@ -296,7 +296,7 @@ impl ModuleString {
     }
 
     /// Writes module `i` as `Name` or `Name(p1,p2)` (numbers in shortest round-trip form,
-    /// see [`write_param`]); an external module is written with its name only.
+    /// see `write_param`); an external module is written with its name only.
     pub fn write_module(&self, i: usize, symbols: &SymbolTable, out: &mut String) {
         out.push_str(symbols.name(self.sym(i)));
         let params = self.params(i);

@@ -1,5 +1,5 @@
 //! An L-system's rules and how they are added; compilation ([`compile`]), context matching
-//! ([`context`]) and the derivation step ([`derive`]) live in their own files.
+//! ([`context`]) and the derivation step ([`derive`](mod@derive)) live in their own files.
 
 mod compile;
 mod context;

@@ -7,8 +7,8 @@
 //! degrees.
 
 //!
-//! [`parse`](mod@parse) reads text into an [`Ast`], [`compile`](mod@compile) turns an `Ast` into
-//! an [`Expr`] and [`eval`](mod@eval) evaluates it.
+//! `parse` reads text into an [`Ast`], `compile` turns an `Ast` into
+//! an [`Expr`] and `eval` evaluates it.
 
 mod compile;
 mod eval;
