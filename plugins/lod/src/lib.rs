@@ -5,7 +5,7 @@
 //! drawn with two contiguous ranges of V and every instance of a species shares the same
 //! buffers.
 //!
-//! - [`simplify`]: the leaf-collapse chain with the thesis' weighted distance and bounds
+//! - [`simplify()`]: the leaf-collapse chain with the thesis' weighted distance and bounds
 //!   ([`Weights`], [`Bounds`]) and its new leaf ([`Leaf::collapse`]);
 //! - [`LodTable`]: V and the table by V_init and V_fill ([`v_init`], [`v_fill`]), drawn by
 //!   [`LodTable::ranges`] (V_render);
