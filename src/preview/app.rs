@@ -50,8 +50,9 @@ pub struct AppOptions {
 enum Shot {
     /// Waiting for the first generation and its frame.
     Waiting,
-    /// Asked egui for the screenshot.
-    Requested,
+    /// Asked egui for the screenshot of this frame, which drew these triangles and forest
+    /// leaves (the picture arrives a few frames later: what those draw is not in it).
+    Requested { triangles: u64, leaves: u64 },
     /// Written (or failed); closing.
     Done,
 }
@@ -406,10 +407,15 @@ impl PreviewApp {
                     ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(
                         egui::UserData::default(),
                     ));
-                    *state = Shot::Requested;
+                    let drawn = self
+                        .renderer
+                        .as_ref()
+                        .map(|r| (r.triangles(), r.forest_leaves()));
+                    let (triangles, leaves) = drawn.unwrap_or_default();
+                    *state = Shot::Requested { triangles, leaves };
                 }
             }
-            Shot::Requested => {
+            Shot::Requested { triangles, leaves } => {
                 let image = ctx.input(|i| {
                     i.raw.events.iter().find_map(|e| match e {
                         egui::Event::Screenshot { image, .. } => Some(image.clone()),
@@ -430,14 +436,10 @@ impl PreviewApp {
                             _ => {}
                         }
                     }
-                    if result.is_ok()
-                        && let Some(r) = &self.renderer
-                    {
+                    if result.is_ok() && self.renderer.is_some() {
                         println!(
-                            "{}: {} triangles drawn ({} forest leaves)",
-                            path.display(),
-                            r.triangles(),
-                            r.forest_leaves()
+                            "{}: {triangles} triangles drawn ({leaves} forest leaves)",
+                            path.display()
                         );
                     }
                     if let Ok(mut slot) = self.shot_result.lock() {

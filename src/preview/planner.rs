@@ -417,6 +417,26 @@ mod tests {
     }
 
     #[test]
+    fn after_a_new_scene_nothing_is_settled_until_its_own_plan_arrives() {
+        let mut planner = Planner::new(|| {});
+        let want = request(0.0, 3_000);
+        planner.reset(Some(set(scene(100, 1.0))));
+        planner.wait_for(want).expect("a plan of the first scene");
+        assert!(planner.settled(&want));
+        // The same camera and budget for a new scene: the plan drawn is the old scene's.
+        planner.reset(Some(set(scene(50, 1.0))));
+        assert!(!planner.settled(&want));
+        planner.ask(want);
+        assert!(!planner.settled(&want), "asked, not arrived");
+        let planned = planner.wait_for(want).expect("a plan of the new scene");
+        assert_eq!(planned.epoch, planner.epoch());
+        assert!(planner.settled(&want));
+        // A scene without a forest has nothing to wait for.
+        planner.reset(None);
+        assert!(planner.settled(&want));
+    }
+
+    #[test]
     fn the_plan_for_a_camera_is_the_same_every_time() {
         let mut a = Planner::new(|| {});
         let mut b = Planner::new(|| {});
