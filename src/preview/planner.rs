@@ -275,13 +275,14 @@ impl Drop for Planner {
 /// instances changed since its previous plan of the same epoch.
 fn plan_jobs(inbox: &Receiver<Job>, outbox: &Sender<Planned>, epoch: &AtomicU64, wake: &dyn Fn()) {
     let mut previous: Option<(u64, Vec<Vec<u32>>)> = None;
+    let mut buffers = forest::PlanBuffers::default();
     while let Ok(job) = inbox.recv() {
         if job.epoch != epoch.load(Ordering::SeqCst) {
             continue; // a newer scene was uploaded
         }
         let t0 = Instant::now();
         let meshes = job.set.forest_meshes();
-        let plan = forest::plan(&meshes, &job.request.view, job.request.budget);
+        let plan = forest::plan(&meshes, &job.request.view, job.request.budget, &mut buffers);
         let matrices: Vec<Vec<[f32; 16]>> = meshes
             .iter()
             .zip(&plan.meshes)
