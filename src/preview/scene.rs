@@ -348,8 +348,10 @@ fn coarse_bark(
 }
 
 /// A grid mesh keeps every this many rows and columns of vertices (and its last) while the
-/// camera moves: a ninth of its triangles.
-const COARSE_GRID_STEP: usize = 3;
+/// camera moves: a sixteenth of its triangles (measured on a 1 km terrain of 127,000
+/// triangles orbited on lavapipe: every third row, a ninth, made moving frames about 9 %
+/// slower than the scattered eighth a bark mesh keeps; every fourth, as fast).
+const COARSE_GRID_STEP: usize = 4;
 
 /// The triangles of the cells between the vertex columns `columns` and rows `rows` (both
 /// increasing) of a grid `width` vertices wide, numbered row by row: each cell (a, c, b),
