@@ -8,18 +8,18 @@ use std::time::{Duration, Instant};
 use eframe::egui::{self, Color32};
 use pge_engine::{Engine, ParamValue};
 
+use self::motion::{Frame, MOTION_SETTLE, Motion};
 use self::orbit::Orbit;
 use super::camera::OrbitCamera;
 use super::live::Live;
 use super::reload::{Settings, Status};
 use super::render::{Renderer, Toggles};
 
+mod motion;
 mod orbit;
 mod panel;
 
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
-/// How long after the last camera motion the viewport is drawn at full quality.
-const MOTION_SETTLE: Duration = Duration::from_millis(200);
 
 /// How a `--screenshot` run ended, read after the window closed.
 pub type ScreenshotResult = Arc<Mutex<Option<anyhow::Result<()>>>>;
@@ -50,8 +50,9 @@ pub struct AppOptions {
 enum Shot {
     /// Waiting for the first generation and its frame.
     Waiting,
-    /// Asked egui for the screenshot.
-    Requested,
+    /// Asked egui for the screenshot of this frame, which drew these triangles and forest
+    /// leaves (the picture arrives a few frames later: what those draw is not in it).
+    Requested { triangles: u64, leaves: u64 },
     /// Written (or failed); closing.
     Done,
 }
@@ -83,12 +84,11 @@ pub struct PreviewApp {
     frames: VecDeque<Instant>,
     render_ms: f64,
     log_fps: bool,
-    full_quality_motion: bool,
     last_fps_log: Instant,
     /// A model caused by a save was drawn in the last frame: (save time, generation count).
     drawn_after_save: Option<(Instant, u64)>,
-    /// When the camera last moved.
-    last_motion: Option<Instant>,
+    /// When the camera moved, and whether a frame is a moving one.
+    motion: Motion,
     /// Save to first frame on screen of the latest model a save caused.
     save_to_screen: Option<Duration>,
     /// The `--orbit-frames` measurement, while it runs.
@@ -145,10 +145,9 @@ impl PreviewApp {
             frames: VecDeque::new(),
             render_ms: 0.0,
             log_fps: options.log_fps,
-            full_quality_motion: options.full_quality_motion,
+            motion: Motion::new(options.full_quality_motion),
             last_fps_log: Instant::now(),
             drawn_after_save: None,
-            last_motion: None,
             save_to_screen: None,
             orbit: options.orbit_frames.map(Orbit::new),
         })
@@ -256,31 +255,22 @@ impl PreviewApp {
             self.viewport_dirty = true;
         }
         let model_shown = self.framed && !self.live.reloader().is_running();
-        let orbit_moving = match &mut self.orbit {
-            Some(orbit) if model_shown && !orbit.finished() => {
-                let (moving, redraw) = orbit.next_frame(Instant::now());
-                if moving {
-                    self.camera.yaw += std::f32::consts::TAU / orbit.frames as f32;
-                }
-                self.viewport_dirty |= redraw;
-                Some(moving)
-            }
-            _ => None,
-        };
         // While the camera moves, draw at 30 % resolution with an eighth of the leaves and the
         // largest eighth of big bark meshes (measured: a 126k-leaf tree turns at 38-40
         // frames/s on llvmpipe instead of 18-20); once it rests, draw once more at full
         // quality.
-        let now = Instant::now();
-        if self.camera != camera_before {
-            self.last_motion = Some(now);
-        }
-        let moving = orbit_moving.unwrap_or_else(|| {
-            !self.full_quality_motion
-                && self
-                    .last_motion
-                    .is_some_and(|t| now.duration_since(t) < MOTION_SETTLE)
-        });
+        let Frame {
+            moving,
+            orbit: orbit_moving,
+            redraw,
+        } = self.motion.frame(
+            &mut self.camera,
+            camera_before,
+            self.orbit.as_mut(),
+            model_shown,
+            Instant::now(),
+        );
+        self.viewport_dirty |= redraw;
         if moving {
             ui.ctx().request_repaint_after(MOTION_SETTLE);
         }
@@ -417,10 +407,15 @@ impl PreviewApp {
                     ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(
                         egui::UserData::default(),
                     ));
-                    *state = Shot::Requested;
+                    let drawn = self
+                        .renderer
+                        .as_ref()
+                        .map(|r| (r.triangles(), r.forest_leaves()));
+                    let (triangles, leaves) = drawn.unwrap_or_default();
+                    *state = Shot::Requested { triangles, leaves };
                 }
             }
-            Shot::Requested => {
+            Shot::Requested { triangles, leaves } => {
                 let image = ctx.input(|i| {
                     i.raw.events.iter().find_map(|e| match e {
                         egui::Event::Screenshot { image, .. } => Some(image.clone()),
@@ -441,14 +436,10 @@ impl PreviewApp {
                             _ => {}
                         }
                     }
-                    if result.is_ok()
-                        && let Some(r) = &self.renderer
-                    {
+                    if result.is_ok() && self.renderer.is_some() {
                         println!(
-                            "{}: {} triangles drawn ({} forest leaves)",
-                            path.display(),
-                            r.triangles(),
-                            r.forest_leaves()
+                            "{}: {triangles} triangles drawn ({leaves} forest leaves)",
+                            path.display()
                         );
                     }
                     if let Ok(mut slot) = self.shot_result.lock() {

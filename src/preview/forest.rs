@@ -5,7 +5,7 @@
 //! camera or the budget changes) the instances in view are found and given a level:
 //!
 //! - a leaf mesh with levels of detail gets a number of leaves from its distance by the
-//!   thesis' Scaling ([`pge_lod::assign`], `near` and `far` the nearest and farthest
+//!   thesis' Scaling ([`pge_lod::assign_into`], `near` and `far` the nearest and farthest
 //!   instance in view), the leaf budget T shared between the leaf meshes in proportion to
 //!   what their instances ask for; that number is rounded down to one of a few *bands*
 //!   (leaf counts halving from the original leaves to the coarsest level), each drawn with
@@ -21,7 +21,7 @@
 use std::ops::Range;
 
 use glam::{Mat4, Vec3, Vec4};
-use pge_lod::{Budget, assign};
+use pge_lod::{Budget, assign_into};
 use rayon::prelude::*;
 
 use super::lod::LeafLod;
@@ -240,10 +240,32 @@ fn in_view(mesh: &ForestMesh, view: &View, planes: &[Vec4; 6]) -> Vec<(u32, f32)
         .collect()
 }
 
+/// What planning keeps from one plan to the next (the planner thread holds one), so that
+/// the leaf meshes' Scaling allocates nothing once its buffers have grown to the instances
+/// in view. Their contents never carry over: a plan is the same with new buffers.
+#[derive(Debug, Default)]
+pub struct PlanBuffers {
+    /// Per mesh given to [`plan`], in the same order: its instances' distances and leaf
+    /// counts ([`assign_into`]).
+    meshes: Vec<LeafBuffers>,
+}
+
+#[derive(Debug, Default)]
+struct LeafBuffers {
+    distances: Vec<f32>,
+    counts: Vec<u32>,
+}
+
 /// Plans a frame: every instance in view of every mesh gets at most one band; the leaves
 /// drawn are at most `leaf_budget`, the other meshes' triangles at most `leaf_budget` too.
+/// `buffers` are reused from earlier plans.
 #[must_use]
-pub fn plan(meshes: &[ForestMesh], view: &View, leaf_budget: u64) -> Plan {
+pub fn plan(
+    meshes: &[ForestMesh],
+    view: &View,
+    leaf_budget: u64,
+    buffers: &mut PlanBuffers,
+) -> Plan {
     let planes = frustum(view.view_proj);
     let visible: Vec<Vec<(u32, f32)>> = meshes
         .par_iter()
@@ -267,7 +289,7 @@ pub fn plan(meshes: &[ForestMesh], view: &View, leaf_budget: u64) -> Plan {
         far,
         total: 0,
     };
-    plan_leaves(meshes, &visible, budget, leaf_budget, &mut out);
+    plan_leaves(meshes, &visible, budget, leaf_budget, buffers, &mut out);
     plan_rigid(meshes, &visible, leaf_budget, &mut out);
     out
 }
@@ -278,6 +300,7 @@ fn plan_leaves(
     visible: &[Vec<(u32, f32)>],
     budget: Budget,
     total: u64,
+    buffers: &mut PlanBuffers,
     out: &mut Plan,
 ) {
     // What each mesh's instances ask for (the tentative counts) and need at least (all
@@ -297,11 +320,15 @@ fn plan_leaves(
         .unzip();
     let shares = share(total, &asked, &least);
     // Each mesh on its own (in parallel, merged in order).
+    buffers
+        .meshes
+        .resize_with(meshes.len(), LeafBuffers::default);
     let planned: Vec<Option<(MeshPlan, u64)>> = meshes
         .par_iter()
         .zip(visible)
         .zip(&shares)
-        .map(|((mesh, seen), &share)| plan_leaf_mesh(mesh, seen, budget, share))
+        .zip(&mut buffers.meshes)
+        .map(|(((mesh, seen), &share), buffers)| plan_leaf_mesh(mesh, seen, budget, share, buffers))
         .collect();
     for (k, planned) in planned.into_iter().enumerate() {
         if let Some((plan, leaves)) = planned {
@@ -312,13 +339,15 @@ fn plan_leaves(
     }
 }
 
-/// One leaf mesh's plan for its `share` of the leaves and the leaves it draws; `None` for a
-/// mesh without levels.
+/// One leaf mesh's plan for its `share` of the leaves and the leaves it draws, with the
+/// Scaling's `buffers`; `None` for a mesh without levels (or one the Scaling refused: not
+/// drawn).
 fn plan_leaf_mesh(
     mesh: &ForestMesh,
     seen: &[(u32, f32)],
     budget: Budget,
     share: u64,
+    buffers: &mut LeafBuffers,
 ) -> Option<(MeshPlan, u64)> {
     let Detail::Leaves {
         bands,
@@ -328,14 +357,16 @@ fn plan_leaf_mesh(
     else {
         return None;
     };
-    let distances: Vec<f32> = seen.iter().map(|&(_, d)| d).collect();
+    let LeafBuffers { distances, counts } = buffers;
+    distances.clear();
+    distances.extend(seen.iter().map(|&(_, d)| d));
     let budget = Budget {
         total: share,
         ..budget
     };
     // Distances are finite and non-negative and near <= far, so this cannot fail; if it
     // did, the mesh would simply not be drawn.
-    let counts = assign(&distances, *leaves, *least, &budget).unwrap_or_default();
+    assign_into(distances, *leaves, *least, &budget, counts).ok()?;
     // The finest band not above each instance's count (`bands.len()`: none).
     let none = bands.len();
     let mut chosen: Vec<usize> = counts
@@ -686,7 +717,7 @@ mod tests {
             },
         ];
         for budget in [0, 1, 50, 499, 500, 2_000, 10_000, 32_000, 1_000_000] {
-            let plan = plan(&meshes, &view(), budget);
+            let plan = plan(&meshes, &view(), budget, &mut PlanBuffers::default());
             let triangles = count(&plan, &meshes);
             assert_eq!(triangles, plan.triangles, "budget {budget}");
             assert!(plan.leaves <= budget, "{} leaves > {budget}", plan.leaves);
@@ -718,14 +749,67 @@ mod tests {
             assert!(bark.windows(2).all(|w| w[0] <= w[1]), "{budget}: {bark:?}");
         }
         // A generous budget draws everything whole.
-        let plan = plan(&meshes, &view(), 1_000_000);
+        let plan = plan(&meshes, &view(), 1_000_000, &mut PlanBuffers::default());
         assert_eq!(plan.leaves, 500 * 64);
         assert_eq!(plan.triangles, 500 * (128 + 100 + 20));
         // A tight one still draws the nearest trees finer than the farthest.
-        let tight = super::plan(&meshes, &view(), 4_000);
+        let tight = super::plan(&meshes, &view(), 4_000, &mut PlanBuffers::default());
         let drawn = leaves_per_instance(&tight.meshes[0], instances.len());
         assert!(drawn[0] > drawn[400], "{drawn:?}");
         assert!(tight.leaves > 3_000, "the budget is used: {}", tight.leaves);
+    }
+
+    #[test]
+    fn buffers_kept_from_earlier_plans_make_the_same_plans_as_new_ones() {
+        let small = Detail::leaves(&lod(64, 16));
+        let big = Detail::leaves(&lod(200, 25));
+        let bark = Detail::Rigid {
+            full: 300,
+            coarse: Some(30),
+        };
+        let (many, few) = (row(800), row(120));
+        let forest = |instances| {
+            [&small, &big, &bark].map(|detail| ForestMesh {
+                instances,
+                centre: Vec3::Y,
+                radius: 1.5,
+                detail,
+            })
+        };
+        let (large, smaller) = (forest(&many), forest(&few));
+        let turned = |x: f32| {
+            let eye = Vec3::new(x, 2.0, 3.0);
+            View {
+                eye,
+                view_proj: Mat4::perspective_rh(0.8, 1.0, 0.1, 10_000.0)
+                    * Mat4::look_at_rh(eye, Vec3::new(0.0, 0.0, -60.0), Vec3::Y),
+            }
+        };
+        // One set of buffers through plans of more instances, then fewer, other cameras and
+        // budgets: each plan is the one new buffers (what `pge_lod::assign` allocates) make.
+        let mut kept = PlanBuffers::default();
+        let mut drawn = 0;
+        for (meshes, x, budget) in [
+            (&large, 0.0, 50_000),
+            (&smaller, 0.0, 50_000),
+            (&smaller, 4.0, 3_000),
+            (&large, -3.0, 900),
+            (&large, -3.0, 1_000_000),
+            (&smaller, 1.0, 20_000),
+        ] {
+            let again = plan(meshes, &turned(x), budget, &mut kept);
+            let fresh = plan(meshes, &turned(x), budget, &mut PlanBuffers::default());
+            assert_eq!(
+                again,
+                fresh,
+                "{} instances at x = {x}, T = {budget}",
+                meshes[0].instances.len()
+            );
+            drawn += again.leaves;
+        }
+        assert!(drawn > 0);
+        assert_eq!(kept.meshes.len(), 3);
+        assert!(kept.meshes[1].counts.capacity() >= 120);
     }
 
     #[test]
@@ -773,7 +857,7 @@ mod tests {
             radius: 1.0,
             detail: &bark,
         }];
-        let plan = plan(&meshes, &view(), 100);
+        let plan = plan(&meshes, &view(), 100, &mut PlanBuffers::default());
         let mut order = plan.meshes[0].order.clone();
         order.sort_unstable();
         assert_eq!(order, vec![0, 1]);
@@ -785,7 +869,7 @@ mod tests {
                 * Mat4::look_at_rh(Vec3::ZERO, Vec3::Y, Vec3::Z),
         };
         assert_eq!(
-            super::plan(&meshes, &away, 100),
+            super::plan(&meshes, &away, 100, &mut PlanBuffers::default()),
             Plan {
                 meshes: vec![MeshPlan::default()],
                 ..Plan::default()

@@ -275,13 +275,14 @@ impl Drop for Planner {
 /// instances changed since its previous plan of the same epoch.
 fn plan_jobs(inbox: &Receiver<Job>, outbox: &Sender<Planned>, epoch: &AtomicU64, wake: &dyn Fn()) {
     let mut previous: Option<(u64, Vec<Vec<u32>>)> = None;
+    let mut buffers = forest::PlanBuffers::default();
     while let Ok(job) = inbox.recv() {
         if job.epoch != epoch.load(Ordering::SeqCst) {
             continue; // a newer scene was uploaded
         }
         let t0 = Instant::now();
         let meshes = job.set.forest_meshes();
-        let plan = forest::plan(&meshes, &job.request.view, job.request.budget);
+        let plan = forest::plan(&meshes, &job.request.view, job.request.budget, &mut buffers);
         let matrices: Vec<Vec<[f32; 16]>> = meshes
             .iter()
             .zip(&plan.meshes)
@@ -414,6 +415,26 @@ mod tests {
         std::thread::sleep(Duration::from_millis(50));
         assert!(planner.poll().is_none());
         assert!(planner.settled(&request(0.0, 1_000_000)));
+    }
+
+    #[test]
+    fn after_a_new_scene_nothing_is_settled_until_its_own_plan_arrives() {
+        let mut planner = Planner::new(|| {});
+        let want = request(0.0, 3_000);
+        planner.reset(Some(set(scene(100, 1.0))));
+        planner.wait_for(want).expect("a plan of the first scene");
+        assert!(planner.settled(&want));
+        // The same camera and budget for a new scene: the plan drawn is the old scene's.
+        planner.reset(Some(set(scene(50, 1.0))));
+        assert!(!planner.settled(&want));
+        planner.ask(want);
+        assert!(!planner.settled(&want), "asked, not arrived");
+        let planned = planner.wait_for(want).expect("a plan of the new scene");
+        assert_eq!(planned.epoch, planner.epoch());
+        assert!(planner.settled(&want));
+        // A scene without a forest has nothing to wait for.
+        planner.reset(None);
+        assert!(planner.settled(&want));
     }
 
     #[test]
