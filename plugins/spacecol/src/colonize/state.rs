@@ -229,13 +229,15 @@ impl State {
         }
     }
 
-    /// Whether a node stands within `eps` of `q`.
+    /// Whether a node stands within `eps` of `q`: only the cells that the box of half-side
+    /// `eps` (widened a little above rounding) around `q` overlaps can hold one.
     pub(super) fn occupied(&self, q: Vec3, eps: f32, step: f32) -> bool {
-        let c = cell_of(q, step);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(list) = self.node_cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+        let wide = eps * 1.01 + 1e-6 * q.abs().max_element();
+        let (lo, hi) = (cell_of(q - wide, step), cell_of(q + wide, step));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    if let Some(list) = self.node_cells.get(&[x, y, z])
                         && list
                             .iter()
                             .any(|n| self.nodes[*n as usize].distance_squared(q) < eps * eps)
