@@ -170,6 +170,12 @@ impl PointGrid {
         old
     }
 
+    /// Sub-cells per cell side (1: the cells are not split).
+    #[must_use]
+    pub fn sub_cells(&self) -> usize {
+        self.split
+    }
+
     /// Whether point `i` is still in the grid.
     #[must_use]
     pub fn contains(&self, i: u32) -> bool {

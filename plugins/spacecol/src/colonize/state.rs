@@ -54,14 +54,21 @@ pub(super) struct State {
 }
 
 impl State {
-    /// The state before any node: every point alive, in a grid of cells a third of the
-    /// influence radius wide.
+    /// The state before any node: every point alive, numbered in the order of a grid of
+    /// cells a third of the influence radius wide (the order pulls are summed in), in a
+    /// grid of such cells, or of cells half the influence radius wide where the points are
+    /// sparse.
     pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
         let n = pts.len();
         let alive = vec![true; n];
         let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
         // Points that a query reads together then lie together in memory.
-        let points = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
+        let points: Vec<Vec3> = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
+        if grid.sub_cells() == 1 {
+            // Sparse points (a small tree's crown: a few to a cell, no sub-cells): in larger
+            // cells a query reads fewer cells, empty or skipped, for a few more points.
+            grid = PointGrid::new(&points, &alive, influence / 2.0);
+        }
         State {
             points,
             alive,
