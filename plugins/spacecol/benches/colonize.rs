@@ -1,6 +1,7 @@
 //! Space colonization's growth phase (every step after `init`, no meshing) from 1,000 to
 //! 1,000,000 attraction points in the same ellipsoid crown, and a complete small tree from
-//! script to glb bytes in memory.
+//! script to glb bytes in memory, and the small oak's points and growth (its script's
+//! parameters).
 //!
 //! The growth phase should cost time linear in the points: the per-point figure
 //! (criterion's throughput) stays about flat along the curve.
@@ -59,6 +60,39 @@ fn bench_colonize(c: &mut Criterion) {
     group.finish();
 }
 
+/// The parameters `scripts/species/oak.lua` gives (3,000 points in a wide, flattened
+/// crown above the root, a slight upward tropism), seeded as `pge run` seeds it.
+fn oak() -> Params {
+    let mut p = Params::new(Shape::Ellipsoid {
+        center: Vec3::new(0.0, 6.4, 0.0),
+        radii: Vec3::new(5.5, 3.2, 4.95),
+    });
+    p.points = Some(3000);
+    p.step = 0.3;
+    p.influence = 2.4;
+    p.kill = 0.6;
+    p.tropism = Vec3::new(0.0, 0.05, 0.0);
+    p
+}
+
+/// The small oak's points and growth (`init` and every step, no meshing): the `points` and
+/// `growth` phases of `pge run scripts/species/oak.lua --stats`.
+fn bench_oak(c: &mut Criterion) {
+    let params = oak();
+    let ctx = RunContext::default();
+    let run = || {
+        let mut sc =
+            SpaceColonization::new(params.clone(), Location::new("oak", 1)).expect("valid");
+        sc.init(&ctx).expect("init");
+        while sc.step(&ctx).expect("step") == Step::Continue {}
+        sc.iterations()
+    };
+    let iterations = run();
+    c.bench_function(&format!("colonize oak: {iterations} iterations"), |b| {
+        b.iter(|| black_box(run()))
+    });
+}
+
 fn bench_script_to_glb(c: &mut Criterion) {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/small_tree.lua");
     let engine = Engine::builder()
@@ -81,5 +115,5 @@ fn bench_script_to_glb(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, bench_colonize, bench_script_to_glb);
+criterion_group!(benches, bench_colonize, bench_oak, bench_script_to_glb);
 criterion_main!(benches);

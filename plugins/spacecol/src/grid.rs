@@ -46,8 +46,10 @@ pub struct PointGrid {
     /// How far a point may lie outside its cell's nominal box through rounding: skipping
     /// tests shrink distances by this much, so that they never skip an affected point.
     slack: f32,
-    /// Scratch of `update_near`: the cells to read.
-    visit: Vec<([usize; 3], usize)>,
+    /// Scratch of `update_near`: the per-axis gaps of the cells it spans...
+    gaps: Vec<f32>,
+    /// ... and the cells it reads.
+    visit: Vec<u32>,
 }
 
 /// Grids larger than this many cells get larger cells.
@@ -110,6 +112,7 @@ impl PointGrid {
             sub_bound: Vec::new(),
             cell_bound: Vec::new(),
             slack,
+            gaps: Vec::new(),
             visit: Vec::new(),
         };
         let subs = cells * split.pow(3);
@@ -167,14 +170,25 @@ impl PointGrid {
         old
     }
 
+    /// Sub-cells per cell side (1: the cells are not split).
+    #[must_use]
+    pub fn sub_cells(&self) -> usize {
+        self.split
+    }
+
     /// Whether point `i` is still in the grid.
     #[must_use]
     pub fn contains(&self, i: u32) -> bool {
         self.slot_of.get(i as usize).is_some_and(|s| *s != NONE)
     }
 
+    /// The cell of coordinate `v` along `axis` (origin `o` there), clamped to the grid.
+    ///
+    /// The float-to-integer cast rounds toward zero and takes negatives and NaN to 0, so it
+    /// is `floor` clamped at 0 without the call to `floor` (a libm call on the baseline
+    /// x86-64 target, most of a grid's set-up).
     fn coord(&self, v: f32, axis: usize, o: f32) -> usize {
-        (((v - o) * self.inv_cell).floor().max(0.0) as usize).min(self.dims[axis] - 1)
+        (((v - o) * self.inv_cell) as usize).min(self.dims[axis] - 1)
     }
 
     /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
@@ -183,7 +197,7 @@ impl PointGrid {
         let (o, fine) = (self.origin, self.inv_cell * s as f32);
         let axis = |v: f32, a: usize, o: f32| {
             let k = self.coord(v, a, o);
-            let f = ((v - o) * fine).floor().max(0.0) as usize;
+            let f = ((v - o) * fine) as usize;
             (k, f.clamp(k * s, k * s + s - 1) - k * s)
         };
         let (x, sx) = axis(p.x, 0, o.x);
@@ -308,37 +322,97 @@ impl PointGrid {
     /// the point. Calls come cell by cell in increasing cell order, in no particular order
     /// within a cell. Cells and sub-cells whose largest reach is below their distance to
     /// `q` are skipped unread.
+    ///
+    /// A cell's distance to `q` is the sum of its three per-axis gaps, computed once per
+    /// query for the rows, columns and layers the ball spans, so a skipped cell costs one
+    /// addition and one comparison (most cells are skipped once the points near them have
+    /// a node close by).
     pub fn update_near(&mut self, q: Vec3, r: f32, mut f: impl FnMut(u32, f32) -> Option<f32>) {
+        let Some([(x0, x1), (y0, y1), (z0, z1)]) = self.span(q, r) else {
+            return;
+        };
         let r2 = r * r;
+        let mut gaps = std::mem::take(&mut self.gaps);
+        gaps.clear();
+        let (o, w) = (self.origin, self.cell);
+        gaps.extend((x0..=x1).map(|x| self.near_gap(o.x + x as f32 * w, w, q.x)));
+        gaps.extend((y0..=y1).map(|y| self.near_gap(o.y + y as f32 * w, w, q.y)));
+        gaps.extend((z0..=z1).map(|z| self.near_gap(o.z + z as f32 * w, w, q.z)));
+        let (gx, rest) = gaps.split_at(x1 - x0 + 1);
+        let (gy, gz) = rest.split_at(y1 - y0 + 1);
+        // The cells to read, found first in a loop that only compares (without branches:
+        // each cell is written, and kept by counting it).
         let mut cells = std::mem::take(&mut self.visit);
-        cells.clear();
-        self.runs(q, r, |g, x, y, z, z_end| {
-            let cx = g.near_gap(g.origin.x + x as f32 * g.cell, g.cell, q.x);
-            let cy = g.near_gap(g.origin.y + y as f32 * g.cell, g.cell, q.y);
-            for zz in z..=z_end {
-                let c = (x * g.dims[1] + y) * g.dims[2] + zz;
-                let cz = g.near_gap(g.origin.z + zz as f32 * g.cell, g.cell, q.z);
-                if cx + cy + cz < g.cell_bound[c] {
-                    cells.push(([x, y, zz], c));
+        let most = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
+        if cells.len() < most {
+            cells.resize(most, 0);
+        }
+        let mut read = 0;
+        for (x, &dx) in (x0..).zip(gx) {
+            for (y, &dy) in (y0..).zip(gy) {
+                let dxy = dx + dy;
+                // A lower bound of the distance of any point in these cells: a cell is
+                // read only when it is below both the radius and the cell's largest reach.
+                if dxy >= r2 {
+                    continue;
+                }
+                let first = (x * self.dims[1] + y) * self.dims[2] + z0;
+                let bounds = &self.cell_bound[first..first + gz.len()];
+                for (k, (&bound, &dz)) in bounds.iter().zip(gz).enumerate() {
+                    let d = dxy + dz;
+                    cells[read] = (first + k) as u32;
+                    read += usize::from((d < r2) & (d < bound));
                 }
             }
-        });
-        for &(at, c) in &cells {
-            self.update_cell(q, r2, at, c, &mut f);
+        }
+        for &c in &cells[..read] {
+            self.update_cell(q, r2, c as usize, &mut f);
         }
         self.visit = cells;
+        self.gaps = gaps;
     }
 
-    /// [`Self::update_near`] within cell `c` at `[x, y, z]`.
+    /// The ranges of cells along x, y and z that the box of half-side `r` around `q`
+    /// overlaps, or `None` when it misses the grid.
+    fn span(&self, q: Vec3, r: f32) -> Option<[(usize, usize); 3]> {
+        let lo = q - r;
+        let hi = q + r;
+        let top = self.origin
+            + Vec3::new(
+                self.dims[0] as f32,
+                self.dims[1] as f32,
+                self.dims[2] as f32,
+            ) * self.cell;
+        if hi.cmplt(self.origin).any() || lo.cmpgt(top).any() {
+            return None;
+        }
+        let o = self.origin;
+        Some([
+            (self.coord(lo.x, 0, o.x), self.coord(hi.x, 0, o.x)),
+            (self.coord(lo.y, 1, o.y), self.coord(hi.y, 1, o.y)),
+            (self.coord(lo.z, 2, o.z), self.coord(hi.z, 2, o.z)),
+        ])
+    }
+
+    /// [`Self::update_near`] within cell `c`.
     fn update_cell(
         &mut self,
         q: Vec3,
         r2: f32,
-        [x, y, z]: [usize; 3],
         c: usize,
         f: &mut impl FnMut(u32, f32) -> Option<f32>,
     ) {
         let s = self.split;
+        if s == 1 {
+            // The cell is its one sub-cell, whose distance was just tested.
+            self.cell_bound[c] = self.update_sub(q, r2, c, f);
+            return;
+        }
+        let (x, y, z) = (
+            c / (self.dims[1] * self.dims[2]),
+            c / self.dims[2] % self.dims[1],
+            c % self.dims[2],
+        );
         let w = self.cell / s as f32;
         let corner = self.origin + Vec3::new(x as f32, y as f32, z as f32) * self.cell;
         let first = c * s * s * s;
@@ -371,25 +445,34 @@ impl PointGrid {
         f: &mut impl FnMut(u32, f32) -> Option<f32>,
     ) -> f32 {
         let start = self.starts[sub] as usize;
-        let mut end = start + self.lens[sub] as usize;
-        let mut kept = 0.0f32;
-        let mut slot = start;
-        while slot < end {
-            let d2 = self.positions[slot].distance_squared(q);
-            if d2 < r2 && d2 < self.reach[slot] {
+        let end = start + self.lens[sub] as usize;
+        // Chunks of up to 64 slots from the last: the points to call back for are found
+        // without branching, then called back for from the highest slot down, so that a
+        // removal's swap moves in only a point already seen.
+        let mut chunk_end = end;
+        while chunk_end > start {
+            let chunk_start = chunk_end.saturating_sub(64).max(start);
+            let positions = &self.positions[chunk_start..chunk_end];
+            let reach = &self.reach[chunk_start..chunk_end];
+            let mut hits = 0u64;
+            for (k, (p, &reach)) in positions.iter().zip(reach).enumerate() {
+                let d2 = p.distance_squared(q);
+                hits |= u64::from((d2 < r2) & (d2 < reach)) << k;
+            }
+            while hits != 0 {
+                let k = 63 - hits.leading_zeros() as usize;
+                hits &= !(1u64 << k);
+                let slot = chunk_start + k;
+                let d2 = self.positions[slot].distance_squared(q);
                 match f(self.items[slot], d2) {
                     Some(reach) => self.reach[slot] = reach,
-                    None => {
-                        // The last point moves in and is read next, in this slot.
-                        self.remove_slot(sub, slot);
-                        end -= 1;
-                        continue;
-                    }
+                    None => self.remove_slot(sub, slot),
                 }
             }
-            kept = kept.max(self.reach[slot]);
-            slot += 1;
+            chunk_end = chunk_start;
         }
+        let live = start..start + self.lens[sub] as usize;
+        let kept = self.reach[live].iter().fold(0.0f32, |m, r| m.max(*r));
         self.sub_bound[sub] = kept;
         kept
     }
@@ -431,8 +514,30 @@ mod tests {
     /// `remove` does).
     #[test]
     fn updates_visit_exactly_the_live_points_within_reach() {
+        let g = check_updates(20_000, 0.3);
+        assert!(g.split > 1, "dense points split the cells");
+    }
+
+    /// The same on sparse points (a few per cell, no sub-cells, as in a small tree's
+    /// crown), and on points so crowded that sub-cells hold more than the 64 points
+    /// `update_sub` tests at once.
+    #[test]
+    fn updates_visit_exactly_the_live_points_within_reach_sparse_and_crowded() {
+        let g = check_updates(1_500, 0.2);
+        assert_eq!(g.split, 1, "sparse points leave the cells whole");
+        let g = check_updates(60_000, 2.0);
+        assert!(
+            g.lens.iter().any(|n| *n > 64),
+            "a sub-cell holds more than 64 points"
+        );
+    }
+
+    /// Runs 300 `update_near` queries of radius 0.5 on `n` random points in a 2 m cube
+    /// (one in seven left out) in a grid of cells `cell` wide, each checked against brute
+    /// force; returns the grid.
+    fn check_updates(n: usize, cell: f32) -> PointGrid {
         let mut rng = Mt64::new(3);
-        let pts: Vec<Vec3> = (0..20_000)
+        let pts: Vec<Vec3> = (0..n)
             .map(|_| {
                 Vec3::new(
                     uniform24(&mut rng),
@@ -442,8 +547,7 @@ mod tests {
             })
             .collect();
         let keep: Vec<bool> = (0..pts.len()).map(|i| i % 7 != 0).collect();
-        let mut g = PointGrid::new(&pts, &keep, 0.3);
-        assert!(g.split > 1, "dense points split the cells");
+        let mut g = PointGrid::new(&pts, &keep, cell);
         let mut live = keep.clone();
         let mut reach = vec![f32::INFINITY; pts.len()];
         let r = 0.5;
@@ -499,5 +603,6 @@ mod tests {
             left += 1;
         });
         assert_eq!(left, live.iter().filter(|l| **l).count());
+        g
     }
 }

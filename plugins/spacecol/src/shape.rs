@@ -173,6 +173,10 @@ impl Shape {
                 p.cmpge(*min).all() && p.cmple(*max).all() && test(p)?
             }
             Shape::Mesh(m) => m.contains(p),
+            // Inside when the signed distance `k0 (k0 - 1) / k1` is at most 0, which it is
+            // whenever `k0 <= 1` (`k1 > 0`, or the centre): most candidates decide there,
+            // without `k1` and the division.
+            Shape::Ellipsoid { center, radii } if ((p - *center) / *radii).length() <= 1.0 => true,
             _ => self.signed_distance(p).is_some_and(|d| d <= 0.0),
         })
     }
@@ -361,6 +365,35 @@ pub(crate) fn polygon_distance(p: Vec2, poly: &[Vec2]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An ellipsoid's inside test (which decides most points without the full distance)
+    /// agrees with the sign of its signed distance, on points near its surface too.
+    #[test]
+    fn ellipsoid_inside_is_the_sign_of_its_distance() {
+        let ell = Shape::Ellipsoid {
+            center: Vec3::new(0.5, 6.4, -1.0),
+            radii: Vec3::new(5.5, 3.2, 4.95),
+        };
+        let mut rng = rand_mt::Mt64::new(7);
+        let mut both = [0; 2];
+        for _ in 0..20_000 {
+            let u = Vec3::new(
+                pge_engine::random::uniform24(&mut rng),
+                pge_engine::random::uniform24(&mut rng),
+                pge_engine::random::uniform24(&mut rng),
+            ) * 2.0
+                - 1.0;
+            // Directions scaled to lie around the surface, within a few per cent of it.
+            let scale = 0.97 + 0.06 * pge_engine::random::uniform24(&mut rng);
+            let p = Vec3::new(0.5, 6.4, -1.0)
+                + u.normalize_or_zero() * scale * Vec3::new(5.5, 3.2, 4.95);
+            let inside = ell.contains(p).expect("no predicate");
+            let d = ell.signed_distance(p).expect("a distance");
+            assert_eq!(inside, d <= 0.0, "{p}: distance {d}");
+            both[usize::from(inside)] += 1;
+        }
+        assert!(both[0] > 1000 && both[1] > 1000, "{both:?}");
+    }
 
     fn inside(s: &Shape, p: Vec3) -> bool {
         s.contains(p).expect("no predicate error")

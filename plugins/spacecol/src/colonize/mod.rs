@@ -17,14 +17,15 @@
 //! Cost: a point's nearest node only changes when a node is added closer to it, so each
 //! point keeps its nearest node and its distance to it (its *reach*), and a new node visits
 //! only the points it changes: those within the influence radius and closer to it than to
-//! their nearest node (or within the kill distance). The [`PointGrid`](crate::PointGrid) (cells of a third
-//! of the influence radius, split again where points are dense) keeps the largest reach of
-//! each cell and sub-cell, and a new node skips, unread, every cell whose distance exceeds
-//! that bound. Dead points leave the grid at once (swap-remove in their sub-cell's compact
-//! run), so no query reads them again. Points are numbered in the grid's order, so the
-//! points a query reads lie together in memory. An iteration then costs O(attracted
-//! points, plus the points each new node changes, plus the cells around it), not points x
-//! nodes nor new nodes x points in reach.
+//! their nearest node (or within the kill distance). The [`PointGrid`](crate::PointGrid)
+//! (cells of a third of the influence radius, split again where points are dense; of half
+//! the influence radius where points are sparse, a few to a cell) keeps the largest reach
+//! of each cell and sub-cell, and a new node skips, unread, every cell whose distance
+//! exceeds that bound. Dead points leave the grid at once (swap-remove in their sub-cell's
+//! compact run), so no query reads them again. Points are numbered in the order of the grid
+//! of a third of the influence radius, so the points a query reads lie together in memory.
+//! An iteration then costs O(attracted points, plus the points each new node changes, plus
+//! the cells around it), not points x nodes nor new nodes x points in reach.
 //!
 //! Each node's pull is summed over its points in increasing point number (the grid's
 //! order), a fixed order whatever order the points came within reach in.

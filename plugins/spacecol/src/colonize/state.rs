@@ -54,14 +54,21 @@ pub(super) struct State {
 }
 
 impl State {
-    /// The state before any node: every point alive, in a grid of cells a third of the
-    /// influence radius wide.
+    /// The state before any node: every point alive, numbered in the order of a grid of
+    /// cells a third of the influence radius wide (the order pulls are summed in), in a
+    /// grid of such cells, or of cells half the influence radius wide where the points are
+    /// sparse.
     pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
         let n = pts.len();
         let alive = vec![true; n];
         let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
         // Points that a query reads together then lie together in memory.
-        let points = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
+        let points: Vec<Vec3> = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
+        if grid.sub_cells() == 1 {
+            // Sparse points (a small tree's crown: a few to a cell, no sub-cells): in larger
+            // cells a query reads fewer cells, empty or skipped, for a few more points.
+            grid = PointGrid::new(&points, &alive, influence / 2.0);
+        }
         State {
             points,
             alive,
@@ -229,13 +236,15 @@ impl State {
         }
     }
 
-    /// Whether a node stands within `eps` of `q`.
+    /// Whether a node stands within `eps` of `q`: only the cells that the box of half-side
+    /// `eps` (widened a little above rounding) around `q` overlaps can hold one.
     pub(super) fn occupied(&self, q: Vec3, eps: f32, step: f32) -> bool {
-        let c = cell_of(q, step);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(list) = self.node_cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+        let wide = eps * 1.01 + 1e-6 * q.abs().max_element();
+        let (lo, hi) = (cell_of(q - wide, step), cell_of(q + wide, step));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    if let Some(list) = self.node_cells.get(&[x, y, z])
                         && list
                             .iter()
                             .any(|n| self.nodes[*n as usize].distance_squared(q) < eps * eps)
