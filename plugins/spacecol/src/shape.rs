@@ -122,7 +122,7 @@ impl Shape {
         }
     }
 
-    /// Checks a combined shape against [`MAX_NESTING`] and [`MAX_PARTS`], visiting at most
+    /// Checks a combined shape against `MAX_NESTING` and `MAX_PARTS`, visiting at most
     /// that many parts; the error names the limit. The Lua constructors check every union
     /// and difference they build, so the queries' recursion stays bounded.
     pub fn check_size(&self) -> Result<(), String> {

@@ -12,7 +12,7 @@ use crate::shape::Shape;
 pub struct Params {
     /// Where the attraction points are.
     pub envelope: Shape,
-    /// How many points (`None`: [`points::DEFAULT_POINTS`], or every vertex in the
+    /// How many points (`None`: [`DEFAULT_POINTS`](crate::points::DEFAULT_POINTS), or every vertex in the
     /// `vertices` mode).
     pub points: Option<u32>,
     /// How points are taken from the envelope.
