@@ -8,6 +8,11 @@ use super::{Material, Skeleton, triangles};
 /// Elements a thread checks at a time when a mesh is validated.
 const CHECK_CHUNK: usize = 1 << 15;
 
+/// Fewest elements checked on the rayon pool: fewer take less time than handing them to
+/// another thread (tens of microseconds, more on a loaded machine), and are checked on the
+/// calling thread.
+const CHECK_IN_PARALLEL: usize = 8 * CHECK_CHUNK;
+
 /// Why a mesh, a texture or a colour was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -169,12 +174,16 @@ impl Mesh {
         }
         // The largest index first (a loop without early exit, vectorized), the culprit only
         // when there is one.
-        let largest = self
-            .indices
-            .par_chunks(CHECK_CHUNK)
-            .map(|c| c.iter().copied().max().unwrap_or(0))
-            .max()
-            .unwrap_or(0);
+        let most = |c: &[u32]| c.iter().copied().max().unwrap_or(0);
+        let largest = if self.indices.len() < CHECK_IN_PARALLEL {
+            most(&self.indices)
+        } else {
+            self.indices
+                .par_chunks(CHECK_CHUNK)
+                .map(most)
+                .max()
+                .unwrap_or(0)
+        };
         if let Some((at, &index)) = (largest as usize >= n)
             .then(|| {
                 self.indices
@@ -202,7 +211,12 @@ impl Mesh {
                     all & floats(p).iter().all(|x| x.is_finite())
                 })
             };
-            if v.par_chunks(CHECK_CHUNK).all(finite) {
+            let all = if v.len() < CHECK_IN_PARALLEL {
+                finite(v)
+            } else {
+                v.par_chunks(CHECK_CHUNK).all(finite)
+            };
+            if all {
                 return Ok(());
             }
             let at = v.iter().position(|&p| !finite(&[p])).unwrap_or_default();
