@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
-use pge_engine::export::{ExportMeta, Instancing, glb_bytes_with, obj_files};
+use pge_engine::export::{ExportMeta, Instancing, glb_file_with, obj_files};
 use pge_engine::geometry::Model;
 
 /// The metadata a `.glb` records: the seed and the parameters' values, in order.
@@ -21,11 +21,19 @@ pub fn export_meta(seed: u64, params: &[ParamInfo]) -> ExportMeta {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder, renamed over
-/// `path` at the end, so that a failure never leaves a half-written file. The file gets
-/// the permissions of any new file (`0666` less the umask), not the temporary file's
-/// private `0600`.
+/// Writes `bytes` to `path` atomically, as [`write_atomically_with`] does.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    write_atomically_with(path, |file| file.write_all(bytes))
+}
+
+/// Writes a file at `path` with `write` through a temporary file in the same folder, which
+/// then takes `path`'s place, so that a failure never leaves a half-written file. The file
+/// gets the permissions of any new file (`0666` less the umask), not the temporary file's
+/// private `0600`.
+pub fn write_atomically_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> anyhow::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -40,11 +48,34 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let mut tmp = builder
         .tempfile_in(&dir)
         .with_context(|| format!("cannot write in {}", dir.display()))?;
-    tmp.write_all(bytes)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    write(tmp.as_file_mut()).with_context(|| format!("cannot write {}", path.display()))?;
+    if exchanged(&tmp, path) {
+        // The temporary name now holds the old file, which dropping `tmp` removes.
+        return Ok(());
+    }
     tmp.persist(path)
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
+}
+
+/// Whether the finished temporary file `tmp` and an existing regular file at `path` were
+/// swapped in one step (Linux's `renameat2` with `RENAME_EXCHANGE`): `path` is the old file
+/// or the new one at every moment, as with a rename. A rename over an existing file would
+/// make ext4 allocate and start writing the new file's blocks before it returns (its
+/// `auto_da_alloc` guard against files emptied by a crash): 2-5 ms for a 2.5 MB tree, tens
+/// of milliseconds for a 40 MB one, against 0.2 ms for the exchange. False when there is
+/// no such file or the file system cannot swap (the caller renames then).
+#[cfg(target_os = "linux")]
+fn exchanged(tmp: &tempfile::NamedTempFile, path: &Path) -> bool {
+    use rustix::fs::{CWD, RenameFlags, renameat_with};
+    let is_file = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file());
+    is_file && renameat_with(CWD, tmp.path(), CWD, path, RenameFlags::EXCHANGE).is_ok()
+}
+
+/// Elsewhere a rename replaces the file.
+#[cfg(not(target_os = "linux"))]
+fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> bool {
+    false
 }
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
@@ -74,7 +105,9 @@ pub fn write_model(
         write_atomically(&dir.join(&mtl), files.mtl.as_bytes())?;
         write_atomically(output, files.obj.as_bytes())?;
     } else {
-        write_atomically(output, &glb_bytes_with(model, meta, instancing)?)?;
+        // Streamed from the model's memory: no buffer of the file's size.
+        let glb = glb_file_with(model, meta, instancing)?;
+        write_atomically_with(output, |file| glb.write_to(file))?;
     }
     Ok(())
 }
@@ -99,6 +132,25 @@ mod tests {
         std::fs::write(&path, b"an older and longer content").expect("write");
         write_atomically(&path, b"new").expect("replaced");
         assert_eq!(std::fs::read(&path).expect("read"), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+        // Again over the new file, and a failed write leaves it as it was.
+        write_atomically(&path, b"newer").expect("replaced");
+        let failed = write_atomically_with(&path, |file| {
+            file.write_all(b"half")?;
+            Err(std::io::Error::other("the disk is full"))
+        });
+        assert!(format!("{:#}", failed.expect_err("fails")).contains("disk is full"));
+        assert_eq!(std::fs::read(&path).expect("read"), b"newer");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
+    }
+
+    #[test]
+    fn a_folder_in_the_way_is_neither_replaced_nor_moved() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("out.glb");
+        std::fs::create_dir(&path).expect("mkdir");
+        write_atomically(&path, b"glTF").expect_err("a folder is in the way");
+        assert!(path.is_dir());
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
     }
 

@@ -1,13 +1,16 @@
-//! Export speed: a 500,000-triangle grid mesh to glb bytes; a 2 M-triangle tree-like mesh
-//! (normals, colours, a 100,000-node skeleton) to glb bytes beside its limit, one copy of
-//! the same number of bytes, on every core and on one thread; and a script run end to end.
+//! Export speed: a 500,000-triangle grid mesh to glb bytes; a small tree like the library's
+//! oak (31 k triangles, six embedded textures) and a 2 M-triangle tree-like mesh (normals,
+//! colours, a 100,000-node skeleton), to glb bytes and streamed to a file, beside their
+//! limit, one copy of the same number of bytes, on every core and on one thread; and a
+//! script run end to end.
 
+use std::io::{Seek, Write};
 use std::sync::Arc;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{Vec2, Vec3, Vec4};
-use pge_engine::export::{ExportMeta, glb_bytes};
-use pge_engine::geometry::{Mesh, Model, Skeleton};
+use pge_engine::export::{ExportMeta, GlbFile, Instancing, glb_bytes, glb_file_with};
+use pge_engine::geometry::{DiffuseTransmission, Material, Mesh, Model, Skeleton, Texture};
 use pge_engine::{Engine, SessionOptions};
 
 fn grid(n: u32) -> Mesh {
@@ -57,7 +60,98 @@ fn tree_like(n: u32) -> Mesh {
     mesh
 }
 
+/// A texture of `bytes` bytes of PNG (not decoded: the export copies them as they are).
+fn png(name: &str, bytes: usize) -> Option<Arc<Texture>> {
+    let png = (0..bytes).map(|k| (k * 7919 % 251) as u8).collect();
+    Some(Arc::new(Texture {
+        name: name.into(),
+        width: 512,
+        height: 512,
+        png,
+    }))
+}
+
+/// A tree the size of `scripts/species/oak.lua`'s: bark of 27.4 k triangles (normals,
+/// colours, texture coordinates, a 1,370-node skeleton) and leaves of 4.2 k (normals,
+/// colours, texture coordinates, diffuse transmission), each with colour, normal and
+/// roughness maps of the oak's sizes (1.07 MB of PNG in all).
+fn small_tree() -> Model {
+    let mut bark = tree_like(117);
+    bark.material = Arc::new(Material {
+        name: "bark".into(),
+        texture: png("bark color", 298_291),
+        normal_texture: png("bark normal", 380_336),
+        metallic_roughness_texture: png("bark roughness", 184_435),
+        ..Material::default()
+    });
+    let mut leaves = tree_like(46);
+    leaves.skeleton = None;
+    leaves.material = Arc::new(Material {
+        name: "leaves".into(),
+        texture: png("leaf color", 88_710),
+        normal_texture: png("leaf normal", 86_811),
+        metallic_roughness_texture: png("leaf roughness", 36_096),
+        double_sided: true,
+        transmission: Some(DiffuseTransmission {
+            factor: 0.25,
+            color: [0.7, 0.8, 0.4],
+        }),
+        ..Material::default()
+    });
+    let mut model = Model::from_mesh(Arc::new(bark));
+    model.add_mesh(Arc::new(leaves), glam::Mat4::IDENTITY);
+    model
+}
+
+/// `glb` written over the start of `file` and cut to its length (as a fresh file would be).
+fn write_over(glb: &GlbFile, file: &mut std::fs::File) {
+    file.rewind().expect("rewinds");
+    glb.write_to(file).expect("writes");
+    file.set_len(glb.len()).expect("cuts");
+    file.flush().expect("flushes");
+}
+
+/// The glb of `model` three ways, beside the copy of as many bytes into a fresh buffer:
+/// assembled in one buffer (`glb_bytes`), streamed to a sink (building the file and
+/// converting what must be converted, no copy) and streamed into a file (the page cache).
+fn glb_ways(c: &mut Criterion, group: &str, model: &Model, samples: usize) {
+    let meta = ExportMeta::default();
+    let size = glb_bytes(model, &meta).expect("exports").len();
+    let source = vec![1u8; size];
+    let path = concat!(env!("CARGO_TARGET_TMPDIR"), "/export_bench.glb");
+    let mut file = std::fs::File::create(path).expect("a scratch file");
+    let mut g = c.benchmark_group(group);
+    g.throughput(Throughput::Elements(model.triangle_count() as u64));
+    g.sample_size(samples);
+    g.bench_function("glb_bytes", |b| {
+        b.iter(|| glb_bytes(model, &meta).expect("exports"))
+    });
+    g.bench_function("streamed_to_sink", |b| {
+        b.iter(|| {
+            let glb = glb_file_with(model, &meta, Instancing::Gpu).expect("exports");
+            glb.write_to(&mut std::io::sink()).expect("writes");
+        })
+    });
+    g.bench_function("streamed_to_file", |b| {
+        b.iter(|| {
+            let glb = glb_file_with(model, &meta, Instancing::Gpu).expect("exports");
+            write_over(&glb, &mut file);
+        })
+    });
+    g.bench_function("memcpy_same_bytes", |b| b.iter(|| source.clone()));
+    g.bench_function("memcpy_same_bytes_to_file", |b| {
+        b.iter(|| {
+            file.rewind().expect("rewinds");
+            file.write_all(&source).expect("writes");
+        })
+    });
+    g.finish();
+    drop(file);
+    std::fs::remove_file(path).expect("removes the scratch file");
+}
+
 fn export(c: &mut Criterion) {
+    glb_ways(c, "export_small_tree", &small_tree(), 50);
     let model = Model::from_mesh(Arc::new(grid(500)));
     let mut g = c.benchmark_group("export");
     g.throughput(Throughput::Elements(model.triangle_count() as u64));
@@ -89,6 +183,7 @@ fn export(c: &mut Criterion) {
     });
     g.bench_function("memcpy_same_bytes", |b| b.iter(|| source.clone()));
     g.finish();
+    glb_ways(c, "export_2m_ways", &model, 10);
 
     // Finding degenerate and repeated triangles (done before every export of a generated
     // model), on every core and on one thread.

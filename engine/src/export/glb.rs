@@ -13,8 +13,7 @@ use crate::geometry::{
 };
 use crate::{Error, Result};
 
-use super::glb_container::glb_file;
-pub use super::glb_container::{GLB_LIMIT, glb_container};
+pub use super::glb_container::{GLB_LIMIT, GlbFile, glb_container};
 use super::glb_extras::{Extra, JsonText, MeshExtras};
 use super::glb_layout::{Attribute, Data, Layout};
 pub use super::glb_sky::UNLIT;
@@ -504,11 +503,17 @@ pub fn glb_bytes(model: &Model, meta: &ExportMeta) -> Result<Vec<u8>> {
 /// per group (a primitive per member mesh), then one node per group with
 /// `EXT_mesh_gpu_instancing`, or one node per placement.
 pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<Vec<u8>> {
+    glb_file_with(model, meta, instancing)?.to_vec()
+}
+
+/// The file [`glb_bytes_with`] gives, not yet assembled: [`GlbFile::write_to`] writes it to a
+/// file from the model's own memory, with no buffer of the file's size.
+pub fn glb_file_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<GlbFile> {
     model.validate()?;
     let mut b = Builder::new();
     b.instancing = instancing;
     b.root.scene = Some(b.scene(model, "pge")?);
-    b.finish(model, meta, None)
+    b.file(model, meta, None)
 }
 
 /// The `.glb` bytes of several stages of one growth (`pge run --stages`): one scene per
@@ -684,13 +689,18 @@ impl Builder {
         Ok(index)
     }
 
-    /// The root extras (describing `model`), the buffer and the GLB container.
+    /// The file's bytes ([`Builder::file`] in one buffer).
     fn finish(
         self,
         model: &Model,
         meta: &ExportMeta,
         stages: Option<JsonValue>,
     ) -> Result<Vec<u8>> {
+        self.file(model, meta, stages)?.to_vec()
+    }
+
+    /// The root extras (describing `model`), the buffer and the GLB container.
+    fn file(self, model: &Model, meta: &ExportMeta, stages: Option<JsonValue>) -> Result<GlbFile> {
         let mut b = self;
         // What the instances of shared variants draw (a tile that refers to them).
         let [sv, st, sn, sl] = b.shared_counts(model);
@@ -750,15 +760,7 @@ impl Builder {
             with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
         };
         let json = JsonText::new(text, &b.skeletons)?;
-        // The JSON chunk is padded with spaces to 4 bytes.
-        let chunk = json.len().next_multiple_of(4);
-        let write_json = |dst: &mut [u8]| {
-            json.write(dst);
-            dst[json.len()..].fill(b' ');
-        };
-        glb_file(chunk, write_json, bin_len, GLB_LIMIT, |bin| {
-            b.layout.write(bin)
-        })
+        GlbFile::new(json, b.layout, bin_len, GLB_LIMIT)
     }
 }
 

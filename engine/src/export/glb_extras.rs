@@ -19,6 +19,10 @@ use crate::{Error, Result};
 /// Numbers of a skeleton's array a thread formats at a time.
 const PIECE_NUMBERS: usize = 1 << 13;
 
+/// Fewest numbers of the skeletons formatted on the rayon pool (fewer are formatted on the
+/// calling thread, in less time than handing them to another).
+const FORMAT_IN_PARALLEL: usize = 4 * PIECE_NUMBERS;
+
 /// One value of a mesh's `extras.pge`: the skeleton of a mesh, or one of the mesh's own
 /// extras.
 #[derive(Clone, Copy)]
@@ -216,10 +220,16 @@ impl JsonText {
                 );
             }
         }
-        let mut formatted = jobs
-            .into_par_iter()
-            .map(|(sk, array, range)| array.format(sk, range))
-            .collect::<std::io::Result<Vec<_>>>()
+        let numbers: usize = jobs.iter().map(|(_, _, range)| range.len()).sum();
+        let format = |(sk, array, range): (&Skeleton, Array, Range<usize>)| array.format(sk, range);
+        let formatted = if numbers < FORMAT_IN_PARALLEL {
+            jobs.into_iter()
+                .map(format)
+                .collect::<std::io::Result<Vec<_>>>()
+        } else {
+            jobs.into_par_iter().map(format).collect()
+        };
+        let mut formatted = formatted
             .map_err(|e| Error::Export(e.to_string()))?
             .into_iter();
         let mut parts = Vec::with_capacity(2 * markers.len() + 1);
@@ -246,7 +256,7 @@ impl JsonText {
     }
 
     /// The text's bytes, part by part.
-    fn slices(&self) -> impl Iterator<Item = &[u8]> {
+    pub(super) fn slices(&self) -> impl Iterator<Item = &[u8]> {
         self.parts.iter().map(|p| match p {
             Part::Text(range) => &self.text[range.clone()],
             Part::Fixed(bytes) => bytes,

@@ -4,6 +4,7 @@
 //! Each element's bytes depend only on the element, so the output is the same for any
 //! number of threads.
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use rayon::prelude::*;
@@ -62,6 +63,52 @@ impl Data {
             Data::Mesh(m, Attribute::Indices) => m.indices.len(),
             Data::Floats(f) => f.len(),
             Data::Png(t) => t.png.len(),
+        }
+    }
+
+    /// The view's bytes as the file holds them: borrowed where the model's memory already
+    /// holds them (an embedded image; little-endian floats and integers on a little-endian
+    /// host), converted otherwise (colours, and everything on a big-endian host), in pieces
+    /// on the rayon pool when there are many.
+    fn bytes(&self) -> Cow<'_, [u8]> {
+        if let Some(bytes) = self.as_bytes() {
+            return Cow::Borrowed(bytes);
+        }
+        let size = self.element_bytes();
+        let mut out = vec![0; self.count() * size];
+        let per_piece = (PIECE_BYTES / size).max(1) * size;
+        if out.len() <= per_piece {
+            self.fill(0, &mut out);
+        } else {
+            out.par_chunks_mut(per_piece)
+                .enumerate()
+                .for_each(|(k, piece)| self.fill(k * (per_piece / size), piece));
+        }
+        Cow::Owned(out)
+    }
+
+    /// The bytes of data whose memory is the file's bytes as they are.
+    #[cfg(target_endian = "little")]
+    fn as_bytes(&self) -> Option<&[u8]> {
+        use bytemuck::cast_slice;
+        match self {
+            Data::Mesh(m, Attribute::Positions) => Some(cast_slice(&m.positions)),
+            Data::Mesh(m, Attribute::Normals) => Some(cast_slice(&m.normals)),
+            Data::Mesh(m, Attribute::Uvs) => Some(cast_slice(&m.uvs)),
+            Data::Mesh(m, Attribute::Indices) => Some(cast_slice(&m.indices)),
+            Data::Mesh(_, Attribute::Colors) => None,
+            Data::Floats(f) => Some(cast_slice(f)),
+            Data::Png(t) => Some(&t.png),
+        }
+    }
+
+    /// The bytes of data whose memory is the file's bytes as they are: only an image's on a
+    /// big-endian host (numbers are written byte by byte, little-endian).
+    #[cfg(target_endian = "big")]
+    fn as_bytes(&self) -> Option<&[u8]> {
+        match self {
+            Data::Png(t) => Some(&t.png),
+            _ => None,
         }
     }
 
@@ -162,6 +209,27 @@ impl Layout {
         pieces
             .into_par_iter()
             .for_each(|(data, first, piece)| data.fill(first, piece));
+    }
+
+    /// The binary chunk as slices to write in order ([`Layout::padded_len`] bytes in all):
+    /// each view's bytes ([`Data::bytes`]: borrowed from the model where they can be), after
+    /// the zero bytes that align it, and the zero bytes that pad the chunk.
+    pub(super) fn slices(&self) -> Vec<Cow<'_, [u8]>> {
+        const ZEROS: &[u8] = &[0; 3];
+        let mut out = Vec::with_capacity(2 * self.views.len() + 1);
+        let mut at = 0;
+        for view in &self.views {
+            if view.offset > at {
+                out.push(Cow::Borrowed(&ZEROS[..view.offset - at]));
+            }
+            let bytes = view.data.bytes();
+            at = view.offset + bytes.len();
+            out.push(bytes);
+        }
+        if self.padded_len() > at {
+            out.push(Cow::Borrowed(&ZEROS[..self.padded_len() - at]));
+        }
+        out
     }
 }
 

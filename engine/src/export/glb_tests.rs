@@ -211,3 +211,91 @@ fn translucent_materials_carry_diffuse_transmission() {
     // Still a glTF the gltf crate reads.
     gltf::Gltf::from_slice(&bytes).expect("parses");
 }
+
+/// A writer that takes at most a few hundred bytes a call, from the first slice only (as a
+/// pipe or a socket may).
+struct Trickle(Vec<u8>);
+
+impl std::io::Write for Trickle {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = buf.len().min(333);
+        self.0.extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
+    use crate::geometry::InstanceTransform;
+    // Large enough that the colours are converted in pieces and the skeleton is formatted
+    // in several: a strip of 70,000 vertices with normals, uvs, colours and a texture.
+    let n = 35_000u32;
+    let positions: Vec<Vec3> = (0..2 * n)
+        .map(|k| Vec3::new((k / 2) as f32 * 0.01, (k % 2) as f32, (k as f32).sin()))
+        .collect();
+    let indices = (0..n - 1)
+        .flat_map(|i| [2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 2, 2 * i + 1, 2 * i + 3])
+        .collect();
+    let mut mesh = Mesh::from_triangles(positions, indices).expect("valid");
+    mesh.compute_normals();
+    mesh.uvs = mesh.positions.iter().map(|p| Vec2::new(p.x, p.y)).collect();
+    mesh.colors = mesh
+        .positions
+        .iter()
+        .map(|p| glam::Vec4::new(p.z.abs(), 0.5, p.y, 1.0))
+        .collect();
+    mesh.material = textured_model().meshes[0].material.clone();
+    let mut s = Skeleton::new();
+    let mut parent = None;
+    for k in 0..5_000 {
+        parent = Some(s.push(Vec3::splat(k as f32 * 0.1), parent, 0.01, k % 3));
+    }
+    mesh.skeleton = Some(Arc::new(s));
+    let mut model = textured_model();
+    model.add_mesh(Arc::new(mesh), Mat4::from_translation(Vec3::Z));
+    model.groups.push(InstanceGroup {
+        name: "copies".into(),
+        meshes: vec![0],
+        transforms: (0..3)
+            .map(|k| InstanceTransform {
+                translation: [k as f32, 0.0, 0.0],
+                rotation: [0.0, 0.0, 0.0, 1.0],
+                scale: 1.5,
+            })
+            .collect(),
+        leaves: None,
+    });
+    model.environment = Some(Arc::new(
+        Texture::from_rgba("sky", 1, 1, &[9, 9, 200, 255]).expect("png"),
+    ));
+    let meta = ExportMeta {
+        seed: 3,
+        params: vec![("h".into(), json!(2.5))],
+    };
+    for instancing in [Instancing::Gpu, Instancing::Nodes] {
+        let bytes = glb_bytes_with(&model, &meta, instancing).expect("exports");
+        let file = glb_file_with(&model, &meta, instancing).expect("exports");
+        assert_eq!(file.len(), bytes.len() as u64);
+        let mut streamed = Trickle(Vec::new());
+        file.write_to(&mut streamed).expect("written");
+        assert!(
+            streamed.0 == bytes,
+            "{instancing:?}: the streamed file differs"
+        );
+        let mut whole = Vec::new();
+        file.write_to(&mut whole).expect("written");
+        assert!(
+            whole == bytes,
+            "{instancing:?}: the file written at once differs"
+        );
+    }
+    // An empty model: no binary chunk.
+    let file = glb_file_with(&Model::new(), &meta, Instancing::Gpu).expect("exports");
+    let mut streamed = Vec::new();
+    file.write_to(&mut streamed).expect("written");
+    assert_eq!(streamed, file.to_vec().expect("bytes"));
+}

@@ -11,7 +11,7 @@ pub use glb::shared::{
     SharedGroup, SharedVariants, VARIANTS_FORMAT, glb_bytes_shared, variants_files,
 };
 pub use glb::{
-    ExportMeta, GLB_LIMIT, GPU_INSTANCING, Instancing, glb_bytes, glb_bytes_with, glb_container,
-    glb_stages_bytes,
+    ExportMeta, GLB_LIMIT, GPU_INSTANCING, GlbFile, Instancing, glb_bytes, glb_bytes_with,
+    glb_container, glb_file_with, glb_stages_bytes,
 };
 pub use obj::{ObjFiles, obj_files};

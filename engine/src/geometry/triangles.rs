@@ -145,6 +145,7 @@ fn degenerate([a, b, c]: [Vec3; 3]) -> bool {
 
 /// The corners' bits in turning order, starting from the smallest (`+ 0.0` turns -0.0 into
 /// 0.0, so both spell the same position).
+#[inline]
 fn key(corners: [Vec3; 3]) -> [u32; 9] {
     let keys = corners.map(|p| (p + Vec3::ZERO).to_array().map(f32::to_bits));
     let first = (0..3).min_by_key(|&k| keys[k]).unwrap_or(0);
