@@ -123,10 +123,20 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
     let index_base = mesh.indices.len();
     let vertices: usize = counts.iter().map(|c| c.0).sum();
     let indices: usize = counts.iter().map(|c| c.1).sum();
-    mesh.positions.resize(base + vertices, Vec3::ZERO);
-    mesh.normals.resize(base + vertices, Vec3::ZERO);
-    mesh.uvs.resize(base + vertices, Vec2::ZERO);
-    mesh.indices.resize(index_base + indices, 0);
+    if vertices < PARALLEL_FROM {
+        mesh.positions.resize(base + vertices, Vec3::ZERO);
+        mesh.normals.resize(base + vertices, Vec3::ZERO);
+        mesh.uvs.resize(base + vertices, Vec2::ZERO);
+        mesh.indices.resize(index_base + indices, 0);
+    } else {
+        // Fresh memory zeroed in parallel: its pages are touched by both threads.
+        let zeros = |n: usize| rayon::iter::repeat_n(0u8, n).with_min_len(1 << 14);
+        mesh.positions
+            .par_extend(zeros(vertices).map(|_| Vec3::ZERO));
+        mesh.normals.par_extend(zeros(vertices).map(|_| Vec3::ZERO));
+        mesh.uvs.par_extend(zeros(vertices).map(|_| Vec2::ZERO));
+        mesh.indices.par_extend(zeros(indices).map(|_| 0));
+    }
     let mut sinks = Vec::with_capacity(tubes.len());
     let mut positions = &mut mesh.positions[base..];
     let mut normals = &mut mesh.normals[base..];

@@ -42,15 +42,31 @@ const PARALLEL_FROM: usize = 1 << 14;
 /// away from the branch at 35-75 degrees with a random azimuth and a random roll. A tip that
 /// is a root (no segment) bears no leaves.
 ///
-/// The draws are taken in that order on the calling thread (the counts decide how many each
-/// tip takes); the leaves are then made from them, in parallel when there are many: the same
-/// leaves and the same state of `rng` afterwards for any number of threads.
+/// On more than one thread the draws are taken in that order on the calling thread (the
+/// counts decide how many each tip takes) and the leaves then made from them, in parallel
+/// when there are many; on one, each leaf as its draws are taken. The same leaves and the
+/// same state of `rng` afterwards for any number of threads.
 #[must_use]
 pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) -> Vec<LeafPoint> {
     let (lo, hi) = options.per_tip;
     let per_leaf = 5 + usize::from(options.max_depth > 0);
-    // Each bearing tip with the end of its draws in `draws`.
-    let mut tips = Vec::new();
+    if rayon::current_num_threads() == 1 {
+        // Every leaf from its draws as they are taken, without storing them.
+        let mut out = Vec::new();
+        for tip in skeleton.tips() {
+            if skeleton.parents[tip as usize].is_none() {
+                continue;
+            }
+            for _ in 0..int_in(rng, lo, hi) {
+                let mut d = [0u64; 6];
+                d[..per_leaf].fill_with(|| rng.next_u64());
+                out.push(leaf(skeleton, options, tip, &d[..per_leaf]));
+            }
+        }
+        return out;
+    }
+    // The tip of every leaf, and every leaf's draws one after another.
+    let mut owners = Vec::new();
     let mut draws = Vec::new();
     for tip in skeleton.tips() {
         if skeleton.parents[tip as usize].is_none() {
@@ -58,27 +74,22 @@ pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) ->
         }
         let count = int_in(rng, lo, hi) as usize;
         draws.extend((0..count * per_leaf).map(|_| rng.next_u64()));
-        tips.push((tip, draws.len()));
+        owners.extend(std::iter::repeat_n(tip, count));
     }
-    let leaves_of = |k: usize| {
-        let (tip, end) = tips[k];
-        let start = if k == 0 { 0 } else { tips[k - 1].1 };
-        draws[start..end]
-            .chunks_exact(per_leaf)
-            .map(move |d| leaf(skeleton, options, tip, d))
+    let leaf_of = |j: usize| {
+        let d = &draws[j * per_leaf..(j + 1) * per_leaf];
+        leaf(skeleton, options, owners[j], d)
     };
-    if draws.len() / per_leaf < PARALLEL_FROM {
-        (0..tips.len()).flat_map(leaves_of).collect()
+    if owners.len() < PARALLEL_FROM {
+        (0..owners.len()).map(leaf_of).collect()
     } else {
-        let runs: Vec<Vec<LeafPoint>> = (0..tips.len())
+        let mut out = Vec::new();
+        (0..owners.len())
             .into_par_iter()
-            .with_min_len(256)
-            .fold(Vec::new, |mut out, k| {
-                out.extend(leaves_of(k));
-                out
-            })
-            .collect();
-        runs.concat()
+            .with_min_len(1024)
+            .map(leaf_of)
+            .collect_into_vec(&mut out);
+        out
     }
 }
 
@@ -141,66 +152,70 @@ pub fn append_leaf_quads(
     mesh: &mut Mesh,
 ) {
     let mixes: Vec<f32> = leaves.iter().map(|_| uniform(rng)).collect();
-    // Each attribute grows from its own end (the indices count from the positions').
-    let n = leaves.len();
-    let base = mesh.positions.len();
-    let ends = [mesh.normals.len(), mesh.uvs.len(), mesh.colors.len()];
-    let index_base = mesh.indices.len();
-    mesh.positions.resize(base + 4 * n, Vec3::ZERO);
-    mesh.normals.resize(ends[0] + 4 * n, Vec3::ZERO);
-    mesh.uvs.resize(ends[1] + 4 * n, Vec2::ZERO);
-    mesh.colors.resize(ends[2] + 4 * n, Vec4::ZERO);
-    mesh.indices.resize(index_base + 6 * n, 0);
-    let positions = &mut mesh.positions[base..];
-    let normals = &mut mesh.normals[ends[0]..];
-    let uvs = &mut mesh.uvs[ends[1]..];
-    let colors = &mut mesh.colors[ends[2]..];
-    let indices = &mut mesh.indices[index_base..];
-    // A run of leaves from `first` (numbered in `leaves`) into its slices.
-    let write = |first: usize, run: &[LeafPoint], mixes: &[f32], slots: Slots| {
-        let (p, nm, uv, c, x) = slots;
-        for (k, (leaf, &mix)) in run.iter().zip(mixes).enumerate() {
-            let q = quad(leaf, options, mix);
-            let v = base as u32 + 4 * (first + k) as u32;
-            p[4 * k..4 * k + 4].copy_from_slice(&q.positions);
-            nm[4 * k..4 * k + 4].copy_from_slice(&[q.normal; 4]);
-            uv[4 * k..4 * k + 4].copy_from_slice(&QUAD_UVS);
-            c[4 * k..4 * k + 4].copy_from_slice(&[q.color; 4]);
-            x[6 * k..6 * k + 6].copy_from_slice(&[v, v + 1, v + 2, v, v + 2, v + 3]);
-        }
+    let base = mesh.positions.len() as u32;
+    let quad_of = |k: usize| quad(&leaves[k], options, mixes[k]);
+    let corners = |q: &Quad, c: usize| q.positions[c];
+    let indices = |k: usize| {
+        let v = base + 4 * k as u32;
+        [v, v + 1, v + 2, v, v + 2, v + 3]
     };
-    if n < PARALLEL_FROM {
-        write(
-            0,
-            leaves,
-            &mixes,
-            (positions, normals, uvs, colors, indices),
-        );
+    if leaves.len() < PARALLEL_FROM || rayon::current_num_threads() == 1 {
+        let n = leaves.len();
+        mesh.positions.reserve(4 * n);
+        mesh.normals.reserve(4 * n);
+        mesh.uvs.reserve(4 * n);
+        mesh.colors.reserve(4 * n);
+        mesh.indices.reserve(6 * n);
+        for k in 0..n {
+            let q = quad_of(k);
+            mesh.positions.extend_from_slice(&q.positions);
+            mesh.normals.extend_from_slice(&[q.normal; 4]);
+            mesh.uvs.extend_from_slice(&QUAD_UVS);
+            mesh.colors.extend_from_slice(&[q.color; 4]);
+            mesh.indices.extend_from_slice(&indices(k));
+        }
     } else {
-        const RUN: usize = 1024;
-        leaves
-            .par_chunks(RUN)
-            .zip(mixes.par_chunks(RUN))
-            .zip(positions.par_chunks_mut(4 * RUN))
-            .zip(normals.par_chunks_mut(4 * RUN))
-            .zip(uvs.par_chunks_mut(4 * RUN))
-            .zip(colors.par_chunks_mut(4 * RUN))
-            .zip(indices.par_chunks_mut(6 * RUN))
-            .enumerate()
-            .for_each(|(r, ((((((run, mixes), p), nm), uv), c), x))| {
-                write(r * RUN, run, mixes, (p, nm, uv, c, x));
-            });
+        // Written in parallel into fresh memory: the pages are touched by the threads that
+        // fill them.
+        let mut quads = Vec::new();
+        (0..leaves.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(quad_of)
+            .collect_into_vec(&mut quads);
+        let corner = |i: usize| (&quads[i / 4], i % 4);
+        let n = 4 * leaves.len();
+        mesh.positions
+            .par_extend((0..n).into_par_iter().with_min_len(4096).map(|i| {
+                let (q, c) = corner(i);
+                corners(q, c)
+            }));
+        mesh.normals.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| corner(i).0.normal),
+        );
+        mesh.uvs.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| QUAD_UVS[i % 4]),
+        );
+        mesh.colors.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| corner(i).0.color),
+        );
+        mesh.indices.par_extend(
+            (0..6 * leaves.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| indices(i / 6)[i % 6]),
+        );
     }
 }
-
-/// Where a run of leaf quads goes: positions, normals, uvs, colours and indices.
-type Slots<'a> = (
-    &'a mut [Vec3],
-    &'a mut [Vec3],
-    &'a mut [Vec2],
-    &'a mut [Vec4],
-    &'a mut [u32],
-);
 
 /// The texture coordinates of a leaf quad's corners.
 const QUAD_UVS: [Vec2; 4] = [
