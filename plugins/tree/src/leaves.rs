@@ -42,18 +42,19 @@ const PARALLEL_FROM: usize = 1 << 14;
 /// away from the branch at 35-75 degrees with a random azimuth and a random roll. A tip that
 /// is a root (no segment) bears no leaves.
 ///
-/// On more than one thread the draws are taken in that order on the calling thread (the
-/// counts decide how many each tip takes) and the leaves then made from them, in parallel
-/// when there are many; on one, each leaf as its draws are taken. The same leaves and the
+/// When there may be many leaves and more than one thread, the draws are taken in that
+/// order on the calling thread (the counts decide how many each tip takes) and the leaves
+/// then made from them in parallel; otherwise each leaf is made as its draws are taken. The same leaves and the
 /// same state of `rng` afterwards for any number of threads.
 #[must_use]
 pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) -> Vec<LeafPoint> {
     let (lo, hi) = options.per_tip;
     let per_leaf = 5 + usize::from(options.max_depth > 0);
-    if rayon::current_num_threads() == 1 {
+    let tips = skeleton.tips();
+    if rayon::current_num_threads() == 1 || tips.len() * hi.max(lo) as usize <= PARALLEL_FROM {
         // Every leaf from its draws as they are taken, without storing them.
         let mut out = Vec::new();
-        for tip in skeleton.tips() {
+        for &tip in &tips {
             if skeleton.parents[tip as usize].is_none() {
                 continue;
             }
@@ -68,7 +69,7 @@ pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) ->
     // The tip of every leaf, and every leaf's draws one after another.
     let mut owners = Vec::new();
     let mut draws = Vec::new();
-    for tip in skeleton.tips() {
+    for tip in tips {
         if skeleton.parents[tip as usize].is_none() {
             continue;
         }
