@@ -1,32 +1,45 @@
 //! Finding the triangles no client can use: degenerate ones and repeats of an earlier one.
 //!
-//! Each triangle's key (its three corners' bits, starting from the smallest) is hashed and
-//! dealt into a shard by its hash, in runs of triangles in parallel; then each shard, in
-//! parallel, finds its repeats with a small table of its own, reading its triangles from
-//! the runs in order. A
+//! Each triangle gets a hash of its corners' bits that does not depend on the corner its
+//! indices start at (a sum over its three edges, each edge hashed from its two corners in
+//! turning order), and the first triangle of each hash is kept in an open-addressing table
+//! of tags and triangle numbers; a later triangle whose tag matches is compared by its
+//! corners (a repeat, or, very rarely, another triangle with the same tag).
+//!
+//! A small mesh is searched in one pass, in order. A large one is hashed and dealt into
+//! shards by its hash, in runs of triangles in parallel; then each shard, in parallel, finds
+//! its repeats with a table of its own, reading its triangles from the runs in order. A
 //! repeat and the triangle it repeats share a hash, hence a shard, and a shard meets its
 //! triangles in order, so the first of equal triangles is the one kept, whatever the number
 //! of shards or threads.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Triangles a thread keys at a time.
+/// Triangles a thread hashes at a time.
 const KEY_CHUNK: usize = 1 << 15;
 
-/// Below this many triangles, one shard (the tables are small anyway).
+/// Below this many triangles, one pass on the calling thread (the work is smaller than
+/// handing it to another).
 const SHARDED_FROM: usize = 1 << 15;
 
 /// Shards of a large mesh, as a power of two: each shard's table of a 2 M-triangle mesh
-/// holds about 16 k hashes (about 0.5 MB), which stays in the cache.
+/// holds about 16 k triangles (about 256 kB), which stays in the cache.
 const SHARD_BITS: u32 = 7;
 
 /// A run of triangles after pass 1: each shard's hashes with their triangles, and the
 /// degenerate triangles, in increasing order.
 type Run = (Vec<Vec<(u64, u32)>>, Vec<usize>);
+
+/// What a triangle is to the search.
+enum Look {
+    /// A corner is past the vertices: kept (validation rejects the mesh).
+    Outside,
+    /// No area.
+    Degenerate,
+    /// Usable unless it repeats an earlier triangle of the same hash.
+    Hashed(u64),
+}
 
 /// The triangles of `indices` (three a triangle) that no client can use, in increasing
 /// order: degenerate ones (two corners at the same place, or all three on a line: zero
@@ -34,69 +47,63 @@ type Run = (Vec<Vec<(u64, u32)>>, Vec<usize>);
 /// turning order; a back face is not a repeat).
 pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     let (triangles, _) = indices.as_chunks::<3>();
-    let shard_bits = if triangles.len() < SHARDED_FROM {
-        0
-    } else {
-        SHARD_BITS
+    // Whether triangles `a` and `b` have the same corners in the same turning order.
+    let same = |a: u32, b: u32| {
+        let key_of = |t: u32| corners(positions, &triangles[t as usize]).map(key);
+        key_of(a) == key_of(b)
     };
-    let shards = 1usize << shard_bits;
+    if triangles.len() < SHARDED_FROM {
+        let mut firsts = Firsts::with_room(triangles.len());
+        let mut unusable = Vec::new();
+        for (t, tri) in triangles.iter().enumerate() {
+            match look(positions, tri) {
+                Look::Outside => {}
+                Look::Degenerate => unusable.push(t),
+                Look::Hashed(h) => {
+                    if firsts.repeats(h, t as u32, same) {
+                        unusable.push(t);
+                    }
+                }
+            }
+        }
+        return unusable;
+    }
+    let shards = 1usize << SHARD_BITS;
     // The shard of a hash comes from its middle bits, since a table uses the low bits for
-    // its slot and the high ones for its tags.
-    let shard = |h: u64| ((h >> 32) & ((1 << shard_bits) - 1)) as usize;
+    // its slot.
+    let shard = |h: u64| ((h >> 32) & ((1 << SHARD_BITS) - 1)) as usize;
     // Pass 1, a run of triangles a task: each triangle's hash, dealt into its shard's list
     // with the triangle's number (in increasing order), and the degenerate triangles.
     let runs: Vec<Run> = triangles
         .par_chunks(KEY_CHUNK)
         .enumerate()
         .map(|(c, run)| {
-            let mut dealt = vec![Vec::new(); shards];
+            let mut dealt: Vec<Vec<(u64, u32)>> = (0..shards)
+                .map(|_| Vec::with_capacity(run.len() / shards * 5 / 4))
+                .collect();
             let mut degenerate_ones = Vec::new();
             for (k, tri) in run.iter().enumerate() {
                 let t = c * KEY_CHUNK + k;
-                match corners(positions, tri) {
-                    // Kept: validation rejects the mesh.
-                    None => {}
-                    Some(c) if degenerate(c) => degenerate_ones.push(t),
-                    Some(c) => {
-                        let h = hash(&key(c));
-                        dealt[shard(h)].push((h, t as u32));
-                    }
+                match look(positions, tri) {
+                    Look::Outside => {}
+                    Look::Degenerate => degenerate_ones.push(t),
+                    Look::Hashed(h) => dealt[shard(h)].push((h, t as u32)),
                 }
             }
             (dealt, degenerate_ones)
         })
         .collect();
-    // Pass 2, a shard a task, meeting its triangles in increasing order: the first
-    // triangle of each hash in a table small enough for the cache; a later one with the
-    // same hash is compared by its corners (a repeat, or, very rarely, another triangle
-    // with the same hash).
-    let same = |a: u32, b: u32| {
-        let key_of = |t: u32| corners(positions, &triangles[t as usize]).map(key);
-        key_of(a) == key_of(b)
-    };
+    // Pass 2, a shard a task, meeting its triangles in increasing order.
     let repeats: Vec<Vec<usize>> = (0..shards)
         .into_par_iter()
         .map(|s| {
             let len = runs.iter().map(|(dealt, _)| dealt[s].len()).sum();
-            let mut first: HashMap<u64, u32, BuildHasherDefault<Stored>> =
-                HashMap::with_capacity_and_hasher(len, BuildHasherDefault::default());
-            // Triangles whose hash an earlier, different triangle has.
-            let mut others: Vec<(u64, u32)> = Vec::new();
-            let mut repeats = Vec::new();
-            for &(h, t) in runs.iter().flat_map(|(dealt, _)| &dealt[s]) {
-                let Some(&f) = first.get(&h) else {
-                    first.insert(h, t);
-                    continue;
-                };
-                let earlier = std::iter::once(f)
-                    .chain(others.iter().filter(|&&(oh, _)| oh == h).map(|&(_, o)| o));
-                if earlier.into_iter().any(|e| same(e, t)) {
-                    repeats.push(t as usize);
-                } else {
-                    others.push((h, t));
-                }
-            }
-            repeats
+            let mut firsts = Firsts::with_room(len);
+            runs.iter()
+                .flat_map(|(dealt, _)| &dealt[s])
+                .filter(|&&(h, t)| firsts.repeats(h, t, same))
+                .map(|&(_, t)| t as usize)
+                .collect()
         })
         .collect();
     let mut unusable: Vec<usize> = runs
@@ -107,6 +114,52 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
         .collect();
     unusable.sort_unstable();
     unusable
+}
+
+/// The first triangle of every hash met so far: an open-addressing table (linear probing,
+/// at most half full) of the hash's high half (its tag, never 0) above the triangle's
+/// number; 0 is an empty slot.
+struct Firsts {
+    slots: Vec<u64>,
+    mask: usize,
+}
+
+impl Firsts {
+    /// A table for up to `n` triangles.
+    fn with_room(n: usize) -> Firsts {
+        let len = (2 * n).max(16).next_power_of_two();
+        Firsts {
+            slots: vec![0; len],
+            mask: len - 1,
+        }
+    }
+
+    /// Whether triangle `t` of hash `h` repeats an earlier triangle (`same(earlier)`, asked
+    /// of the earlier ones with the same tag); if not, `t` is recorded.
+    fn repeats(&mut self, h: u64, t: u32, same: impl Fn(u32, u32) -> bool) -> bool {
+        let tag = (h >> 32) | 1;
+        let mut at = h as usize & self.mask;
+        loop {
+            let slot = self.slots[at];
+            if slot == 0 {
+                self.slots[at] = (tag << 32) | u64::from(t);
+                return false;
+            }
+            if slot >> 32 == tag && same(slot as u32, t) {
+                return true;
+            }
+            at = (at + 1) & self.mask;
+        }
+    }
+}
+
+/// A triangle's corners checked: past the vertices, degenerate, or hashed.
+fn look(positions: &[Vec3], tri: &[u32; 3]) -> Look {
+    match corners(positions, tri) {
+        None => Look::Outside,
+        Some(c) if degenerate(c) => Look::Degenerate,
+        Some(c) => Look::Hashed(hash(c)),
+    }
 }
 
 /// `indices` without the triangles listed in `dropped` (in increasing order; a number out
@@ -156,36 +209,21 @@ fn key(corners: [Vec3; 3]) -> [u32; 9] {
     out
 }
 
-/// A 64-bit hash of a key (multiply and rotate over its words, then a final mix so that
-/// every bit depends on every word).
-fn hash(key: &[u32; 9]) -> u64 {
-    let mut h = 0u64;
-    for &w in key {
-        h = (h.rotate_left(26) ^ u64::from(w)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
+/// A 64-bit hash of a triangle's corners (their bits, `-0.0` as `0.0`) that is the same
+/// whichever corner it starts at, and differs for the other turning order: a sum over the
+/// three edges of a hash of the edge's two corners in order, then a final mix so that every
+/// bit depends on every corner. Equal keys ([`key`]) have equal hashes.
+fn hash(corners: [Vec3; 3]) -> u64 {
+    let [a, b, c] = corners.map(|p| {
+        let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
+        let xy = (u64::from(x) | (u64::from(y) << 32)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        xy ^ (xy >> 29) ^ u64::from(z).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+    });
+    let edge = |from: u64, to: u64| (from ^ to.rotate_left(23)).wrapping_mul(0x1656_67B1_9E37_79F9);
+    let mut h = edge(a, b).wrapping_add(edge(b, c)).wrapping_add(edge(c, a));
     h ^= h >> 31;
     h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
     h ^ (h >> 29)
-}
-
-/// The hasher of a shard's table, whose keys are hashes already: hands them on as they are.
-#[derive(Default)]
-struct Stored(u64);
-
-impl Hasher for Stored {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        }
-    }
-
-    fn write_u64(&mut self, h: u64) {
-        self.0 = h;
-    }
 }
 
 #[cfg(test)]
@@ -248,6 +286,21 @@ mod tests {
         let kept = without(&indices, &found);
         assert_eq!(kept.len(), indices.len() - 3 * found.len());
         assert!(unusable(&positions, &kept).is_empty());
+    }
+
+    #[test]
+    fn a_small_mesh_searched_in_one_pass_finds_what_the_definition_finds() {
+        // Corners on a coarse lattice, so many triangles repeat (in every rotation), many
+        // are back faces of others and many are degenerate; -0.0 spells some corners.
+        let mut positions: Vec<Vec3> = (0..60)
+            .map(|k| Vec3::new((k % 4) as f32, (k % 3) as f32, (k % 5) as f32))
+            .collect();
+        positions.push(Vec3::new(-0.0, 0.0, -0.0));
+        let indices: Vec<u32> = (0..3 * 5000u32).map(|i| (i * 7919 + i / 7) % 61).collect();
+        assert!(indices.len() / 3 < SHARDED_FROM);
+        let found = unusable(&positions, &indices);
+        assert_eq!(found, unusable_by_definition(&positions, &indices));
+        assert!(found.len() > 100 && found.len() < 5000, "{}", found.len());
     }
 
     #[test]

@@ -1,11 +1,18 @@
 //! Meshing throughput: a random binary tree of branches turned into bark (triangles per
-//! second, on every core and on one thread), and a complete tree of about 20,000 triangles
-//! with leaves built end to end.
+//! second, on every core and on one thread), a complete tree of about 20,000 triangles
+//! with leaves built end to end, and the small oak of `scripts/species/oak.lua` (its
+//! colonized skeleton in `oak_skeleton.txt`) meshed as `pge run` meshes it: bark, leaves and
+//! the search for unusable triangles, on every core and on one thread, in CPU time (of all
+//! threads: the 2-thread figure shows what fanning out costs, not the wall time saved).
 
+use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
-use pge_tree::{LeafOptions, MeshOptions, TreeOptions, append_bark, build_tree, pipe_radii};
+use pge_tree::{
+    Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TreeOptions, append_bark, build_tree,
+    pipe_radii,
+};
 use std::hint::black_box;
 
 /// A deterministic branching skeleton: each node continues, and every `fork_every`-th node
@@ -103,5 +110,114 @@ fn bench_tree(c: &mut Criterion) {
     });
 }
 
+/// The skeleton `scripts/species/oak.lua` colonizes at its defaults and seed 1, with its
+/// pipe-model radii and orders: one node a line, `parent x y z radius order` (parents from
+/// 1, 0 for a root).
+fn oak_skeleton() -> Skeleton {
+    let mut s = Skeleton::new();
+    for line in include_str!("oak_skeleton.txt").lines() {
+        let f: Vec<f32> = line
+            .split_whitespace()
+            .map(|x| x.parse().expect("a number"))
+            .collect();
+        let parent = (f[0] > 0.0).then(|| f[0] as u32 - 1);
+        s.push(Vec3::new(f[1], f[2], f[3]), parent, f[4], f[5] as u32);
+    }
+    s
+}
+
+/// The oak's tree options (`scripts/species/oak.lua`), radii kept as the colonization gives
+/// them.
+fn oak_options() -> TreeOptions {
+    TreeOptions {
+        mesh: MeshOptions {
+            sides: 10,
+            merge_straight: Some(6.0),
+            smoothing: 0.5,
+            radii: RadiiMode::Keep,
+            bark_depth: 1.3,
+            flare: Some(Flare {
+                roots: 5,
+                spread: 0.9,
+                height: 1.0,
+            }),
+            ..MeshOptions::default()
+        },
+        leaves: Some(LeafOptions {
+            per_tip: (6, 9),
+            size: 0.38,
+            max_depth: 3,
+            shape: LeafShape::Lobed,
+            translucency: 0.25,
+            ..LeafOptions::default()
+        }),
+        lod: None,
+    }
+}
+
+/// CPU time of the whole process (every thread's, from `/proc/self/task/*/schedstat`), in
+/// nanoseconds: unlike the wall time, hardly inflated by other processes on a loaded
+/// machine. Time spent in threads that ended is not counted (rayon's threads live on).
+struct ProcessCpu(WallTime);
+
+impl ProcessCpu {
+    fn now() -> u64 {
+        let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+            return 0;
+        };
+        tasks
+            .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
+            .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+            .sum()
+    }
+}
+
+impl Measurement for ProcessCpu {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        ProcessCpu::now()
+    }
+    fn end(&self, start: u64) -> u64 {
+        ProcessCpu::now().saturating_sub(start)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, value: &u64) -> f64 {
+        *value as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        self.0.formatter()
+    }
+}
+
+fn bench_oak(c: &mut Criterion<ProcessCpu>) {
+    let s = oak_skeleton();
+    let options = oak_options();
+    let mesh = |s: &Skeleton| {
+        let mut model = build_tree(s, &options, 1).expect("builds");
+        model.remove_unusable_triangles();
+        model
+    };
+    let name = format!("oak {} triangles", mesh(&s).triangle_count());
+    c.bench_function(&name, |b| b.iter(|| mesh(black_box(&s))));
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a thread pool");
+    c.bench_function(&format!("{name}, 1 thread"), |b| {
+        b.iter(|| one.install(|| mesh(black_box(&s))))
+    });
+}
+
 criterion_group!(benches, bench_meshing, bench_tree);
-criterion_main!(benches);
+criterion_group! {
+    name = oak;
+    config = Criterion::default().with_measurement(ProcessCpu(WallTime));
+    targets = bench_oak
+}
+criterion_main!(benches, oak);

@@ -2,7 +2,7 @@
 //! Maple", 1985).
 //!
 //! The skeleton is cut into branches: a branch starts at a root, or at a fork for every child
-//! but the one that continues the parent's branch (see [`main_children`]), and follows the
+//! but the one that continues the parent's branch (see [`main_children`](crate::main_children)), and follows the
 //! continuing children to a tip. Each branch is one tube: a ring of `sides` points (plus one
 //! duplicated seam vertex, where the texture's `u` restarts) at every node, each ring
 //! oriented between the incoming and the outgoing direction so joints stay continuous, and
@@ -23,7 +23,7 @@ use pge_engine::geometry::{Mesh, Skeleton};
 use rayon::prelude::*;
 
 use crate::options::{Flare, MeshOptions};
-use crate::radii::main_children;
+use crate::radii::main_child;
 use flare::with_flare_rings;
 use rings::{Shape, Sink};
 
@@ -51,8 +51,10 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
             }
         })
         .collect();
-    let children = skeleton.children();
-    let main = main_children(skeleton, &children);
+    let children = Children::of(skeleton);
+    let main: Vec<Option<u32>> = (0..skeleton.len())
+        .map(|i| main_child(skeleton, i, children.of_node(i)))
+        .collect();
     let scale = if options.texture_scale > 0.0 && options.texture_scale.is_finite() {
         options.texture_scale
     } else {
@@ -71,7 +73,7 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
     // The tubes in the order they are written: a root's, then its node's laterals, node by
     // node.
     let mut tubes = Vec::new();
-    for i in 0..skeleton.len() {
+    for (i, &main_child) in main.iter().enumerate() {
         if skeleton.parents[i].is_none() {
             tubes.push(TubeSpec {
                 start: i,
@@ -82,8 +84,8 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
                 flare,
             });
         }
-        for &c in &children[i] {
-            if Some(c) != main[i] {
+        for &c in children.of_node(i) {
+            if Some(c) != main_child {
                 let attach = skeleton.positions[i];
                 let incoming = skeleton.parents[i]
                     .and_then(|p| (attach - skeleton.positions[p as usize]).try_normalize())
@@ -100,27 +102,41 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
         }
     }
 
-    // Two passes over the tubes, each in parallel: first every tube's rings and how many
-    // vertices and indices it writes; then, a prefix sum having placed each tube in the
-    // mesh, its vertices and indices, written into slices of its own. A tube's numbers
+    // Every tube's rings, one after another, and how many vertices and indices it writes;
+    // then, a prefix sum having placed each tube in the mesh, its vertices and indices,
+    // written into slices of its own, in parallel when the mesh is large. A tube's numbers
     // depend only on the tube: the same mesh for any number of threads.
-    let points: Vec<Vec<(Vec3, f32, f32)>> = tubes
-        .par_iter()
-        .map(|t| tube_points(skeleton, &main, t))
-        .collect();
+    let mut points = Vec::new();
+    let mut ends = Vec::with_capacity(tubes.len());
+    let mut walked = Vec::new();
+    for t in &tubes {
+        tube_points(skeleton, &main, t, &mut walked, &mut points);
+        ends.push(points.len());
+    }
+    let rings = |k: usize| &points[if k == 0 { 0 } else { ends[k - 1] }..ends[k]];
     let counts: Vec<(usize, usize)> = tubes
         .iter()
-        .zip(&points)
-        .map(|(t, pts)| t.counts(pts, sides))
+        .enumerate()
+        .map(|(k, t)| t.counts(rings(k), sides))
         .collect();
     let base = mesh.positions.len();
     let index_base = mesh.indices.len();
     let vertices: usize = counts.iter().map(|c| c.0).sum();
     let indices: usize = counts.iter().map(|c| c.1).sum();
-    mesh.positions.resize(base + vertices, Vec3::ZERO);
-    mesh.normals.resize(base + vertices, Vec3::ZERO);
-    mesh.uvs.resize(base + vertices, Vec2::ZERO);
-    mesh.indices.resize(index_base + indices, 0);
+    if vertices < PARALLEL_FROM {
+        mesh.positions.resize(base + vertices, Vec3::ZERO);
+        mesh.normals.resize(base + vertices, Vec3::ZERO);
+        mesh.uvs.resize(base + vertices, Vec2::ZERO);
+        mesh.indices.resize(index_base + indices, 0);
+    } else {
+        // Fresh memory zeroed in parallel: its pages are touched by both threads.
+        let zeros = |n: usize| rayon::iter::repeat_n(0u8, n).with_min_len(1 << 14);
+        mesh.positions
+            .par_extend(zeros(vertices).map(|_| Vec3::ZERO));
+        mesh.normals.par_extend(zeros(vertices).map(|_| Vec3::ZERO));
+        mesh.uvs.par_extend(zeros(vertices).map(|_| Vec2::ZERO));
+        mesh.indices.par_extend(zeros(indices).map(|_| 0));
+    }
     let mut sinks = Vec::with_capacity(tubes.len());
     let mut positions = &mut mesh.positions[base..];
     let mut normals = &mut mesh.normals[base..];
@@ -147,11 +163,57 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
         });
         first += v as u32;
     }
-    tubes
-        .par_iter()
-        .zip(&points)
-        .zip(sinks)
-        .for_each(|((t, pts), mut sink)| shape.emit(t, pts, &mut sink));
+    if vertices < PARALLEL_FROM {
+        let mut directions = Vec::new();
+        for ((k, t), mut sink) in tubes.iter().enumerate().zip(sinks) {
+            shape.emit(t, rings(k), &mut directions, &mut sink);
+        }
+    } else {
+        tubes
+            .par_iter()
+            .enumerate()
+            .zip(sinks)
+            .with_min_len(16)
+            .for_each_init(Vec::new, |directions, ((k, t), mut sink)| {
+                shape.emit(t, rings(k), directions, &mut sink);
+            });
+    }
+}
+
+/// Bark meshes with fewer vertices are written on the calling thread: handing tubes to
+/// other threads costs more than it saves.
+const PARALLEL_FROM: usize = 1 << 16;
+
+/// Each node's children, in increasing order, in one array.
+struct Children {
+    /// Where each node's children start in `nodes`, and one past the last node's.
+    starts: Vec<u32>,
+    nodes: Vec<u32>,
+}
+
+impl Children {
+    fn of(skeleton: &Skeleton) -> Children {
+        let mut starts = vec![0u32; skeleton.len() + 1];
+        for p in skeleton.parents.iter().flatten() {
+            starts[*p as usize + 1] += 1;
+        }
+        for i in 0..skeleton.len() {
+            starts[i + 1] += starts[i];
+        }
+        let mut next = starts.clone();
+        let mut nodes = vec![0u32; starts[skeleton.len()] as usize];
+        for (i, p) in skeleton.parents.iter().enumerate() {
+            if let Some(p) = p {
+                nodes[next[*p as usize] as usize] = i as u32;
+                next[*p as usize] += 1;
+            }
+        }
+        Children { starts, nodes }
+    }
+
+    fn of_node(&self, i: usize) -> &[u32] {
+        &self.nodes[self.starts[i] as usize..self.starts[i + 1] as usize]
+    }
 }
 
 /// A bark mesh of `skeleton` alone: [`append_bark`] into an empty mesh named `bark`, with the
@@ -215,31 +277,34 @@ impl TubeSpec {
     }
 }
 
-/// The rings of a tube: its points (from the fork for a lateral, then along the continuing
-/// children to a tip) with their radii and distances from the start, and the flare's extra
-/// rings; none when the tube has no segment.
-fn tube_points(skeleton: &Skeleton, main: &[Option<u32>], t: &TubeSpec) -> Vec<(Vec3, f32, f32)> {
-    let mut points = Vec::new();
+/// Appends the rings of a tube to `out`: its points (from the fork for a lateral, then along
+/// the continuing children to a tip) with their radii and distances from the start, and the
+/// flare's extra rings; none when the tube has no segment. `walked` is scratch space.
+fn tube_points(
+    skeleton: &Skeleton,
+    main: &[Option<u32>],
+    t: &TubeSpec,
+    walked: &mut Vec<(Vec3, f32)>,
+    out: &mut Vec<(Vec3, f32, f32)>,
+) {
+    walked.clear();
     if let Some(fork) = t.fork {
-        points.push((skeleton.positions[fork], skeleton.radii[t.start]));
+        walked.push((skeleton.positions[fork], skeleton.radii[t.start]));
     }
-    walk(skeleton, main, t.start, &mut points);
-    if points.len() < 2 {
-        return Vec::new();
+    walk(skeleton, main, t.start, walked);
+    if walked.len() < 2 {
+        return;
     }
     match t.flare {
-        Some(f) => with_flare_rings(&points, f.height),
+        Some(f) => with_flare_rings(walked, f.height, out),
         None => {
             let mut travelled = 0.0;
-            let mut prev = points[0].0;
-            points
-                .iter()
-                .map(|&(p, r)| {
-                    travelled += p.distance(prev);
-                    prev = p;
-                    (p, r, travelled)
-                })
-                .collect()
+            let mut prev = walked[0].0;
+            out.extend(walked.iter().map(|&(p, r)| {
+                travelled += p.distance(prev);
+                prev = p;
+                (p, r, travelled)
+            }));
         }
     }
 }

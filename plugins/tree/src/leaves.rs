@@ -5,12 +5,18 @@
 use glam::{Quat, Vec2, Vec3, Vec4};
 use pge_engine::geometry::{LeafPoint, Mesh, Skeleton};
 use rand_mt::Mt64;
+use rayon::prelude::*;
 
 use crate::options::LeafOptions;
 
 /// A uniform draw in `[0, 1)` (53 random bits, rounded to `f32`).
 pub(crate) fn uniform(rng: &mut Mt64) -> f32 {
     pge_engine::random::uniform64(rng) as f32
+}
+
+/// [`uniform`] of a draw already taken: the same number for the same draw.
+fn uniform_of(draw: u64) -> f32 {
+    ((draw >> 11) as f64 / (1u64 << 53) as f64) as f32
 }
 
 /// A uniform integer in `lo..=hi`.
@@ -22,59 +28,114 @@ fn int_in(rng: &mut Mt64, lo: u32, hi: u32) -> u32 {
     }
 }
 
+/// [`int_in`] of a draw already taken (none is taken when `hi <= lo`).
+fn int_of(draw: u64, lo: u32, hi: u32) -> u32 {
+    lo + (draw % u64::from(hi - lo + 1)) as u32
+}
+
+/// Leaves fewer than this are made and meshed on the calling thread.
+const PARALLEL_FROM: usize = 1 << 14;
+
 /// Leaf points near the tips: for every tip (in index order) a count drawn in
 /// `options.per_tip`; each leaf hangs on one of the tip's last `max_depth + 1` segments (the
 /// segment ending at the tip, its parent segment, ...), at a random place along it, pointing
 /// away from the branch at 35-75 degrees with a random azimuth and a random roll. A tip that
 /// is a root (no segment) bears no leaves.
+///
+/// When there may be many leaves and more than one thread, the draws are taken in that
+/// order on the calling thread (the counts decide how many each tip takes) and the leaves
+/// then made from them in parallel; otherwise each leaf is made as its draws are taken. The same leaves and the
+/// same state of `rng` afterwards for any number of threads.
 #[must_use]
 pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) -> Vec<LeafPoint> {
-    let mut out = Vec::new();
-    let pos = &skeleton.positions;
-    for tip in skeleton.tips() {
+    let (lo, hi) = options.per_tip;
+    let per_leaf = 5 + usize::from(options.max_depth > 0);
+    let tips = skeleton.tips();
+    if rayon::current_num_threads() == 1 || tips.len() * hi.max(lo) as usize <= PARALLEL_FROM {
+        // Every leaf from its draws as they are taken, without storing them.
+        let mut out = Vec::new();
+        for &tip in &tips {
+            if skeleton.parents[tip as usize].is_none() {
+                continue;
+            }
+            for _ in 0..int_in(rng, lo, hi) {
+                let mut d = [0u64; 6];
+                d[..per_leaf].fill_with(|| rng.next_u64());
+                out.push(leaf(skeleton, options, tip, &d[..per_leaf]));
+            }
+        }
+        return out;
+    }
+    // The tip of every leaf, and every leaf's draws one after another.
+    let mut owners = Vec::new();
+    let mut draws = Vec::new();
+    for tip in tips {
         if skeleton.parents[tip as usize].is_none() {
             continue;
         }
-        let count = int_in(rng, options.per_tip.0, options.per_tip.1);
-        for _ in 0..count {
-            // Climb up to `depth` segments, staying on a node that has a parent.
-            let depth = int_in(rng, 0, options.max_depth);
-            let mut node = tip;
-            for _ in 0..depth {
-                match skeleton.parents[node as usize] {
-                    Some(p) if skeleton.parents[p as usize].is_some() => node = p,
-                    _ => break,
-                }
-            }
-            let Some(parent) = skeleton.parents[node as usize] else {
-                continue;
-            };
-            let (a, b) = (pos[parent as usize], pos[node as usize]);
-            let along = 0.35 + 0.65 * uniform(rng);
-            let position = a.lerp(b, along);
-            let branch = (b - a).try_normalize().unwrap_or(Vec3::Y);
-            let (e1, e2) = branch.any_orthonormal_pair();
-            let azimuth = std::f32::consts::TAU * uniform(rng);
-            let out_dir = e1 * azimuth.cos() + e2 * azimuth.sin();
-            let tilt = (35.0 + 40.0 * uniform(rng)).to_radians();
-            let direction = (branch * tilt.cos() + out_dir * tilt.sin()).normalize();
-            let roll = (uniform(rng) - 0.5) * 80f32.to_radians();
-            let side0 = direction
-                .cross(out_dir.cross(branch))
-                .try_normalize()
-                .unwrap_or(e1);
-            let side = Quat::from_axis_angle(direction, roll) * side0;
-            let size = options.size * (0.8 + 0.4 * uniform(rng));
-            out.push(LeafPoint {
-                node,
-                position,
-                direction,
-                side,
-                size,
-            });
+        let count = int_in(rng, lo, hi) as usize;
+        draws.extend((0..count * per_leaf).map(|_| rng.next_u64()));
+        owners.extend(std::iter::repeat_n(tip, count));
+    }
+    let leaf_of = |j: usize| {
+        let d = &draws[j * per_leaf..(j + 1) * per_leaf];
+        leaf(skeleton, options, owners[j], d)
+    };
+    if owners.len() < PARALLEL_FROM {
+        (0..owners.len()).map(leaf_of).collect()
+    } else {
+        let mut out = Vec::new();
+        (0..owners.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(leaf_of)
+            .collect_into_vec(&mut out);
+        out
+    }
+}
+
+/// One leaf of `tip` from its draws (the depth, if `max_depth > 0`, then five uniforms).
+fn leaf(skeleton: &Skeleton, options: &LeafOptions, tip: u32, draws: &[u64]) -> LeafPoint {
+    let pos = &skeleton.positions;
+    let (depth, mut u) = if options.max_depth > 0 {
+        (int_of(draws[0], 0, options.max_depth), draws[1..].iter())
+    } else {
+        (0, draws.iter())
+    };
+    let mut uniform = || uniform_of(u.next().copied().unwrap_or(0));
+    // Climb up to `depth` segments, staying on a node that has a parent.
+    let mut node = tip;
+    for _ in 0..depth {
+        match skeleton.parents[node as usize] {
+            Some(p) if skeleton.parents[p as usize].is_some() => node = p,
+            _ => break,
         }
     }
-    out
+    // The tip has a parent, and the climb stays on nodes with one.
+    let parent = skeleton.parents[node as usize].unwrap_or(node);
+    let (a, b) = (pos[parent as usize], pos[node as usize]);
+    let along = 0.35 + 0.65 * uniform();
+    let position = a.lerp(b, along);
+    let branch = (b - a).try_normalize().unwrap_or(Vec3::Y);
+    let (e1, e2) = branch.any_orthonormal_pair();
+    let azimuth = std::f32::consts::TAU * uniform();
+    let out_dir = e1 * azimuth.cos() + e2 * azimuth.sin();
+    let tilt = (35.0 + 40.0 * uniform()).to_radians();
+    let direction = (branch * tilt.cos() + out_dir * tilt.sin()).normalize();
+    let roll = (uniform() - 0.5) * 80f32.to_radians();
+    let side0 = direction
+        .cross(out_dir.cross(branch))
+        .try_normalize()
+        .unwrap_or(e1);
+    let side = Quat::from_axis_angle(direction, roll) * side0;
+    let size = options.size * (0.8 + 0.4 * uniform());
+    LeafPoint {
+        node,
+        position,
+        direction,
+        side,
+        size,
+    }
 }
 
 /// Appends one quad per leaf point to `mesh` (positions, normals, uvs, colors, indices):
@@ -82,46 +143,115 @@ pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) ->
 /// direction and `size * options.width` wide along its side; `v` runs from 0 at the stalk to 1 at the tip.
 /// Each leaf's colour is drawn between `options.colors`. A leaf of size 0 or less takes
 /// `options.size`.
+///
+/// The colours are drawn in order on the calling thread; the quads are written in parallel
+/// when there are many, the same for any number of threads.
 pub fn append_leaf_quads(
     leaves: &[LeafPoint],
     options: &LeafOptions,
     rng: &mut Mt64,
     mesh: &mut Mesh,
 ) {
-    let [c0, c1] = options.colors.map(Vec4::from_array);
-    mesh.positions.reserve(leaves.len() * 4);
-    mesh.normals.reserve(leaves.len() * 4);
-    mesh.uvs.reserve(leaves.len() * 4);
-    mesh.colors.reserve(leaves.len() * 4);
-    mesh.indices.reserve(leaves.len() * 6);
-    for leaf in leaves {
-        let size = if leaf.size > 0.0 && leaf.size.is_finite() {
-            leaf.size
-        } else {
-            options.size
-        };
-        let axis = leaf.direction.try_normalize().unwrap_or(Vec3::Y);
-        let side = (leaf.side - axis * leaf.side.dot(axis))
-            .try_normalize()
-            .unwrap_or_else(|| axis.any_orthonormal_vector());
-        let l = axis * size;
-        let s = side * (0.5 * size * options.width);
-        let normal = side.cross(axis);
-        let color = c0.lerp(c1, uniform(rng));
-        let base = mesh.positions.len() as u32;
-        let p = leaf.position;
+    let mixes: Vec<f32> = leaves.iter().map(|_| uniform(rng)).collect();
+    let base = mesh.positions.len() as u32;
+    let quad_of = |k: usize| quad(&leaves[k], options, mixes[k]);
+    let corners = |q: &Quad, c: usize| q.positions[c];
+    let indices = |k: usize| {
+        let v = base + 4 * k as u32;
+        [v, v + 1, v + 2, v, v + 2, v + 3]
+    };
+    if leaves.len() < PARALLEL_FROM || rayon::current_num_threads() == 1 {
+        let n = leaves.len();
+        mesh.positions.reserve(4 * n);
+        mesh.normals.reserve(4 * n);
+        mesh.uvs.reserve(4 * n);
+        mesh.colors.reserve(4 * n);
+        mesh.indices.reserve(6 * n);
+        for k in 0..n {
+            let q = quad_of(k);
+            mesh.positions.extend_from_slice(&q.positions);
+            mesh.normals.extend_from_slice(&[q.normal; 4]);
+            mesh.uvs.extend_from_slice(&QUAD_UVS);
+            mesh.colors.extend_from_slice(&[q.color; 4]);
+            mesh.indices.extend_from_slice(&indices(k));
+        }
+    } else {
+        // Written in parallel into fresh memory: the pages are touched by the threads that
+        // fill them.
+        let mut quads = Vec::new();
+        (0..leaves.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(quad_of)
+            .collect_into_vec(&mut quads);
+        let corner = |i: usize| (&quads[i / 4], i % 4);
+        let n = 4 * leaves.len();
         mesh.positions
-            .extend_from_slice(&[p - s, p + s, p + s + l, p - s + l]);
-        mesh.normals.extend_from_slice(&[normal; 4]);
-        mesh.uvs.extend_from_slice(&[
-            Vec2::new(0.0, 0.0),
-            Vec2::new(1.0, 0.0),
-            Vec2::new(1.0, 1.0),
-            Vec2::new(0.0, 1.0),
-        ]);
-        mesh.colors.extend_from_slice(&[color; 4]);
-        mesh.indices
-            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+            .par_extend((0..n).into_par_iter().with_min_len(4096).map(|i| {
+                let (q, c) = corner(i);
+                corners(q, c)
+            }));
+        mesh.normals.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| corner(i).0.normal),
+        );
+        mesh.uvs.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| QUAD_UVS[i % 4]),
+        );
+        mesh.colors.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| corner(i).0.color),
+        );
+        mesh.indices.par_extend(
+            (0..6 * leaves.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| indices(i / 6)[i % 6]),
+        );
+    }
+}
+
+/// The texture coordinates of a leaf quad's corners.
+const QUAD_UVS: [Vec2; 4] = [
+    Vec2::new(0.0, 0.0),
+    Vec2::new(1.0, 0.0),
+    Vec2::new(1.0, 1.0),
+    Vec2::new(0.0, 1.0),
+];
+
+/// One leaf's quad: its corners, normal and colour.
+struct Quad {
+    positions: [Vec3; 4],
+    normal: Vec3,
+    color: Vec4,
+}
+
+/// The quad of a leaf whose colour lies `mix` of the way between the options' two.
+fn quad(leaf: &LeafPoint, options: &LeafOptions, mix: f32) -> Quad {
+    let [c0, c1] = options.colors.map(Vec4::from_array);
+    let size = if leaf.size > 0.0 && leaf.size.is_finite() {
+        leaf.size
+    } else {
+        options.size
+    };
+    let axis = leaf.direction.try_normalize().unwrap_or(Vec3::Y);
+    let side = (leaf.side - axis * leaf.side.dot(axis))
+        .try_normalize()
+        .unwrap_or_else(|| axis.any_orthonormal_vector());
+    let l = axis * size;
+    let s = side * (0.5 * size * options.width);
+    let p = leaf.position;
+    Quad {
+        positions: [p - s, p + s, p + s + l, p - s + l],
+        normal: side.cross(axis),
+        color: c0.lerp(c1, mix),
     }
 }
 
@@ -194,6 +324,91 @@ mod tests {
         };
         for l in tip_leaves(&s, &zero, &mut rng) {
             assert!(s.tips().contains(&l.node));
+        }
+    }
+
+    /// The leaves by their definition: every draw taken where it is used, one leaf after
+    /// another.
+    fn tip_leaves_one_draw_at_a_time(
+        skeleton: &Skeleton,
+        options: &LeafOptions,
+        rng: &mut Mt64,
+    ) -> Vec<LeafPoint> {
+        let mut out = Vec::new();
+        for tip in skeleton.tips() {
+            if skeleton.parents[tip as usize].is_none() {
+                continue;
+            }
+            for _ in 0..int_in(rng, options.per_tip.0, options.per_tip.1) {
+                let depth = int_in(rng, 0, options.max_depth);
+                let draws: Vec<u64> = (0..5).map(|_| rng.next_u64()).collect();
+                let with_depth: Vec<u64> = if options.max_depth > 0 {
+                    // `leaf` reads the depth back from its first draw.
+                    std::iter::once(u64::from(depth)).chain(draws).collect()
+                } else {
+                    draws
+                };
+                out.push(leaf(skeleton, options, tip, &with_depth));
+            }
+        }
+        out
+    }
+
+    /// A skeleton of `n` nodes with a tip every few nodes.
+    fn bushy(n: u32) -> Skeleton {
+        let mut s = Skeleton::new();
+        s.push(Vec3::ZERO, None, 0.1, 0);
+        for i in 1..n {
+            let parent = if i % 3 == 0 { i / 2 } else { i - 1 };
+            let t = i as f32 * 0.7;
+            let p = s.positions[parent as usize] + Vec3::new(t.sin(), 0.5, t.cos()) * 0.3;
+            s.push(p, Some(parent), 0.05, 1);
+        }
+        s
+    }
+
+    #[test]
+    fn many_leaves_are_the_same_on_any_number_of_threads_and_as_drawn_one_by_one() {
+        let s = bushy(3000);
+        for max_depth in [0, 3] {
+            let opts = LeafOptions {
+                per_tip: (10, 30),
+                max_depth,
+                ..LeafOptions::default()
+            };
+            let mut reference_rng = Mt64::new(5);
+            let reference = tip_leaves_one_draw_at_a_time(&s, &opts, &mut reference_rng);
+            assert!(reference.len() > PARALLEL_FROM, "{}", reference.len());
+            let on = |threads: usize| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a pool")
+                    .install(|| {
+                        let mut rng = Mt64::new(5);
+                        let leaves = tip_leaves(&s, &opts, &mut rng);
+                        let mut mesh = Mesh::default();
+                        append_leaf_quads(&leaves, &opts, &mut rng, &mut mesh);
+                        (leaves, mesh, rng.next_u64())
+                    })
+            };
+            let (leaves, mesh, next) = on(1);
+            assert_eq!(leaves, reference);
+            mesh.validate().expect("valid");
+            assert_eq!(mesh.triangle_count(), 2 * leaves.len());
+            // The colours took one draw a leaf after the leaves' own.
+            let mut after = reference_rng;
+            for _ in 0..reference.len() {
+                after.next_u64();
+            }
+            assert_eq!(next, after.next_u64());
+            for threads in [2, 4] {
+                assert_eq!(
+                    on(threads),
+                    (leaves.clone(), mesh.clone(), next),
+                    "{threads}"
+                );
+            }
         }
     }
 

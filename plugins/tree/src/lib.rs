@@ -265,7 +265,11 @@ pub fn build_tree(
     let mut rng = Mt64::new(seed);
     if let Some(leaf_options) = &options.leaves {
         let extra = tip_leaves(&prepared, leaf_options, &mut rng);
-        prepared.leaves.extend(extra);
+        if prepared.leaves.is_empty() {
+            prepared.leaves = extra;
+        } else {
+            prepared.leaves.extend(extra);
+        }
     }
     let leaves_time = t.elapsed().as_secs_f64();
 

@@ -32,32 +32,36 @@ pub fn pipe_radii(skeleton: &mut Skeleton, tip_radius: f32, exponent: f32) {
 /// that turns least, then the first. `None` for tips.
 #[must_use]
 pub fn main_children(skeleton: &Skeleton, children: &[Vec<u32>]) -> Vec<Option<u32>> {
-    let pos = &skeleton.positions;
     children
         .iter()
         .enumerate()
-        .map(|(i, kids)| {
-            let incoming = skeleton.parents[i]
-                .and_then(|p| (pos[i] - pos[p as usize]).try_normalize())
-                .unwrap_or(glam::Vec3::Y);
-            let key = |c: u32| {
-                let c = c as usize;
-                let same_order = skeleton.orders[c] == skeleton.orders[i];
-                let turn = (pos[c] - pos[i])
-                    .try_normalize()
-                    .map_or(-2.0, |d| d.dot(incoming));
-                (same_order, skeleton.radii[c], turn)
-            };
-            let mut best: Option<u32> = None;
-            for &c in kids {
-                best = match best {
-                    None => Some(c),
-                    Some(b) => Some(if key(c) > key(b) { c } else { b }),
-                };
-            }
-            best
-        })
+        .map(|(i, kids)| main_child(skeleton, i, kids))
         .collect()
+}
+
+/// The child of node `i` among `kids` (in increasing order) that continues its branch: see
+/// [`main_children`].
+pub(crate) fn main_child(skeleton: &Skeleton, i: usize, kids: &[u32]) -> Option<u32> {
+    let pos = &skeleton.positions;
+    let (&first, rest) = kids.split_first()?;
+    let incoming = skeleton.parents[i]
+        .and_then(|p| (pos[i] - pos[p as usize]).try_normalize())
+        .unwrap_or(glam::Vec3::Y);
+    let key = |c: u32| {
+        let c = c as usize;
+        let same_order = skeleton.orders[c] == skeleton.orders[i];
+        let turn = (pos[c] - pos[i])
+            .try_normalize()
+            .map_or(-2.0, |d| d.dot(incoming));
+        (same_order, skeleton.radii[c], turn)
+    };
+    let mut best = first;
+    for &c in rest {
+        if key(c) > key(best) {
+            best = c;
+        }
+    }
+    Some(best)
 }
 
 /// Sets branch orders from the radii: a root has order 0, the main child of a node (see

@@ -9,10 +9,13 @@ use crate::options::Flare;
 /// Where a flared trunk gets rings of its own: fractions of the flare's height.
 const FLARE_RINGS: [f32; 9] = [0.0, 0.03, 0.08, 0.15, 0.25, 0.38, 0.55, 0.75, 1.0];
 
-/// The points of a tube with extra points in its first `height` metres (at
+/// Appends the points of a tube with extra points in its first `height` metres (at
 /// [`FLARE_RINGS`]), each with its distance from the start along the tube.
-pub(super) fn with_flare_rings(points: &[(Vec3, f32)], height: f32) -> Vec<(Vec3, f32, f32)> {
-    let mut out = Vec::with_capacity(points.len() + FLARE_RINGS.len());
+pub(super) fn with_flare_rings(
+    points: &[(Vec3, f32)],
+    height: f32,
+    out: &mut Vec<(Vec3, f32, f32)>,
+) {
     let mut travelled = 0.0;
     out.push((points[0].0, points[0].1, 0.0));
     for w in points.windows(2) {
@@ -28,7 +31,6 @@ pub(super) fn with_flare_rings(points: &[(Vec3, f32)], height: f32) -> Vec<(Vec3
         travelled += len;
         out.push((b, rb, travelled));
     }
-    out
 }
 /// A flared ring vertex at `travelled` metres up the trunk and `turn` turns around it: the
 /// factor its offset from the axis is widened by, and its normal. The flare fades from

@@ -52,8 +52,15 @@ pub(super) struct Shape<'a> {
 }
 
 impl Shape<'_> {
-    /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)) into `out`.
-    pub(super) fn emit(&self, tube: &TubeSpec, pts: &[(Vec3, f32, f32)], out: &mut Sink) {
+    /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)) into
+    /// `out`; `seg` is scratch space.
+    pub(super) fn emit(
+        &self,
+        tube: &TubeSpec,
+        pts: &[(Vec3, f32, f32)],
+        seg: &mut Vec<Vec3>,
+        out: &mut Sink,
+    ) {
         if pts.len() < 2 {
             return;
         }
@@ -63,7 +70,7 @@ impl Shape<'_> {
             .windows(2)
             .find_map(|w| (w[1].0 - w[0].0).try_normalize())
             .unwrap_or(tube.fallback);
-        let mut seg = Vec::with_capacity(pts.len() - 1);
+        seg.clear();
         let mut last = first_dir;
         for w in pts.windows(2) {
             last = (w[1].0 - w[0].0).try_normalize().unwrap_or(last);
