@@ -236,30 +236,10 @@ impl PointGrid {
     /// The cells whose boxes the ball of radius `r` around `q` touches, as runs of z cells:
     /// `f(self, x, y, z0, z1)` for each (x, y) column, in increasing cell order.
     fn runs(&self, q: Vec3, r: f32, mut f: impl FnMut(&Self, usize, usize, usize, usize)) {
-        let lo = q - r;
-        let hi = q + r;
-        let top = self.origin
-            + Vec3::new(
-                self.dims[0] as f32,
-                self.dims[1] as f32,
-                self.dims[2] as f32,
-            ) * self.cell;
-        if hi.cmplt(self.origin).any() || lo.cmpgt(top).any() {
+        let Some([(x0, x1), (y0, y1), (z0, z1)]) = self.span(q, r) else {
             return;
-        }
+        };
         let r2 = r * r;
-        let (x0, x1) = (
-            self.coord(lo.x, 0, self.origin.x),
-            self.coord(hi.x, 0, self.origin.x),
-        );
-        let (y0, y1) = (
-            self.coord(lo.y, 1, self.origin.y),
-            self.coord(hi.y, 1, self.origin.y),
-        );
-        let (z0, z1) = (
-            self.coord(lo.z, 2, self.origin.z),
-            self.coord(hi.z, 2, self.origin.z),
-        );
         // Squared distance from q to the slab of cell k along one axis.
         let gap = |k: usize, q: f32, o: f32| {
             let a = o + k as f32 * self.cell;
