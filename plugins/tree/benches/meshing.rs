@@ -5,7 +5,6 @@
 //! the search for unusable triangles, on every core and on one thread, in CPU time (of all
 //! threads: the 2-thread figure shows what fanning out costs, not the wall time saved).
 
-use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
@@ -14,6 +13,10 @@ use pge_tree::{
     pipe_radii,
 };
 use std::hint::black_box;
+
+#[path = "common/cpu.rs"]
+mod cpu;
+use cpu::ProcessCpu;
 
 /// A deterministic branching skeleton: each node continues, and every `fork_every`-th node
 /// also starts a lateral branch, until `nodes` nodes exist.
@@ -155,46 +158,6 @@ fn oak_options() -> TreeOptions {
     }
 }
 
-/// CPU time of the whole process (every thread's, from `/proc/self/task/*/schedstat`), in
-/// nanoseconds: unlike the wall time, hardly inflated by other processes on a loaded
-/// machine. Time spent in threads that ended is not counted (rayon's threads live on).
-struct ProcessCpu(WallTime);
-
-impl ProcessCpu {
-    fn now() -> u64 {
-        let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
-            return 0;
-        };
-        tasks
-            .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
-            .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
-            .sum()
-    }
-}
-
-impl Measurement for ProcessCpu {
-    type Intermediate = u64;
-    type Value = u64;
-    fn start(&self) -> u64 {
-        ProcessCpu::now()
-    }
-    fn end(&self, start: u64) -> u64 {
-        ProcessCpu::now().saturating_sub(start)
-    }
-    fn add(&self, a: &u64, b: &u64) -> u64 {
-        a + b
-    }
-    fn zero(&self) -> u64 {
-        0
-    }
-    fn to_f64(&self, value: &u64) -> f64 {
-        *value as f64
-    }
-    fn formatter(&self) -> &dyn ValueFormatter {
-        self.0.formatter()
-    }
-}
-
 fn bench_oak(c: &mut Criterion<ProcessCpu>) {
     let s = oak_skeleton();
     let options = oak_options();
@@ -217,7 +180,7 @@ fn bench_oak(c: &mut Criterion<ProcessCpu>) {
 criterion_group!(benches, bench_meshing, bench_tree);
 criterion_group! {
     name = oak;
-    config = Criterion::default().with_measurement(ProcessCpu(WallTime));
+    config = Criterion::default().with_measurement(ProcessCpu);
     targets = bench_oak
 }
 criterion_main!(benches, oak);

@@ -8,13 +8,17 @@
 //! than the wall time. With `RAYON_NUM_THREADS=1` the CPU time is that of one thread; on
 //! two cores and a quiet machine the wall time is about half of it.
 
-use criterion::measurement::{Measurement, ValueFormatter};
-use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::Measurement;
+use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use pge_tree::{
     BarkParams, BarkStyle, LeafParams, LeafShape, bark_maps, bark_set, encode_maps, leaf_maps,
     leaf_set,
 };
 use std::hint::black_box;
+
+#[path = "common/cpu.rs"]
+mod cpu;
+use cpu::ProcessCpu;
 
 fn bark(style: BarkStyle) -> BarkParams {
     BarkParams {
@@ -29,69 +33,6 @@ const LEAF: LeafParams = LeafParams {
     shape: LeafShape::Lobed,
     size: 512,
 };
-
-/// The CPU time of the process: the nanoseconds every one of its threads has run on a CPU
-/// (the first field of each thread's `schedstat`). Threads that ended are not counted, so
-/// this is for work on long-lived threads (rayon's pool, the bench's own).
-struct ProcessCpu;
-
-/// The process's CPU time so far in nanoseconds (0 where Linux's schedstat is missing).
-fn process_cpu_ns() -> u64 {
-    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
-        return 0;
-    };
-    tasks
-        .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
-        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
-        .sum()
-}
-
-impl Measurement for ProcessCpu {
-    type Intermediate = u64;
-    type Value = u64;
-
-    fn start(&self) -> u64 {
-        process_cpu_ns()
-    }
-    fn end(&self, start: u64) -> u64 {
-        process_cpu_ns().saturating_sub(start)
-    }
-    fn add(&self, a: &u64, b: &u64) -> u64 {
-        a + b
-    }
-    fn zero(&self) -> u64 {
-        0
-    }
-    fn to_f64(&self, value: &u64) -> f64 {
-        *value as f64
-    }
-    fn formatter(&self) -> &dyn ValueFormatter {
-        &CpuFormatter
-    }
-}
-
-/// Nanoseconds of CPU time shown in ms (the only scale these benchmarks need).
-struct CpuFormatter;
-
-impl ValueFormatter for CpuFormatter {
-    fn scale_values(&self, _typical: f64, values: &mut [f64]) -> &'static str {
-        values.iter_mut().for_each(|v| *v *= 1e-6);
-        "ms CPU"
-    }
-    fn scale_throughputs(
-        &self,
-        _typical: f64,
-        _t: &Throughput,
-        values: &mut [f64],
-    ) -> &'static str {
-        // No benchmark here sets a throughput.
-        let _ = values;
-        ""
-    }
-    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
-        "ns"
-    }
-}
 
 fn bench_textures(c: &mut Criterion) {
     let mut group = c.benchmark_group("textures");
