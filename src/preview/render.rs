@@ -19,7 +19,7 @@ use eframe::egui;
 use eframe::egui_wgpu::{self, wgpu};
 use glam::{Mat4, Vec3};
 
-use self::mesh::{GpuMesh, MeshPipelines, buffer_init, material_group};
+use self::mesh::{GpuMesh, MeshPipelines, bind_material, buffer_init, material_group};
 use self::overlay::grid_lines;
 use super::forest::{MOVING_MARGIN, MOVING_SHARE, View};
 use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines, material_uniform};
@@ -511,30 +511,14 @@ impl Renderer {
     /// around the horizon and clamps at the poles.
     fn sky_group(&self, env: &Environment) -> wgpu::BindGroup {
         let view = upload_texture(&self.device, &self.queue, &env.texture);
-        let uniform = buffer_init(
+        bind_material(
             &self.device,
+            &self.material_layout,
             "sky",
-            bytemuck::cast_slice(&material_uniform([1.0; 4], None, false, None)),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("sky"),
-            layout: &self.material_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&self.sky_sampler),
-                },
-            ],
-        })
+            &material_uniform([1.0; 4], None, false, None),
+            &view,
+            &self.sky_sampler,
+        )
     }
 
     fn make_target(&self, size: [u32; 2]) -> Target {

@@ -321,14 +321,27 @@ pub(super) fn material_group(
         mesh.double_sided,
         mesh.transmission,
     );
+    bind_material(device, layout, "material", &uniform, view, sampler)
+}
+
+/// A bind group of the material layout named `label`: the `uniform` (as
+/// [`material_uniform`] makes it) in a new buffer, the texture `view` and `sampler`.
+pub(super) fn bind_material(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    label: &str,
+    uniform: &[f32],
+    view: &wgpu::TextureView,
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
     let uniform = buffer_init(
         device,
-        "material",
-        bytemuck::cast_slice(&uniform),
+        label,
+        bytemuck::cast_slice(uniform),
         wgpu::BufferUsages::UNIFORM,
     );
     device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("material"),
+        label: Some(label),
         layout,
         entries: &[
             wgpu::BindGroupEntry {
