@@ -102,20 +102,6 @@ fn sector_of(axis: &Axis, basis: (Vec3, Vec3), p: Vec3, n: u32) -> usize {
     ((t * n as f32) as u32).min(n - 1) as usize
 }
 
-/// The default axis: vertical through the centre of the leaves' bounding box, from its
-/// bottom.
-fn default_axis(leaves: &[Leaf]) -> Axis {
-    let (lo, hi) = leaves.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), l| (lo.min(l.center), hi.max(l.center)),
-    );
-    let mid = (lo + hi) * 0.5;
-    Axis {
-        origin: Vec3::new(mid.x, lo.y, mid.z),
-        direction: Vec3::Y,
-    }
-}
-
 /// Simplifies `leaves` per sector: the sectors' collapse chains (labels local to each
 /// sector) and, for each, the indices of its original leaves in `leaves`.
 #[must_use]
@@ -124,7 +110,7 @@ pub fn simplify_sectors(leaves: &[Leaf], options: &LodOptions) -> Vec<(Chain, Ve
     let axis = options
         .selection
         .axis
-        .unwrap_or_else(|| default_axis(leaves));
+        .unwrap_or_else(|| Axis::through_crown(leaves));
     let basis = axis.direction.any_orthonormal_pair();
     let mut members: Vec<Vec<u32>> = vec![Vec::new(); n as usize];
     for (i, leaf) in leaves.iter().enumerate() {

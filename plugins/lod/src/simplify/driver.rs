@@ -34,17 +34,9 @@ pub(super) struct Simplifier {
 
 impl Simplifier {
     pub(super) fn new(leaves: &[Leaf], selection: &Selection) -> Simplifier {
-        let axis = selection.axis.unwrap_or_else(|| {
-            let (lo, hi) = leaves.iter().fold(
-                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-                |(lo, hi), l| (lo.min(l.center), hi.max(l.center)),
-            );
-            let mid = (lo + hi) * 0.5;
-            Axis {
-                origin: Vec3::new(mid.x, lo.y, mid.z),
-                direction: Vec3::Y,
-            }
-        });
+        let axis = selection
+            .axis
+            .unwrap_or_else(|| Axis::through_crown(leaves));
         let crown = leaves
             .iter()
             .map(|l| axis.distance(l.center))

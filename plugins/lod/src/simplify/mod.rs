@@ -110,6 +110,20 @@ pub struct Axis {
 }
 
 impl Axis {
+    /// The default axis: vertical through the centre of the leaves' bounding box, from its
+    /// bottom.
+    pub(crate) fn through_crown(leaves: &[Leaf]) -> Axis {
+        let (lo, hi) = leaves.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), l| (lo.min(l.center), hi.max(l.center)),
+        );
+        let mid = (lo + hi) * 0.5;
+        Axis {
+            origin: Vec3::new(mid.x, lo.y, mid.z),
+            direction: Vec3::Y,
+        }
+    }
+
     /// Distance from `p` to the axis.
     #[must_use]
     pub fn distance(&self, p: Vec3) -> f32 {
