@@ -416,7 +416,8 @@ impl PointGrid {
         self.cell_bound[c] = cell_bound;
     }
 
-    /// [`Self::update_near`] within sub-cell `sub`; returns its new largest reach.
+    /// [`Self::update_near`] within sub-cell `sub`; returns its largest reach (an upper
+    /// bound: when no point changed, the bound it had, unread).
     fn update_sub(
         &mut self,
         q: Vec3,
@@ -430,6 +431,7 @@ impl PointGrid {
         // without branching, then called back for from the highest slot down, so that a
         // removal's swap moves in only a point already seen.
         let mut chunk_end = end;
+        let mut changed = false;
         while chunk_end > start {
             let chunk_start = chunk_end.saturating_sub(64).max(start);
             let positions = &self.positions[chunk_start..chunk_end];
@@ -439,6 +441,7 @@ impl PointGrid {
                 let d2 = p.distance_squared(q);
                 hits |= u64::from((d2 < r2) & (d2 < reach)) << k;
             }
+            changed |= hits != 0;
             while hits != 0 {
                 let k = 63 - hits.leading_zeros() as usize;
                 hits &= !(1u64 << k);
@@ -450,6 +453,11 @@ impl PointGrid {
                 }
             }
             chunk_end = chunk_start;
+        }
+        if !changed {
+            // No point changed (most of the sub-cells read): the bound still holds, and
+            // folding the reaches again is skipped.
+            return self.sub_bound[sub];
         }
         let live = start..start + self.lens[sub] as usize;
         let kept = self.reach[live].iter().fold(0.0f32, |m, r| m.max(*r));
