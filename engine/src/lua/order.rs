@@ -14,6 +14,8 @@ use std::cmp::Ordering;
 
 use mlua::{Function, Lua, Table, Value};
 
+use super::chunks::engine_chunk;
+
 /// The rank of a key's type in the traversal order.
 fn rank(v: &Value) -> u8 {
     match v {
@@ -171,7 +173,7 @@ pub(crate) fn register(lua: &Lua) -> mlua::Result<()> {
     let globals = lua.globals();
     let sorted = lua.create_function(|lua, t: Table| lua.create_sequence_from(sorted_keys(&t)?))?;
     let rawnext: Function = globals.get("next")?;
-    let (next, pairs): (Function, Function) = lua.load(ORDERED).set_name("=pge").call((
+    let (next, pairs): (Function, Function) = engine_chunk(lua, "=pge", ORDERED)?.call((
         sorted,
         lua.create_function(pairs_metamethod)?,
         rawnext,

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::rc::Rc;
 
 use mlua::{Function, Lua, Table, Value};
-use pge_engine::lua::script_error;
+use pge_engine::lua::{engine_chunk, script_error};
 
 use super::{session_symbols, with_shared};
 use crate::Sym;
@@ -69,17 +69,17 @@ pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
     // A table that is already a symbol (`Floor(b), Roof(b)`), or has any metatable, is
     // copied (with the global `next`, in its order) so that one table never stands for two
     // symbols. Rare, so written in Lua.
-    let copy: Function = lua
-        .load(
-            r#"local next = next
+    let copy: Function = engine_chunk(
+        lua,
+        "=pge.sym",
+        r#"local next = next
             return function(p)
                 local c = {}
                 for k, v in next, p do c[k] = v end
                 return c
             end"#,
-        )
-        .set_name("=pge.sym")
-        .call(())?;
+    )?
+    .call(())?;
     let tag = meta.clone();
     let symbol = name.to_string();
     let f = lua.create_function(move |lua, p: Value| -> mlua::Result<Table> {
@@ -144,7 +144,9 @@ pub(crate) fn register(lua: &Lua, pge: &mlua::Table) -> mlua::Result<()> {
     let make = lua.create_function(|lua, name: String| constructor(lua, &name))?;
     // Undefined globals starting with an uppercase letter are symbol constructors; the
     // lookup and cache live in Lua so that `A{}` in a hot rule costs one table read.
-    lua.load(
+    engine_chunk(
+        lua,
+        "=pge.lsystem",
         r#"
         local make = ...
         local cache = {}
@@ -169,7 +171,6 @@ pub(crate) fn register(lua: &Lua, pge: &mlua::Table) -> mlua::Result<()> {
         end
         setmetatable(_G, meta)
         "#,
-    )
-    .set_name("=pge.lsystem")
+    )?
     .call::<()>(make)
 }
