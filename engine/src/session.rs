@@ -113,12 +113,21 @@ impl Session {
             plugin: "pge".into(),
             message: e.to_string(),
         })?;
-        for plugin in engine.plugins() {
+        let mut lazy = Vec::new();
+        for plugin in engine.shared_plugins() {
+            if !plugin.lazy_names().is_empty() {
+                lazy.push(plugin.clone());
+                continue;
+            }
             plugin.register(&lua, &pge).map_err(|e| Error::Plugin {
                 plugin: plugin.name().to_string(),
                 message: e.to_string(),
             })?;
         }
+        crate::lua::register_lazily(&lua, &pge, lazy).map_err(|e| Error::Plugin {
+            plugin: "pge".into(),
+            message: e.to_string(),
+        })?;
         lua.gc_restart();
         Ok(Session {
             lua,
