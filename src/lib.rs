@@ -94,6 +94,31 @@ mod tests {
     }
 
     #[test]
+    fn a_lazy_plugin_sets_exactly_its_names_and_no_two_plugins_share_one() {
+        let engine = default_engine().build().expect("engine");
+        let mut seen: Vec<&str> = Vec::new();
+        for plugin in engine.plugins() {
+            let mut names: Vec<&str> = plugin.lazy_names().to_vec();
+            if names.is_empty() {
+                continue;
+            }
+            let lua = pge_engine::mlua::Lua::new();
+            let pge = lua.create_table().expect("table");
+            plugin.register(&lua, &pge).expect("registers");
+            let mut set: Vec<String> = pge
+                .pairs::<String, pge_engine::mlua::Value>()
+                .map(|kv| kv.expect("string keys").0)
+                .collect();
+            set.sort();
+            names.sort_unstable();
+            assert_eq!(set, names, "{}", plugin.name());
+            assert!(!names.iter().any(|n| seen.contains(n)), "{}", plugin.name());
+            seen.extend(names);
+        }
+        assert!(seen.contains(&"SpaceColonization"), "{seen:?}");
+    }
+
+    #[test]
     fn this_checkout_has_a_marked_library() {
         let scripts = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts");
         assert!(scripts.join(LIBRARY_MARKER).is_file());

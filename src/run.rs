@@ -1,5 +1,6 @@
 //! `pge run`: run a script and write its model.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -148,8 +149,11 @@ fn generate_forest(
     })
 }
 
+/// The progress bar of a run: hidden with `--quiet`, and when stderr is not a terminal
+/// (where indicatif would draw nothing either; making a drawn bar costs a short run tens of
+/// microseconds).
 pub(crate) fn progress_bar(quiet: bool) -> ProgressBar {
-    if quiet {
+    if quiet || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(0);

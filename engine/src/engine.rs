@@ -131,6 +131,11 @@ impl Engine {
         self.plugins.iter().map(|p| &**p)
     }
 
+    /// The plugins, shared (a session keeps those it registers lazily).
+    pub(crate) fn shared_plugins(&self) -> &[Arc<dyn Plugin>] {
+        &self.plugins
+    }
+
     /// A new sandboxed Lua state with the support library and every plugin registered.
     pub fn session(&self, options: SessionOptions) -> Result<Session> {
         Session::new(self, options)

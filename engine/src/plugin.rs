@@ -38,4 +38,14 @@ pub trait Plugin: Send + Sync + 'static {
 
     /// Adds this plugin's functions and constructors to the `pge` table of a new session.
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()>;
+
+    /// The names [`register`](Plugin::register) sets in the `pge` table, for a plugin whose
+    /// registration does nothing else a script could see before it touches one of them (no
+    /// session services, no globals). The session then registers the plugin when a script
+    /// first reads or assigns `pge.NAME` for one of them, or iterates `pge` with `pairs`:
+    /// a script pays only for the plugins it uses. Until then `rawget(pge, NAME)` is nil and
+    /// `pge` has a metatable. Empty (the default): registered with every session, in order.
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &[]
+    }
 }

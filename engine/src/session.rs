@@ -73,6 +73,8 @@ impl Session {
             plugin: "lua".into(),
             message: e.to_string(),
         })?;
+        // What a session sets up is all kept: no garbage to collect until the script runs.
+        lua.gc_stop();
         lua.set_memory_limit(limits.memory)
             .map_err(|e| Error::Plugin {
                 plugin: "lua".into(),
@@ -94,7 +96,7 @@ impl Session {
             ..SessionState::default()
         });
         lua.set_app_data(crate::lua::state::EngineHandle(engine.clone()));
-        lua.set_app_data(CurrentRng(crate::random::mt_from_seed(options.seed)));
+        lua.set_app_data(CurrentRng::from_seed(options.seed));
         // The registry of session services the plugins fill while they register.
         lua.set_app_data(crate::lua::services::Services::default());
         install_hook(&lua).map_err(|e| Error::Plugin {
@@ -111,12 +113,22 @@ impl Session {
             plugin: "pge".into(),
             message: e.to_string(),
         })?;
-        for plugin in engine.plugins() {
+        let mut lazy = Vec::new();
+        for plugin in engine.shared_plugins() {
+            if !plugin.lazy_names().is_empty() {
+                lazy.push(plugin.clone());
+                continue;
+            }
             plugin.register(&lua, &pge).map_err(|e| Error::Plugin {
                 plugin: plugin.name().to_string(),
                 message: e.to_string(),
             })?;
         }
+        crate::lua::register_lazily(&lua, &pge, lazy).map_err(|e| Error::Plugin {
+            plugin: "pge".into(),
+            message: e.to_string(),
+        })?;
+        lua.gc_restart();
         Ok(Session {
             lua,
             limits,

@@ -8,7 +8,9 @@
 
 mod algorithm;
 mod args;
+mod chunks;
 mod errors;
+mod lazy;
 mod math;
 mod model;
 mod noise;
@@ -23,7 +25,9 @@ pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
 pub use args::{conversion_message, finite_f32, finite_number, no_new_fields, vec3_arg};
+pub use chunks::engine_chunk;
 pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
+pub(crate) use lazy::register_lazily;
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
 pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};
 pub use options::{Bounds, KeyStyle, Options};

@@ -14,6 +14,8 @@ use std::cmp::Ordering;
 
 use mlua::{Function, Lua, Table, Value};
 
+use super::chunks::engine_chunk;
+
 /// The rank of a key's type in the traversal order.
 fn rank(v: &Value) -> u8 {
     match v {
@@ -79,7 +81,7 @@ pub fn sorted_pairs(t: &Table) -> mlua::Result<Vec<(Value, Value)>> {
 /// undefined in Lua and here sees the snapshot. Values are read at each step, so fields
 /// cleared during the traversal are skipped.
 const ORDERED: &str = r#"
-local sorted, pairs_metamethod, rawnext = ...
+local sorted, pairs_metamethod, rawnext, global_next = ...
 local rawget, rawequal, type, error, setmetatable = rawget, rawequal, type, error, setmetatable
 local cache = setmetatable({}, { __mode = "k" })
 
@@ -144,9 +146,28 @@ local function pairs(t)
   if type(t) ~= "table" then
     error("bad argument #1 to 'pairs' (table expected, got " .. type(t) .. ")", 2)
   end
-  return next, t, nil
+  return global_next, t, nil
 end
 
+return next, pairs
+"#;
+
+/// The global `next` and `pairs`: they load [`ORDERED`] at their first call (most scripts
+/// never call them, and compiling it was a tenth of a session's setup), then hand over to
+/// it with a tail call, so its errors still point at the script's line. `pairs` returns
+/// the global `next`, as Lua's own does.
+const ON_FIRST_CALL: &str = r#"
+local load_ordered = ...
+local ordered_next, ordered_pairs
+local next
+next = function(t, k)
+  if ordered_next == nil then ordered_next, ordered_pairs = load_ordered(next) end
+  return ordered_next(t, k)
+end
+local function pairs(t)
+  if ordered_pairs == nil then ordered_next, ordered_pairs = load_ordered(next) end
+  return ordered_pairs(t)
+end
 return next, pairs
 "#;
 
@@ -169,13 +190,19 @@ fn pairs_metamethod(_: &Lua, v: Value) -> mlua::Result<Value> {
 /// Replaces the global `next` and `pairs` with the ordered ones.
 pub(crate) fn register(lua: &Lua) -> mlua::Result<()> {
     let globals = lua.globals();
-    let sorted = lua.create_function(|lua, t: Table| lua.create_sequence_from(sorted_keys(&t)?))?;
     let rawnext: Function = globals.get("next")?;
-    let (next, pairs): (Function, Function) = lua.load(ORDERED).set_name("=pge").call((
-        sorted,
-        lua.create_function(pairs_metamethod)?,
-        rawnext,
-    ))?;
+    let load_ordered = lua.create_function(move |lua, global_next: Function| {
+        let sorted =
+            lua.create_function(|lua, t: Table| lua.create_sequence_from(sorted_keys(&t)?))?;
+        engine_chunk(lua, "=pge", ORDERED)?.call::<(Function, Function)>((
+            sorted,
+            lua.create_function(pairs_metamethod)?,
+            rawnext.clone(),
+            global_next,
+        ))
+    })?;
+    let (next, pairs): (Function, Function) =
+        engine_chunk(lua, "=pge", ON_FIRST_CALL)?.call(load_ordered)?;
     globals.set("next", next)?;
     globals.set("pairs", pairs)?;
     Ok(())
@@ -276,6 +303,37 @@ mod tests {
             .exec()
             .expect_err("no such key");
         assert!(e.to_string().contains("invalid key to 'next'"), "{e}");
+    }
+
+    #[test]
+    fn next_and_pairs_made_at_first_call_keep_positions_and_identity() {
+        // `next` first in one state, `pairs` first in another.
+        for first in ["next({})", "pairs({})"] {
+            let lua = lua();
+            lua.load(first).exec().expect("runs");
+            let same: bool = lua
+                .load(
+                    "local f, t, k = pairs({ b = 1, a = 2 })\nreturn f == next and f(t, k) == 'a'",
+                )
+                .eval()
+                .expect("runs");
+            assert!(same, "pairs returns the global next ({first} first)");
+            let e = lua
+                .load("local x = 1\nfor k in pairs(3) do end")
+                .set_name("=s")
+                .exec()
+                .expect_err("a number");
+            assert!(
+                e.to_string().contains("s:2: bad argument #1 to 'pairs'"),
+                "{e}"
+            );
+            let e = lua
+                .load("local x = 1\n\nnext({a = 1}, 'b')")
+                .set_name("=s")
+                .exec()
+                .expect_err("no such key");
+            assert!(e.to_string().contains("s:3: invalid key to 'next'"), "{e}");
+        }
     }
 
     #[test]

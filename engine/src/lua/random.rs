@@ -8,16 +8,36 @@ use super::errors::script_error;
 use super::state::SessionState;
 use crate::random::{int_in, mt_from_seed, normal, uniform};
 
-/// The generator `pge.random()` and `math.random()` draw from.
-pub(crate) struct CurrentRng(pub Mt);
+/// The generator `pge.random()` and `math.random()` draw from: made from the run's seed at
+/// the first draw (seeding an MT19937 costs a session a few microseconds, and most scripts
+/// never draw).
+pub(crate) struct CurrentRng {
+    seed: u64,
+    rng: Option<Mt>,
+}
+
+impl CurrentRng {
+    /// The generator of `seed`, made when first drawn from.
+    pub fn from_seed(seed: u64) -> CurrentRng {
+        CurrentRng { seed, rng: None }
+    }
+
+    fn get(&mut self) -> &mut Mt {
+        let seed = self.seed;
+        self.rng.get_or_insert_with(|| mt_from_seed(seed))
+    }
+}
 
 /// Replaces the generator `pge.random()` draws from and returns the previous one. An
 /// L-system swaps its instance's generator in around its rule calls.
 pub fn swap_rng(lua: &Lua, rng: Mt) -> Mt {
     match lua.app_data_mut::<CurrentRng>() {
-        Some(mut cur) => std::mem::replace(&mut cur.0, rng),
+        Some(mut cur) => std::mem::replace(cur.get(), rng),
         None => {
-            lua.set_app_data(CurrentRng(rng));
+            lua.set_app_data(CurrentRng {
+                seed: 0,
+                rng: Some(rng),
+            });
             Mt::new(5489)
         }
     }
@@ -33,7 +53,7 @@ pub fn current_uniform(lua: &Lua) -> f64 {
 
 fn draw<R>(lua: &Lua, f: impl FnOnce(&mut Mt) -> R) -> R {
     match lua.app_data_mut::<CurrentRng>() {
-        Some(mut cur) => f(&mut cur.0),
+        Some(mut cur) => f(cur.get()),
         None => f(&mut Mt::new(5489)),
     }
 }

@@ -5,6 +5,7 @@ use std::path::{Component, Path, PathBuf};
 
 use mlua::{Lua, Table, Value};
 
+use super::chunks::engine_chunk;
 use super::errors::{caller_location, script_error};
 use super::params;
 use super::state::{Chunk, SessionState};
@@ -40,23 +41,23 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     // time limit: metatables with a `__gc` field are refused. (Lua only marks a table for
     // finalization when its metatable has `__gc` as it is set.)
     let setmetatable: mlua::Function = globals.get("setmetatable")?;
-    let guarded = lua
-        .load(
-            r#"local setmetatable, rawget, type, error = ...
+    let guarded = engine_chunk(
+        lua,
+        "=pge",
+        r#"local setmetatable, rawget, type, error = ...
 return function(t, mt, ...)
   if type(mt) == "table" and rawget(mt, "__gc") ~= nil then
     error("setmetatable: __gc finalizers are not allowed (Lua runs them outside the time limit)", 2)
   end
   return setmetatable(t, mt, ...)
 end"#,
-        )
-        .set_name("=pge")
-        .call::<mlua::Function>((
-            setmetatable,
-            globals.get::<mlua::Function>("rawget")?,
-            globals.get::<mlua::Function>("type")?,
-            globals.get::<mlua::Function>("error")?,
-        ))?;
+    )?
+    .call::<mlua::Function>((
+        setmetatable,
+        globals.get::<mlua::Function>("rawget")?,
+        globals.get::<mlua::Function>("type")?,
+        globals.get::<mlua::Function>("error")?,
+    ))?;
     globals.set("setmetatable", guarded)?;
     // `print` writes to stderr so that stdout stays clean for `--stats` and `derive`.
     globals.set(

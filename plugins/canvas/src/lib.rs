@@ -36,6 +36,10 @@ impl pge_engine::Plugin for CanvasPlugin {
         "canvas"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["Lines", "Image"]
+    }
+
     fn register(&self, lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
         lua::register(lua, pge)
     }

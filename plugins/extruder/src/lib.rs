@@ -38,6 +38,10 @@ impl pge_engine::Plugin for ExtruderPlugin {
         "extruder"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["Extruder", "MatrixManipulator"]
+    }
+
     fn register(&self, lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {
         lua::register(lua, pge)
     }

@@ -50,6 +50,10 @@ impl Plugin for ForestPlugin {
         "forest"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["Forest"]
+    }
+
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
         if let Some(cache) = &self.variant_cache {
             lua.set_app_data(cache.clone());

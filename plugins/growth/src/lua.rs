@@ -19,6 +19,10 @@ impl Plugin for GrowthPlugin {
         "growth"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["Growth"]
+    }
+
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
         pge.set(
             "Growth",

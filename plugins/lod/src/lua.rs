@@ -16,6 +16,10 @@ impl Plugin for LodPlugin {
         "lod"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["lod"]
+    }
+
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
         let lod = lua.create_table()?;
         lod.set(

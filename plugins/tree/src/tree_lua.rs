@@ -18,6 +18,10 @@ impl Plugin for TreePlugin {
         "tree"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["tree"]
+    }
+
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
         pge.set("tree", lua.create_function(|lua, v: Value| tree(lua, v))?)
     }

@@ -9,8 +9,8 @@ use std::rc::Rc;
 use mlua::{Function, Lua, ObjectLike, Value, WeakLua};
 use pge_engine::geometry::Model;
 use pge_engine::lua::{
-    DefaultInterpreter, check_mutable, default_instance, interpreters, read_only_phase,
-    script_error, swap_rng, to_engine_error, to_model_in,
+    DefaultInterpreter, check_mutable, default_instance, engine_chunk, interpreters,
+    read_only_phase, script_error, swap_rng, to_engine_error, to_model_in,
 };
 use pge_engine::{Algorithm, Error, RunContext, Step};
 use rand_mt::Mt;
@@ -366,11 +366,7 @@ impl LSystemAlgorithm {
             "return function(f, a, b, c) return f({a, b, c}) end",
         ]
         .iter()
-        .map(|code| {
-            lua.load(*code)
-                .set_name("=pge.lsystem")
-                .call::<Function>(())
-        })
+        .map(|code| engine_chunk(lua, "=pge.lsystem", code)?.call::<Function>(()))
         .collect::<mlua::Result<_>>()?;
         // Numeric globals become names classic expressions can read.
         for pair in self.cfg.globals.pairs::<Value, Value>() {

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::rc::Rc;
 
 use mlua::{Function, Lua, Table, Value};
-use pge_engine::lua::script_error;
+use pge_engine::lua::{engine_chunk, script_error};
 
 use super::{session_symbols, with_shared};
 use crate::Sym;
@@ -69,17 +69,17 @@ pub(crate) fn constructor(lua: &Lua, name: &str) -> mlua::Result<Function> {
     // A table that is already a symbol (`Floor(b), Roof(b)`), or has any metatable, is
     // copied (with the global `next`, in its order) so that one table never stands for two
     // symbols. Rare, so written in Lua.
-    let copy: Function = lua
-        .load(
-            r#"local next = next
+    let copy: Function = engine_chunk(
+        lua,
+        "=pge.sym",
+        r#"local next = next
             return function(p)
                 local c = {}
                 for k, v in next, p do c[k] = v end
                 return c
             end"#,
-        )
-        .set_name("=pge.sym")
-        .call(())?;
+    )?
+    .call(())?;
     let tag = meta.clone();
     let symbol = name.to_string();
     let f = lua.create_function(move |lua, p: Value| -> mlua::Result<Table> {
@@ -141,35 +141,42 @@ pub(crate) fn register(lua: &Lua, pge: &mlua::Table) -> mlua::Result<()> {
             constructor(lua, &name)?.call::<Value>(params)
         })?,
     )?;
-    let make = lua.create_function(|lua, name: String| constructor(lua, &name))?;
-    // Undefined globals starting with an uppercase letter are symbol constructors; the
-    // lookup and cache live in Lua so that `A{}` in a hot rule costs one table read.
-    lua.load(
-        r#"
-        local make = ...
-        local cache = {}
-        local meta = getmetatable(_G) or {}
-        local previous = meta.__index
-        meta.__index = function(t, k)
-            local c = cache[k]
-            if c then return c end
-            if previous then
-                local v
-                if type(previous) == "function" then v = previous(t, k) else v = previous[k] end
-                if v ~= nil then return v end
-            end
-            if type(k) == "string" and k:match("^[A-Z]") then
-                c = make(k)
-                cache[k] = c
-                -- Later reads are plain global reads; assigning the name still works.
-                rawset(t, k, c)
-                return c
-            end
-            return nil
-        end
-        setmetatable(_G, meta)
-        "#,
-    )
-    .set_name("=pge.lsystem")
-    .call::<()>(make)
+    // Undefined globals starting with an uppercase ASCII letter are symbol constructors,
+    // found by the globals' `__index` (after any `__index` already there) and then stored
+    // as plain globals: later reads of the name cost one table read. A name the script
+    // cleared reads its constructor again. A Rust function, so that a session compiles no
+    // Lua for it.
+    let globals = lua.globals();
+    let meta = match globals.metatable() {
+        Some(meta) => meta,
+        None => lua.create_table()?,
+    };
+    let previous: Value = meta.raw_get("__index")?;
+    let made = lua.create_table()?;
+    let index = lua.create_function(move |lua, (t, k): (Table, Value)| {
+        let cached: Value = made.raw_get(&k)?;
+        if !cached.is_nil() {
+            return Ok(cached);
+        }
+        let v = match &previous {
+            Value::Function(f) => f.call::<Value>((&t, &k))?,
+            Value::Table(p) => p.get::<Value>(&k)?,
+            _ => Value::Nil,
+        };
+        if !v.is_nil() {
+            return Ok(v);
+        }
+        let Value::String(name) = &k else {
+            return Ok(Value::Nil);
+        };
+        if !name.as_bytes().first().is_some_and(u8::is_ascii_uppercase) {
+            return Ok(Value::Nil);
+        }
+        let c = Value::Function(constructor(lua, &name.to_str()?)?);
+        made.raw_set(&k, &c)?;
+        t.raw_set(k, &c)?;
+        Ok(c)
+    })?;
+    meta.raw_set("__index", index)?;
+    globals.set_metatable(Some(meta))
 }

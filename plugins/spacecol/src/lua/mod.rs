@@ -22,6 +22,10 @@ impl Plugin for SpaceColonizationPlugin {
         "spacecol"
     }
 
+    fn lazy_names(&self) -> &'static [&'static str] {
+        &["SpaceColonization", "shape"]
+    }
+
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
         pge.set(
             "SpaceColonization",
