@@ -1,57 +1,23 @@
 //! The cost of a session of the batteries-included engine (issue 14, the whole oak: what
 //! `pge run` spends besides the phases): `Engine::session` (a Lua state, its libraries and
 //! every plugin's tables), and a session that runs the oak's script (the `script` phase), in
-//! CPU time of the benchmarking thread (`/proc/thread-self/schedstat`: hardly inflated by
-//! other processes on a loaded machine; it advances in scheduler ticks, so each sample runs
+//! CPU time of the process (`/proc/self/task/*/schedstat`: hardly inflated by other
+//! processes on a loaded machine; it advances in scheduler ticks, so each sample runs
 //! hundreds of sessions).
 
-use criterion::measurement::{Measurement, ValueFormatter, WallTime};
+// The process's CPU time, the measurement the tree crate's benches use too: a session runs
+// on the calling thread alone, so this is that thread's time.
+#[path = "../plugins/tree/benches/common/cpu.rs"]
+mod cpu;
+
+use cpu::ProcessCpu;
 use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
 use std::hint::black_box;
 
-/// CPU time of the calling thread in nanoseconds (0 where Linux's schedstat is missing).
-struct ThreadCpu;
-
-/// The formatter of the wall time: nanoseconds shown as a duration.
-static WALL: WallTime = WallTime;
-
-impl ThreadCpu {
-    fn now() -> u64 {
-        std::fs::read_to_string("/proc/thread-self/schedstat")
-            .ok()
-            .and_then(|s| s.split_whitespace().next()?.parse().ok())
-            .unwrap_or(0)
-    }
-}
-
-impl Measurement for ThreadCpu {
-    type Intermediate = u64;
-    type Value = u64;
-
-    fn start(&self) -> u64 {
-        ThreadCpu::now()
-    }
-    fn end(&self, start: u64) -> u64 {
-        ThreadCpu::now().saturating_sub(start)
-    }
-    fn add(&self, a: &u64, b: &u64) -> u64 {
-        a + b
-    }
-    fn zero(&self) -> u64 {
-        0
-    }
-    fn to_f64(&self, value: &u64) -> f64 {
-        *value as f64
-    }
-    fn formatter(&self) -> &dyn ValueFormatter {
-        WALL.formatter()
-    }
-}
-
-fn session(c: &mut Criterion<ThreadCpu>) {
+fn session(c: &mut Criterion<ProcessCpu>) {
     let engine = pge::default_engine().build().expect("engine");
     let mut group = c.benchmark_group("session");
-    // The thread's CPU time advances in scheduler ticks: every sample runs many sessions.
+    // The CPU time advances in scheduler ticks: every sample runs many sessions.
     group.sampling_mode(SamplingMode::Flat).sample_size(20);
     group.bench_function("new", |b| {
         b.iter(|| black_box(engine.session(Default::default()).expect("session")));
@@ -69,7 +35,7 @@ fn session(c: &mut Criterion<ThreadCpu>) {
 
 criterion_group! {
     name = benches;
-    config = Criterion::default().with_measurement(ThreadCpu);
+    config = Criterion::default().with_measurement(ProcessCpu);
     targets = session
 }
 criterion_main!(benches);
