@@ -183,12 +183,8 @@ impl PointGrid {
     }
 
     /// The cell of coordinate `v` along `axis` (origin `o` there), clamped to the grid.
-    ///
-    /// The float-to-integer cast rounds toward zero and takes negatives and NaN to 0, so it
-    /// is `floor` clamped at 0 without the call to `floor` (a libm call on the baseline
-    /// x86-64 target, most of a grid's set-up).
     fn coord(&self, v: f32, axis: usize, o: f32) -> usize {
-        (((v - o) * self.inv_cell) as usize).min(self.dims[axis] - 1)
+        floor_index((v - o) * self.inv_cell).min(self.dims[axis] - 1)
     }
 
     /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
@@ -197,7 +193,10 @@ impl PointGrid {
         let (o, fine) = (self.origin, self.inv_cell * s as f32);
         let axis = |v: f32, a: usize, o: f32| {
             let k = self.coord(v, a, o);
-            let f = ((v - o) * fine) as usize;
+            if s == 1 {
+                return (k, 0);
+            }
+            let f = floor_index((v - o) * fine);
             (k, f.clamp(k * s, k * s + s - 1) - k * s)
         };
         let (x, sx) = axis(p.x, 0, o.x);
@@ -464,6 +463,17 @@ impl PointGrid {
         self.sub_bound[sub] = kept;
         kept
     }
+}
+
+/// `x` rounded down and clamped at 0 (NaN gives 0), as an index.
+///
+/// The cast rounds toward zero and takes negatives and NaN to 0, so it is `floor` clamped at
+/// 0 without the call to `floor` (a libm call on the baseline x86-64 target). It goes through
+/// `i32`, whose saturating cast is a few instructions where `usize`'s is a dozen; an index
+/// beyond `i32::MAX` saturates there, above any grid's largest index, so callers' clamps
+/// give the same cell.
+fn floor_index(x: f32) -> usize {
+    (x as i32).max(0) as usize
 }
 
 #[cfg(test)]
