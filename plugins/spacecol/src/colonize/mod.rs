@@ -211,35 +211,7 @@ impl Algorithm for SpaceColonization {
         // Pulls: each live point adds its unit direction to its nearest node (a tip only
         // perceives the points within its angle of perception).
         let perceive = (p.perception < 180.0).then(|| p.perception.to_radians().cos());
-        let mut active = st.take_active();
-        active.retain(|&i| {
-            let i = i as usize;
-            let n = st.nearest[i] as usize;
-            if st.refused[n] == iteration - 1 {
-                // The node could not grow toward these points last time: unreachable.
-                st.kill(i);
-                return false;
-            }
-            let d2 = st.nearest_d2[i];
-            let to = (st.points[i] - st.nodes[n]) / d2.sqrt();
-            if let Some(cos) = perceive
-                && !st.has_child[n]
-                && st.dirs[n] != Vec3::ZERO
-                && to.dot(st.dirs[n]) < cos
-            {
-                return true;
-            }
-            if st.count[n] == 0 {
-                st.touched.push(n as u32);
-            }
-            st.sum[n] += to;
-            st.count[n] += 1;
-            if d2 < st.closest[n].0 {
-                st.closest[n] = (d2, i as u32);
-            }
-            true
-        });
-        st.set_active(active);
+        st.pull(iteration, perceive);
 
         // Growth directions, all from the state before this iteration's new nodes.
         st.touched.sort_unstable();

@@ -28,6 +28,8 @@ pub(super) struct State {
     active: Vec<u32>,
     /// Points given their first nearest node since `active` was last read, in any order.
     fresh: Vec<u32>,
+    /// The buffer the next `active` is built in.
+    spare: Vec<u32>,
     /// The live points.
     grid: PointGrid,
     pub(super) nodes: Vec<Vec3>,
@@ -38,8 +40,12 @@ pub(super) struct State {
     pub(super) headings: Vec<Vec3>,
     /// Whether a node has grown a child.
     pub(super) has_child: Vec<bool>,
-    /// Nodes by cell of side `step`, for the duplicate-growth guard.
-    node_cells: HashMap<[i32; 3], Vec<u32>, BuildHasherDefault<CellHasher>>,
+    /// Nodes by cell of side `step`, for the duplicate-growth guard: the last node added
+    /// in each cell...
+    node_cells: HashMap<[i32; 3], u32, BuildHasherDefault<CellHasher>>,
+    /// ... and for each node, the node added before it in its cell ([`NONE`]: none), so
+    /// that a cell's nodes are a chain without a list of their own.
+    earlier_in_cell: Vec<u32>,
     /// The iteration in which a node's growth was refused (its pullers are dropped next).
     pub(super) refused: Vec<u32>,
     /// Roots still growing their trunk: the trunk's current tip and the length of straight
@@ -77,6 +83,7 @@ impl State {
             nearest_d2: vec![f32::INFINITY; n],
             active: Vec::new(),
             fresh: Vec::new(),
+            spare: Vec::new(),
             grid,
             nodes: Vec::new(),
             parents: Vec::new(),
@@ -84,6 +91,7 @@ impl State {
             headings: Vec::new(),
             has_child: Vec::new(),
             node_cells: HashMap::default(),
+            earlier_in_cell: Vec::new(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
             iteration: 0,
@@ -117,10 +125,8 @@ impl State {
         self.sum.push(Vec3::ZERO);
         self.count.push(0);
         self.closest.push((f32::INFINITY, NONE));
-        self.node_cells
-            .entry(cell_of(position, p.step))
-            .or_default()
-            .push(index);
+        let earlier = self.node_cells.insert(cell_of(position, p.step), index);
+        self.earlier_in_cell.push(earlier.unwrap_or(NONE));
         index
     }
 
@@ -159,13 +165,23 @@ impl State {
         index
     }
 
-    /// The live points with a nearest node, in increasing index order (the order in which
-    /// their pulls are summed). Hand the list back with [`Self::set_active`].
-    pub(super) fn take_active(&mut self) -> Vec<u32> {
+    /// Pulls: each live point with a nearest node, in increasing index order (the order in
+    /// which the pulls are summed), adds its unit direction to its nearest node's `sum`
+    /// (and counts itself, and may be its `closest`), and the pulled nodes are listed in
+    /// `touched`. A tip only perceives the points whose direction has a cosine of at least
+    /// `perceive` with its own. Points whose node was refused at the last iteration are
+    /// dropped as unreachable.
+    ///
+    /// One pass: the points pulling since before merged with those given their first
+    /// nearest node since (each list in increasing order), the dead skipped, and the
+    /// points still pulling kept, in order, for the next iteration.
+    pub(super) fn pull(&mut self, iteration: u32, perceive: Option<f32>) {
         let old = std::mem::take(&mut self.active);
         let mut fresh = std::mem::take(&mut self.fresh);
         fresh.sort_unstable();
-        let mut merged = Vec::with_capacity(old.len() + fresh.len());
+        let mut kept = std::mem::take(&mut self.spare);
+        kept.clear();
+        kept.reserve(old.len() + fresh.len());
         let (mut a, mut b) = (0, 0);
         while a < old.len() || b < fresh.len() {
             let i = if b == fresh.len() || (a < old.len() && old[a] < fresh[b]) {
@@ -174,19 +190,39 @@ impl State {
             } else {
                 b += 1;
                 fresh[b - 1]
-            };
-            if self.alive[i as usize] {
-                merged.push(i);
+            } as usize;
+            if !self.alive[i] {
+                continue;
+            }
+            let n = self.nearest[i] as usize;
+            if self.refused[n] == iteration - 1 {
+                // The node could not grow toward these points last time: unreachable.
+                self.kill(i);
+                continue;
+            }
+            kept.push(i as u32);
+            let d2 = self.nearest_d2[i];
+            let to = (self.points[i] - self.nodes[n]) / d2.sqrt();
+            if let Some(cos) = perceive
+                && !self.has_child[n]
+                && self.dirs[n] != Vec3::ZERO
+                && to.dot(self.dirs[n]) < cos
+            {
+                continue;
+            }
+            if self.count[n] == 0 {
+                self.touched.push(n as u32);
+            }
+            self.sum[n] += to;
+            self.count[n] += 1;
+            if d2 < self.closest[n].0 {
+                self.closest[n] = (d2, i as u32);
             }
         }
         fresh.clear();
         self.fresh = fresh;
-        merged
-    }
-
-    /// Hands back the list [`Self::take_active`] gave (still in increasing order).
-    pub(super) fn set_active(&mut self, active: Vec<u32>) {
-        self.active = active;
+        self.active = kept;
+        self.spare = old;
     }
 
     /// Whether no point pulled at the last iteration nor was given a nearest node since.
@@ -244,12 +280,12 @@ impl State {
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    if let Some(list) = self.node_cells.get(&[x, y, z])
-                        && list
-                            .iter()
-                            .any(|n| self.nodes[*n as usize].distance_squared(q) < eps * eps)
-                    {
-                        return true;
+                    let mut n = self.node_cells.get(&[x, y, z]).copied().unwrap_or(NONE);
+                    while n != NONE {
+                        if self.nodes[n as usize].distance_squared(q) < eps * eps {
+                            return true;
+                        }
+                        n = self.earlier_in_cell[n as usize];
                     }
                 }
             }
