@@ -9,9 +9,11 @@ const NONE: u32 = u32::MAX;
 /// queries, from which points are removed as they die.
 ///
 /// Each cell is split again into `split³` sub-cells (more when the points are dense). Each
-/// sub-cell keeps its live points in a compact run of slots (the point, its position and
-/// its reach, side by side); a removed point's slot takes the run's last point
-/// (swap-remove), so dead points are never read again.
+/// sub-cell keeps its live points in a compact run of slots, four to a group of lanes (the
+/// positions and reaches of four points, coordinate by coordinate, so that they are tested
+/// together); a run starts on a group and its last group is padded with empty slots, which
+/// no query hits. A removed point's slot takes the run's last point (swap-remove), so dead
+/// points are never read again.
 ///
 /// Every point carries a *reach*: the squared distance under which a new node changes
 /// something for it (for colonization, its distance to its nearest node). Cells and
@@ -26,17 +28,17 @@ pub struct PointGrid {
     dims: [usize; 3],
     /// Sub-cells per cell side.
     split: usize,
-    /// Where the slots of each sub-cell start; a cell's sub-cells are consecutive (x, y, z
-    /// order), so cell `c` holds slots `starts[c s³] .. starts[(c + 1) s³]`.
+    /// Where the slots of each sub-cell start (a multiple of four); a cell's sub-cells are
+    /// consecutive (x, y, z order), so cell `c` holds slots `starts[c s³] .. starts[(c + 1)
+    /// s³]`.
     starts: Vec<u32>,
     /// How many of its slots each sub-cell still fills (its live points).
     lens: Vec<u32>,
-    /// The point in each slot.
+    /// The point in each slot ([`NONE`]: an empty slot).
     items: Vec<u32>,
-    /// The position of the point in each slot.
-    positions: Vec<Vec3>,
-    /// The reach (squared) of the point in each slot.
-    reach: Vec<f32>,
+    /// The positions and reaches of the slots, four to a group: slot `k` is lane `k % 4`
+    /// of group `k / 4`.
+    lanes: Vec<Lanes>,
     /// Each point's slot, [`NONE`] once removed (or never kept).
     slot_of: Vec<u32>,
     /// The largest reach in each sub-cell (an upper bound).
@@ -50,6 +52,30 @@ pub struct PointGrid {
     gaps: Vec<f32>,
     /// ... and the cells it reads.
     visit: Vec<u32>,
+}
+
+/// Four slots of a [`PointGrid`]: their positions coordinate by coordinate and their reaches
+/// (squared). An empty slot lies at the origin with reach 0, which no distance is below.
+#[derive(Clone, Copy, Debug, Default)]
+struct Lanes {
+    x: [f32; 4],
+    y: [f32; 4],
+    z: [f32; 4],
+    reach: [f32; 4],
+}
+
+impl Lanes {
+    /// Bit `j` set when lane `j` lies within `r2` of `q` and closer than its reach (the
+    /// squared distance summed as `Vec3::distance_squared` sums it).
+    fn hits(&self, q: Vec3, r2: f32) -> u64 {
+        let mut hits = 0;
+        for j in 0..4 {
+            let (dx, dy, dz) = (self.x[j] - q.x, self.y[j] - q.y, self.z[j] - q.z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            hits |= u64::from((d2 < r2) & (d2 < self.reach[j])) << j;
+        }
+        hits
+    }
 }
 
 /// Grids larger than this many cells get larger cells.
@@ -106,8 +132,7 @@ impl PointGrid {
             starts: Vec::new(),
             lens: Vec::new(),
             items: Vec::new(),
-            positions: Vec::new(),
-            reach: Vec::new(),
+            lanes: Vec::new(),
             slot_of: vec![NONE; points.len()],
             sub_bound: Vec::new(),
             cell_bound: Vec::new(),
@@ -128,24 +153,24 @@ impl PointGrid {
             }
         }
         grid.lens = counts[1..].to_vec();
+        // Each run starts on a group of four slots.
         for c in 0..subs {
-            counts[c + 1] += counts[c];
+            counts[c + 1] = counts[c] + counts[c + 1].next_multiple_of(4);
         }
         let mut fill = counts.clone();
         let total = counts[subs] as usize;
-        grid.items = vec![0; total];
-        grid.positions = vec![Vec3::ZERO; total];
+        grid.items = vec![NONE; total];
+        grid.lanes = vec![Lanes::default(); total / 4];
         for (i, c) in sub_of.iter().enumerate() {
             if keep[i] {
                 let slot = fill[*c];
                 grid.items[slot as usize] = i as u32;
-                grid.positions[slot as usize] = points[i];
+                grid.set(slot as usize, points[i], f32::INFINITY);
                 grid.slot_of[i] = slot;
                 fill[*c] += 1;
             }
         }
         grid.starts = counts;
-        grid.reach = vec![f32::INFINITY; total];
         grid.sub_bound = (0..subs)
             .map(|s| if grid.lens[s] > 0 { f32::INFINITY } else { 0.0 })
             .collect();
@@ -165,8 +190,15 @@ impl PointGrid {
     /// of each new one; points not in the grid get no new number. Only before any point
     /// was removed (the slots are then in the grid's order).
     pub fn renumber(&mut self) -> Vec<u32> {
-        let old = std::mem::replace(&mut self.items, (0..self.positions.len() as u32).collect());
-        self.slot_of = (0..old.len() as u32).collect();
+        let mut old = Vec::with_capacity(self.slot_of.len());
+        self.slot_of.clear();
+        for (slot, item) in self.items.iter_mut().enumerate() {
+            if *item != NONE {
+                old.push(*item);
+                *item = self.slot_of.len() as u32;
+                self.slot_of.push(slot as u32);
+            }
+        }
         old
     }
 
@@ -185,6 +217,18 @@ impl PointGrid {
     /// The cell of coordinate `v` along `axis` (origin `o` there), clamped to the grid.
     fn coord(&self, v: f32, axis: usize, o: f32) -> usize {
         floor_index((v - o) * self.inv_cell).min(self.dims[axis] - 1)
+    }
+
+    /// The position of the point in `slot`.
+    fn position(&self, slot: usize) -> Vec3 {
+        let (l, j) = (&self.lanes[slot / 4], slot % 4);
+        Vec3::new(l.x[j], l.y[j], l.z[j])
+    }
+
+    /// Puts a point at `p` with reach `reach` in `slot`.
+    fn set(&mut self, slot: usize, p: Vec3, reach: f32) {
+        let (l, j) = (&mut self.lanes[slot / 4], slot % 4);
+        (l.x[j], l.y[j], l.z[j], l.reach[j]) = (p.x, p.y, p.z, reach);
     }
 
     /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
@@ -215,21 +259,24 @@ impl PointGrid {
         if slot == NONE {
             return;
         }
-        let sub = self.sub_index(self.positions[slot as usize]);
+        let sub = self.sub_index(self.position(slot as usize));
         self.remove_slot(sub, slot as usize);
     }
 
-    /// Removes the point in `slot` of sub-cell `sub`, moving the sub-cell's last point in.
+    /// Removes the point in `slot` of sub-cell `sub`, moving the sub-cell's last point in;
+    /// the last slot is left empty.
     fn remove_slot(&mut self, sub: usize, slot: usize) {
         self.lens[sub] -= 1;
         let last = (self.starts[sub] + self.lens[sub]) as usize;
         self.slot_of[self.items[slot] as usize] = NONE;
         if last != slot {
             self.items[slot] = self.items[last];
-            self.positions[slot] = self.positions[last];
-            self.reach[slot] = self.reach[last];
+            let reach = self.lanes[last / 4].reach[last % 4];
+            self.set(slot, self.position(last), reach);
             self.slot_of[self.items[slot] as usize] = slot as u32;
         }
+        self.items[last] = NONE;
+        self.set(last, Vec3::ZERO, 0.0);
     }
 
     /// The cells whose boxes the ball of radius `r` around `q` touches, as runs of z cells:
@@ -279,10 +326,11 @@ impl PointGrid {
             for sub in (row + z) * s3..(row + z_end + 1) * s3 {
                 let a = g.starts[sub] as usize;
                 let b = a + g.lens[sub] as usize;
-                for (i, p) in g.items[a..b].iter().zip(&g.positions[a..b]) {
+                for slot in a..b {
+                    let p = g.position(slot);
                     let d2 = p.distance_squared(q);
                     if d2 < r2 {
-                        f(*i, *p, d2);
+                        f(g.items[slot], p, d2);
                     }
                 }
             }
@@ -425,29 +473,27 @@ impl PointGrid {
         f: &mut impl FnMut(u32, f32) -> Option<f32>,
     ) -> f32 {
         let start = self.starts[sub] as usize;
-        let end = start + self.lens[sub] as usize;
-        // Chunks of up to 64 slots from the last: the points to call back for are found
-        // without branching, then called back for from the highest slot down, so that a
-        // removal's swap moves in only a point already seen.
-        let mut chunk_end = end;
+        let len = self.lens[sub] as usize;
+        // Up to 16 groups (64 slots) at a time from the last: the points to call back for
+        // are found four at a time without branching, then called back for from the highest
+        // slot down, so that a removal's swap moves in only a point already seen.
+        let first = start / 4;
+        let mut chunk_end = (start + len).div_ceil(4);
         let mut changed = false;
-        while chunk_end > start {
-            let chunk_start = chunk_end.saturating_sub(64).max(start);
-            let positions = &self.positions[chunk_start..chunk_end];
-            let reach = &self.reach[chunk_start..chunk_end];
+        while chunk_end > first {
+            let chunk_start = chunk_end.saturating_sub(16).max(first);
             let mut hits = 0u64;
-            for (k, (p, &reach)) in positions.iter().zip(reach).enumerate() {
-                let d2 = p.distance_squared(q);
-                hits |= u64::from((d2 < r2) & (d2 < reach)) << k;
+            for (k, lanes) in self.lanes[chunk_start..chunk_end].iter().enumerate() {
+                hits |= lanes.hits(q, r2) << (4 * k);
             }
             changed |= hits != 0;
             while hits != 0 {
                 let k = 63 - hits.leading_zeros() as usize;
                 hits &= !(1u64 << k);
-                let slot = chunk_start + k;
-                let d2 = self.positions[slot].distance_squared(q);
+                let slot = chunk_start * 4 + k;
+                let d2 = self.position(slot).distance_squared(q);
                 match f(self.items[slot], d2) {
-                    Some(reach) => self.reach[slot] = reach,
+                    Some(reach) => self.lanes[slot / 4].reach[slot % 4] = reach,
                     None => self.remove_slot(sub, slot),
                 }
             }
@@ -458,8 +504,12 @@ impl PointGrid {
             // folding the reaches again is skipped.
             return self.sub_bound[sub];
         }
-        let live = start..start + self.lens[sub] as usize;
-        let kept = self.reach[live].iter().fold(0.0f32, |m, r| m.max(*r));
+        // Empty slots have reach 0, which leaves the largest reach as it is.
+        let groups = first..(start + self.lens[sub] as usize).div_ceil(4);
+        let kept = self.lanes[groups]
+            .iter()
+            .flat_map(|l| l.reach)
+            .fold(0.0f32, f32::max);
         self.sub_bound[sub] = kept;
         kept
     }
