@@ -464,7 +464,9 @@ impl PointGrid {
     }
 
     /// [`Self::update_near`] within sub-cell `sub`; returns its largest reach (an upper
-    /// bound: when no point changed, the bound it had, unread).
+    /// bound: when no point changed, the bound it had, unread). Inlined into the cells'
+    /// loop (some 30,000 reads an oak), which keeps the query's values in registers.
+    #[inline(always)]
     fn update_sub(
         &mut self,
         q: Vec3,

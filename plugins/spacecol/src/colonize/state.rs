@@ -330,7 +330,55 @@ impl Hasher for CellHasher {
     }
 }
 
+/// The cell of side `step` holding `p`.
 pub(super) fn cell_of(p: Vec3, step: f32) -> [i32; 3] {
-    let c = (p / step).floor();
-    [c.x as i32, c.y as i32, c.z as i32]
+    let c = p / step;
+    [floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)]
+}
+
+/// `x.floor() as i32` without the call to `floor` (a libm call on the baseline x86-64
+/// target): the cast rounds toward zero, one less below zero off the integers. Where the
+/// cast saturates, so does `floor`'s; NaN gives 0 both ways; and beyond 2^24 every float is
+/// an integer, so the comparison is exact.
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    if (t as f32) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::floor_i32;
+
+    #[test]
+    fn floor_i32_is_floor_cast() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.5,
+            2.999_999_8,
+            -2.000_000_2,
+            16_777_217.0,
+            -16_777_215.5,
+            2.5e9,
+            -2.5e9,
+            -2_147_483_648.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+        ];
+        xs.extend((-2000..2000).map(|k| k as f32 * 0.173));
+        for x in xs {
+            assert_eq!(floor_i32(x), x.floor() as i32, "{x}");
+        }
+    }
 }
