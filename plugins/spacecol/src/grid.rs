@@ -232,6 +232,7 @@ impl PointGrid {
     }
 
     /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
+    #[inline]
     fn sub_index(&self, p: Vec3) -> usize {
         let s = self.split;
         let (o, fine) = (self.origin, self.inv_cell * s as f32);
