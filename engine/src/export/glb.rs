@@ -6,6 +6,7 @@ use glam::{Mat4, Vec3};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
+use rayon::prelude::*;
 use serde_json::{Map, Value as JsonValue, json};
 
 use crate::geometry::{
@@ -71,6 +72,38 @@ struct Builder {
     /// The meshes whose skeletons the JSON text marks, formatted when it is written (see
     /// [`JsonText`]).
     skeletons: Vec<Arc<Mesh>>,
+}
+
+/// Points whose bounds one thread finds at a time.
+const BOUNDS_PIECE: usize = 1 << 16;
+
+/// The per-axis minimum and maximum of `points` (infinities when empty), in pieces on the
+/// rayon pool when there are many. The pieces' bounds are combined in order, with the same
+/// `min` and `max` as within a piece, so the result is the one-pass fold's to the bit (which
+/// zero of a `-0.0` / `0.0` tie wins included), whatever the number of threads.
+fn vec3_bounds(points: &[Vec3]) -> ([f32; 3], [f32; 3]) {
+    let fold = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &Vec3| {
+        for (k, c) in p.to_array().into_iter().enumerate() {
+            lo[k] = lo[k].min(c);
+            hi[k] = hi[k].max(c);
+        }
+        (lo, hi)
+    };
+    let empty = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    if points.len() <= 2 * BOUNDS_PIECE {
+        return points.iter().fold(empty, fold);
+    }
+    let pieces: Vec<_> = points
+        .par_chunks(BOUNDS_PIECE)
+        .map(|piece| piece.iter().fold(empty, fold))
+        .collect();
+    pieces.iter().fold(empty, |(mut lo, mut hi), (plo, phi)| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(plo[k]);
+            hi[k] = hi[k].max(phi[k]);
+        }
+        (lo, hi)
+    })
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
@@ -151,14 +184,7 @@ impl Builder {
             _ => &mesh.positions,
         };
         let b = bounds.then(|| {
-            let mut lo = [f32::INFINITY; 3];
-            let mut hi = [f32::NEG_INFINITY; 3];
-            for p in data {
-                for (k, c) in p.to_array().into_iter().enumerate() {
-                    lo[k] = lo[k].min(c);
-                    hi[k] = hi[k].max(c);
-                }
-            }
+            let (lo, hi) = vec3_bounds(data);
             (json!(lo.to_vec()), json!(hi.to_vec()))
         });
         self.accessor(
@@ -345,7 +371,10 @@ impl Builder {
         let mut primitives = Vec::with_capacity(group.meshes.len());
         let mut merged = MeshExtras::default();
         for &m in &group.meshes {
-            let (primitive, pge) = self.primitive(&meshes[m])?;
+            let mesh = meshes
+                .get(m)
+                .ok_or_else(|| Error::Export("a group's mesh does not exist".into()))?;
+            let (primitive, pge) = self.primitive(mesh)?;
             primitives.push(primitive);
             for (k, v) in pge.0 {
                 if !merged.0.iter().any(|(key, _)| *key == k) {
@@ -373,7 +402,8 @@ impl Builder {
     ) -> Result<(json::mesh::Primitive, MeshExtras<'m>)> {
         use json::accessor::{ComponentType, Type};
         use json::mesh::Semantic;
-        // The callers validated the model (and the sky dome is built here, valid).
+        // Reads every attribute by its own length: nothing here fails on an invalid mesh
+        // (`glb_file_with` checks the model while it builds).
         let mut attributes = std::collections::BTreeMap::new();
         attributes.insert(
             Valid(Semantic::Positions),
@@ -509,11 +539,21 @@ pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) 
 /// The file [`glb_bytes_with`] gives, not yet assembled: [`GlbFile::write_to`] writes it to a
 /// file from the model's own memory, with no buffer of the file's size.
 pub fn glb_file_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<GlbFile> {
-    model.validate()?;
-    let mut b = Builder::new();
-    b.instancing = instancing;
-    b.root.scene = Some(b.scene(model, "pge")?);
-    b.file(model, meta, None)
+    // The model is checked while the file is built (a pass over every number and index, as
+    // long as building a big tree's JSON), on the pool's other thread: building reads no
+    // index or number in a way that could fail on an invalid model, and a check's error
+    // comes first, as if it had run before.
+    let (valid, file) = rayon::join(
+        || model.validate(),
+        || {
+            let mut b = Builder::new();
+            b.instancing = instancing;
+            b.root.scene = Some(b.scene(model, "pge")?);
+            b.file(model, meta, None)
+        },
+    );
+    valid?;
+    file
 }
 
 /// The `.glb` bytes of several stages of one growth (`pge run --stages`): one scene per
@@ -573,7 +613,7 @@ impl Builder {
         }
         let mut nodes = Vec::with_capacity(model.instances.len());
         for inst in &model.instances {
-            let Some(mesh) = meshes[inst.mesh] else {
+            let Some(&Some(mesh)) = meshes.get(inst.mesh) else {
                 return Err(Error::Export("an instance's mesh was not written".into()));
             };
             let n = node(mesh, &inst.transform);

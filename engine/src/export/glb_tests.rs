@@ -299,3 +299,48 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
     file.write_to(&mut streamed).expect("written");
     assert_eq!(streamed, file.to_vec().expect("bytes"));
 }
+
+#[test]
+fn bounds_in_pieces_are_the_one_pass_fold_to_the_bit() {
+    // Enough points for several pieces, with signed zeros at the minimum and the maximum.
+    let points: Vec<Vec3> = (0..5 * BOUNDS_PIECE)
+        .map(|k| {
+            let zero = if k % 3 == 0 { -0.0 } else { 0.0 };
+            Vec3::new(
+                (k as f32 * 0.37).sin(),
+                zero,
+                -(k as f32).abs() * 1e-3 + zero,
+            )
+        })
+        .collect();
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in &points {
+        for (k, c) in p.to_array().into_iter().enumerate() {
+            lo[k] = lo[k].min(c);
+            hi[k] = hi[k].max(c);
+        }
+    }
+    let bits = |a: [f32; 3]| a.map(f32::to_bits);
+    let (plo, phi) = vec3_bounds(&points);
+    assert_eq!((bits(plo), bits(phi)), (bits(lo), bits(hi)));
+}
+
+#[test]
+fn an_invalid_model_gets_the_checks_error_and_no_file() {
+    let mut mesh =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    mesh.indices = vec![0, 1, 7];
+    let mut model = Model::new();
+    model.add_mesh(Arc::new(mesh), Mat4::IDENTITY);
+    // An instance of a mesh that does not exist, which building alone would also refuse.
+    model.instances.push(crate::geometry::Instance {
+        mesh: 5,
+        transform: Mat4::IDENTITY,
+    });
+    let err = glb_file_with(&model, &ExportMeta::default(), Instancing::Gpu)
+        .err()
+        .expect("invalid");
+    let want = Error::from(model.validate().expect_err("invalid"));
+    assert_eq!(err.to_string(), want.to_string());
+}
