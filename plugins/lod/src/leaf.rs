@@ -129,21 +129,28 @@ impl Leaf {
         let normal = (a.normal * wa + nb * wb)
             .try_normalize()
             .unwrap_or(a.normal);
-        let project = |p: Vec3| p - normal * (p - center).dot(normal);
         let in_plane = |v: Vec3| (v - normal * v.dot(normal)).try_normalize();
         let bigger = if b.area() > a.area() { b } else { a };
-        let axis = in_plane(project(b.center) - project(a.center))
+        let axis = in_plane(b.center - a.center)
             .or_else(|| in_plane(bigger.axis))
             .or_else(|| in_plane(bigger.side()))
             .unwrap_or_else(|| normal.any_orthonormal_vector());
         let side = axis.cross(normal);
-        let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
-        for p in a.corners().into_iter().chain(b.corners()) {
-            let d = project(p) - center;
-            let q = glam::Vec2::new(d.dot(axis), d.dot(side));
-            lo = lo.min(q);
-            hi = hi.max(q);
-        }
+        // Each leaf's corners, projected on the plane, span its centre's coordinates plus or
+        // minus the projections of its half axes (projecting drops only the normal's part,
+        // which `axis` and `side` do not see): no corner is built.
+        let span = |l: &Leaf| {
+            let (along, across) = (l.axis * l.half_length, l.side() * l.half_width);
+            let d = l.center - center;
+            let mid = glam::Vec2::new(d.dot(axis), d.dot(side));
+            let half = glam::Vec2::new(
+                along.dot(axis).abs() + across.dot(axis).abs(),
+                along.dot(side).abs() + across.dot(side).abs(),
+            );
+            (mid - half, mid + half)
+        };
+        let ((lo_a, hi_a), (lo_b, hi_b)) = (span(a), span(b));
+        let (lo, hi) = (lo_a.min(lo_b), hi_a.max(hi_b));
         let mid = (lo + hi) * 0.5;
         let center = center + axis * mid.x + side * mid.y;
         let (mut half_length, mut half_width) = (0.5 * (hi.x - lo.x), 0.5 * (hi.y - lo.y));

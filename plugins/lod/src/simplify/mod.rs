@@ -30,7 +30,6 @@ use crate::leaf::Leaf;
 
 mod driver;
 mod grid;
-mod queue;
 mod search;
 
 use driver::Simplifier;
