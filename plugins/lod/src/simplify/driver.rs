@@ -71,12 +71,14 @@ impl Simplifier {
         }
     }
 
-    /// Rounds of greedy matching until a round collapses nothing. In each round the leaves
-    /// made by the last one (at first, every leaf) find their allowed pairs: their nearest
-    /// partners within the distance and angle bounds whose new leaf keeps the area bounds.
-    /// Then the pairs are collapsed cheapest first, each as long as both its leaves live.
-    /// A pair of two older leaves needs no second look: it was found before, and one of its
-    /// leaves has gone since, or the round would have collapsed it.
+    /// Rounds of greedy matching. In each round the leaves made by the last one (at first,
+    /// every leaf) find their allowed pairs: of their nearest partners within the distance
+    /// and angle bounds, those whose new leaf keeps the area bounds. Then the pairs are
+    /// collapsed cheapest first, each as long as both its leaves live. A pair of two older
+    /// leaves needs no second look: it was found before, and one of its leaves has gone
+    /// since, or the round would have collapsed it. A round that makes nothing is followed
+    /// by a sweep, every living leaf searching again among more partners; a sweep that
+    /// makes nothing ends the simplification.
     pub(super) fn run(&mut self) {
         let mut fresh = 0u32;
         let mut sweep = false;

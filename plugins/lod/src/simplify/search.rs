@@ -1,5 +1,5 @@
-//! A leaf's search for partners in the grid, the collapse distance it ranks them by, and
-//! the list of candidates it keeps between searches.
+//! A leaf's search for the pairs it may collapse into, in the grid, and the collapse
+//! distance they are ranked by.
 
 use super::driver::Simplifier;
 use super::grid::Traits;
