@@ -129,21 +129,28 @@ impl Leaf {
         let normal = (a.normal * wa + nb * wb)
             .try_normalize()
             .unwrap_or(a.normal);
-        let project = |p: Vec3| p - normal * (p - center).dot(normal);
         let in_plane = |v: Vec3| (v - normal * v.dot(normal)).try_normalize();
         let bigger = if b.area() > a.area() { b } else { a };
-        let axis = in_plane(project(b.center) - project(a.center))
+        let axis = in_plane(b.center - a.center)
             .or_else(|| in_plane(bigger.axis))
             .or_else(|| in_plane(bigger.side()))
             .unwrap_or_else(|| normal.any_orthonormal_vector());
         let side = axis.cross(normal);
-        let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
-        for p in a.corners().into_iter().chain(b.corners()) {
-            let d = project(p) - center;
-            let q = glam::Vec2::new(d.dot(axis), d.dot(side));
-            lo = lo.min(q);
-            hi = hi.max(q);
-        }
+        // Each leaf's corners, projected on the plane, span its centre's coordinates plus or
+        // minus the projections of its half axes (projecting drops only the normal's part,
+        // which `axis` and `side` do not see): no corner is built.
+        let span = |l: &Leaf| {
+            let (along, across) = (l.axis * l.half_length, l.side() * l.half_width);
+            let d = l.center - center;
+            let mid = glam::Vec2::new(d.dot(axis), d.dot(side));
+            let half = glam::Vec2::new(
+                along.dot(axis).abs() + across.dot(axis).abs(),
+                along.dot(side).abs() + across.dot(side).abs(),
+            );
+            (mid - half, mid + half)
+        };
+        let ((lo_a, hi_a), (lo_b, hi_b)) = (span(a), span(b));
+        let (lo, hi) = (lo_a.min(lo_b), hi_a.max(hi_b));
         let mid = (lo + hi) * 0.5;
         let center = center + axis * mid.x + side * mid.y;
         let (mut half_length, mut half_width) = (0.5 * (hi.x - lo.x), 0.5 * (hi.y - lo.y));
@@ -252,5 +259,81 @@ mod tests {
         let flipped = square(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z, Vec3::Y, 0.5);
         let d = Leaf::collapse(&a, &flipped);
         assert!(d.normal.abs_diff_eq(Vec3::Z, 1e-6));
+    }
+
+    /// The construction as seed 003 §2.4.2 states it: all eight corners projected on the new
+    /// plane, the bounding rectangle on the main axis found from them.
+    fn collapse_by_corners(a: &Leaf, b: &Leaf) -> (Vec3, Vec3, f32, f32) {
+        let c = Leaf::collapse(a, b);
+        let (wa, wb) = (a.count as f32, b.count as f32);
+        let weighted = (a.center * wa + b.center * wb) / (wa + wb);
+        let side = c.side();
+        let project = |p: Vec3| p - c.normal * (p - weighted).dot(c.normal);
+        let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+        for p in a.corners().into_iter().chain(b.corners()) {
+            let d = project(p) - weighted;
+            let q = glam::Vec2::new(d.dot(c.axis), d.dot(side));
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+        let mid = (lo + hi) * 0.5;
+        let bounding = (hi.x - lo.x) * (hi.y - lo.y);
+        let target = (0.5 * (a.area() + b.area() + bounding)).min(bounding);
+        let s = (target / bounding).sqrt();
+        let center = weighted + c.axis * mid.x + side * mid.y;
+        (
+            center,
+            c.axis,
+            0.5 * (hi.x - lo.x) * s,
+            0.5 * (hi.y - lo.y) * s,
+        )
+    }
+
+    #[test]
+    fn spanning_the_half_axes_is_projecting_the_corners() {
+        let mut rng = rand_mt::Mt64::new(12);
+        let mut u = move || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32 - 0.5;
+        let leaf = |u: &mut dyn FnMut() -> f32| {
+            let normal = Vec3::new(u(), u(), u()).normalize_or(Vec3::Z);
+            let axis = normal
+                .cross(Vec3::new(u(), u(), u()))
+                .normalize_or(normal.any_orthonormal_vector());
+            let half_length = 0.1 + u().abs();
+            let half_width = 0.1 + u().abs();
+            let center = Vec3::new(u(), u(), u());
+            Leaf {
+                center,
+                normal,
+                axis,
+                half_length,
+                half_width,
+                count: 1 + (u().abs() * 8.0) as u32,
+                leaf_area: 4.0 * half_length * half_width,
+                lo: center - Vec3::ONE,
+                hi: center + Vec3::ONE,
+            }
+        };
+        for _ in 0..2000 {
+            let (a, b) = (leaf(&mut u), leaf(&mut u));
+            let c = Leaf::collapse(&a, &b);
+            let (center, axis, half_length, half_width) = collapse_by_corners(&a, &b);
+            let scale = 1.0 + a.radius() + b.radius();
+            assert!(
+                c.center.abs_diff_eq(center, 1e-5 * scale),
+                "{} {center}",
+                c.center
+            );
+            assert!(c.axis.abs_diff_eq(axis, 1e-6));
+            assert!(
+                close(c.half_length, half_length),
+                "{} {half_length}",
+                c.half_length
+            );
+            assert!(
+                close(c.half_width, half_width),
+                "{} {half_width}",
+                c.half_width
+            );
+        }
     }
 }

@@ -9,61 +9,71 @@ use crate::leaf::Leaf;
 /// The label of a grid slot with no leaf.
 pub(super) const EMPTY: u32 = u32::MAX;
 
-/// What the cost of a pair reads of a leaf (the grid keeps a copy in its cell, so a search
-/// reads no leaf).
+/// A grid slot: a copy of a living leaf, with what the search reads of it besides (a search
+/// and the tests of its pairs read no leaf outside the grid).
 #[derive(Clone, Copy)]
 pub(super) struct Traits {
-    pub(super) center: Vec3,
+    pub(super) leaf: Leaf,
     pub(super) radius: f32,
-    pub(super) normal: Vec3,
-    /// Original leaves represented.
-    pub(super) count: f32,
-    pub(super) area: f32,
     pub(super) label: u32,
 }
 
 impl Traits {
     pub(super) const NONE: Traits = Traits {
-        center: Vec3::ZERO,
+        leaf: Leaf {
+            center: Vec3::ZERO,
+            normal: Vec3::ZERO,
+            axis: Vec3::ZERO,
+            half_length: 0.0,
+            half_width: 0.0,
+            count: 0,
+            leaf_area: 0.0,
+            lo: Vec3::ZERO,
+            hi: Vec3::ZERO,
+        },
         radius: 0.0,
-        normal: Vec3::ZERO,
-        count: 0.0,
-        area: 0.0,
         label: EMPTY,
     };
 
     pub(super) fn of(label: u32, leaf: &Leaf) -> Traits {
         Traits {
-            center: leaf.center,
+            leaf: *leaf,
             radius: leaf.radius(),
-            normal: leaf.normal,
-            count: leaf.count as f32,
-            area: leaf.area(),
             label,
         }
     }
 }
 
-/// A cell of the grid: its slots are `start .. start + len` of the grid's arrays, with room
-/// up to the next cell's start.
+/// What the distance test reads of a slot's leaf, in an array of its own: most slots a
+/// search reads fail the test, and four of these share a cache line.
+#[derive(Clone, Copy)]
+pub(super) struct Sphere {
+    pub(super) center: Vec3,
+    pub(super) radius: f32,
+}
+
+impl Sphere {
+    const NONE: Sphere = Sphere {
+        center: Vec3::ZERO,
+        radius: 0.0,
+    };
+}
+
+/// A cell of the grid: its slots are `start .. start + len` of the grid's arrays.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Cell {
     pub(super) start: u32,
     pub(super) len: u32,
-    /// At least the largest radius of its leaves (leaves that left it are not forgotten
-    /// until the next layout), for the searches to skip a cell whose every leaf is beyond
-    /// the distance bound.
+    /// The largest radius of its leaves, for the searches to skip a cell whose every leaf
+    /// is beyond the distance bound.
     pub(super) radius: f32,
 }
 
 /// A dense uniform grid of living leaves over the box of their centres; points outside the
-/// box (new leaves may stray a little) go to the nearest border cell. The slots of all cells
-/// lie in one array, cell after cell (x fastest, so a row of cells is one run of memory),
-/// each slot a copy of everything the distance test and the cost read of its leaf (one
-/// array rather than a narrow one for the distance test beside it: a cell's slots are few,
-/// and the pairs that pass the test then need no second run of memory). Each cell keeps
-/// room for half as many leaves again as it was laid out with, for the new leaves of
-/// collapses.
+/// box go to the nearest border cell. The slots of all cells lie cell after cell (x
+/// fastest, so a row of cells is one run of memory) in two arrays: the spheres that the
+/// distance test reads, and beside them a copy of each leaf for the cost and the area
+/// bounds of the pairs that pass it.
 #[derive(Default)]
 pub(super) struct Grid {
     pub(super) origin: Vec3,
@@ -73,8 +83,11 @@ pub(super) struct Grid {
     /// rounding never makes them more than the distance of a point they bound.
     pub(super) slack: f32,
     pub(super) dims: [i32; 3],
+    /// At least the largest radius of a leaf in the grid.
+    pub(super) radius: f32,
     /// One per cell, and one past the last that marks the end of the slots.
     pub(super) cells: Vec<Cell>,
+    pub(super) spheres: Vec<Sphere>,
     pub(super) traits: Vec<Traits>,
     /// Scratch: the cell of each leaf being laid out.
     pub(super) cell_of: Vec<u32>,
@@ -150,22 +163,30 @@ impl Grid {
                 len: 0,
                 radius: 0.0,
             };
-            start += len + len / 2 + 1;
+            start += len;
         }
         let slots = start as usize;
+        self.spheres.clear();
+        self.spheres.resize(slots, Sphere::NONE);
         self.traits.clear();
         self.traits.resize(slots, Traits::NONE);
+        self.radius = 0.0;
         for (k, &l) in labels.iter().enumerate() {
             let cell = &mut self.cells[self.cell_of[k] as usize];
             let slot = (cell.start + cell.len) as usize;
             let traits = Traits::of(l, &leaves[l as usize]);
             cell.len += 1;
             cell.radius = cell.radius.max(traits.radius);
+            self.radius = self.radius.max(traits.radius);
             self.put(slot, traits);
         }
     }
 
     pub(super) fn put(&mut self, slot: usize, traits: Traits) {
+        self.spheres[slot] = Sphere {
+            center: traits.leaf.center,
+            radius: traits.radius,
+        };
         self.traits[slot] = traits;
     }
 
@@ -185,36 +206,6 @@ impl Grid {
 
     pub(super) fn index(&self, c: [i32; 3]) -> usize {
         ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize
-    }
-
-    /// Adds the leaf `label` to its cell; `false` when the cell has no room left.
-    pub(super) fn insert(&mut self, label: u32, leaf: &Leaf) -> bool {
-        let i = self.index(self.coords(leaf.center));
-        let (cell, end) = (self.cells[i], self.cells[i + 1].start);
-        if cell.start + cell.len >= end {
-            return false;
-        }
-        let traits = Traits::of(label, leaf);
-        self.cells[i].len += 1;
-        self.cells[i].radius = cell.radius.max(traits.radius);
-        self.put((cell.start + cell.len) as usize, traits);
-        true
-    }
-
-    /// Removes the leaf `label` at `p` from its cell (the cell's last leaf takes its slot).
-    pub(super) fn remove(&mut self, label: u32, p: Vec3) {
-        let i = self.index(self.coords(p));
-        let Cell { start, len, .. } = self.cells[i];
-        let (start, end) = (start as usize, (start + len) as usize);
-        if let Some(k) = self.traits[start..end]
-            .iter()
-            .position(|t| t.label == label)
-        {
-            let last = end - 1;
-            self.traits[start + k] = self.traits[last];
-            self.traits[last] = Traits::NONE;
-            self.cells[i].len -= 1;
-        }
     }
 
     /// Whether any cell lies `ring` cells away from `c` (Chebyshev distance).
@@ -324,27 +315,20 @@ mod tests {
     }
 
     #[test]
-    fn a_full_cell_refuses_a_leaf_until_laid_out_again() {
-        let leaves: Vec<Leaf> = (0..6)
-            .map(|i| leaf(Vec3::new(i as f32 * 0.01, 0.0, 0.0)))
-            .collect();
-        let labels: Vec<u32> = (0..6).collect();
+    fn leaves_are_laid_out_cell_by_cell_in_the_order_given() {
+        let leaves: Vec<Leaf> = [0.1, 2.5, 0.2, 2.6, 0.3]
+            .map(|x| leaf(Vec3::new(x, 0.0, 0.0)))
+            .to_vec();
+        let labels: Vec<u32> = (0..5).collect();
         let mut grid = Grid::default();
-        grid.shape(Vec3::ZERO, Vec3::splat(0.05), 1.0, leaves.len());
-        grid.fill(&leaves, &labels[..4]);
-        // Four leaves leave room for 4 / 2 + 1 more in their one cell.
-        assert!(grid.insert(4, &leaves[4]));
-        assert!(grid.insert(5, &leaves[5]));
-        assert!(grid.insert(5, &leaves[5]));
-        assert!(!grid.insert(5, &leaves[5]));
-        grid.remove(2, leaves[2].center);
-        assert!(grid.insert(2, &leaves[2]));
+        grid.shape(Vec3::ZERO, Vec3::new(2.6, 0.0, 0.0), 1.0, leaves.len());
         grid.fill(&leaves, &labels);
-        let mut seen = Vec::new();
-        grid.ring([0, 0, 0], 0, Vec3::ZERO, |slots, _, _| {
-            seen.extend(grid.traits[slots].iter().map(|t| t.label));
-        });
-        assert_eq!(seen, labels);
+        let order: Vec<u32> = grid.traits.iter().map(|t| t.label).collect();
+        assert_eq!(order, [0, 2, 4, 1, 3]);
+        let spheres: Vec<Vec3> = grid.spheres.iter().map(|s| s.center).collect();
+        let copies: Vec<Vec3> = grid.traits.iter().map(|t| t.leaf.center).collect();
+        assert_eq!(spheres, copies);
+        assert_eq!(grid.radius, leaves[0].radius());
     }
 
     #[test]
@@ -370,16 +354,20 @@ mod tests {
             for ring in 0..5 {
                 grid.ring(c, ring, p, |slots, radius, least| {
                     for t in &grid.traits[slots] {
-                        assert!(least <= p.distance_squared(t.center), "{p} {}", t.center);
+                        assert!(
+                            least <= p.distance_squared(t.leaf.center),
+                            "{p} {}",
+                            t.leaf.center
+                        );
                         assert!(t.radius <= radius);
                         visited += 1;
                     }
                 });
                 let beyond = grid.beyond(c, ring, p).max(0.0);
                 for t in grid.traits.iter().filter(|t| t.label != EMPTY) {
-                    let tc = grid.coords(t.center);
+                    let tc = grid.coords(t.leaf.center);
                     if (0..3).any(|k| (tc[k] - c[k]).abs() > ring) {
-                        assert!(beyond * beyond <= p.distance_squared(t.center));
+                        assert!(beyond * beyond <= p.distance_squared(t.leaf.center));
                     }
                 }
             }

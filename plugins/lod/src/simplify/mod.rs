@@ -3,26 +3,24 @@
 //! distance, within bounds that forbid far or differently oriented pairs, until no pair is
 //! allowed. The result is the collapse forest ([`Chain`]).
 //!
-//! The thesis evaluates every pair at every step (cubic in the number of leaves). Here a
-//! leaf's candidates come from a dense uniform grid (rebuilt coarser each time half the
-//! leaves have merged): the living leaves no larger than it within the distance bound, of
-//! which it keeps the eight cheapest in a list. A priority queue holds one entry per leaf,
-//! its cheapest unconsumed candidate, and is updated lazily: a popped pair whose partner has
-//! gone, or whose new leaf would break the area bounds, moves its leaf on to its next
-//! candidate; a leaf whose list is used up searches again (for partners made since, or
-//! beyond the ones it consumed), and a new leaf searches for its own. Costs never change
-//! while both leaves live and the bounds are checked on the new leaf only when its pair is
-//! the cheapest in the queue, which then becomes the new leaf itself. Nothing is allocated
-//! per collapse; the result is deterministic (ties go to the lower label).
+//! The thesis evaluates every pair at every step (cubic in the number of leaves). Here the
+//! collapses come in rounds of greedy matching. A round lays the living leaves out in a
+//! dense uniform grid; each leaf made by the last round (at first, every leaf) searches it
+//! for its nearest partners within the distance and angle bounds (`NEAREST` of them) and
+//! builds the new leaf of each pair there and then ([`Leaf::collapse`] on the grid's copies),
+//! keeping the pairs whose new leaf keeps the area bounds. The round's pairs are then
+//! collapsed cheapest first, each while both its leaves still live. A pair of two older
+//! leaves needs no second look (one of them has gone, or the round that found it would have
+//! collapsed it), so later rounds search only around the new leaves. When a round makes
+//! nothing, a sweep searches around every living leaf again with more partners (`SWEEP`);
+//! the simplification ends when a sweep makes nothing. A refused pair is refused once, at
+//! search time: it never waits in a queue, and no leaf searches again because of it.
 //!
-//! The work is bound by memory latency, so its data is laid out to be read in runs: the
-//! grid's cells lie one after the other in one array of what the cost reads of each leaf,
-//! with room for new leaves, and a search skips the cells that cannot hold a partner (by
-//! the cell's box and largest radius); the queue is a 4-ary heap (half the levels of a
-//! binary one), and the two leaves of the pair on top are read before it sifts down; a
-//! leaf's candidates and search state lie in one record; and a refused pair is remembered
-//! by the partner, whose own attempt at the same pair (refusal is symmetric) is then
-//! skipped without building the new leaf again.
+//! The searches of a round go cell by cell, so neighbouring searches read the same memory;
+//! the grid keeps what the distance test reads (centre and radius) in one array and a copy
+//! of each leaf beside it, cell after cell; a search skips the cells that cannot hold a
+//! partner (by the cell's box and largest radius). Nothing is allocated per collapse; the
+//! result is deterministic (pairs are ordered by cost, then by their labels).
 
 use glam::Vec3;
 
@@ -30,7 +28,6 @@ use crate::leaf::Leaf;
 
 mod driver;
 mod grid;
-mod queue;
 mod search;
 
 use driver::Simplifier;
@@ -295,5 +292,50 @@ mod tests {
         let b = simplify(&leaves, &Selection::default());
         assert_eq!(a, b);
         assert!(a.children.len() > 100, "{}", a.children.len());
+    }
+
+    /// `n` leaves of a small round crown: random centres in a shell, random orientations
+    /// and sizes (the refusals of the area bounds are most pairs there).
+    fn crown(n: usize, seed: u64) -> Vec<Leaf> {
+        let mut rng = rand_mt::Mt64::new(seed);
+        let mut u = move || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
+        (0..n)
+            .map(|_| {
+                let dir = Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5).normalize_or(Vec3::Y);
+                let center = dir * (2.0 + u());
+                let normal = (dir + Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5)).normalize();
+                let (e1, e2) = normal.any_orthonormal_pair();
+                let (l, w) = (0.1 + 0.2 * u(), 0.05 + 0.1 * u());
+                let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .map(|(x, y)| center + e1 * (x * w) + e2 * (y * l));
+                Leaf::from_quad(corners, Some(normal)).expect("leaf")
+            })
+            .collect()
+    }
+
+    /// The area bounds are tested when a search finds a pair, on the grid's copies of both
+    /// leaves, and never again: every collapse of the chain must keep them, checked here on
+    /// the chain's own leaves with the corners themselves.
+    #[test]
+    fn every_collapse_keeps_the_area_bounds() {
+        let bounds = Bounds::default();
+        for seed in 1..=4 {
+            let chain = simplify(&crown(1500, seed), &Selection::default());
+            assert!(chain.roots().len() * 10 <= chain.originals, "seed {seed}");
+            for (k, &[a, b]) in chain.children.iter().enumerate() {
+                let new = &chain.leaves[chain.originals + k];
+                let (la, lb) = (&chain.leaves[a as usize], &chain.leaves[b as usize]);
+                let area = new.area();
+                let tolerance = 1e-5 * (1.0 + area);
+                assert!(area <= bounds.max_growth * (la.area() + lb.area()) + tolerance);
+                assert!(new.leaf_area + tolerance >= bounds.min_density * area);
+                assert_eq!(new.count, la.count + lb.count);
+                let size = new.hi - new.lo;
+                let slack = size * bounds.max_overhang + Vec3::splat(1e-5 * size.max_element());
+                for c in new.corners() {
+                    assert!(c.cmpge(new.lo - slack).all() && c.cmple(new.hi + slack).all());
+                }
+            }
+        }
     }
 }
