@@ -4,7 +4,9 @@
 //! indices start at (a sum over its three edges, each edge hashed from its two corners in
 //! turning order), and the first triangle of each hash is kept in an open-addressing table
 //! of tags and triangle numbers; a later triangle whose tag matches is compared by its
-//! corners (a repeat, or, very rarely, another triangle with the same tag).
+//! corners (a repeat, or, very rarely, another triangle with the same tag). A corner's own
+//! hash is computed once per vertex, not once per triangle it is a corner of (about six in
+//! a mesh of tubes or grids).
 //!
 //! A small mesh is searched in one pass, in order. A large one is hashed and dealt into
 //! shards by its hash, in runs of triangles in parallel; then each shard, in parallel, finds
@@ -53,10 +55,11 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
         key_of(a) == key_of(b)
     };
     if triangles.len() < SHARDED_FROM {
+        let vertex_hashes: Vec<u64> = positions.iter().map(|&p| vertex_hash(p)).collect();
         let mut firsts = Firsts::with_room(triangles.len());
         let mut unusable = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {
-            match look(positions, tri) {
+            match look(positions, &vertex_hashes, tri) {
                 Look::Outside => {}
                 Look::Degenerate => unusable.push(t),
                 Look::Hashed(h) => {
@@ -72,6 +75,12 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     // The shard of a hash comes from its middle bits, since a table uses the low bits for
     // its slot.
     let shard = |h: u64| ((h >> 32) & ((1 << SHARD_BITS) - 1)) as usize;
+    let mut vertex_hashes = Vec::new();
+    positions
+        .par_iter()
+        .with_min_len(KEY_CHUNK)
+        .map(|&p| vertex_hash(p))
+        .collect_into_vec(&mut vertex_hashes);
     // Pass 1, a run of triangles a task: each triangle's hash, dealt into its shard's list
     // with the triangle's number (in increasing order), and the degenerate triangles.
     let runs: Vec<Run> = triangles
@@ -84,7 +93,7 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
             let mut degenerate_ones = Vec::new();
             for (k, tri) in run.iter().enumerate() {
                 let t = c * KEY_CHUNK + k;
-                match look(positions, tri) {
+                match look(positions, &vertex_hashes, tri) {
                     Look::Outside => {}
                     Look::Degenerate => degenerate_ones.push(t),
                     Look::Hashed(h) => dealt[shard(h)].push((h, t as u32)),
@@ -153,12 +162,17 @@ impl Firsts {
     }
 }
 
-/// A triangle's corners checked: past the vertices, degenerate, or hashed.
-fn look(positions: &[Vec3], tri: &[u32; 3]) -> Look {
+/// A triangle's corners checked: past the vertices, degenerate, or hashed (from
+/// `vertex_hashes`, one [`vertex_hash`] a position).
+#[inline]
+fn look(positions: &[Vec3], vertex_hashes: &[u64], tri: &[u32; 3]) -> Look {
     match corners(positions, tri) {
         None => Look::Outside,
         Some(c) if degenerate(c) => Look::Degenerate,
-        Some(c) => Look::Hashed(hash(c)),
+        Some(_) => match tri.map(|i| vertex_hashes.get(i as usize).copied()) {
+            [Some(a), Some(b), Some(c)] => Look::Hashed(hash_of_corners([a, b, c])),
+            _ => Look::Outside,
+        },
     }
 }
 
@@ -209,16 +223,20 @@ fn key(corners: [Vec3; 3]) -> [u32; 9] {
     out
 }
 
-/// A 64-bit hash of a triangle's corners (their bits, `-0.0` as `0.0`) that is the same
-/// whichever corner it starts at, and differs for the other turning order: a sum over the
-/// three edges of a hash of the edge's two corners in order, then a final mix so that every
-/// bit depends on every corner. Equal keys ([`key`]) have equal hashes.
-fn hash(corners: [Vec3; 3]) -> u64 {
-    let [a, b, c] = corners.map(|p| {
-        let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
-        let xy = (u64::from(x) | (u64::from(y) << 32)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        xy ^ (xy >> 29) ^ u64::from(z).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
-    });
+/// A 64-bit hash of a position's bits (`-0.0` as `0.0`): a triangle's corners' hashes make
+/// its hash ([`hash_of_corners`]).
+fn vertex_hash(p: Vec3) -> u64 {
+    let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
+    let xy = (u64::from(x) | (u64::from(y) << 32)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    xy ^ (xy >> 29) ^ u64::from(z).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+}
+
+/// A 64-bit hash of a triangle's corners, from their [`vertex_hash`]es in turning order,
+/// that is the same whichever corner it starts at, and differs for the other turning order:
+/// a sum over the three edges of a hash of the edge's two corners in order, then a final mix
+/// so that every bit depends on every corner. Equal keys ([`key`]) have equal hashes.
+#[inline]
+fn hash_of_corners([a, b, c]: [u64; 3]) -> u64 {
     let edge = |from: u64, to: u64| (from ^ to.rotate_left(23)).wrapping_mul(0x1656_67B1_9E37_79F9);
     let mut h = edge(a, b).wrapping_add(edge(b, c)).wrapping_add(edge(c, a));
     h ^= h >> 31;
