@@ -56,7 +56,7 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     };
     if triangles.len() < SHARDED_FROM {
         let vertex_hashes: Vec<u64> = positions.iter().map(|&p| vertex_hash(p)).collect();
-        let mut firsts = Firsts::with_room(triangles.len());
+        let mut firsts = SmallFirsts::with_room(triangles.len());
         let mut unusable = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {
             match look(positions, &vertex_hashes, tri) {
@@ -145,6 +145,7 @@ impl Firsts {
 
     /// Whether triangle `t` of hash `h` repeats an earlier triangle (`same(earlier)`, asked
     /// of the earlier ones with the same tag); if not, `t` is recorded.
+    #[inline]
     fn repeats(&mut self, h: u64, t: u32, same: impl Fn(u32, u32) -> bool) -> bool {
         let tag = (h >> 32) | 1;
         let mut at = h as usize & self.mask;
@@ -155,6 +156,46 @@ impl Firsts {
                 return false;
             }
             if slot >> 32 == tag && same(slot as u32, t) {
+                return true;
+            }
+            at = (at + 1) & self.mask;
+        }
+    }
+}
+
+/// [`Firsts`] for fewer than [`SHARDED_FROM`] triangles, in half the memory (fresh memory
+/// costs a page fault a page): each slot holds the hash's top 17 bits (its tag, odd, so
+/// never 0) above the triangle's number in 15 bits.
+struct SmallFirsts {
+    slots: Vec<u32>,
+    mask: usize,
+}
+
+/// Bits of a triangle's number in a [`SmallFirsts`] slot.
+const SMALL_BITS: u32 = SHARDED_FROM.trailing_zeros();
+
+impl SmallFirsts {
+    /// A table for up to `n` triangles (`n <= SHARDED_FROM`).
+    fn with_room(n: usize) -> SmallFirsts {
+        let len = (2 * n).max(16).next_power_of_two();
+        SmallFirsts {
+            slots: vec![0; len],
+            mask: len - 1,
+        }
+    }
+
+    /// [`Firsts::repeats`] (`t < SHARDED_FROM`).
+    #[inline]
+    fn repeats(&mut self, h: u64, t: u32, same: impl Fn(u32, u32) -> bool) -> bool {
+        let tag = ((h >> (64 - (32 - SMALL_BITS))) as u32) | 1;
+        let mut at = h as usize & self.mask;
+        loop {
+            let slot = self.slots[at];
+            if slot == 0 {
+                self.slots[at] = (tag << SMALL_BITS) | t;
+                return false;
+            }
+            if slot >> SMALL_BITS == tag && same(slot & ((1 << SMALL_BITS) - 1), t) {
                 return true;
             }
             at = (at + 1) & self.mask;
@@ -319,6 +360,23 @@ mod tests {
         let found = unusable(&positions, &indices);
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         assert!(found.len() > 100 && found.len() < 5000, "{}", found.len());
+    }
+
+    #[test]
+    fn the_largest_mesh_searched_in_one_pass_finds_what_the_definition_finds() {
+        // Every triangle number a one-pass table holds, with repeats of the first triangles
+        // at the end.
+        let positions: Vec<Vec3> = (0..900)
+            .map(|k| Vec3::new((k % 30) as f32, (k / 30) as f32, (k % 7) as f32))
+            .collect();
+        let mut indices: Vec<u32> = (0..3 * (SHARDED_FROM as u32 - 11))
+            .map(|i| (i * 7919 + i / 3) % 900)
+            .collect();
+        indices.extend_from_slice(&indices[..30].to_vec());
+        assert_eq!(indices.len() / 3, SHARDED_FROM - 1);
+        let found = unusable(&positions, &indices);
+        assert_eq!(found, unusable_by_definition(&positions, &indices));
+        assert!(found.ends_with(&[SHARDED_FROM - 2]), "{:?}", found.last());
     }
 
     #[test]
