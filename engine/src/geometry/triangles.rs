@@ -372,7 +372,7 @@ mod tests {
         let mut indices: Vec<u32> = (0..3 * (SHARDED_FROM as u32 - 11))
             .map(|i| (i * 7919 + i / 3) % 900)
             .collect();
-        indices.extend_from_slice(&indices[..30].to_vec());
+        indices.extend_from_within(..30);
         assert_eq!(indices.len() / 3, SHARDED_FROM - 1);
         let found = unusable(&positions, &indices);
         assert_eq!(found, unusable_by_definition(&positions, &indices));

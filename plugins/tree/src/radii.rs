@@ -76,10 +76,14 @@ pub fn assign_orders(skeleton: &mut Skeleton) {
     let main: Vec<Option<u32>> = (0..skeleton.len())
         .map(|i| main_child(skeleton, i, children.of_node(i)))
         .collect();
-    for i in 0..skeleton.len() {
+    for (i, &continuing) in main.iter().enumerate() {
         let order = skeleton.orders[i];
         for &c in children.of_node(i) {
-            skeleton.orders[c as usize] = if Some(c) == main[i] { order } else { order + 1 };
+            skeleton.orders[c as usize] = if Some(c) == continuing {
+                order
+            } else {
+                order + 1
+            };
         }
     }
 }
