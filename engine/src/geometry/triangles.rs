@@ -4,7 +4,9 @@
 //! indices start at (a sum over its three edges, each edge hashed from its two corners in
 //! turning order), and the first triangle of each hash is kept in an open-addressing table
 //! of tags and triangle numbers; a later triangle whose tag matches is compared by its
-//! corners (a repeat, or, very rarely, another triangle with the same tag).
+//! corners (a repeat, or, very rarely, another triangle with the same tag). A corner's own
+//! hash is computed once per vertex, not once per triangle it is a corner of (about six in
+//! a mesh of tubes or grids).
 //!
 //! A small mesh is searched in one pass, in order. A large one is hashed and dealt into
 //! shards by its hash, in runs of triangles in parallel; then each shard, in parallel, finds
@@ -53,10 +55,11 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
         key_of(a) == key_of(b)
     };
     if triangles.len() < SHARDED_FROM {
-        let mut firsts = Firsts::with_room(triangles.len());
+        let vertex_hashes: Vec<u64> = positions.iter().map(|&p| vertex_hash(p)).collect();
+        let mut firsts = SmallFirsts::with_room(triangles.len());
         let mut unusable = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {
-            match look(positions, tri) {
+            match look(positions, &vertex_hashes, tri) {
                 Look::Outside => {}
                 Look::Degenerate => unusable.push(t),
                 Look::Hashed(h) => {
@@ -72,6 +75,12 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     // The shard of a hash comes from its middle bits, since a table uses the low bits for
     // its slot.
     let shard = |h: u64| ((h >> 32) & ((1 << SHARD_BITS) - 1)) as usize;
+    let mut vertex_hashes = Vec::new();
+    positions
+        .par_iter()
+        .with_min_len(KEY_CHUNK)
+        .map(|&p| vertex_hash(p))
+        .collect_into_vec(&mut vertex_hashes);
     // Pass 1, a run of triangles a task: each triangle's hash, dealt into its shard's list
     // with the triangle's number (in increasing order), and the degenerate triangles.
     let runs: Vec<Run> = triangles
@@ -84,7 +93,7 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
             let mut degenerate_ones = Vec::new();
             for (k, tri) in run.iter().enumerate() {
                 let t = c * KEY_CHUNK + k;
-                match look(positions, tri) {
+                match look(positions, &vertex_hashes, tri) {
                     Look::Outside => {}
                     Look::Degenerate => degenerate_ones.push(t),
                     Look::Hashed(h) => dealt[shard(h)].push((h, t as u32)),
@@ -136,6 +145,7 @@ impl Firsts {
 
     /// Whether triangle `t` of hash `h` repeats an earlier triangle (`same(earlier)`, asked
     /// of the earlier ones with the same tag); if not, `t` is recorded.
+    #[inline]
     fn repeats(&mut self, h: u64, t: u32, same: impl Fn(u32, u32) -> bool) -> bool {
         let tag = (h >> 32) | 1;
         let mut at = h as usize & self.mask;
@@ -153,12 +163,57 @@ impl Firsts {
     }
 }
 
-/// A triangle's corners checked: past the vertices, degenerate, or hashed.
-fn look(positions: &[Vec3], tri: &[u32; 3]) -> Look {
+/// [`Firsts`] for fewer than [`SHARDED_FROM`] triangles, in half the memory (fresh memory
+/// costs a page fault a page): each slot holds the hash's top 17 bits (its tag, odd, so
+/// never 0) above the triangle's number in 15 bits.
+struct SmallFirsts {
+    slots: Vec<u32>,
+    mask: usize,
+}
+
+/// Bits of a triangle's number in a [`SmallFirsts`] slot.
+const SMALL_BITS: u32 = SHARDED_FROM.trailing_zeros();
+
+impl SmallFirsts {
+    /// A table for up to `n` triangles (`n <= SHARDED_FROM`).
+    fn with_room(n: usize) -> SmallFirsts {
+        let len = (2 * n).max(16).next_power_of_two();
+        SmallFirsts {
+            slots: vec![0; len],
+            mask: len - 1,
+        }
+    }
+
+    /// [`Firsts::repeats`] (`t < SHARDED_FROM`).
+    #[inline]
+    fn repeats(&mut self, h: u64, t: u32, same: impl Fn(u32, u32) -> bool) -> bool {
+        let tag = ((h >> (64 - (32 - SMALL_BITS))) as u32) | 1;
+        let mut at = h as usize & self.mask;
+        loop {
+            let slot = self.slots[at];
+            if slot == 0 {
+                self.slots[at] = (tag << SMALL_BITS) | t;
+                return false;
+            }
+            if slot >> SMALL_BITS == tag && same(slot & ((1 << SMALL_BITS) - 1), t) {
+                return true;
+            }
+            at = (at + 1) & self.mask;
+        }
+    }
+}
+
+/// A triangle's corners checked: past the vertices, degenerate, or hashed (from
+/// `vertex_hashes`, one [`vertex_hash`] a position).
+#[inline]
+fn look(positions: &[Vec3], vertex_hashes: &[u64], tri: &[u32; 3]) -> Look {
     match corners(positions, tri) {
         None => Look::Outside,
         Some(c) if degenerate(c) => Look::Degenerate,
-        Some(c) => Look::Hashed(hash(c)),
+        Some(_) => match tri.map(|i| vertex_hashes.get(i as usize).copied()) {
+            [Some(a), Some(b), Some(c)] => Look::Hashed(hash_of_corners([a, b, c])),
+            _ => Look::Outside,
+        },
     }
 }
 
@@ -209,16 +264,20 @@ fn key(corners: [Vec3; 3]) -> [u32; 9] {
     out
 }
 
-/// A 64-bit hash of a triangle's corners (their bits, `-0.0` as `0.0`) that is the same
-/// whichever corner it starts at, and differs for the other turning order: a sum over the
-/// three edges of a hash of the edge's two corners in order, then a final mix so that every
-/// bit depends on every corner. Equal keys ([`key`]) have equal hashes.
-fn hash(corners: [Vec3; 3]) -> u64 {
-    let [a, b, c] = corners.map(|p| {
-        let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
-        let xy = (u64::from(x) | (u64::from(y) << 32)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        xy ^ (xy >> 29) ^ u64::from(z).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
-    });
+/// A 64-bit hash of a position's bits (`-0.0` as `0.0`): a triangle's corners' hashes make
+/// its hash ([`hash_of_corners`]).
+fn vertex_hash(p: Vec3) -> u64 {
+    let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
+    let xy = (u64::from(x) | (u64::from(y) << 32)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    xy ^ (xy >> 29) ^ u64::from(z).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+}
+
+/// A 64-bit hash of a triangle's corners, from their [`vertex_hash`]es in turning order,
+/// that is the same whichever corner it starts at, and differs for the other turning order:
+/// a sum over the three edges of a hash of the edge's two corners in order, then a final mix
+/// so that every bit depends on every corner. Equal keys ([`key`]) have equal hashes.
+#[inline]
+fn hash_of_corners([a, b, c]: [u64; 3]) -> u64 {
     let edge = |from: u64, to: u64| (from ^ to.rotate_left(23)).wrapping_mul(0x1656_67B1_9E37_79F9);
     let mut h = edge(a, b).wrapping_add(edge(b, c)).wrapping_add(edge(c, a));
     h ^= h >> 31;
@@ -301,6 +360,23 @@ mod tests {
         let found = unusable(&positions, &indices);
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         assert!(found.len() > 100 && found.len() < 5000, "{}", found.len());
+    }
+
+    #[test]
+    fn the_largest_mesh_searched_in_one_pass_finds_what_the_definition_finds() {
+        // Every triangle number a one-pass table holds, with repeats of the first triangles
+        // at the end.
+        let positions: Vec<Vec3> = (0..900)
+            .map(|k| Vec3::new((k % 30) as f32, (k / 30) as f32, (k % 7) as f32))
+            .collect();
+        let mut indices: Vec<u32> = (0..3 * (SHARDED_FROM as u32 - 11))
+            .map(|i| (i * 7919 + i / 3) % 900)
+            .collect();
+        indices.extend_from_within(..30);
+        assert_eq!(indices.len() / 3, SHARDED_FROM - 1);
+        let found = unusable(&positions, &indices);
+        assert_eq!(found, unusable_by_definition(&positions, &indices));
+        assert!(found.ends_with(&[SHARDED_FROM - 2]), "{:?}", found.last());
     }
 
     #[test]

@@ -23,7 +23,7 @@ use pge_engine::geometry::{Mesh, Skeleton};
 use rayon::prelude::*;
 
 use crate::options::{Flare, MeshOptions};
-use crate::radii::main_child;
+use crate::radii::{Children, main_child};
 use flare::with_flare_rings;
 use rings::{Shape, Sink};
 
@@ -183,38 +183,6 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
 /// Bark meshes with fewer vertices are written on the calling thread: handing tubes to
 /// other threads costs more than it saves.
 const PARALLEL_FROM: usize = 1 << 16;
-
-/// Each node's children, in increasing order, in one array.
-struct Children {
-    /// Where each node's children start in `nodes`, and one past the last node's.
-    starts: Vec<u32>,
-    nodes: Vec<u32>,
-}
-
-impl Children {
-    fn of(skeleton: &Skeleton) -> Children {
-        let mut starts = vec![0u32; skeleton.len() + 1];
-        for p in skeleton.parents.iter().flatten() {
-            starts[*p as usize + 1] += 1;
-        }
-        for i in 0..skeleton.len() {
-            starts[i + 1] += starts[i];
-        }
-        let mut next = starts.clone();
-        let mut nodes = vec![0u32; starts[skeleton.len()] as usize];
-        for (i, p) in skeleton.parents.iter().enumerate() {
-            if let Some(p) = p {
-                nodes[next[*p as usize] as usize] = i as u32;
-                next[*p as usize] += 1;
-            }
-        }
-        Children { starts, nodes }
-    }
-
-    fn of_node(&self, i: usize) -> &[u32] {
-        &self.nodes[self.starts[i] as usize..self.starts[i + 1] as usize]
-    }
-}
 
 /// A bark mesh of `skeleton` alone: [`append_bark`] into an empty mesh named `bark`, with the
 /// default material.

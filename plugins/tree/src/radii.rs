@@ -72,13 +72,51 @@ pub fn assign_orders(skeleton: &mut Skeleton) {
     for o in &mut skeleton.orders {
         *o = 0;
     }
-    let children = skeleton.children();
-    let main = main_children(skeleton, &children);
-    for i in 0..skeleton.len() {
+    let children = Children::of(skeleton);
+    let main: Vec<Option<u32>> = (0..skeleton.len())
+        .map(|i| main_child(skeleton, i, children.of_node(i)))
+        .collect();
+    for (i, &continuing) in main.iter().enumerate() {
         let order = skeleton.orders[i];
-        for &c in &children[i] {
-            skeleton.orders[c as usize] = if Some(c) == main[i] { order } else { order + 1 };
+        for &c in children.of_node(i) {
+            skeleton.orders[c as usize] = if Some(c) == continuing {
+                order
+            } else {
+                order + 1
+            };
         }
+    }
+}
+
+/// Each node's children, in increasing order, in one array.
+pub(crate) struct Children {
+    /// Where each node's children start in `nodes`, and one past the last node's.
+    starts: Vec<u32>,
+    nodes: Vec<u32>,
+}
+
+impl Children {
+    pub(crate) fn of(skeleton: &Skeleton) -> Children {
+        let mut starts = vec![0u32; skeleton.len() + 1];
+        for p in skeleton.parents.iter().flatten() {
+            starts[*p as usize + 1] += 1;
+        }
+        for i in 0..skeleton.len() {
+            starts[i + 1] += starts[i];
+        }
+        let mut next = starts.clone();
+        let mut nodes = vec![0u32; starts[skeleton.len()] as usize];
+        for (i, p) in skeleton.parents.iter().enumerate() {
+            if let Some(p) = p {
+                nodes[next[*p as usize] as usize] = i as u32;
+                next[*p as usize] += 1;
+            }
+        }
+        Children { starts, nodes }
+    }
+
+    pub(crate) fn of_node(&self, i: usize) -> &[u32] {
+        &self.nodes[self.starts[i] as usize..self.starts[i + 1] as usize]
     }
 }
 
