@@ -28,8 +28,8 @@ impl Simplifier {
         let me = Traits::of(a, &self.leaves[a as usize]);
         let centre_of_me = me.leaf.center;
         let reach = self.max_distance * (me.radius + self.grid.radius);
-        // The nearest allowed partners: (distance squared, key, slot), by distance.
-        let mut near = [(f32::MAX, u64::MAX, 0usize); N];
+        // The nearest partners within the angle bound: (distance squared, slot), by distance.
+        let mut near = [(f32::MAX, 0usize); N];
         let mut len = 0usize;
         let centre = self.grid.coords(centre_of_me);
         let grid = &self.grid;
@@ -42,7 +42,6 @@ impl Simplifier {
                 if least > limit * limit || (len == N && least >= near[N - 1].0) {
                     return;
                 }
-                // The cost only for the pairs within the bound.
                 for (slot, sphere) in slots.clone().zip(&grid.spheres[slots]) {
                     let d2 = centre_of_me.distance_squared(sphere.center);
                     let limit = self.max_distance * (me.radius + sphere.radius);
@@ -53,16 +52,16 @@ impl Simplifier {
                     if other.label == a || (other.label >= fresh && other.label < a) {
                         continue;
                     }
-                    let Some(cost) = self.cost(&me, other) else {
+                    if me.leaf.normal.dot(other.leaf.normal).abs() < self.min_cos {
                         continue;
-                    };
+                    }
                     // Insertion into the sorted, bounded list.
                     let mut i = len.min(N - 1);
                     while i > 0 && near[i - 1].0 > d2 {
                         near[i] = near[i - 1];
                         i -= 1;
                     }
-                    near[i] = (d2, key(cost, a.min(other.label)), slot);
+                    near[i] = (d2, slot);
                     len = (len + 1).min(N);
                 }
             });
@@ -79,16 +78,21 @@ impl Simplifier {
             }
             ring += 1;
         }
-        for &(_, k, slot) in &near[..len] {
+        // The cost only for the pairs kept: most of the nearest fail the area bounds.
+        for &(_, slot) in &near[..len] {
             let other = &grid.traits[slot];
-            if self.fits(&me.leaf, &other.leaf) {
-                self.pairs.push((k, a, other.label));
+            if !self.fits(&me.leaf, &other.leaf) {
+                continue;
+            }
+            if let Some(cost) = self.cost(&me, other) {
+                self.pairs
+                    .push((key(cost, a.min(other.label)), a, other.label));
             }
         }
     }
 
     /// The weighted distance of seed 003 §2.4.1 between two leaves within the distance
-    /// bound, or `None` when the angle bound forbids the pair.
+    /// bound, or `None` when the angle bound forbids the pair (the search tests it first).
     pub(super) fn cost(&self, a: &Traits, b: &Traits) -> Option<f32> {
         let (la, lb) = (&a.leaf, &b.leaf);
         let cos = la.normal.dot(lb.normal).abs();
