@@ -77,11 +77,14 @@ impl Simplifier {
     /// collapsed cheapest first, each as long as both its leaves live. A pair of two older
     /// leaves needs no second look: it was found before, and one of its leaves has gone
     /// since, or the round would have collapsed it. A round that makes nothing is followed
-    /// by a sweep, every living leaf searching again among more partners; a sweep that
-    /// makes nothing ends the simplification.
+    /// by a sweep, searching again among more partners around every living leaf made since
+    /// the last sweep began (the first: every leaf); a sweep that makes nothing ends the
+    /// simplification.
     pub(super) fn run(&mut self) {
         let mut fresh = 0u32;
         let mut sweep = false;
+        // The labels made before the last sweep began: it searched around each of them.
+        let mut swept = 0u32;
         loop {
             self.rebuild_grid();
             self.pairs.clear();
@@ -112,7 +115,8 @@ impl Simplifier {
             // Rounds that find nothing more end in a sweep: every leaf searches again, wider.
             sweep = !made;
             if sweep {
-                fresh = 0;
+                fresh = swept;
+                swept = self.leaves.len() as u32;
             }
         }
     }

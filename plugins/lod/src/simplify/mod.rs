@@ -12,8 +12,9 @@
 //! collapsed cheapest first, each while both its leaves still live. A pair of two older
 //! leaves needs no second look (one of them has gone, or the round that found it would have
 //! collapsed it), so later rounds search only around the new leaves. When a round makes
-//! nothing, a sweep searches around every living leaf again with more partners (`SWEEP`);
-//! the simplification ends when a sweep makes nothing. A refused pair is refused once, at
+//! nothing, a sweep searches again with more partners (`SWEEP`) around every living leaf
+//! made since the last sweep began (the first sweep: around every leaf); the simplification
+//! ends when a sweep makes nothing. A refused pair is refused once, at
 //! search time: it never waits in a queue, and no leaf searches again because of it.
 //!
 //! The searches of a round go cell by cell, so neighbouring searches read the same memory;
