@@ -74,12 +74,13 @@ impl Simplifier {
     /// Rounds of greedy matching. In each round the leaves made by the last one (at first,
     /// every leaf) find their allowed pairs: of their nearest partners within the distance
     /// and angle bounds, those whose new leaf keeps the area bounds. Then the pairs are
-    /// collapsed cheapest first, each as long as both its leaves live. A pair of two older
-    /// leaves needs no second look: it was found before, and one of its leaves has gone
-    /// since, or the round would have collapsed it. A round that makes nothing is followed
-    /// by a sweep, searching again among more partners around every living leaf made since
-    /// the last sweep began (the first: every leaf); a sweep that makes nothing ends the
-    /// simplification.
+    /// collapsed cheapest first, each as long as both its leaves live. A pair a search
+    /// found needs no second look: one of its leaves has gone since, or the round would have
+    /// collapsed it. A round that makes nothing is followed by a sweep, searching again
+    /// among more partners around every living leaf made since the last sweep began (the
+    /// first: every leaf); a sweep that makes nothing ends the simplification. Pairs beyond
+    /// each other's nearest partners in every search around them are never tested (a
+    /// heuristic; see the module's docs).
     pub(super) fn run(&mut self) {
         let mut fresh = 0u32;
         let mut sweep = false;

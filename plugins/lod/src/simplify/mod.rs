@@ -9,12 +9,15 @@
 //! for its nearest partners within the distance and angle bounds (`NEAREST` of them) and
 //! builds the new leaf of each pair there and then ([`Leaf::collapse`] on the grid's copies),
 //! keeping the pairs whose new leaf keeps the area bounds. The round's pairs are then
-//! collapsed cheapest first, each while both its leaves still live. A pair of two older
-//! leaves needs no second look (one of them has gone, or the round that found it would have
-//! collapsed it), so later rounds search only around the new leaves. When a round makes
-//! nothing, a sweep searches again with more partners (`SWEEP`) around every living leaf
-//! made since the last sweep began (the first sweep: around every leaf); the simplification
-//! ends when a sweep makes nothing. A refused pair is refused once, at
+//! collapsed cheapest first, each while both its leaves still live. A pair a search has found
+//! needs no second look (one of its leaves has gone, or the round that found it would have
+//! collapsed it), so later rounds search only around the new leaves. Pairs beyond each
+//! other's nearest `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep
+//! searches again with more partners (`SWEEP`) around every living leaf made since the last
+//! sweep began (the first sweep: around every leaf); the simplification ends when a sweep
+//! makes nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that
+//! are beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
+//! again (the quality figures in benches/README.md, not a proof, justify it). A refused pair is refused once, at
 //! search time: it never waits in a queue, and no leaf searches again because of it.
 //!
 //! The searches of a round go cell by cell, so neighbouring searches read the same memory;
