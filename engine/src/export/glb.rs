@@ -6,7 +6,6 @@ use glam::{Mat4, Vec3};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
-use rayon::prelude::*;
 use serde_json::{Map, Value as JsonValue, json};
 
 use crate::geometry::{
@@ -16,7 +15,7 @@ use crate::{Error, Result};
 
 pub use super::glb_container::{GLB_LIMIT, GlbFile, glb_container};
 use super::glb_extras::{Extra, JsonText, MeshExtras};
-use super::glb_layout::{Attribute, Data, Layout};
+use super::glb_layout::{Attribute, Data, Layout, vec3_bounds};
 pub use super::glb_sky::UNLIT;
 use super::glb_sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
 
@@ -72,38 +71,6 @@ struct Builder {
     /// The meshes whose skeletons the JSON text marks, formatted when it is written (see
     /// [`JsonText`]).
     skeletons: Vec<Arc<Mesh>>,
-}
-
-/// Points whose bounds one thread finds at a time.
-const BOUNDS_PIECE: usize = 1 << 16;
-
-/// The per-axis minimum and maximum of `points` (infinities when empty), in pieces on the
-/// rayon pool when there are many. The pieces' bounds are combined in order, with the same
-/// `min` and `max` as within a piece, so the result is the one-pass fold's to the bit (which
-/// zero of a `-0.0` / `0.0` tie wins included), whatever the number of threads.
-fn vec3_bounds(points: &[Vec3]) -> ([f32; 3], [f32; 3]) {
-    let fold = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &Vec3| {
-        for (k, c) in p.to_array().into_iter().enumerate() {
-            lo[k] = lo[k].min(c);
-            hi[k] = hi[k].max(c);
-        }
-        (lo, hi)
-    };
-    let empty = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    if points.len() <= 2 * BOUNDS_PIECE {
-        return points.iter().fold(empty, fold);
-    }
-    let pieces: Vec<_> = points
-        .par_chunks(BOUNDS_PIECE)
-        .map(|piece| piece.iter().fold(empty, fold))
-        .collect();
-    pieces.iter().fold(empty, |(mut lo, mut hi), (plo, phi)| {
-        for k in 0..3 {
-            lo[k] = lo[k].min(plo[k]);
-            hi[k] = hi[k].max(phi[k]);
-        }
-        (lo, hi)
-    })
 }
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {

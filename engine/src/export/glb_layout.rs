@@ -9,6 +9,8 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use glam::Vec3;
+
 use crate::geometry::{Mesh, Texture};
 
 /// Bytes of a piece of work when a view is cut up for the threads: large enough that a
@@ -231,6 +233,38 @@ impl Layout {
         }
         out
     }
+}
+
+/// Points whose bounds one thread finds at a time.
+pub(super) const BOUNDS_PIECE: usize = 1 << 16;
+
+/// The per-axis minimum and maximum of `points` (infinities when empty), in pieces on the
+/// rayon pool when there are many. The pieces' bounds are combined in order, with the same
+/// `min` and `max` as within a piece, so the result is the one-pass fold's to the bit (which
+/// zero of a `-0.0` / `0.0` tie wins included), whatever the number of threads.
+pub(super) fn vec3_bounds(points: &[Vec3]) -> ([f32; 3], [f32; 3]) {
+    let fold = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &Vec3| {
+        for (k, c) in p.to_array().into_iter().enumerate() {
+            lo[k] = lo[k].min(c);
+            hi[k] = hi[k].max(c);
+        }
+        (lo, hi)
+    };
+    let empty = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    if points.len() <= 2 * BOUNDS_PIECE {
+        return points.iter().fold(empty, fold);
+    }
+    let pieces: Vec<_> = points
+        .par_chunks(BOUNDS_PIECE)
+        .map(|piece| piece.iter().fold(empty, fold))
+        .collect();
+    pieces.iter().fold(empty, |(mut lo, mut hi), (plo, phi)| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(plo[k]);
+            hi[k] = hi[k].max(phi[k]);
+        }
+        (lo, hi)
+    })
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Tests of the glb writer: meshes, materials, extras, instancing.
 
 use super::*;
+use crate::export::glb_layout::{BOUNDS_PIECE, vec3_bounds};
 use crate::geometry::{Material, Mesh, Skeleton};
 use glam::{Quat, Vec2};
 
