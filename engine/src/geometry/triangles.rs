@@ -210,10 +210,8 @@ fn look(positions: &[Vec3], vertex_hashes: &[u64], tri: &[u32; 3]) -> Look {
     match corners(positions, tri) {
         None => Look::Outside,
         Some(c) if degenerate(c) => Look::Degenerate,
-        Some(_) => match tri.map(|i| vertex_hashes.get(i as usize).copied()) {
-            [Some(a), Some(b), Some(c)] => Look::Hashed(hash_of_corners([a, b, c])),
-            _ => Look::Outside,
-        },
+        // `corners` found every index within the positions, which `vertex_hashes` matches.
+        Some(_) => Look::Hashed(hash_of_corners(tri.map(|i| vertex_hashes[i as usize]))),
     }
 }
 

@@ -182,7 +182,7 @@ impl Grid {
         }
     }
 
-    pub(super) fn put(&mut self, slot: usize, traits: Traits) {
+    fn put(&mut self, slot: usize, traits: Traits) {
         self.spheres[slot] = Sphere {
             center: traits.leaf.center,
             radius: traits.radius,

@@ -17,8 +17,9 @@
 //! sweep began (the first sweep: around every leaf); the simplification ends when a sweep
 //! makes nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that
 //! are beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
-//! again (the quality figures in benches/README.md, not a proof, justify it). A refused pair is refused once, at
-//! search time: it never waits in a queue, and no leaf searches again because of it.
+//! again (the quality figures in benches/README.md, not a proof, justify it). A refused
+//! pair is refused once, at search time: it never waits in a queue, and no leaf searches
+//! again because of it.
 //!
 //! The searches of a round go cell by cell, so neighbouring searches read the same memory;
 //! the grid keeps what the distance test reads (centre and radius) in one array and a copy
