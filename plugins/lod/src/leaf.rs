@@ -1,7 +1,7 @@
 //! A leaf as the simplification sees it (a textured rectangle), and the new leaf that
 //! replaces two collapsed ones (seed 003, §2.4.2 "Generación de las hojas nuevas").
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// One leaf of the collapse forest: an original leaf of the model or one made by a collapse.
 ///
@@ -178,6 +178,82 @@ impl Leaf {
             hi: a.hi.max(b.hi),
         }
     }
+
+    /// Whether the leaf [`Leaf::collapse`] makes of `a` and `b` surely reaches farther from
+    /// its centre than `allowed[k]` along some world axis `k` (its reach: `|axis[k]| *
+    /// half_length + |side[k]| * half_width`): a cheap refusal for the overhang bound, without
+    /// the collapse's chain of three square roots and four divisions.
+    ///
+    /// It evaluates the construction's exact formulas on unnormalised vectors: with the
+    /// weights `fa, fb` (summing to 1), `m = fa na + fb nb` (the normal times `|m|`), `v` from
+    /// `a`'s centre to `b`'s, `u = |m|² v - (v·m) m` (the main axis times `α = |u|`) and
+    /// `e = u × m` (the secondary axis times `α |m|`), the centres lie on the main axis at
+    /// `-fb α / |m|²` and `fa α / |m|²` from the weighted centre, so the bounding quad's half
+    /// sides are `H / (α |m|²)` and `W / (α |m|)`, with `H` the half span of both leaves along
+    /// `u` (scaled by `|m|²`) and `W` along `e`. Its reach along `k` is then
+    /// `s (|u[k]| H + |e[k]| W) / (α² |m|²)`, where `s² = min((1 + summed / bounding) / 2, 1)`
+    /// is the squared scale to the new area; the test compares squares (in `f64`, so that
+    /// they neither overflow nor underflow). `false` when unsure: a main axis within 6° of the
+    /// normal, centres closer than a thousandth of the pair's size, a half side under a
+    /// thousandth of it, or a pair smaller than 1e-4 or larger than 1e4. The margin asked,
+    /// 1e-4 of `allowed` and of the pair's size, is far beyond the rounding of `collapse` and
+    /// of this test under these conditions (about 1e-6 of them), so it never refuses a leaf
+    /// whose reach is within `allowed`.
+    #[must_use]
+    pub(crate) fn surely_reaches(a: &Leaf, b: &Leaf, allowed: Vec3) -> bool {
+        let (wa, wb) = (a.count as f32, b.count as f32);
+        let inv = 1.0 / (wa + wb);
+        let (fa, fb) = (wa * inv, wb * inv);
+        // The same flip as `collapse`, decided on the same product.
+        let nb = if a.normal.dot(b.normal) < 0.0 {
+            -b.normal
+        } else {
+            b.normal
+        };
+        let m = Vec3A::from(a.normal) * fa + Vec3A::from(nb) * fb;
+        let m2 = m.length_squared();
+        let v = Vec3A::from(b.center) - Vec3A::from(a.center);
+        let u = v * m2 - m * v.dot(m);
+        let alpha2 = u.length_squared();
+        let apart = v.abs().element_sum();
+        let size = apart + (a.half_length + a.half_width) + (b.half_length + b.half_width);
+        let well_posed = m2 >= 0.25
+            && (1e-4..=1e4).contains(&size)
+            && apart >= 1e-3 * size
+            && alpha2 >= 0.01 * m2 * m2 * v.length_squared();
+        if !well_posed {
+            return false;
+        }
+        let e = u.cross(m);
+        let spans = |l: &Leaf| {
+            let along = Vec3A::from(l.axis) * l.half_length;
+            let across = Vec3A::from(l.side()) * l.half_width;
+            let on = |d: Vec3A| along.dot(d).abs() + across.dot(d).abs();
+            (on(u) * m2, on(e))
+        };
+        let ((au, ae), (bu, be)) = (spans(a), spans(b));
+        let (pa, pb) = (-fb * alpha2, fa * alpha2);
+        let h = 0.5 * ((pb + bu).max(pa + au) - (pb - bu).min(pa - au));
+        let w = ae.max(be);
+        let least = 1e-6 * size * size * alpha2 * m2;
+        if !(h * h >= least * m2 && w * w >= least) {
+            return false;
+        }
+        let reach = u.abs() * h + e.abs() * w;
+        let margin = Vec3A::splat(1e-4 * size);
+        let bound = (Vec3A::from(allowed).max(Vec3A::ZERO) * (1.0 + 1e-4) + margin) * (alpha2 * m2);
+        // s² = num / den: the summed area over the bounding one is
+        // `summed α² |m|³ / (4 H W)`.
+        let summed = f64::from((a.area() + b.area()) * alpha2 * m2 * m2.sqrt());
+        let bounding = 4.0 * f64::from(h) * f64::from(w);
+        let (num, den) = if summed >= bounding {
+            (1.0, 1.0)
+        } else {
+            (0.5 * (summed + bounding), bounding)
+        };
+        let (reach, bound) = (reach.as_dvec3(), bound.as_dvec3());
+        (reach * reach * num).cmpgt(bound * bound * den).any()
+    }
 }
 
 #[cfg(test)]
@@ -335,5 +411,75 @@ mod tests {
                 c.half_width
             );
         }
+    }
+
+    /// The new leaf's reach along each world axis, as the overhang bound measures it.
+    fn reach(l: &Leaf) -> Vec3 {
+        (l.axis * l.half_length).abs() + (l.side() * l.half_width).abs()
+    }
+
+    #[test]
+    fn the_reach_test_never_refuses_a_leaf_within_its_bound() {
+        let mut rng = rand_mt::Mt64::new(31);
+        let mut u = move || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32 - 0.5;
+        let unit = |u: &mut dyn FnMut() -> f32| Vec3::new(u(), u(), u()).normalize_or(Vec3::Z);
+        let (mut tested, mut refused) = (0, 0);
+        for i in 0..20_000 {
+            // Sizes from a millimetre to ten metres, far from the origin or near it.
+            let scale = 10f32.powf(4.0 * (u() + 0.5) - 3.0);
+            let offset = Vec3::new(u(), u(), u()) * if i % 2 == 0 { 2000.0 } else { 2.0 };
+            let leaf = |u: &mut dyn FnMut() -> f32, normal: Vec3, center: Vec3| {
+                let axis = normal
+                    .cross(unit(u))
+                    .normalize_or(normal.any_orthonormal_vector());
+                let (half_length, half_width) =
+                    (scale * (0.05 + u().abs()), scale * (0.05 + u().abs()));
+                Leaf {
+                    center,
+                    normal,
+                    axis,
+                    half_length,
+                    half_width,
+                    count: 1 + (u().abs() * if i % 3 == 0 { 2000.0 } else { 6.0 }) as u32,
+                    leaf_area: 4.0 * half_length * half_width,
+                    lo: center - Vec3::splat(scale),
+                    hi: center + Vec3::splat(scale),
+                }
+            };
+            let na = unit(&mut u);
+            // Nearly parallel normals, or any; centres apart in any direction, along the
+            // normal (stacked leaves) or nearly together.
+            let nb = match i % 4 {
+                0 => (na + unit(&mut u) * 0.05).normalize(),
+                1 => -(na + unit(&mut u) * 0.3).normalize(),
+                _ => unit(&mut u),
+            };
+            let apart = match i % 5 {
+                0 => na * u() * 2.0 + unit(&mut u) * 0.02 * u(),
+                1 => unit(&mut u) * 1e-3 * u(),
+                _ => unit(&mut u) * 2.0 * u(),
+            };
+            let a = leaf(&mut u, na, offset);
+            let b = leaf(&mut u, nb, offset + apart * scale);
+            let reach = reach(&Leaf::collapse(&a, &b));
+            // Exactly the new leaf's reach is within the bound: never refused.
+            assert!(!Leaf::surely_reaches(&a, &b, reach), "{a:?} {b:?}");
+            assert!(
+                !Leaf::surely_reaches(&b, &a, reach_of(&b, &a)),
+                "{b:?} {a:?}"
+            );
+            // A little less along one axis: refused when the test is sure of it.
+            let k = i % 3;
+            let mut less = reach;
+            less[k] *= 0.99;
+            tested += 1;
+            refused += usize::from(Leaf::surely_reaches(&a, &b, less));
+        }
+        // Sure for most pairs (the rest are ill-posed: stacked or coinciding centres).
+        assert!(refused * 10 >= tested * 6, "{refused} of {tested}");
+    }
+
+    fn reach_of(a: &Leaf, b: &Leaf) -> Vec3 {
+        reach(&Leaf::collapse(a, b))
     }
 }

@@ -137,6 +137,23 @@ impl Simplifier {
     /// `max_growth`, its leaves cover at least `min_density` of it, and its corners stay
     /// within `max_overhang` of the box around the original leaves it stands for.
     pub(super) fn fits(&self, a: &Leaf, b: &Leaf) -> bool {
+        !self.surely_overhangs(a, b) && self.keeps_bounds(a, b)
+    }
+
+    /// Whether the new leaf of `a` and `b` surely reaches past the box of its originals and
+    /// its slack along some world axis, tested without building it ([`Leaf::surely_reaches`]):
+    /// most pairs the overhang bound refuses, none that [`Simplifier::keeps_bounds`] accepts.
+    /// Within the box and slack on both sides, a leaf's reach is at most half of them, plus
+    /// what rounding in the full test lets through (a few units in the last place of the
+    /// coordinates, far less than 1e-5 of them).
+    pub(super) fn surely_overhangs(&self, a: &Leaf, b: &Leaf) -> bool {
+        let (lo, hi) = (a.lo.min(b.lo), a.hi.max(b.hi));
+        let allowed = (hi - lo) * (0.5 + self.max_overhang) + (lo.abs() + hi.abs()) * 1e-5;
+        Leaf::surely_reaches(a, b, allowed)
+    }
+
+    /// The full test of [`Simplifier::fits`], on the new leaf itself.
+    pub(super) fn keeps_bounds(&self, a: &Leaf, b: &Leaf) -> bool {
         let new = Leaf::collapse(a, b);
         let area = new.area();
         let slack = (new.hi - new.lo) * self.max_overhang;

@@ -343,4 +343,30 @@ mod tests {
             }
         }
     }
+
+    /// The overhang pre-test refuses no pair the full test keeps: every pair of leaves near
+    /// each other among the original leaves of a crown and the leaves its chain makes (of
+    /// every size and count), tested both ways.
+    #[test]
+    fn the_pre_test_refuses_only_what_the_full_test_refuses() {
+        let chain = simplify(&crown(700, 5), &Selection::default());
+        let s = Simplifier::new(&chain.leaves, &Selection::default());
+        let (mut refused, mut pre_refused) = (0, 0);
+        for (i, a) in chain.leaves.iter().enumerate() {
+            for b in &chain.leaves[i + 1..] {
+                let reach = 3.0 * (a.radius() + b.radius());
+                if a.center.distance_squared(b.center) > reach * reach {
+                    continue;
+                }
+                for (a, b) in [(a, b), (b, a)] {
+                    let keeps = s.keeps_bounds(a, b);
+                    assert_eq!(s.fits(a, b), keeps, "{a:?} {b:?}");
+                    refused += usize::from(!keeps);
+                    pre_refused += usize::from(s.surely_overhangs(a, b));
+                }
+            }
+        }
+        // And it refuses most of what the full test refuses.
+        assert!(pre_refused * 2 >= refused, "{pre_refused} of {refused}");
+    }
 }
