@@ -1,7 +1,7 @@
 //! A leaf as the simplification sees it (a textured rectangle), and the new leaf that
 //! replaces two collapsed ones (seed 003, §2.4.2 "Generación de las hojas nuevas").
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec3A, Vec4};
 
 /// One leaf of the collapse forest: an original leaf of the model or one made by a collapse.
 ///
@@ -225,13 +225,22 @@ impl Leaf {
             return false;
         }
         let e = u.cross(m);
-        let spans = |l: &Leaf| {
-            let along = Vec3A::from(l.axis) * l.half_length;
-            let across = Vec3A::from(l.side()) * l.half_width;
-            let on = |d: Vec3A| along.dot(d).abs() + across.dot(d).abs();
-            (on(u) * m2, on(e))
+        // The four half axes of both leaves, one world axis per row, so that their four
+        // projections on a direction are one product.
+        let half_axes = |l: &Leaf| {
+            let axis = Vec3A::from(l.axis);
+            (
+                axis * l.half_length,
+                axis.cross(Vec3A::from(l.normal)) * l.half_width,
+            )
         };
-        let ((au, ae), (bu, be)) = (spans(a), spans(b));
+        let ((along_a, across_a), (along_b, across_b)) = (half_axes(a), half_axes(b));
+        let row = |k: usize| Vec4::new(along_a[k], across_a[k], along_b[k], across_b[k]);
+        let (xs, ys, zs) = (row(0), row(1), row(2));
+        let on = |d: Vec3A| (xs * d.x + ys * d.y + zs * d.z).abs();
+        let (du, de) = (on(u), on(e));
+        let (au, bu) = ((du.x + du.y) * m2, (du.z + du.w) * m2);
+        let (ae, be) = (de.x + de.y, de.z + de.w);
         let (pa, pb) = (-fb * alpha2, fa * alpha2);
         let h = 0.5 * ((pb + bu).max(pa + au) - (pb - bu).min(pa - au));
         let w = ae.max(be);
@@ -242,17 +251,13 @@ impl Leaf {
         let reach = u.abs() * h + e.abs() * w;
         let margin = Vec3A::splat(1e-4 * size);
         let bound = (Vec3A::from(allowed).max(Vec3A::ZERO) * (1.0 + 1e-4) + margin) * (alpha2 * m2);
-        // s² = num / den: the summed area over the bounding one is
+        // s² = s2 / bounding, the summed area over the bounding one being
         // `summed α² |m|³ / (4 H W)`.
         let summed = f64::from((a.area() + b.area()) * alpha2 * m2 * m2.sqrt());
         let bounding = 4.0 * f64::from(h) * f64::from(w);
-        let (num, den) = if summed >= bounding {
-            (1.0, 1.0)
-        } else {
-            (0.5 * (summed + bounding), bounding)
-        };
+        let s2 = (0.5 * (summed + bounding)).min(bounding);
         let (reach, bound) = (reach.as_dvec3(), bound.as_dvec3());
-        (reach * reach * num).cmpgt(bound * bound * den).any()
+        (reach * reach * s2).cmpgt(bound * bound * bounding).any()
     }
 }
 
