@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::grid::{EMPTY, Grid};
+use super::grid::Grid;
 use super::search::{NEAREST, SWEEP};
 use super::{Axis, Selection, Weights};
 use crate::leaf::Leaf;
@@ -87,16 +87,17 @@ impl Simplifier {
         // The labels made before the last sweep began: it searched around each of them.
         let mut swept = 0u32;
         loop {
-            self.rebuild_grid();
+            self.rebuild_grid(fresh);
             self.pairs.clear();
-            // Cell by cell, so neighbouring searches share the cells they read.
-            for slot in 0..self.grid.traits.len() {
-                let a = self.grid.traits[slot].label;
-                if a != EMPTY && a >= fresh {
+            // Cell by cell, so neighbouring searches share the cells they read; the fresh
+            // leaves are the last slots of each cell.
+            for c in 0..self.grid.cells.len() {
+                let cell = self.grid.cells[c];
+                for slot in (cell.start + cell.old) as usize..(cell.start + cell.len) as usize {
                     if sweep {
-                        self.search::<SWEEP>(a, fresh);
+                        self.search::<SWEEP>(slot);
                     } else {
-                        self.search::<NEAREST>(a, fresh);
+                        self.search::<NEAREST>(slot);
                     }
                 }
             }
@@ -150,7 +151,7 @@ impl Simplifier {
 
     /// A grid of the living leaves with about three leaves per occupied cell, so that the
     /// nearest partners of a leaf are found in its cell and the next ring or two.
-    fn rebuild_grid(&mut self) {
+    fn rebuild_grid(&mut self, fresh: u32) {
         self.living.clear();
         let alive = self.alive.iter().enumerate().filter(|(_, a)| **a);
         self.living.extend(alive.map(|(i, _)| i as u32));
@@ -178,7 +179,7 @@ impl Simplifier {
             }
             cell = grid.cell * 0.5;
         }
-        grid.fill(&self.leaves, &self.living);
+        grid.fill(&self.leaves, &self.living, fresh);
         self.grid = grid;
     }
 }

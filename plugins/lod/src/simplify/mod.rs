@@ -21,6 +21,9 @@
 //! pair is refused once, at search time: it never waits in a queue, and no leaf searches
 //! again because of it.
 //!
+//! A pair of two leaves that both search in a round is looked at only by the one in the
+//! earlier grid slot: each cell lays out the leaves made before the round first, so in the
+//! cells before its own a search reads only those, about half the slots of the first rounds.
 //! The searches of a round go cell by cell, so neighbouring searches read the same memory;
 //! the grid keeps what the distance test reads (centre and radius) in one array and a copy
 //! of each leaf beside it, cell after cell; a search skips the cells that cannot hold a
