@@ -6,8 +6,8 @@ use std::ops::Range;
 use super::driver::Simplifier;
 use super::grid::Traits;
 
-/// The most partners of a leaf a search tests against the area bounds (its nearest within
-/// the distance and angle bounds).
+/// The most partners of a leaf a search lists (its nearest within the distance and angle
+/// bounds).
 pub(super) const NEAREST: usize = 16;
 
 /// The same for the searches of a sweep, once the rounds have run out of pairs.
@@ -20,17 +20,16 @@ pub(super) fn key(cost: f32, label: u32) -> u64 {
 }
 
 impl Simplifier {
-    /// Adds to the round's pairs those of the leaf in grid slot `me` (a fresh leaf: labelled
-    /// at least `fresh`) that may collapse: of its nearest partners within the distance and
-    /// angle bounds, those whose new leaf keeps the area bounds. A fresh partner in an
-    /// earlier slot finds the pair itself, so it is not read: in the cells before `me`'s (in
-    /// memory order) only the old leaves are, which [`super::grid::Grid::fill`] puts first. The grid is
-    /// searched in rings of cells around `me` until the ring is farther than the farthest of
+    /// Adds to the round's pairs, with their costs, those of the fresh leaf in grid slot `at`
+    /// (labelled at least the round's `fresh`): its nearest partners within the distance and
+    /// angle bounds (the round's matching tests the area bounds). A fresh partner in an earlier
+    /// slot finds the pair itself, so it is not read: in the cells before its own (in memory
+    /// order) only the old leaves are, which [`super::grid::Grid::fill`] puts first. The grid
+    /// is searched in rings of cells around it until the ring is farther than the farthest of
     /// the nearest, or than the distance bound to the largest leaf.
-    pub(super) fn search<const N: usize>(&mut self, me: usize) {
+    pub(super) fn search<const N: usize>(&mut self, at: usize) {
         let grid = &self.grid;
-        let me_slot = me;
-        let me = grid.traits[me_slot];
+        let me = grid.traits[at];
         let a = me.label;
         let centre_of_me = me.leaf.center;
         let reach = self.max_distance * (me.radius + grid.radius);
@@ -79,7 +78,7 @@ impl Simplifier {
                         &mut near,
                     );
                     if index == my_cell {
-                        scan(me_slot + 1..slots.end, &mut len, &mut near);
+                        scan(at + 1..slots.end, &mut len, &mut near);
                     }
                 }
             });
@@ -96,12 +95,8 @@ impl Simplifier {
             }
             ring += 1;
         }
-        // The cost only for the pairs kept: most of the nearest fail the area bounds.
         for &(_, slot) in &near[..len] {
             let other = &grid.traits[slot];
-            if !self.fits(&me.leaf, &other.leaf) {
-                continue;
-            }
             if let Some(cost) = self.cost(&me, other) {
                 self.pairs
                     .push((key(cost, a.min(other.label)), a, other.label));
