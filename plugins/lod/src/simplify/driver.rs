@@ -22,9 +22,9 @@ pub(super) struct Simplifier {
     /// Scratch list of the living labels, for laying out the grid.
     pub(super) living: Vec<u32>,
     pub(super) pairs: Vec<Pair>,
-    /// Scratch for sorting the pairs: a copy of them, and where each bucket starts.
+    /// Scratch for matching the pairs: the pairs in buckets by cost, and where each ends.
     scratch: Vec<Pair>,
-    starts: Vec<u32>,
+    ends: Vec<u32>,
     pub(super) weights: Weights,
     pub(super) max_distance: f32,
     pub(super) min_cos: f32,
@@ -58,7 +58,7 @@ impl Simplifier {
             living: Vec::with_capacity(leaves.len()),
             pairs: Vec::new(),
             scratch: Vec::new(),
-            starts: Vec::new(),
+            ends: Vec::new(),
             weights: selection.weights,
             max_distance: selection.bounds.max_distance.max(0.0),
             max_growth: selection.bounds.max_growth,
@@ -106,16 +106,8 @@ impl Simplifier {
                     }
                 }
             }
-            sort_pairs(&mut self.pairs, &mut self.scratch, &mut self.starts);
             fresh = self.leaves.len() as u32;
-            let pairs = std::mem::take(&mut self.pairs);
-            for &(_, a, b) in &pairs {
-                let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
-                if self.alive[a as usize] && self.alive[b as usize] && self.fits(la, lb) {
-                    self.collapse(a, b);
-                }
-            }
-            self.pairs = pairs;
+            self.match_pairs();
             let made = self.leaves.len() as u32 > fresh;
             if !made && sweep {
                 break;
@@ -127,6 +119,38 @@ impl Simplifier {
                 swept = self.leaves.len() as u32;
             }
         }
+    }
+
+    /// Collapses the round's pairs cheapest first, each whose leaves both live and whose new
+    /// leaf keeps the area bounds. The pairs are put in buckets by cost, and each bucket in
+    /// turn is rid of its pairs with a leaf gone, then sorted: the order is total, so the
+    /// collapses are those of one sort of every pair, but most pairs are reached after one of
+    /// their leaves has gone and are never sorted.
+    fn match_pairs(&mut self) {
+        let mut buckets = std::mem::take(&mut self.scratch);
+        into_buckets(&self.pairs, &mut buckets, &mut self.ends);
+        let mut start = 0;
+        for b in 0..self.ends.len() {
+            let end = self.ends[b] as usize;
+            let bucket = &mut buckets[start..end];
+            start = end;
+            let mut kept = 0;
+            for i in 0..bucket.len() {
+                let (_, a, b) = bucket[i];
+                if self.alive[a as usize] && self.alive[b as usize] {
+                    bucket[kept] = bucket[i];
+                    kept += 1;
+                }
+            }
+            bucket[..kept].sort_unstable();
+            for &(_, a, b) in &bucket[..kept] {
+                let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
+                if self.alive[a as usize] && self.alive[b as usize] && self.fits(la, lb) {
+                    self.collapse(a, b);
+                }
+            }
+        }
+        self.scratch = buckets;
     }
 
     /// Joins `a` and `b` into their new leaf.
@@ -190,47 +214,37 @@ impl Simplifier {
     }
 }
 
-/// Sorts `pairs` into increasing order (the order is total, so the result is the one of
-/// `sort_unstable`): first into buckets by the high bits of their costs, then each bucket on
-/// its own, which reads memory in far shorter runs than one sort of every pair.
-fn sort_pairs(pairs: &mut Vec<Pair>, scratch: &mut Vec<Pair>, starts: &mut Vec<u32>) {
-    // Each bucket holds a few hundred pairs on average.
-    let buckets = (pairs.len() / 256).min(4096);
-    if buckets < 2 {
-        pairs.sort_unstable();
-        return;
-    }
-    let cost = |p: &Pair| (p.0 >> 32) as u32;
-    let (lo, hi) = pairs.iter().fold((u32::MAX, 0), |(lo, hi), p| {
+/// Puts `pairs` into `buckets` by the high bits of their costs, a few hundred pairs to a
+/// bucket on average: bucket `k` is `buckets[ends[k - 1]..ends[k]]` (from 0 for the first),
+/// and every pair of a bucket is less than every pair of a later one.
+fn into_buckets(pairs: &[Pair], buckets: &mut Vec<Pair>, ends: &mut Vec<u32>) {
+    let count = (pairs.len() / 256).clamp(1, 4096);
+    let cost = |p: &Pair| p.0 >> 32;
+    let (lo, hi) = pairs.iter().fold((u64::MAX, 0), |(lo, hi), p| {
         (lo.min(cost(p)), hi.max(cost(p)))
     });
     let mut shift = 0;
-    while (u64::from(hi - lo) >> shift) >= buckets as u64 {
+    while hi > lo && (hi - lo) >> shift >= count as u64 {
         shift += 1;
     }
     let bucket = |p: &Pair| ((cost(p) - lo) >> shift) as usize;
-    starts.clear();
-    starts.resize(buckets + 1, 0);
-    for p in pairs.iter() {
-        starts[bucket(p) + 1] += 1;
+    ends.clear();
+    ends.resize(count, 0);
+    for p in pairs {
+        ends[bucket(p)] += 1;
     }
-    for b in 0..buckets {
-        starts[b + 1] += starts[b];
-    }
-    scratch.clear();
-    scratch.resize(pairs.len(), (0, 0, 0));
-    for p in pairs.iter() {
-        let b = bucket(p);
-        scratch[starts[b] as usize] = *p;
-        starts[b] += 1;
-    }
-    // `starts[b]` is now where bucket `b` ends.
+    // Where each bucket starts, moved to its end as it is filled.
     let mut start = 0;
-    for &end in &starts[..buckets] {
-        scratch[start..end as usize].sort_unstable();
-        start = end as usize;
+    for e in ends.iter_mut() {
+        (*e, start) = (start, start + *e);
     }
-    std::mem::swap(pairs, scratch);
+    buckets.clear();
+    buckets.resize(pairs.len(), (0, 0, 0));
+    for p in pairs {
+        let e = &mut ends[bucket(p)];
+        buckets[*e as usize] = *p;
+        *e += 1;
+    }
 }
 
 #[cfg(test)]
@@ -239,24 +253,31 @@ mod tests {
     use crate::simplify::search::key;
 
     #[test]
-    fn pairs_sort_as_sort_unstable_sorts_them() {
+    fn buckets_of_pairs_sorted_one_by_one_sort_every_pair() {
         let mut x = 11u64;
         let mut r = move || {
             x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
             (x >> 33) as u32
         };
-        for n in [0, 10, 600, 5000, 70_000] {
+        for n in [0, 1, 10, 600, 5000, 70_000] {
             // Few distinct costs and labels: many ties on the key and on the labels.
-            let mut pairs: Vec<Pair> = (0..n)
+            let pairs: Vec<Pair> = (0..n)
                 .map(|_| {
                     let cost = 0.5 + (r() % 300) as f32 * 0.01;
                     (key(cost, r() % 50), r() % 40, r() % 40)
                 })
                 .collect();
+            let (mut buckets, mut ends) = (Vec::new(), Vec::new());
+            into_buckets(&pairs, &mut buckets, &mut ends);
+            assert_eq!(ends.last().map_or(0, |&e| e as usize), n);
+            let mut start = 0;
+            for &end in &ends {
+                buckets[start..end as usize].sort_unstable();
+                start = end as usize;
+            }
             let mut expected = pairs.clone();
             expected.sort_unstable();
-            sort_pairs(&mut pairs, &mut Vec::new(), &mut Vec::new());
-            assert_eq!(pairs, expected, "{n}");
+            assert_eq!(buckets, expected, "{n}");
         }
     }
 }
