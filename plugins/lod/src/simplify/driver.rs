@@ -202,7 +202,7 @@ impl Simplifier {
         let mut grid = std::mem::take(&mut self.grid);
         loop {
             grid.shape(lo, hi, cell, living);
-            let occupied = grid.occupied(&self.leaves, &self.living);
+            let occupied = grid.count(&self.leaves, &self.living);
             let finer = grid.cell_count() * 8 <= living;
             if occupied * 3 >= living || !finer {
                 break;

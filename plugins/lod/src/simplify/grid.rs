@@ -142,30 +142,26 @@ impl Grid {
         self.dims.iter().map(|&d| d as usize).product()
     }
 
-    /// Counts the leaves `labels` of each cell into `cells` (zeroed first); the cell of each
-    /// into `cell_of`.
-    pub(super) fn count(&mut self, leaves: &[Leaf], labels: &[u32]) {
+    /// Counts the leaves `labels` of each cell into `cells` (zeroed first) and the cell of
+    /// each into `cell_of`; returns how many cells they occupy.
+    pub(super) fn count(&mut self, leaves: &[Leaf], labels: &[u32]) -> usize {
         self.cells.clear();
         self.cells.resize(self.cell_count() + 1, Cell::default());
         self.cell_of.clear();
+        let mut occupied = 0;
         for &l in labels {
             let c = self.index(self.coords(leaves[l as usize].center));
+            occupied += usize::from(self.cells[c].len == 0);
             self.cells[c].len += 1;
             self.cell_of.push(c as u32);
         }
+        occupied
     }
 
-    /// How many cells the leaves `labels` occupy.
-    pub(super) fn occupied(&mut self, leaves: &[Leaf], labels: &[u32]) -> usize {
-        self.count(leaves, labels);
-        self.cells.iter().filter(|c| c.len > 0).count()
-    }
-
-    /// Lays out the leaves `labels` cell by cell, in the order given within each cell, and
-    /// counts in each cell the leaves labelled below `fresh` (with `labels` increasing, they
-    /// are its first slots).
+    /// Lays out the leaves `labels`, just counted by [`Grid::count`] in the grid's shape,
+    /// cell by cell, in the order given within each cell, and counts in each cell the leaves
+    /// labelled below `fresh` (with `labels` increasing, they are its first slots).
     pub(super) fn fill(&mut self, leaves: &[Leaf], labels: &[u32], fresh: u32) {
-        self.count(leaves, labels);
         let mut start = 0u32;
         for cell in &mut self.cells {
             let len = cell.len;
@@ -334,6 +330,7 @@ mod tests {
         let labels: Vec<u32> = (0..5).collect();
         let mut grid = Grid::default();
         grid.shape(Vec3::ZERO, Vec3::new(2.6, 0.0, 0.0), 1.0, leaves.len());
+        grid.count(&leaves, &labels);
         grid.fill(&leaves, &labels, 3);
         let order: Vec<u32> = grid.traits.iter().map(|t| t.label).collect();
         assert_eq!(order, [0, 2, 4, 1, 3]);
@@ -361,6 +358,7 @@ mod tests {
         let labels: Vec<u32> = (0..400).collect();
         let mut grid = Grid::default();
         grid.shape(Vec3::ZERO, Vec3::new(8.0, 4.0, 2.0), 0.7, leaves.len());
+        grid.count(&leaves, &labels);
         grid.fill(&leaves, &labels, 0);
         let mut visited = 0;
         for probe in leaves.iter().step_by(7) {
