@@ -10,15 +10,15 @@
 //! weighs each pair. The round's pairs are then taken cheapest first, and a pair whose two
 //! leaves still live collapses if its new leaf keeps the area bounds ([`Leaf::collapse`]);
 //! only then are the bounds tested, as most pairs are reached after one of their leaves has
-//! gone (a fifth of them are tested, and the result is the same as testing every pair when
-//! found). A pair a search has found needs no second look (one of its leaves has gone, or
-//! the round that found it would have collapsed it, or the area bounds refused it), so
-//! later rounds search only around the new leaves. Pairs beyond each other's nearest
-//! `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep searches
-//! again with more partners (`SWEEP`) around every living leaf made since the last sweep
-//! began (the first sweep: around every leaf); the simplification ends when a sweep makes
-//! nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that are
-//! beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
+//! gone (about a quarter of them are tested, and the result is the same as testing every
+//! pair when found). A pair a search has found needs no second look (one of its leaves has
+//! gone, or the round that found it would have collapsed it, or the area bounds refused
+//! it), so later rounds search only around the new leaves. Pairs beyond each other's
+//! nearest `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep
+//! searches again with more partners (`SWEEP`) around every living leaf made since the last
+//! sweep began (the first sweep: around every leaf); the simplification ends when a sweep
+//! makes nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that
+//! are beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
 //! again (the quality figures in benches/README.md, not a proof, justify it). A refused
 //! pair is refused once, in the round that found it: it never waits in a queue, and no leaf
 //! searches again because of it.
