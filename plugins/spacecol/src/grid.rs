@@ -43,15 +43,14 @@ pub struct PointGrid {
     slot_of: Vec<u32>,
     /// The largest reach in each sub-cell (an upper bound).
     sub_bound: Vec<f32>,
-    /// The largest reach in each cell (an upper bound).
+    /// The largest reach in each cell (an upper bound), and three more of 0 at the end, so
+    /// that the cells are read four at a time.
     cell_bound: Vec<f32>,
     /// How far a point may lie outside its cell's nominal box through rounding: skipping
     /// tests shrink distances by this much, so that they never skip an affected point.
     slack: f32,
-    /// Scratch of `update_near`: the per-axis gaps of the cells it spans...
+    /// Scratch of `update_near`: the per-axis gaps of the cells it spans.
     gaps: Vec<f32>,
-    /// ... and the cells it reads.
-    visit: Vec<u32>,
 }
 
 /// Four slots of a [`PointGrid`]: their positions coordinate by coordinate and their reaches
@@ -140,7 +139,6 @@ impl PointGrid {
             cell_bound: Vec::new(),
             slack,
             gaps: Vec::new(),
-            visit: Vec::new(),
         };
         let subs = cells * split.pow(3);
         let mut counts = vec![0u32; subs + 1];
@@ -183,6 +181,7 @@ impl PointGrid {
                     .iter()
                     .fold(0.0f32, |m, r| m.max(*r))
             })
+            .chain([0.0; 3])
             .collect();
         grid
     }
@@ -354,9 +353,9 @@ impl PointGrid {
     /// `q` are skipped unread.
     ///
     /// A cell's distance to `q` is the sum of its three per-axis gaps, computed once per
-    /// query for the rows, columns and layers the ball spans, so a skipped cell costs one
-    /// addition and one comparison (most cells are skipped once the points near them have
-    /// a node close by).
+    /// query for the rows, columns and layers the ball spans; a column's cells are tested
+    /// four at a time (most cells are skipped once the points near them have a node close
+    /// by).
     pub fn update_near(&mut self, q: Vec3, r: f32, mut f: impl FnMut(u32, f32) -> Option<f32>) {
         let Some([(x0, x1), (y0, y1), (z0, z1)]) = self.span(q, r) else {
             return;
@@ -368,16 +367,16 @@ impl PointGrid {
         gaps.extend((x0..=x1).map(|x| self.near_gap(o.x + x as f32 * w, w, q.x)));
         gaps.extend((y0..=y1).map(|y| self.near_gap(o.y + y as f32 * w, w, q.y)));
         gaps.extend((z0..=z1).map(|z| self.near_gap(o.z + z as f32 * w, w, q.z)));
+        // The layers padded to groups of four with an infinite gap, whose cells (the next
+        // column's, or the bounds' padding) are never read.
+        let layers = z1 - z0 + 1;
+        gaps.resize(
+            gaps.len() + layers.next_multiple_of(4) - layers,
+            f32::INFINITY,
+        );
         let (gx, rest) = gaps.split_at(x1 - x0 + 1);
         let (gy, gz) = rest.split_at(y1 - y0 + 1);
-        // The cells to read, found first in a loop that only compares (without branches:
-        // each cell is written, and kept by counting it).
-        let mut cells = std::mem::take(&mut self.visit);
-        let most = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
-        if cells.len() < most {
-            cells.resize(most, 0);
-        }
-        let mut read = 0;
+        let r2s = Vec4::splat(r2);
         for (x, &dx) in (x0..).zip(gx) {
             for (y, &dy) in (y0..).zip(gy) {
                 let dxy = dx + dy;
@@ -386,19 +385,19 @@ impl PointGrid {
                 if dxy >= r2 {
                     continue;
                 }
-                let first = (x * self.dims[1] + y) * self.dims[2] + z0;
-                let bounds = &self.cell_bound[first..first + gz.len()];
-                for (k, (&bound, &dz)) in bounds.iter().zip(gz).enumerate() {
-                    let d = dxy + dz;
-                    cells[read] = (first + k) as u32;
-                    read += usize::from((d < r2) & (d < bound));
+                let column = (x * self.dims[1] + y) * self.dims[2] + z0;
+                for (first, dz) in (column..).step_by(4).zip(gz.chunks_exact(4)) {
+                    let d = Vec4::splat(dxy) + Vec4::from_slice(dz);
+                    let bound = Vec4::from_slice(&self.cell_bound[first..first + 4]);
+                    let mut read = (d.cmplt(r2s) & d.cmplt(bound)).bitmask();
+                    while read != 0 {
+                        let k = read.trailing_zeros() as usize;
+                        read &= read - 1;
+                        self.update_cell(q, r2, first + k, &mut f);
+                    }
                 }
             }
         }
-        for &c in &cells[..read] {
-            self.update_cell(q, r2, c as usize, &mut f);
-        }
-        self.visit = cells;
         self.gaps = gaps;
     }
 
