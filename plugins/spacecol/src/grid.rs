@@ -93,53 +93,9 @@ impl PointGrid {
     /// point's reach is infinite. Within a sub-cell, points are in increasing index order.
     #[must_use]
     pub fn new(points: &[Vec3], keep: &[bool], cell: f32) -> PointGrid {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for (p, k) in points.iter().zip(keep) {
-            if *k {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-        }
-        if !lo.is_finite() {
-            lo = Vec3::ZERO;
-            hi = Vec3::ZERO;
-        }
-        let size = (hi - lo).max(Vec3::splat(1e-6));
-        let mut cell = cell.max(size.max_element() / 1024.0).max(1e-6);
-        let dims = loop {
-            let d = (size / cell).ceil().max(Vec3::ONE);
-            let dims = [d.x as usize, d.y as usize, d.z as usize];
-            if dims[0] * dims[1] * dims[2] <= MAX_CELLS {
-                break dims;
-            }
-            cell *= 1.5;
-        };
-        let cells = dims[0] * dims[1] * dims[2];
-        let kept = keep.iter().filter(|k| **k).count();
-        let per_cell = kept as f32 / cells as f32;
-        let mut split = ((per_cell / POINTS_PER_SUB_CELL).cbrt().round() as usize).clamp(1, 8);
-        while split > 1 && cells * split.pow(3) > MAX_SUB_CELLS {
-            split -= 1;
-        }
-        let top = lo + Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * cell;
-        let slack = 1e-3 * cell + 1e-5 * lo.abs().max(top.abs()).max_element();
-        let mut grid = PointGrid {
-            origin: lo,
-            inv_cell: 1.0 / cell,
-            cell,
-            dims,
-            split,
-            starts: Vec::new(),
-            lens: Vec::new(),
-            items: Vec::new(),
-            lanes: Vec::new(),
-            slot_of: vec![NONE; points.len()],
-            sub_bound: Vec::new(),
-            cell_bound: Vec::new(),
-            slack,
-            gaps: Vec::new(),
-        };
+        let mut grid = PointGrid::layout(points, keep, cell);
+        grid.slot_of = vec![NONE; points.len()];
+        let (cells, split) = (grid.cells(), grid.split);
         let subs = cells * split.pow(3);
         let mut counts = vec![0u32; subs + 1];
         let sub_of: Vec<usize> = points
@@ -186,6 +142,94 @@ impl PointGrid {
         grid
     }
 
+    /// A grid without points: its cells and sub-cells for the kept points.
+    fn layout(points: &[Vec3], keep: &[bool], cell: f32) -> PointGrid {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for (p, k) in points.iter().zip(keep) {
+            if *k {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        if !lo.is_finite() {
+            lo = Vec3::ZERO;
+            hi = Vec3::ZERO;
+        }
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let mut cell = cell.max(size.max_element() / 1024.0).max(1e-6);
+        let dims = loop {
+            let d = (size / cell).ceil().max(Vec3::ONE);
+            let dims = [d.x as usize, d.y as usize, d.z as usize];
+            if dims[0] * dims[1] * dims[2] <= MAX_CELLS {
+                break dims;
+            }
+            cell *= 1.5;
+        };
+        let cells = dims[0] * dims[1] * dims[2];
+        let kept = keep.iter().filter(|k| **k).count();
+        let per_cell = kept as f32 / cells as f32;
+        let mut split = ((per_cell / POINTS_PER_SUB_CELL).cbrt().round() as usize).clamp(1, 8);
+        while split > 1 && cells * split.pow(3) > MAX_SUB_CELLS {
+            split -= 1;
+        }
+        let top = lo + Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * cell;
+        let slack = 1e-3 * cell + 1e-5 * lo.abs().max(top.abs()).max_element();
+        PointGrid {
+            origin: lo,
+            inv_cell: 1.0 / cell,
+            cell,
+            dims,
+            split,
+            starts: Vec::new(),
+            lens: Vec::new(),
+            items: Vec::new(),
+            lanes: Vec::new(),
+            slot_of: Vec::new(),
+            sub_bound: Vec::new(),
+            cell_bound: Vec::new(),
+            slack,
+            gaps: Vec::new(),
+        }
+    }
+
+    /// The order in which [`Self::new`] would keep the points, as [`Self::renumber`] then
+    /// gives it (cell by cell, in increasing index within a cell), when its cells are not
+    /// split (`None` when they are), without building the grid: a stable counting sort of
+    /// the kept points by cell.
+    #[must_use]
+    pub fn unsplit_order(points: &[Vec3], keep: &[bool], cell: f32) -> Option<Vec<u32>> {
+        let grid = PointGrid::layout(points, keep, cell);
+        if grid.split > 1 {
+            return None;
+        }
+        let cells = grid.cells();
+        let mut starts = vec![0u32; cells + 1];
+        let cell_of: Vec<u32> = points
+            .iter()
+            .zip(keep)
+            .map(|(p, k)| {
+                let c = grid.sub_index(*p);
+                if *k {
+                    starts[c + 1] += 1;
+                }
+                c as u32
+            })
+            .collect();
+        for c in 0..cells {
+            starts[c + 1] += starts[c];
+        }
+        let mut order = vec![0u32; starts[cells] as usize];
+        for (i, c) in cell_of.iter().enumerate() {
+            if keep[i] {
+                let slot = &mut starts[*c as usize];
+                order[*slot as usize] = i as u32;
+                *slot += 1;
+            }
+        }
+        Some(order)
+    }
+
     /// Renumbers the points in the grid's order (cell by cell, sub-cell by sub-cell: the
     /// points a query reads together get consecutive numbers) and returns the old number
     /// of each new one; points not in the grid get no new number. Only before any point
@@ -201,6 +245,11 @@ impl PointGrid {
             }
         }
         old
+    }
+
+    /// The number of cells.
+    fn cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
     }
 
     /// Sub-cells per cell side (1: the cells are not split).
@@ -558,6 +607,31 @@ mod tests {
         let mut none = 0;
         g.for_each_near(Vec3::splat(100.0), 2.0, |_, _, _| none += 1);
         assert_eq!(none, 0);
+    }
+
+    /// `unsplit_order` gives the order `new` keeps unsplit cells in, and nothing for split
+    /// ones.
+    #[test]
+    fn unsplit_order_is_the_grids_order() {
+        let mut rng = Mt64::new(5);
+        let pts: Vec<Vec3> = (0..3000)
+            .map(|_| {
+                Vec3::new(
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                ) * 4.0
+            })
+            .collect();
+        let keep: Vec<bool> = (0..pts.len()).map(|i| i % 5 != 0).collect();
+        let mut grid = PointGrid::new(&pts, &keep, 0.5);
+        assert_eq!(grid.sub_cells(), 1);
+        assert_eq!(
+            PointGrid::unsplit_order(&pts, &keep, 0.5),
+            Some(grid.renumber())
+        );
+        assert!(PointGrid::new(&pts, &keep, 2.0).sub_cells() > 1);
+        assert_eq!(PointGrid::unsplit_order(&pts, &keep, 2.0), None);
     }
 
     /// `update_near` against brute force on dense points (cells split into sub-cells): it
