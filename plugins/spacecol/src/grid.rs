@@ -55,7 +55,9 @@ pub struct PointGrid {
 
 /// Four slots of a [`PointGrid`]: their positions coordinate by coordinate and their reaches
 /// (squared), each a SIMD vector on x86-64. An empty slot lies at the origin with reach 0,
-/// which no distance is below.
+/// which no distance is below. A slot's lane is addressed through the vector's array
+/// (`as_ref`, `as_mut`): `Vec4`'s indexing is a `match`, a jump on the lane that the
+/// processor mispredicts at nearly every call-back.
 #[derive(Clone, Copy, Debug, Default)]
 struct Lanes {
     x: Vec4,
@@ -272,13 +274,16 @@ impl PointGrid {
     /// The position of the point in `slot`.
     fn position(&self, slot: usize) -> Vec3 {
         let (l, j) = (&self.lanes[slot / 4], slot % 4);
-        Vec3::new(l.x[j], l.y[j], l.z[j])
+        Vec3::new(l.x.as_ref()[j], l.y.as_ref()[j], l.z.as_ref()[j])
     }
 
     /// Puts a point at `p` with reach `reach` in `slot`.
     fn set(&mut self, slot: usize, p: Vec3, reach: f32) {
         let (l, j) = (&mut self.lanes[slot / 4], slot % 4);
-        (l.x[j], l.y[j], l.z[j], l.reach[j]) = (p.x, p.y, p.z, reach);
+        l.x.as_mut()[j] = p.x;
+        l.y.as_mut()[j] = p.y;
+        l.z.as_mut()[j] = p.z;
+        l.reach.as_mut()[j] = reach;
     }
 
     /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
@@ -322,7 +327,7 @@ impl PointGrid {
         self.slot_of[self.items[slot] as usize] = NONE;
         if last != slot {
             self.items[slot] = self.items[last];
-            let reach = self.lanes[last / 4].reach[last % 4];
+            let reach = self.lanes[last / 4].reach.as_ref()[last % 4];
             self.set(slot, self.position(last), reach);
             self.slot_of[self.items[slot] as usize] = slot as u32;
         }
@@ -546,7 +551,7 @@ impl PointGrid {
                 let slot = chunk_start * 4 + k;
                 let d2 = self.position(slot).distance_squared(q);
                 match f(self.items[slot], d2) {
-                    Some(reach) => self.lanes[slot / 4].reach[slot % 4] = reach,
+                    Some(reach) => self.lanes[slot / 4].reach.as_mut()[slot % 4] = reach,
                     None => self.remove_slot(sub, slot),
                 }
             }
