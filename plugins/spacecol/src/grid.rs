@@ -1,7 +1,7 @@
 //! The uniform grid over the attraction points: which live points lie within a radius of a
 //! node, and which of them a new node changes.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 const NONE: u32 = u32::MAX;
 
@@ -43,38 +43,41 @@ pub struct PointGrid {
     slot_of: Vec<u32>,
     /// The largest reach in each sub-cell (an upper bound).
     sub_bound: Vec<f32>,
-    /// The largest reach in each cell (an upper bound).
+    /// The largest reach in each cell (an upper bound), and three more of 0 at the end, so
+    /// that the cells are read four at a time.
     cell_bound: Vec<f32>,
     /// How far a point may lie outside its cell's nominal box through rounding: skipping
     /// tests shrink distances by this much, so that they never skip an affected point.
     slack: f32,
-    /// Scratch of `update_near`: the per-axis gaps of the cells it spans...
+    /// Scratch of `update_near`: the per-axis gaps of the cells it spans.
     gaps: Vec<f32>,
-    /// ... and the cells it reads.
-    visit: Vec<u32>,
 }
 
 /// Four slots of a [`PointGrid`]: their positions coordinate by coordinate and their reaches
-/// (squared). An empty slot lies at the origin with reach 0, which no distance is below.
+/// (squared), each a SIMD vector on x86-64. An empty slot lies at the origin with reach 0,
+/// which no distance is below. A slot's lane is addressed through the vector's array
+/// (`as_ref`, `as_mut`): `Vec4`'s indexing is a `match`, a jump on the lane that the
+/// processor mispredicts at nearly every call-back.
 #[derive(Clone, Copy, Debug, Default)]
 struct Lanes {
-    x: [f32; 4],
-    y: [f32; 4],
-    z: [f32; 4],
-    reach: [f32; 4],
+    x: Vec4,
+    y: Vec4,
+    z: Vec4,
+    reach: Vec4,
 }
 
 impl Lanes {
     /// Bit `j` set when lane `j` lies within `r2` of `q` and closer than its reach (the
-    /// squared distance summed as `Vec3::distance_squared` sums it).
+    /// squared distance summed as `Vec3::distance_squared` sums it, lane by lane).
+    #[inline(always)]
     fn hits(&self, q: Vec3, r2: f32) -> u64 {
-        let mut hits = 0;
-        for j in 0..4 {
-            let (dx, dy, dz) = (self.x[j] - q.x, self.y[j] - q.y, self.z[j] - q.z);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            hits |= u64::from((d2 < r2) & (d2 < self.reach[j])) << j;
-        }
-        hits
+        let (dx, dy, dz) = (
+            self.x - Vec4::splat(q.x),
+            self.y - Vec4::splat(q.y),
+            self.z - Vec4::splat(q.z),
+        );
+        let d2 = dx * dx + dy * dy + dz * dz;
+        u64::from((d2.cmplt(Vec4::splat(r2)) & d2.cmplt(self.reach)).bitmask())
     }
 }
 
@@ -92,54 +95,9 @@ impl PointGrid {
     /// point's reach is infinite. Within a sub-cell, points are in increasing index order.
     #[must_use]
     pub fn new(points: &[Vec3], keep: &[bool], cell: f32) -> PointGrid {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for (p, k) in points.iter().zip(keep) {
-            if *k {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-        }
-        if !lo.is_finite() {
-            lo = Vec3::ZERO;
-            hi = Vec3::ZERO;
-        }
-        let size = (hi - lo).max(Vec3::splat(1e-6));
-        let mut cell = cell.max(size.max_element() / 1024.0).max(1e-6);
-        let dims = loop {
-            let d = (size / cell).ceil().max(Vec3::ONE);
-            let dims = [d.x as usize, d.y as usize, d.z as usize];
-            if dims[0] * dims[1] * dims[2] <= MAX_CELLS {
-                break dims;
-            }
-            cell *= 1.5;
-        };
-        let cells = dims[0] * dims[1] * dims[2];
-        let kept = keep.iter().filter(|k| **k).count();
-        let per_cell = kept as f32 / cells as f32;
-        let mut split = ((per_cell / POINTS_PER_SUB_CELL).cbrt().round() as usize).clamp(1, 8);
-        while split > 1 && cells * split.pow(3) > MAX_SUB_CELLS {
-            split -= 1;
-        }
-        let top = lo + Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * cell;
-        let slack = 1e-3 * cell + 1e-5 * lo.abs().max(top.abs()).max_element();
-        let mut grid = PointGrid {
-            origin: lo,
-            inv_cell: 1.0 / cell,
-            cell,
-            dims,
-            split,
-            starts: Vec::new(),
-            lens: Vec::new(),
-            items: Vec::new(),
-            lanes: Vec::new(),
-            slot_of: vec![NONE; points.len()],
-            sub_bound: Vec::new(),
-            cell_bound: Vec::new(),
-            slack,
-            gaps: Vec::new(),
-            visit: Vec::new(),
-        };
+        let mut grid = PointGrid::layout(points, keep, cell);
+        grid.slot_of = vec![NONE; points.len()];
+        let (cells, split) = (grid.cells(), grid.split);
         let subs = cells * split.pow(3);
         let mut counts = vec![0u32; subs + 1];
         let sub_of: Vec<usize> = points
@@ -181,8 +139,97 @@ impl PointGrid {
                     .iter()
                     .fold(0.0f32, |m, r| m.max(*r))
             })
+            .chain([0.0; 3])
             .collect();
         grid
+    }
+
+    /// A grid without points: its cells and sub-cells for the kept points.
+    fn layout(points: &[Vec3], keep: &[bool], cell: f32) -> PointGrid {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for (p, k) in points.iter().zip(keep) {
+            if *k {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        if !lo.is_finite() {
+            lo = Vec3::ZERO;
+            hi = Vec3::ZERO;
+        }
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let mut cell = cell.max(size.max_element() / 1024.0).max(1e-6);
+        let dims = loop {
+            let d = (size / cell).ceil().max(Vec3::ONE);
+            let dims = [d.x as usize, d.y as usize, d.z as usize];
+            if dims[0] * dims[1] * dims[2] <= MAX_CELLS {
+                break dims;
+            }
+            cell *= 1.5;
+        };
+        let cells = dims[0] * dims[1] * dims[2];
+        let kept = keep.iter().filter(|k| **k).count();
+        let per_cell = kept as f32 / cells as f32;
+        let mut split = ((per_cell / POINTS_PER_SUB_CELL).cbrt().round() as usize).clamp(1, 8);
+        while split > 1 && cells * split.pow(3) > MAX_SUB_CELLS {
+            split -= 1;
+        }
+        let top = lo + Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * cell;
+        let slack = 1e-3 * cell + 1e-5 * lo.abs().max(top.abs()).max_element();
+        PointGrid {
+            origin: lo,
+            inv_cell: 1.0 / cell,
+            cell,
+            dims,
+            split,
+            starts: Vec::new(),
+            lens: Vec::new(),
+            items: Vec::new(),
+            lanes: Vec::new(),
+            slot_of: Vec::new(),
+            sub_bound: Vec::new(),
+            cell_bound: Vec::new(),
+            slack,
+            gaps: Vec::new(),
+        }
+    }
+
+    /// The order in which [`Self::new`] would keep the points, as [`Self::renumber`] then
+    /// gives it (cell by cell, in increasing index within a cell), when its cells are not
+    /// split (`None` when they are), without building the grid: a stable counting sort of
+    /// the kept points by cell.
+    #[must_use]
+    pub fn unsplit_order(points: &[Vec3], keep: &[bool], cell: f32) -> Option<Vec<u32>> {
+        let grid = PointGrid::layout(points, keep, cell);
+        if grid.split > 1 {
+            return None;
+        }
+        let cells = grid.cells();
+        let mut starts = vec![0u32; cells + 1];
+        let cell_of: Vec<u32> = points
+            .iter()
+            .zip(keep)
+            .map(|(p, k)| {
+                let c = grid.sub_index(*p);
+                if *k {
+                    starts[c + 1] += 1;
+                }
+                c as u32
+            })
+            .collect();
+        for c in 0..cells {
+            starts[c + 1] += starts[c];
+        }
+        let mut order = vec![0u32; starts[cells] as usize];
+        for (i, c) in cell_of.iter().enumerate() {
+            if keep[i] {
+                let slot = &mut starts[*c as usize];
+                order[*slot as usize] = i as u32;
+                *slot += 1;
+            }
+        }
+        Some(order)
     }
 
     /// Renumbers the points in the grid's order (cell by cell, sub-cell by sub-cell: the
@@ -200,6 +247,11 @@ impl PointGrid {
             }
         }
         old
+    }
+
+    /// The number of cells.
+    fn cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
     }
 
     /// Sub-cells per cell side (1: the cells are not split).
@@ -222,13 +274,16 @@ impl PointGrid {
     /// The position of the point in `slot`.
     fn position(&self, slot: usize) -> Vec3 {
         let (l, j) = (&self.lanes[slot / 4], slot % 4);
-        Vec3::new(l.x[j], l.y[j], l.z[j])
+        Vec3::new(l.x.as_ref()[j], l.y.as_ref()[j], l.z.as_ref()[j])
     }
 
     /// Puts a point at `p` with reach `reach` in `slot`.
     fn set(&mut self, slot: usize, p: Vec3, reach: f32) {
         let (l, j) = (&mut self.lanes[slot / 4], slot % 4);
-        (l.x[j], l.y[j], l.z[j], l.reach[j]) = (p.x, p.y, p.z, reach);
+        l.x.as_mut()[j] = p.x;
+        l.y.as_mut()[j] = p.y;
+        l.z.as_mut()[j] = p.z;
+        l.reach.as_mut()[j] = reach;
     }
 
     /// The sub-cell of `p` (cell-major), consistent with the cell [`Self::coord`] gives.
@@ -272,7 +327,7 @@ impl PointGrid {
         self.slot_of[self.items[slot] as usize] = NONE;
         if last != slot {
             self.items[slot] = self.items[last];
-            let reach = self.lanes[last / 4].reach[last % 4];
+            let reach = self.lanes[last / 4].reach.as_ref()[last % 4];
             self.set(slot, self.position(last), reach);
             self.slot_of[self.items[slot] as usize] = slot as u32;
         }
@@ -352,9 +407,9 @@ impl PointGrid {
     /// `q` are skipped unread.
     ///
     /// A cell's distance to `q` is the sum of its three per-axis gaps, computed once per
-    /// query for the rows, columns and layers the ball spans, so a skipped cell costs one
-    /// addition and one comparison (most cells are skipped once the points near them have
-    /// a node close by).
+    /// query for the rows, columns and layers the ball spans; a column's cells are tested
+    /// four at a time (most cells are skipped once the points near them have a node close
+    /// by).
     pub fn update_near(&mut self, q: Vec3, r: f32, mut f: impl FnMut(u32, f32) -> Option<f32>) {
         let Some([(x0, x1), (y0, y1), (z0, z1)]) = self.span(q, r) else {
             return;
@@ -366,16 +421,16 @@ impl PointGrid {
         gaps.extend((x0..=x1).map(|x| self.near_gap(o.x + x as f32 * w, w, q.x)));
         gaps.extend((y0..=y1).map(|y| self.near_gap(o.y + y as f32 * w, w, q.y)));
         gaps.extend((z0..=z1).map(|z| self.near_gap(o.z + z as f32 * w, w, q.z)));
+        // The layers padded to groups of four with an infinite gap, whose cells (the next
+        // column's, or the bounds' padding) are never read.
+        let layers = z1 - z0 + 1;
+        gaps.resize(
+            gaps.len() + layers.next_multiple_of(4) - layers,
+            f32::INFINITY,
+        );
         let (gx, rest) = gaps.split_at(x1 - x0 + 1);
         let (gy, gz) = rest.split_at(y1 - y0 + 1);
-        // The cells to read, found first in a loop that only compares (without branches:
-        // each cell is written, and kept by counting it).
-        let mut cells = std::mem::take(&mut self.visit);
-        let most = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
-        if cells.len() < most {
-            cells.resize(most, 0);
-        }
-        let mut read = 0;
+        let r2s = Vec4::splat(r2);
         for (x, &dx) in (x0..).zip(gx) {
             for (y, &dy) in (y0..).zip(gy) {
                 let dxy = dx + dy;
@@ -384,19 +439,19 @@ impl PointGrid {
                 if dxy >= r2 {
                     continue;
                 }
-                let first = (x * self.dims[1] + y) * self.dims[2] + z0;
-                let bounds = &self.cell_bound[first..first + gz.len()];
-                for (k, (&bound, &dz)) in bounds.iter().zip(gz).enumerate() {
-                    let d = dxy + dz;
-                    cells[read] = (first + k) as u32;
-                    read += usize::from((d < r2) & (d < bound));
+                let column = (x * self.dims[1] + y) * self.dims[2] + z0;
+                for (first, dz) in (column..).step_by(4).zip(gz.chunks_exact(4)) {
+                    let d = Vec4::splat(dxy) + Vec4::from_slice(dz);
+                    let bound = Vec4::from_slice(&self.cell_bound[first..first + 4]);
+                    let mut read = (d.cmplt(r2s) & d.cmplt(bound)).bitmask();
+                    while read != 0 {
+                        let k = read.trailing_zeros() as usize;
+                        read &= read - 1;
+                        self.update_cell(q, r2, first + k, &mut f);
+                    }
                 }
             }
         }
-        for &c in &cells[..read] {
-            self.update_cell(q, r2, c as usize, &mut f);
-        }
-        self.visit = cells;
         self.gaps = gaps;
     }
 
@@ -496,7 +551,7 @@ impl PointGrid {
                 let slot = chunk_start * 4 + k;
                 let d2 = self.position(slot).distance_squared(q);
                 match f(self.items[slot], d2) {
-                    Some(reach) => self.lanes[slot / 4].reach[slot % 4] = reach,
+                    Some(reach) => self.lanes[slot / 4].reach.as_mut()[slot % 4] = reach,
                     None => self.remove_slot(sub, slot),
                 }
             }
@@ -511,8 +566,8 @@ impl PointGrid {
         let groups = first..(start + self.lens[sub] as usize).div_ceil(4);
         let kept = self.lanes[groups]
             .iter()
-            .flat_map(|l| l.reach)
-            .fold(0.0f32, f32::max);
+            .fold(Vec4::ZERO, |m, l| m.max(l.reach))
+            .max_element();
         self.sub_bound[sub] = kept;
         kept
     }
@@ -557,6 +612,31 @@ mod tests {
         let mut none = 0;
         g.for_each_near(Vec3::splat(100.0), 2.0, |_, _, _| none += 1);
         assert_eq!(none, 0);
+    }
+
+    /// `unsplit_order` gives the order `new` keeps unsplit cells in, and nothing for split
+    /// ones.
+    #[test]
+    fn unsplit_order_is_the_grids_order() {
+        let mut rng = Mt64::new(5);
+        let pts: Vec<Vec3> = (0..3000)
+            .map(|_| {
+                Vec3::new(
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                    uniform24(&mut rng),
+                ) * 4.0
+            })
+            .collect();
+        let keep: Vec<bool> = (0..pts.len()).map(|i| i % 5 != 0).collect();
+        let mut grid = PointGrid::new(&pts, &keep, 0.5);
+        assert_eq!(grid.sub_cells(), 1);
+        assert_eq!(
+            PointGrid::unsplit_order(&pts, &keep, 0.5),
+            Some(grid.renumber())
+        );
+        assert!(PointGrid::new(&pts, &keep, 2.0).sub_cells() > 1);
+        assert_eq!(PointGrid::unsplit_order(&pts, &keep, 2.0), None);
     }
 
     /// `update_near` against brute force on dense points (cells split into sub-cells): it

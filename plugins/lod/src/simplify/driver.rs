@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::grid::{EMPTY, Grid};
+use super::grid::Grid;
 use super::search::{NEAREST, SWEEP};
 use super::{Axis, Selection, Weights};
 use crate::leaf::Leaf;
@@ -22,6 +22,9 @@ pub(super) struct Simplifier {
     /// Scratch list of the living labels, for laying out the grid.
     pub(super) living: Vec<u32>,
     pub(super) pairs: Vec<Pair>,
+    /// Scratch for matching the pairs: the pairs in buckets by cost, and where each ends.
+    scratch: Vec<Pair>,
+    ends: Vec<u32>,
     pub(super) weights: Weights,
     pub(super) max_distance: f32,
     pub(super) min_cos: f32,
@@ -54,6 +57,8 @@ impl Simplifier {
             grid: Grid::default(),
             living: Vec::with_capacity(leaves.len()),
             pairs: Vec::new(),
+            scratch: Vec::new(),
+            ends: Vec::new(),
             weights: selection.weights,
             max_distance: selection.bounds.max_distance.max(0.0),
             max_growth: selection.bounds.max_growth,
@@ -72,43 +77,37 @@ impl Simplifier {
     }
 
     /// Rounds of greedy matching. In each round the leaves made by the last one (at first,
-    /// every leaf) find their allowed pairs: of their nearest partners within the distance
-    /// and angle bounds, those whose new leaf keeps the area bounds. Then the pairs are
-    /// collapsed cheapest first, each as long as both its leaves live. A pair a search
-    /// found needs no second look: one of its leaves has gone since, or the round would have
-    /// collapsed it. A round that makes nothing is followed by a sweep, searching again
-    /// among more partners around every living leaf made since the last sweep began (the
+    /// every leaf) find their pairs: their nearest partners within the distance and angle
+    /// bounds. Then the pairs are taken cheapest first, and each whose leaves both live
+    /// collapses if its new leaf keeps the area bounds. A pair a search found needs no second
+    /// look: one of its leaves has gone since, or the round would have collapsed it, or the
+    /// area bounds refused it. A round that makes nothing is followed by a sweep, searching
+    /// again among more partners around every living leaf made since the last sweep began (the
     /// first: every leaf); a sweep that makes nothing ends the simplification. Pairs beyond
-    /// each other's nearest partners in every search around them are never tested (a
-    /// heuristic; see the module's docs).
+    /// each other's nearest partners in every search around them are never tested (a heuristic;
+    /// see the module's docs).
     pub(super) fn run(&mut self) {
         let mut fresh = 0u32;
         let mut sweep = false;
         // The labels made before the last sweep began: it searched around each of them.
         let mut swept = 0u32;
         loop {
-            self.rebuild_grid();
+            self.rebuild_grid(fresh);
             self.pairs.clear();
-            // Cell by cell, so neighbouring searches share the cells they read.
-            for slot in 0..self.grid.traits.len() {
-                let a = self.grid.traits[slot].label;
-                if a != EMPTY && a >= fresh {
+            // Cell by cell, so neighbouring searches share the cells they read; the fresh
+            // leaves are the last slots of each cell.
+            for c in 0..self.grid.cells.len() {
+                let cell = self.grid.cells[c];
+                for slot in (cell.start + cell.old) as usize..(cell.start + cell.len) as usize {
                     if sweep {
-                        self.search::<SWEEP>(a, fresh);
+                        self.search::<SWEEP>(slot);
                     } else {
-                        self.search::<NEAREST>(a, fresh);
+                        self.search::<NEAREST>(slot);
                     }
                 }
             }
-            self.pairs.sort_unstable();
             fresh = self.leaves.len() as u32;
-            let pairs = std::mem::take(&mut self.pairs);
-            for &(_, a, b) in &pairs {
-                if self.alive[a as usize] && self.alive[b as usize] {
-                    self.collapse(a, b);
-                }
-            }
-            self.pairs = pairs;
+            self.match_pairs();
             let made = self.leaves.len() as u32 > fresh;
             if !made && sweep {
                 break;
@@ -120,6 +119,38 @@ impl Simplifier {
                 swept = self.leaves.len() as u32;
             }
         }
+    }
+
+    /// Collapses the round's pairs cheapest first, each whose leaves both live and whose new
+    /// leaf keeps the area bounds. The pairs are put in buckets by cost, and each bucket in
+    /// turn is rid of its pairs with a leaf gone, then sorted: the order is total, so the
+    /// collapses are those of one sort of every pair, but most pairs are reached after one of
+    /// their leaves has gone and are never sorted.
+    fn match_pairs(&mut self) {
+        let mut buckets = std::mem::take(&mut self.scratch);
+        into_buckets(&self.pairs, &mut buckets, &mut self.ends);
+        let mut start = 0;
+        for b in 0..self.ends.len() {
+            let end = self.ends[b] as usize;
+            let bucket = &mut buckets[start..end];
+            start = end;
+            let mut kept = 0;
+            for i in 0..bucket.len() {
+                let (_, a, b) = bucket[i];
+                if self.alive[a as usize] && self.alive[b as usize] {
+                    bucket[kept] = bucket[i];
+                    kept += 1;
+                }
+            }
+            bucket[..kept].sort_unstable();
+            for &(_, a, b) in &bucket[..kept] {
+                let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
+                if self.alive[a as usize] && self.alive[b as usize] && self.fits(la, lb) {
+                    self.collapse(a, b);
+                }
+            }
+        }
+        self.scratch = buckets;
     }
 
     /// Joins `a` and `b` into their new leaf.
@@ -167,7 +198,7 @@ impl Simplifier {
 
     /// A grid of the living leaves with about three leaves per occupied cell, so that the
     /// nearest partners of a leaf are found in its cell and the next ring or two.
-    fn rebuild_grid(&mut self) {
+    fn rebuild_grid(&mut self, fresh: u32) {
         self.living.clear();
         let alive = self.alive.iter().enumerate().filter(|(_, a)| **a);
         self.living.extend(alive.map(|(i, _)| i as u32));
@@ -188,14 +219,82 @@ impl Simplifier {
         let mut grid = std::mem::take(&mut self.grid);
         loop {
             grid.shape(lo, hi, cell, living);
-            let occupied = grid.occupied(&self.leaves, &self.living);
+            let occupied = grid.count(&self.leaves, &self.living);
             let finer = grid.cell_count() * 8 <= living;
             if occupied * 3 >= living || !finer {
                 break;
             }
             cell = grid.cell * 0.5;
         }
-        grid.fill(&self.leaves, &self.living);
+        grid.fill(&self.leaves, &self.living, fresh);
         self.grid = grid;
+    }
+}
+
+/// Puts `pairs` into `buckets` by the high bits of their costs, a few hundred pairs to a
+/// bucket on average: bucket `k` is `buckets[ends[k - 1]..ends[k]]` (from 0 for the first),
+/// and every pair of a bucket is less than every pair of a later one.
+fn into_buckets(pairs: &[Pair], buckets: &mut Vec<Pair>, ends: &mut Vec<u32>) {
+    let count = (pairs.len() / 256).clamp(1, 4096);
+    let cost = |p: &Pair| p.0 >> 32;
+    let (lo, hi) = pairs.iter().fold((u64::MAX, 0), |(lo, hi), p| {
+        (lo.min(cost(p)), hi.max(cost(p)))
+    });
+    let mut shift = 0;
+    while hi > lo && (hi - lo) >> shift >= count as u64 {
+        shift += 1;
+    }
+    let bucket = |p: &Pair| ((cost(p) - lo) >> shift) as usize;
+    ends.clear();
+    ends.resize(count, 0);
+    for p in pairs {
+        ends[bucket(p)] += 1;
+    }
+    // Where each bucket starts, moved to its end as it is filled.
+    let mut start = 0;
+    for e in ends.iter_mut() {
+        (*e, start) = (start, start + *e);
+    }
+    buckets.clear();
+    buckets.resize(pairs.len(), (0, 0, 0));
+    for p in pairs {
+        let e = &mut ends[bucket(p)];
+        buckets[*e as usize] = *p;
+        *e += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simplify::search::key;
+
+    #[test]
+    fn buckets_of_pairs_sorted_one_by_one_sort_every_pair() {
+        let mut x = 11u64;
+        let mut r = move || {
+            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (x >> 33) as u32
+        };
+        for n in [0, 1, 10, 600, 5000, 70_000] {
+            // Few distinct costs and labels: many ties on the key and on the labels.
+            let pairs: Vec<Pair> = (0..n)
+                .map(|_| {
+                    let cost = 0.5 + (r() % 300) as f32 * 0.01;
+                    (key(cost, r() % 50), r() % 40, r() % 40)
+                })
+                .collect();
+            let (mut buckets, mut ends) = (Vec::new(), Vec::new());
+            into_buckets(&pairs, &mut buckets, &mut ends);
+            assert_eq!(ends.last().map_or(0, |&e| e as usize), n);
+            let mut start = 0;
+            for &end in &ends {
+                buckets[start..end as usize].sort_unstable();
+                start = end as usize;
+            }
+            let mut expected = pairs.clone();
+            expected.sort_unstable();
+            assert_eq!(buckets, expected, "{n}");
+        }
     }
 }

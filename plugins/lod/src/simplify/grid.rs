@@ -59,14 +59,23 @@ impl Sphere {
     };
 }
 
-/// A cell of the grid: its slots are `start .. start + len` of the grid's arrays.
+/// A cell of the grid: its slots are `start .. start + len` of the grid's arrays, the leaves
+/// made before the round's first fresh label (see [`Grid::fill`]) the first `old` of them.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Cell {
     pub(super) start: u32,
     pub(super) len: u32,
+    pub(super) old: u32,
     /// The largest radius of its leaves, for the searches to skip a cell whose every leaf
     /// is beyond the distance bound.
     pub(super) radius: f32,
+}
+
+impl Cell {
+    /// Its slots.
+    pub(super) fn slots(&self) -> Range<usize> {
+        self.start as usize..(self.start + self.len) as usize
+    }
 }
 
 /// A dense uniform grid of living leaves over the box of their centres; points outside the
@@ -133,34 +142,33 @@ impl Grid {
         self.dims.iter().map(|&d| d as usize).product()
     }
 
-    /// Counts the leaves `labels` of each cell into `cells` (zeroed first); the cell of each
-    /// into `cell_of`.
-    pub(super) fn count(&mut self, leaves: &[Leaf], labels: &[u32]) {
+    /// Counts the leaves `labels` of each cell into `cells` (zeroed first) and the cell of
+    /// each into `cell_of`; returns how many cells they occupy.
+    pub(super) fn count(&mut self, leaves: &[Leaf], labels: &[u32]) -> usize {
         self.cells.clear();
         self.cells.resize(self.cell_count() + 1, Cell::default());
         self.cell_of.clear();
+        let mut occupied = 0;
         for &l in labels {
             let c = self.index(self.coords(leaves[l as usize].center));
+            occupied += usize::from(self.cells[c].len == 0);
             self.cells[c].len += 1;
             self.cell_of.push(c as u32);
         }
+        occupied
     }
 
-    /// How many cells the leaves `labels` occupy.
-    pub(super) fn occupied(&mut self, leaves: &[Leaf], labels: &[u32]) -> usize {
-        self.count(leaves, labels);
-        self.cells.iter().filter(|c| c.len > 0).count()
-    }
-
-    /// Lays out the leaves `labels` cell by cell, in the order given within each cell.
-    pub(super) fn fill(&mut self, leaves: &[Leaf], labels: &[u32]) {
-        self.count(leaves, labels);
+    /// Lays out the leaves `labels`, just counted by [`Grid::count`] in the grid's shape,
+    /// cell by cell, in the order given within each cell, and counts in each cell the leaves
+    /// labelled below `fresh` (with `labels` increasing, they are its first slots).
+    pub(super) fn fill(&mut self, leaves: &[Leaf], labels: &[u32], fresh: u32) {
         let mut start = 0u32;
         for cell in &mut self.cells {
             let len = cell.len;
             *cell = Cell {
                 start,
                 len: 0,
+                old: 0,
                 radius: 0.0,
             };
             start += len;
@@ -176,6 +184,7 @@ impl Grid {
             let slot = (cell.start + cell.len) as usize;
             let traits = Traits::of(l, &leaves[l as usize]);
             cell.len += 1;
+            cell.old += u32::from(l < fresh);
             cell.radius = cell.radius.max(traits.radius);
             self.radius = self.radius.max(traits.radius);
             self.put(slot, traits);
@@ -254,15 +263,15 @@ impl Grid {
             - self.slack
     }
 
-    /// Calls `visit` on the slots of each non-empty cell exactly `ring` cells away from `c`
-    /// (Chebyshev distance) within the grid, in memory order (x fastest), with the cell's
-    /// largest radius and the least squared distance from `p` to a point it may hold.
+    /// Calls `visit` on each non-empty cell exactly `ring` cells away from `c` (Chebyshev
+    /// distance) within the grid, in memory order (x fastest), with its index and the least
+    /// squared distance from `p` to a point it may hold.
     pub(super) fn ring(
         &self,
         c: [i32; 3],
         ring: i32,
         p: Vec3,
-        mut visit: impl FnMut(Range<usize>, f32, f32),
+        mut visit: impl FnMut(usize, &Cell, f32),
     ) {
         let lo = [0, 1, 2].map(|k| (c[k] - ring).max(0));
         let hi = [0, 1, 2].map(|k| (c[k] + ring).min(self.dims[k] - 1));
@@ -271,8 +280,7 @@ impl Grid {
             for (x, cell) in (x0..).zip(&self.cells[first..=last]) {
                 if cell.len > 0 {
                     let dx = self.gap(0, x, p.x);
-                    let slots = cell.start as usize..(cell.start + cell.len) as usize;
-                    visit(slots, cell.radius, dx * dx + yz2);
+                    visit(first + (x - x0) as usize, cell, dx * dx + yz2);
                 }
             }
         };
@@ -322,9 +330,13 @@ mod tests {
         let labels: Vec<u32> = (0..5).collect();
         let mut grid = Grid::default();
         grid.shape(Vec3::ZERO, Vec3::new(2.6, 0.0, 0.0), 1.0, leaves.len());
-        grid.fill(&leaves, &labels);
+        grid.count(&leaves, &labels);
+        grid.fill(&leaves, &labels, 3);
         let order: Vec<u32> = grid.traits.iter().map(|t| t.label).collect();
         assert_eq!(order, [0, 2, 4, 1, 3]);
+        // The leaves labelled below 3 come first in each cell.
+        let old: Vec<(u32, u32)> = grid.cells.iter().map(|c| (c.len, c.old)).collect();
+        assert_eq!(old, [(3, 2), (0, 0), (2, 1), (0, 0)]);
         let spheres: Vec<Vec3> = grid.spheres.iter().map(|s| s.center).collect();
         let copies: Vec<Vec3> = grid.traits.iter().map(|t| t.leaf.center).collect();
         assert_eq!(spheres, copies);
@@ -346,20 +358,21 @@ mod tests {
         let labels: Vec<u32> = (0..400).collect();
         let mut grid = Grid::default();
         grid.shape(Vec3::ZERO, Vec3::new(8.0, 4.0, 2.0), 0.7, leaves.len());
-        grid.fill(&leaves, &labels);
+        grid.count(&leaves, &labels);
+        grid.fill(&leaves, &labels, 0);
         let mut visited = 0;
         for probe in leaves.iter().step_by(7) {
             let p = probe.center;
             let c = grid.coords(p);
             for ring in 0..5 {
-                grid.ring(c, ring, p, |slots, radius, least| {
-                    for t in &grid.traits[slots] {
+                grid.ring(c, ring, p, |_, cell, least| {
+                    for t in &grid.traits[cell.slots()] {
                         assert!(
                             least <= p.distance_squared(t.leaf.center),
                             "{p} {}",
                             t.leaf.center
                         );
-                        assert!(t.radius <= radius);
+                        assert!(t.radius <= cell.radius);
                         visited += 1;
                     }
                 });

@@ -7,20 +7,25 @@
 //! collapses come in rounds of greedy matching. A round lays the living leaves out in a
 //! dense uniform grid; each leaf made by the last round (at first, every leaf) searches it
 //! for its nearest partners within the distance and angle bounds (`NEAREST` of them) and
-//! builds the new leaf of each pair there and then ([`Leaf::collapse`] on the grid's copies),
-//! keeping the pairs whose new leaf keeps the area bounds. The round's pairs are then
-//! collapsed cheapest first, each while both its leaves still live. A pair a search has found
-//! needs no second look (one of its leaves has gone, or the round that found it would have
-//! collapsed it), so later rounds search only around the new leaves. Pairs beyond each
-//! other's nearest `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep
+//! weighs each pair. The round's pairs are then taken cheapest first, and a pair whose two
+//! leaves still live collapses if its new leaf keeps the area bounds ([`Leaf::collapse`]);
+//! only then are the bounds tested, as most pairs are reached after one of their leaves has
+//! gone (about a quarter of them are tested, and the result is the same as testing every
+//! pair when found). A pair a search has found needs no second look (one of its leaves has
+//! gone, or the round that found it would have collapsed it, or the area bounds refused
+//! it), so later rounds search only around the new leaves. Pairs beyond each other's
+//! nearest `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep
 //! searches again with more partners (`SWEEP`) around every living leaf made since the last
 //! sweep began (the first sweep: around every leaf); the simplification ends when a sweep
 //! makes nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that
 //! are beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
 //! again (the quality figures in benches/README.md, not a proof, justify it). A refused
-//! pair is refused once, at search time: it never waits in a queue, and no leaf searches
-//! again because of it.
+//! pair is refused once, in the round that found it: it never waits in a queue, and no leaf
+//! searches again because of it.
 //!
+//! A pair of two leaves that both search in a round is looked at only by the one in the
+//! earlier grid slot: each cell lays out the leaves made before the round first, so in the
+//! cells before its own a search reads only those, about half the slots of the first rounds.
 //! The searches of a round go cell by cell, so neighbouring searches read the same memory;
 //! the grid keeps what the distance test reads (centre and radius) in one array and a copy
 //! of each leaf beside it, cell after cell; a search skips the cells that cannot hold a
@@ -318,8 +323,8 @@ mod tests {
             .collect()
     }
 
-    /// The area bounds are tested when a search finds a pair, on the grid's copies of both
-    /// leaves, and never again: every collapse of the chain must keep them, checked here on
+    /// The area bounds are tested once for a pair, when its round's matching reaches it
+    /// with both leaves living: every collapse of the chain must keep them, checked here on
     /// the chain's own leaves with the corners themselves.
     #[test]
     fn every_collapse_keeps_the_area_bounds() {

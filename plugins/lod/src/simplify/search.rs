@@ -1,11 +1,13 @@
 //! A leaf's search for the pairs it may collapse into, in the grid, and the collapse
 //! distance they are ranked by.
 
+use std::ops::Range;
+
 use super::driver::Simplifier;
 use super::grid::Traits;
 
-/// The most partners of a leaf a search tests against the area bounds (its nearest within
-/// the distance and angle bounds).
+/// The most partners of a leaf a search lists (its nearest within the distance and angle
+/// bounds).
 pub(super) const NEAREST: usize = 16;
 
 /// The same for the searches of a sweep, once the rounds have run out of pairs.
@@ -18,55 +20,70 @@ pub(super) fn key(cost: f32, label: u32) -> u64 {
 }
 
 impl Simplifier {
-    /// Adds to the round's pairs those of `a` that may collapse: of its nearest partners
-    /// within the distance and angle bounds, those whose new leaf keeps the area bounds. A
-    /// partner made in the same round as `a` (label at least `fresh`) with a lower label
-    /// finds the pair itself. The grid is searched in rings of cells around `a` until the
-    /// ring is farther than the farthest of the nearest, or than the distance bound to the
-    /// largest leaf.
-    pub(super) fn search<const N: usize>(&mut self, a: u32, fresh: u32) {
-        let me = Traits::of(a, &self.leaves[a as usize]);
+    /// Adds to the round's pairs, with their costs, those of the fresh leaf in grid slot `at`
+    /// (labelled at least the round's `fresh`): its nearest partners within the distance and
+    /// angle bounds (the round's matching tests the area bounds). A fresh partner in an earlier
+    /// slot finds the pair itself, so it is not read: in the cells before its own (in memory
+    /// order) only the old leaves are, which [`super::grid::Grid::fill`] puts first. The grid
+    /// is searched in rings of cells around it until the ring is farther than the farthest of
+    /// the nearest, or than the distance bound to the largest leaf.
+    pub(super) fn search<const N: usize>(&mut self, at: usize) {
+        let grid = &self.grid;
+        let me = grid.traits[at];
+        let a = me.label;
         let centre_of_me = me.leaf.center;
-        let reach = self.max_distance * (me.radius + self.grid.radius);
+        let reach = self.max_distance * (me.radius + grid.radius);
         // The nearest partners within the angle bound: (distance squared, slot), by distance.
         let mut near = [(f32::MAX, 0usize); N];
         let mut len = 0usize;
-        let centre = self.grid.coords(centre_of_me);
-        let grid = &self.grid;
+        let centre = grid.coords(centre_of_me);
+        let my_cell = grid.index(centre);
+        let scan = |slots: Range<usize>, len: &mut usize, near: &mut [(f32, usize); N]| {
+            for (slot, sphere) in slots.clone().zip(&grid.spheres[slots]) {
+                let d2 = centre_of_me.distance_squared(sphere.center);
+                let limit = self.max_distance * (me.radius + sphere.radius);
+                if d2 > limit * limit || (*len == N && d2 >= near[N - 1].0) {
+                    continue;
+                }
+                let other = &grid.traits[slot];
+                if me.leaf.normal.dot(other.leaf.normal).abs() < self.min_cos {
+                    continue;
+                }
+                // Insertion into the sorted, bounded list.
+                let mut i = (*len).min(N - 1);
+                while i > 0 && near[i - 1].0 > d2 {
+                    near[i] = near[i - 1];
+                    i -= 1;
+                }
+                near[i] = (d2, slot);
+                *len = (*len + 1).min(N);
+            }
+        };
         let mut ring = 0i32;
         loop {
-            grid.ring(centre, ring, centre_of_me, |slots, radius, least| {
+            grid.ring(centre, ring, centre_of_me, |index, cell, least| {
                 // A cell whose every leaf is farther than the distance bound, or than the
                 // farthest of a full list, would add nothing: not read at all.
-                let limit = self.max_distance * (me.radius + radius);
+                let limit = self.max_distance * (me.radius + cell.radius);
                 if least > limit * limit || (len == N && least >= near[N - 1].0) {
                     return;
                 }
-                for (slot, sphere) in slots.clone().zip(&grid.spheres[slots]) {
-                    let d2 = centre_of_me.distance_squared(sphere.center);
-                    let limit = self.max_distance * (me.radius + sphere.radius);
-                    if d2 > limit * limit || (len == N && d2 >= near[N - 1].0) {
-                        continue;
+                let slots = cell.slots();
+                if index > my_cell {
+                    scan(slots, &mut len, &mut near);
+                } else {
+                    scan(
+                        slots.start..slots.start + cell.old as usize,
+                        &mut len,
+                        &mut near,
+                    );
+                    if index == my_cell {
+                        scan(at + 1..slots.end, &mut len, &mut near);
                     }
-                    let other = &grid.traits[slot];
-                    if other.label == a || (other.label >= fresh && other.label < a) {
-                        continue;
-                    }
-                    if me.leaf.normal.dot(other.leaf.normal).abs() < self.min_cos {
-                        continue;
-                    }
-                    // Insertion into the sorted, bounded list.
-                    let mut i = len.min(N - 1);
-                    while i > 0 && near[i - 1].0 > d2 {
-                        near[i] = near[i - 1];
-                        i -= 1;
-                    }
-                    near[i] = (d2, slot);
-                    len = (len + 1).min(N);
                 }
             });
             // Every point of the rings beyond is at least `ring` cells away, and farther
-            // when `a` is far from its cell's faces.
+            // when `me` is far from its cell's faces.
             let beyond = ring as f32 * grid.cell;
             let least = grid.beyond(centre, ring, centre_of_me).max(0.0);
             let full = len == N;
@@ -78,12 +95,8 @@ impl Simplifier {
             }
             ring += 1;
         }
-        // The cost only for the pairs kept: most of the nearest fail the area bounds.
         for &(_, slot) in &near[..len] {
             let other = &grid.traits[slot];
-            if !self.fits(&me.leaf, &other.leaf) {
-                continue;
-            }
             if let Some(cost) = self.cost(&me, other) {
                 self.pairs
                     .push((key(cost, a.min(other.label)), a, other.label));

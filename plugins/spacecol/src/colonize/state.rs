@@ -67,14 +67,22 @@ impl State {
     pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
         let n = pts.len();
         let alive = vec![true; n];
-        let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
         // Points that a query reads together then lie together in memory.
-        let points: Vec<Vec3> = grid.renumber().iter().map(|i| pts[*i as usize]).collect();
-        if grid.sub_cells() == 1 {
+        let renumbered =
+            |order: Vec<u32>| -> Vec<Vec3> { order.iter().map(|i| pts[*i as usize]).collect() };
+        let (points, grid) = match PointGrid::unsplit_order(&pts, &alive, influence / 3.0) {
             // Sparse points (a small tree's crown: a few to a cell, no sub-cells): in larger
             // cells a query reads fewer cells, empty or skipped, for a few more points.
-            grid = PointGrid::new(&points, &alive, influence / 2.0);
-        }
+            Some(order) => {
+                let points = renumbered(order);
+                let grid = PointGrid::new(&points, &alive, influence / 2.0);
+                (points, grid)
+            }
+            None => {
+                let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
+                (renumbered(grid.renumber()), grid)
+            }
+        };
         State {
             points,
             alive,
