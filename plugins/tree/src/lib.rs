@@ -269,8 +269,7 @@ pub fn build_tree(
     let ((bark, meshing_time), (leaves, mut leaves_time)) = beside(
         || {
             // At least one segment, so the bark mesh has triangles.
-            let r = has_bark.then(|| bark_mesh(&prepared, &options.mesh));
-            r
+            has_bark.then(|| bark_mesh(&prepared, &options.mesh))
         },
         || {
             let mut rng = Mt64::new(seed);
