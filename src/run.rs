@@ -97,8 +97,12 @@ pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
             .num_threads(n)
             .build_global()
             .context("cannot start the worker threads")?,
-        // The default pool starts on first use, without waiting for its workers.
-        None => rayon::spawn(|| {}),
+        // The default pool, started by a thread of its own: this one goes on making the
+        // session while the pool counts the cores and starts its workers. Should no thread
+        // start now, the pool starts on first use.
+        None => {
+            let _ = std::thread::Builder::new().spawn(|| rayon::spawn(|| {}));
+        }
     }
     Ok(())
 }
