@@ -265,18 +265,27 @@ pub fn build_tree(
     let default_style = LeafOptions::default();
     let style = options.leaves.as_ref().unwrap_or(&default_style);
     // The bark draws nothing from the generator and the leaves read nothing of the bark, so
-    // they are made side by side; each phase counts its own time.
+    // a small tree's are made side by side (a big tree's each use the whole pool already);
+    // each phase counts its own time.
+    let small = prepared.len() * (options.mesh.sides as usize + 1) < SIDE_BY_SIDE_BELOW;
     let ((bark, meshing_time), (leaves, mut leaves_time)) = beside(
+        small,
         || {
             // At least one segment, so the bark mesh has triangles.
             has_bark.then(|| bark_mesh(&prepared, &options.mesh))
         },
         || {
             let mut rng = Mt64::new(seed);
-            let mut points = prepared.leaves.clone();
-            if let Some(leaf_options) = &options.leaves {
-                points.extend(tip_leaves(&prepared, leaf_options, &mut rng));
-            }
+            let tips = match &options.leaves {
+                Some(leaf_options) => tip_leaves(&prepared, leaf_options, &mut rng),
+                None => Vec::new(),
+            };
+            // The skeleton's own leaves first, then the tip leaves (not copied when alone).
+            let points = if prepared.leaves.is_empty() {
+                tips
+            } else {
+                [prepared.leaves.as_slice(), &tips].concat()
+            };
             let mesh = (!points.is_empty()).then(|| {
                 let mut mesh = Mesh {
                     name: "leaves".into(),
@@ -339,15 +348,24 @@ pub fn build_tree(
     Ok(model)
 }
 
-/// `a` on the calling thread beside `b` on the rayon pool when it has more than one thread
-/// (one after the other otherwise), each with the seconds it took.
-fn beside<A, B: Send>(a: impl FnOnce() -> A, b: impl FnOnce() -> B + Send) -> ((A, f64), (B, f64)) {
+/// Nodes times sides plus one (about half the bark's vertices) below which a tree's bark and
+/// leaves are made side by side: above it, the bark's tubes and the leaves each use the pool
+/// (from 64 k vertices and 16 k leaves), and making them one after the other costs nothing.
+const SIDE_BY_SIDE_BELOW: usize = 1 << 16;
+
+/// `a` on the calling thread beside `b` on the rayon pool when `together` and the pool has
+/// more than one thread (one after the other otherwise), each with the seconds it took.
+fn beside<A, B: Send>(
+    together: bool,
+    a: impl FnOnce() -> A,
+    b: impl FnOnce() -> B + Send,
+) -> ((A, f64), (B, f64)) {
     fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
         let t = Instant::now();
         let out = f();
         (out, t.elapsed().as_secs_f64())
     }
-    if rayon::current_num_threads() == 1 {
+    if !together || rayon::current_num_threads() == 1 {
         return (timed(a), timed(b));
     }
     let mut b_out = None;
