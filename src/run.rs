@@ -87,16 +87,22 @@ fn parse_tile(s: &str) -> Result<(usize, usize), String> {
     ))
 }
 
-/// Sets the global rayon pool to `threads` workers (every core when `None`).
+/// Sets the global rayon pool to `threads` workers (every core when `None`) and starts them
+/// now, while the session is made, rather than when the first parallel work would wait for
+/// them (a few hundred microseconds).
 pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
-    if let Some(n) = threads {
-        if n == 0 {
-            crate::common::usage!("--threads must be at least 1");
-        }
-        rayon::ThreadPoolBuilder::new()
+    match threads {
+        Some(0) => crate::common::usage!("--threads must be at least 1"),
+        Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()
-            .context("cannot start the worker threads")?;
+            .context("cannot start the worker threads")?,
+        // The default pool, started by a thread of its own: this one goes on making the
+        // session while the pool counts the cores and starts its workers. Should no thread
+        // start now, the pool starts on first use.
+        None => {
+            let _ = std::thread::Builder::new().spawn(|| rayon::spawn(|| {}));
+        }
     }
     Ok(())
 }

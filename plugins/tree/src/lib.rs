@@ -261,57 +261,71 @@ pub fn build_tree(
     let mut prepared = prepare_skeleton(skeleton, &options.mesh)?;
     model.stats.add_phase("radii", t.elapsed().as_secs_f64());
 
-    let t = Instant::now();
-    let mut rng = Mt64::new(seed);
-    if let Some(leaf_options) = &options.leaves {
-        let extra = tip_leaves(&prepared, leaf_options, &mut rng);
-        if prepared.leaves.is_empty() {
-            prepared.leaves = extra;
-        } else {
-            prepared.leaves.extend(extra);
-        }
-    }
-    let leaves_time = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let prepared = Arc::new(prepared);
     let has_bark = prepared.parents.iter().any(Option::is_some);
-    let bark = if has_bark {
-        // At least one segment, so the bark mesh has triangles.
-        let mut mesh = bark_mesh(&prepared, &options.mesh);
-        mesh.skeleton = Some(prepared.clone());
-        Some(mesh)
-    } else {
-        None
-    };
-    model.stats.add_phase("meshing", t.elapsed().as_secs_f64());
+    let default_style = LeafOptions::default();
+    let style = options.leaves.as_ref().unwrap_or(&default_style);
+    // The bark draws nothing from the generator and the leaves read nothing of the bark, so
+    // a small tree's are made side by side (a big tree's each use the whole pool already);
+    // each phase counts its own time.
+    let small = prepared.len() * (options.mesh.sides as usize + 1) < SIDE_BY_SIDE_BELOW;
+    let ((bark, meshing_time), (leaves, mut leaves_time)) = beside(
+        small,
+        || {
+            // At least one segment, so the bark mesh has triangles.
+            has_bark.then(|| bark_mesh(&prepared, &options.mesh))
+        },
+        || {
+            let mut rng = Mt64::new(seed);
+            let tips = match &options.leaves {
+                Some(leaf_options) => tip_leaves(&prepared, leaf_options, &mut rng),
+                None => Vec::new(),
+            };
+            // The skeleton's own leaves first, then the tip leaves (not copied when alone).
+            let points = if prepared.leaves.is_empty() {
+                tips
+            } else {
+                [prepared.leaves.as_slice(), &tips].concat()
+            };
+            let mesh = (!points.is_empty()).then(|| {
+                let mut mesh = Mesh {
+                    name: "leaves".into(),
+                    ..Mesh::default()
+                };
+                append_leaf_quads(&points, style, &mut rng, &mut mesh);
+                mesh
+            });
+            (points, mesh)
+        },
+    );
+    model.stats.add_phase("meshing", meshing_time);
+    let (points, leaf_mesh) = leaves;
+    prepared.leaves = points;
+    let prepared = Arc::new(prepared);
 
     let t = Instant::now();
-    if let Some(mut mesh) = bark {
-        mesh.material = bark_material(&options.mesh)?;
+    let (bark_material, leaf_material) = rayon::join(
+        || {
+            bark.is_some()
+                .then(|| bark_material(&options.mesh))
+                .transpose()
+        },
+        || {
+            leaf_mesh
+                .is_some()
+                .then(|| leaf_material(style))
+                .transpose()
+        },
+    );
+    let textures_time = t.elapsed().as_secs_f64();
+    if let (Some(mut mesh), Some(material)) = (bark, bark_material?) {
+        mesh.material = material;
+        mesh.skeleton = Some(prepared.clone());
         model.add_mesh(mesh, Mat4::IDENTITY);
     }
-    let mut textures_time = t.elapsed().as_secs_f64();
-    let mut leaf_textures_time = 0.0;
 
     let t = Instant::now();
-    if !prepared.leaves.is_empty() {
-        let default_style;
-        let style = match &options.leaves {
-            Some(l) => l,
-            None => {
-                default_style = LeafOptions::default();
-                &default_style
-            }
-        };
-        let mut mesh = Mesh {
-            name: "leaves".into(),
-            ..Mesh::default()
-        };
-        append_leaf_quads(&prepared.leaves, style, &mut rng, &mut mesh);
-        let tm = Instant::now();
-        mesh.material = leaf_material(style)?;
-        leaf_textures_time = tm.elapsed().as_secs_f64();
+    if let (Some(mut mesh), Some(material)) = (leaf_mesh, leaf_material?) {
+        mesh.material = material;
         if let Some(lod) = &options.lod {
             mesh = lod_leaves(&mesh, lod, &prepared)?;
         }
@@ -326,13 +340,41 @@ pub fn build_tree(
             "{at}warning: lod: the tree has no leaves, so it has no LOD table (give it leaves = {{...}})"
         ));
     }
-    let leaves_time = leaves_time + t.elapsed().as_secs_f64() - leaf_textures_time;
-    textures_time += leaf_textures_time;
-    model.stats.add_phase("leaves", leaves_time.max(0.0));
+    leaves_time += t.elapsed().as_secs_f64();
+    model.stats.add_phase("leaves", leaves_time);
     model.stats.add_phase("textures", textures_time);
     model.stats.nodes = prepared.len() as u64;
     model.stats.leaves = prepared.leaves.len() as u64;
     Ok(model)
+}
+
+/// Nodes times sides plus one (about half the bark's vertices) below which a tree's bark and
+/// leaves are made side by side: above it, the bark's tubes and the leaves each use the pool
+/// (from 64 k vertices and 16 k leaves), and making them one after the other costs nothing.
+const SIDE_BY_SIDE_BELOW: usize = 1 << 16;
+
+/// `a` on the calling thread beside `b` on the rayon pool when `together` and the pool has
+/// more than one thread (one after the other otherwise), each with the seconds it took.
+fn beside<A, B: Send>(
+    together: bool,
+    a: impl FnOnce() -> A,
+    b: impl FnOnce() -> B + Send,
+) -> ((A, f64), (B, f64)) {
+    fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+        let t = Instant::now();
+        let out = f();
+        (out, t.elapsed().as_secs_f64())
+    }
+    if !together || rayon::current_num_threads() == 1 {
+        return (timed(a), timed(b));
+    }
+    let mut b_out = None;
+    let a_out = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| b_out = Some(timed(b)));
+        timed(a)
+    });
+    // The scope returns when every task it spawned has run.
+    (a_out, b_out.expect("b ran in the scope"))
 }
 
 /// The leaf mesh with levels of detail ([`pge_lod::lod_mesh`]): simplified around the
