@@ -11,19 +11,20 @@
 //! leaves still live collapses if its new leaf keeps the area bounds; only then are the
 //! bounds tested, as most pairs are reached after one of their leaves has gone (about a
 //! quarter of them are tested, and the result is the same as testing every pair when
-//! found). Most tested pairs that the overhang bound refuses are refused by a sound pre-test
-//! without building their new leaf ([`Leaf::surely_reaches`]); the others build it once
-//! ([`Leaf::collapse`]), for the full test, and a pair that passes keeps that leaf. A pair
-//! a search has found needs no second look (one of its leaves has gone, or the round that
-//! found it would have collapsed it, or the area bounds refused it), so later rounds search only around the new leaves. Pairs beyond each other's
-//! nearest `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep
-//! searches again with more partners (`SWEEP`) around every living leaf made since the last
-//! sweep began (the first sweep: around every leaf); the simplification ends when a sweep
-//! makes nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that
-//! are beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
-//! again (the quality figures in benches/README.md, not a proof, justify it). A refused
-//! pair is refused once, in the round that found it: it never waits in a queue, and no leaf
-//! searches again because of it.
+//! found). Most tested pairs that the overhang bound refuses are refused by a sound
+//! pre-test without building their new leaf ([`Leaf::surely_reaches`]); the others build it
+//! once ([`Leaf::collapse`]), for the full test, and a pair that passes keeps that leaf. A
+//! pair a search has found needs no second look (one of its leaves has gone, or the round
+//! that found it would have collapsed it, or the area bounds refused it), so later rounds
+//! search only around the new leaves. Pairs beyond each other's nearest `NEAREST` are what
+//! the sweeps are for: when a round makes nothing, a sweep searches again with more
+//! partners (`SWEEP`) around every living leaf made since the last sweep began (the first
+//! sweep: around every leaf); the simplification ends when a sweep makes nothing. This is a
+//! heuristic, not an exhaustive search: a pair of two leaves that are beyond each other's
+//! nearest `SWEEP` when a sweep searches around them is not tested again (the quality
+//! figures in benches/README.md, not a proof, justify it). A refused pair is refused once,
+//! in the round that found it: it never waits in a queue, and no leaf searches again
+//! because of it.
 //!
 //! A pair of two leaves that both search in a round is looked at only by the one in the
 //! earlier grid slot: each cell lays out the leaves made before the round first, so in the
