@@ -145,17 +145,19 @@ impl Simplifier {
             bucket[..kept].sort_unstable();
             for &(_, a, b) in &bucket[..kept] {
                 let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
-                if self.alive[a as usize] && self.alive[b as usize] && self.fits(la, lb) {
-                    self.collapse(a, b);
+                if !(self.alive[a as usize] && self.alive[b as usize]) {
+                    continue;
+                }
+                if let Some(new) = self.fits(la, lb) {
+                    self.collapse(a, b, new);
                 }
             }
         }
         self.scratch = buckets;
     }
 
-    /// Joins `a` and `b` into their new leaf.
-    fn collapse(&mut self, a: u32, b: u32) {
-        let new = Leaf::collapse(&self.leaves[a as usize], &self.leaves[b as usize]);
+    /// Replaces `a` and `b` by their new leaf `new` (built by [`Simplifier::fits`]).
+    fn collapse(&mut self, a: u32, b: u32, new: Leaf) {
         self.alive[a as usize] = false;
         self.alive[b as usize] = false;
         // The thesis' figure 2.3 keeps the lower label on the left.
@@ -164,11 +166,14 @@ impl Simplifier {
         self.alive.push(true);
     }
 
-    /// Whether `a` and `b` may collapse: their new leaf grows the pair's area by at most
+    /// The new leaf of `a` and `b` if they may collapse: it grows the pair's area by at most
     /// `max_growth`, its leaves cover at least `min_density` of it, and its corners stay
     /// within `max_overhang` of the box around the original leaves it stands for.
-    pub(super) fn fits(&self, a: &Leaf, b: &Leaf) -> bool {
-        !self.surely_overhangs(a, b) && self.keeps_bounds(a, b)
+    pub(super) fn fits(&self, a: &Leaf, b: &Leaf) -> Option<Leaf> {
+        if self.surely_overhangs(a, b) {
+            return None;
+        }
+        self.keeps_bounds(a, b)
     }
 
     /// Whether the new leaf of `a` and `b` surely reaches past the box of its originals and
@@ -183,17 +188,18 @@ impl Simplifier {
         Leaf::surely_reaches(a, b, allowed)
     }
 
-    /// The full test of [`Simplifier::fits`], on the new leaf itself.
-    pub(super) fn keeps_bounds(&self, a: &Leaf, b: &Leaf) -> bool {
+    /// The full test of [`Simplifier::fits`], on the new leaf itself: the leaf if it passes.
+    pub(super) fn keeps_bounds(&self, a: &Leaf, b: &Leaf) -> Option<Leaf> {
         let new = Leaf::collapse(a, b);
         let area = new.area();
         let slack = (new.hi - new.lo) * self.max_overhang;
         // The corners' farthest reach along each world axis.
         let reach = (new.axis * new.half_length).abs() + (new.side() * new.half_width).abs();
-        area <= self.max_growth * (a.area() + b.area())
+        let keeps = area <= self.max_growth * (a.area() + b.area())
             && new.leaf_area >= self.min_density * area
             && (new.center - reach).cmpge(new.lo - slack).all()
-            && (new.center + reach).cmple(new.hi + slack).all()
+            && (new.center + reach).cmple(new.hi + slack).all();
+        keeps.then_some(new)
     }
 
     /// A grid of the living leaves with about three leaves per occupied cell, so that the

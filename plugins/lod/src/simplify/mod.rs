@@ -8,20 +8,23 @@
 //! dense uniform grid; each leaf made by the last round (at first, every leaf) searches it
 //! for its nearest partners within the distance and angle bounds (`NEAREST` of them) and
 //! weighs each pair. The round's pairs are then taken cheapest first, and a pair whose two
-//! leaves still live collapses if its new leaf keeps the area bounds ([`Leaf::collapse`]);
-//! only then are the bounds tested, as most pairs are reached after one of their leaves has
-//! gone (about a quarter of them are tested, and the result is the same as testing every
-//! pair when found). A pair a search has found needs no second look (one of its leaves has
-//! gone, or the round that found it would have collapsed it, or the area bounds refused
-//! it), so later rounds search only around the new leaves. Pairs beyond each other's
-//! nearest `NEAREST` are what the sweeps are for: when a round makes nothing, a sweep
-//! searches again with more partners (`SWEEP`) around every living leaf made since the last
-//! sweep began (the first sweep: around every leaf); the simplification ends when a sweep
-//! makes nothing. This is a heuristic, not an exhaustive search: a pair of two leaves that
-//! are beyond each other's nearest `SWEEP` when a sweep searches around them is not tested
-//! again (the quality figures in benches/README.md, not a proof, justify it). A refused
-//! pair is refused once, in the round that found it: it never waits in a queue, and no leaf
-//! searches again because of it.
+//! leaves still live collapses if its new leaf keeps the area bounds; only then are the
+//! bounds tested, as most pairs are reached after one of their leaves has gone (about a
+//! quarter of them are tested, and the result is the same as testing every pair when
+//! found). Most tested pairs that the overhang bound refuses are refused by a sound
+//! pre-test without building their new leaf ([`Leaf::surely_reaches`]); the others build it
+//! once ([`Leaf::collapse`]), for the full test, and a pair that passes keeps that leaf. A
+//! pair a search has found needs no second look (one of its leaves has gone, or the round
+//! that found it would have collapsed it, or the area bounds refused it), so later rounds
+//! search only around the new leaves. Pairs beyond each other's nearest `NEAREST` are what
+//! the sweeps are for: when a round makes nothing, a sweep searches again with more
+//! partners (`SWEEP`) around every living leaf made since the last sweep began (the first
+//! sweep: around every leaf); the simplification ends when a sweep makes nothing. This is a
+//! heuristic, not an exhaustive search: a pair of two leaves that are beyond each other's
+//! nearest `SWEEP` when a sweep searches around them is not tested again (the quality
+//! figures in benches/README.md, not a proof, justify it). A refused pair is refused once,
+//! in the round that found it: it never waits in a queue, and no leaf searches again
+//! because of it.
 //!
 //! A pair of two leaves that both search in a round is looked at only by the one in the
 //! earlier grid slot: each cell lays out the leaves made before the round first, so in the
@@ -29,8 +32,9 @@
 //! The searches of a round go cell by cell, so neighbouring searches read the same memory;
 //! the grid keeps what the distance test reads (centre and radius) in one array and a copy
 //! of each leaf beside it, cell after cell; a search skips the cells that cannot hold a
-//! partner (by the cell's box and largest radius). Nothing is allocated per collapse; the
-//! result is deterministic (pairs are ordered by cost, then by their labels).
+//! partner (by the cell's box and largest radius) and reads the slots of the cells it keeps
+//! that lie side by side in memory (a row of a ring) as one run. Nothing is allocated per
+//! collapse; the result is deterministic (pairs are ordered by cost, then by their labels).
 
 use glam::Vec3;
 
@@ -366,7 +370,7 @@ mod tests {
                 for (a, b) in [(a, b), (b, a)] {
                     let keeps = s.keeps_bounds(a, b);
                     assert_eq!(s.fits(a, b), keeps, "{a:?} {b:?}");
-                    refused += usize::from(!keeps);
+                    refused += usize::from(keeps.is_none());
                     pre_refused += usize::from(s.surely_overhangs(a, b));
                 }
             }

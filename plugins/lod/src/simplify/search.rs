@@ -61,6 +61,9 @@ impl Simplifier {
         };
         let mut ring = 0i32;
         loop {
+            // The slots to read, gathered into runs of adjacent slots (the cells of a row of
+            // the ring, and the empty cells between them, are one run of memory).
+            let mut pending = 0..0;
             grid.ring(centre, ring, centre_of_me, |index, cell, least| {
                 // A cell whose every leaf is farther than the distance bound, or than the
                 // farthest of a full list, would add nothing: not read at all.
@@ -69,19 +72,23 @@ impl Simplifier {
                     return;
                 }
                 let slots = cell.slots();
+                let mut read = |run: Range<usize>| {
+                    if run.start == pending.end {
+                        pending.end = run.end;
+                    } else {
+                        scan(std::mem::replace(&mut pending, run), &mut len, &mut near);
+                    }
+                };
                 if index > my_cell {
-                    scan(slots, &mut len, &mut near);
+                    read(slots);
                 } else {
-                    scan(
-                        slots.start..slots.start + cell.old as usize,
-                        &mut len,
-                        &mut near,
-                    );
+                    read(slots.start..slots.start + cell.old as usize);
                     if index == my_cell {
-                        scan(at + 1..slots.end, &mut len, &mut near);
+                        read(at + 1..slots.end);
                     }
                 }
             });
+            scan(pending, &mut len, &mut near);
             // Every point of the rings beyond is at least `ring` cells away, and farther
             // when `me` is far from its cell's faces.
             let beyond = ring as f32 * grid.cell;
