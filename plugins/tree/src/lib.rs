@@ -303,19 +303,17 @@ pub fn build_tree(
     let prepared = Arc::new(prepared);
 
     let t = Instant::now();
-    let (bark_material, leaf_material) = rayon::join(
-        || {
-            bark.is_some()
-                .then(|| bark_material(&options.mesh))
-                .transpose()
-        },
-        || {
-            leaf_mesh
-                .is_some()
-                .then(|| leaf_material(style))
-                .transpose()
-        },
-    );
+    // One after the other on this thread, not side by side: the texture cache generates a
+    // set inside its generate-once cell with pool work, and a pool thread waiting there
+    // may steal a job that asks the same cell for the same set (a deadlock).
+    let bark_material = bark
+        .is_some()
+        .then(|| bark_material(&options.mesh))
+        .transpose();
+    let leaf_material = leaf_mesh
+        .is_some()
+        .then(|| leaf_material(style))
+        .transpose();
     let textures_time = t.elapsed().as_secs_f64();
     if let (Some(mut mesh), Some(material)) = (bark, bark_material?) {
         mesh.material = material;
