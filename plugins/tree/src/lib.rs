@@ -303,17 +303,21 @@ pub fn build_tree(
     let prepared = Arc::new(prepared);
 
     let t = Instant::now();
-    // One after the other on this thread, not side by side: the texture cache generates a
-    // set inside its generate-once cell with pool work, and a pool thread waiting there
-    // may steal a job that asks the same cell for the same set (a deadlock).
-    let bark_material = bark
-        .is_some()
-        .then(|| bark_material(&options.mesh))
-        .transpose();
-    let leaf_material = leaf_mesh
-        .is_some()
-        .then(|| leaf_material(style))
-        .transpose();
+    // Side by side: the cache generates each set on texture threads of its own, so a pool
+    // thread waiting for a set runs no other job meanwhile.
+    let (bark_material, leaf_material) = rayon::join(
+        || {
+            bark.is_some()
+                .then(|| bark_material(&options.mesh))
+                .transpose()
+        },
+        || {
+            leaf_mesh
+                .is_some()
+                .then(|| leaf_material(style))
+                .transpose()
+        },
+    );
     let textures_time = t.elapsed().as_secs_f64();
     if let (Some(mut mesh), Some(material)) = (bark, bark_material?) {
         mesh.material = material;

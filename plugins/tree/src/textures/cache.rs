@@ -43,7 +43,7 @@ impl TextureCache {
     fn get(
         &self,
         key: String,
-        make: impl FnOnce() -> Result<TextureSet, TreeError>,
+        make: impl FnOnce() -> Result<TextureSet, TreeError> + Send,
     ) -> Result<Arc<TextureSet>, TreeError> {
         let cell = {
             let mut cells = self.cells.lock().unwrap_or_else(|e| e.into_inner());
@@ -51,11 +51,42 @@ impl TextureCache {
         };
         cell.get_or_init(|| {
             self.generated.fetch_add(1, Ordering::Relaxed);
-            make().map(Arc::new).map_err(|e| e.to_string())
+            generate(make).map(Arc::new)
         })
         .clone()
         .map_err(TreeError::Generated)
     }
+}
+
+/// Runs `make` on the texture threads: a pool of their own (as many as the caller's pool),
+/// reached through a thread outside every pool. Generating a set fills its rows with pool
+/// work while the cache's cell for it is held; a thread of the caller's pool waiting there
+/// would run other jobs of that pool meanwhile, and one of them (another variant of a
+/// forest) could ask the same cell for the same set: the thread would wait for itself. The
+/// texture threads run nothing but the set's own work, and the caller only waits.
+fn generate(
+    make: impl FnOnce() -> Result<TextureSet, TreeError> + Send,
+) -> Result<TextureSet, String> {
+    static POOL: OnceLock<Result<rayon::ThreadPool, String>> = OnceLock::new();
+    let pool = POOL
+        .get_or_init(|| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(rayon::current_num_threads())
+                .thread_name(|i| format!("pge-textures-{i}"))
+                .build()
+                .map_err(|e| format!("cannot start the texture threads: {e}"))
+        })
+        .as_ref()
+        .map_err(Clone::clone)?;
+    std::thread::scope(|scope| {
+        let made = std::thread::Builder::new()
+            .name("pge-textures".into())
+            .spawn_scoped(scope, || pool.install(make))
+            .map_err(|e| format!("cannot start the texture threads: {e}"))?
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        made.map_err(|e| e.to_string())
+    })
 }
 
 /// The bark set of `params` from the process's cache.
