@@ -228,10 +228,9 @@ impl Leaf {
         // The four half axes of both leaves, one world axis per row, so that their four
         // projections on a direction are one product.
         let half_axes = |l: &Leaf| {
-            let axis = Vec3A::from(l.axis);
             (
-                axis * l.half_length,
-                axis.cross(Vec3A::from(l.normal)) * l.half_width,
+                Vec3A::from(l.axis) * l.half_length,
+                Vec3A::from(l.side()) * l.half_width,
             )
         };
         let ((along_a, across_a), (along_b, across_b)) = (half_axes(a), half_axes(b));

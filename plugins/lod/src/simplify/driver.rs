@@ -130,8 +130,8 @@ impl Simplifier {
         let mut buckets = std::mem::take(&mut self.scratch);
         into_buckets(&self.pairs, &mut buckets, &mut self.ends);
         let mut start = 0;
-        for b in 0..self.ends.len() {
-            let end = self.ends[b] as usize;
+        for k in 0..self.ends.len() {
+            let end = self.ends[k] as usize;
             let bucket = &mut buckets[start..end];
             start = end;
             let mut kept = 0;
@@ -144,10 +144,11 @@ impl Simplifier {
             }
             bucket[..kept].sort_unstable();
             for &(_, a, b) in &bucket[..kept] {
-                let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
+                // An earlier pair of the bucket may have taken one of them.
                 if !(self.alive[a as usize] && self.alive[b as usize]) {
                     continue;
                 }
+                let (la, lb) = (&self.leaves[a as usize], &self.leaves[b as usize]);
                 if let Some(new) = self.fits(la, lb) {
                     self.collapse(a, b, new);
                 }
