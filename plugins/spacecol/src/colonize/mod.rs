@@ -179,6 +179,7 @@ impl Algorithm for SpaceColonization {
         } else {
             for root in &p.roots {
                 let r = st.add_node(*root, None, p);
+                st.flush(p);
                 if p.trunk > 0.0 || !st.in_range(*root, p) {
                     st.trunk_tips.push((r, p.trunk));
                 }
@@ -316,14 +317,16 @@ impl Algorithm for SpaceColonization {
                 }
                 Some(q) => {
                     let child = st.add_node(q, Some(n), p);
-                    if let Some(left) = trunk_left
-                        && (left > 0.0 || !st.in_range(q, p))
-                    {
-                        next_trunks.push((child, left));
+                    if let Some(left) = trunk_left {
+                        st.flush(p);
+                        if left > 0.0 || !st.in_range(q, p) {
+                            next_trunks.push((child, left));
+                        }
                     }
                 }
             }
         }
+        st.flush(p);
         st.trunk_tips = next_trunks;
 
         let finished = st.alive_count == 0 || (st.none_active() && st.trunk_tips.is_empty());

@@ -3,6 +3,7 @@
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
@@ -30,8 +31,10 @@ pub(super) struct State {
     fresh: Vec<u32>,
     /// The buffer the next `active` is built in.
     spare: Vec<u32>,
-    /// The live points.
-    grid: PointGrid,
+    /// The live points: one part, or two whose updates run side by side on the pool.
+    parts: Vec<Part>,
+    /// Nodes added whose updates to the points are not applied yet (see [`State::flush`]).
+    pending: Vec<(u32, Vec3)>,
     pub(super) nodes: Vec<Vec3>,
     pub(super) parents: Vec<Option<u32>>,
     /// Unit direction of each node's segment (zero for a root).
@@ -59,12 +62,98 @@ pub(super) struct State {
     pub(super) touched: Vec<u32>,
 }
 
+/// The live points numbered from `first` up to the next part's `first`, in a grid of their
+/// own. Points are numbered cell by cell along x first, so two parts are two slabs of the
+/// crown (sharing at most one layer of cells), and a new node's updates of one part touch
+/// nothing of the other's: the parts can be updated side by side, each in the nodes' order,
+/// with the bytes of one after the other.
+#[derive(Clone)]
+struct Part {
+    first: usize,
+    grid: PointGrid,
+    /// Points given their first nearest node by the last updates, in any order.
+    fresh: Vec<u32>,
+    /// Points killed by the last updates.
+    killed: usize,
+}
+
+impl Part {
+    fn new(first: usize, grid: PointGrid) -> Part {
+        Part {
+            first,
+            grid,
+            fresh: Vec::new(),
+            killed: 0,
+        }
+    }
+
+    /// Applies the updates of `nodes` (index and position, in order) to the part's points,
+    /// for the influence radius and the squared kill distance `k2`; `alive`, `nearest` and
+    /// `nearest_d2` are the part's own ranges of the state's arrays.
+    fn update(
+        &mut self,
+        nodes: &[(u32, Vec3)],
+        influence: f32,
+        k2: f32,
+        alive: &mut [bool],
+        nearest: &mut [u32],
+        nearest_d2: &mut [f32],
+    ) {
+        let Part {
+            first,
+            grid,
+            fresh,
+            killed,
+        } = self;
+        for &(index, q) in nodes {
+            // The grid calls back only for the live points closer to the new node than
+            // their reach, their distance to their nearest node.
+            grid.update_near(q, influence, |i, d2| {
+                let i = i as usize;
+                if d2 < k2 {
+                    alive[i] = false;
+                    *killed += 1;
+                    return None;
+                }
+                if nearest[i] == NONE {
+                    fresh.push((*first + i) as u32);
+                }
+                nearest[i] = index;
+                nearest_d2[i] = d2;
+                Some(d2)
+            });
+        }
+    }
+}
+
+/// Points below which the updates stay in one part: the pool's hand-over (some 20 us an
+/// iteration) and the second grid cost about what the second thread saves (the oak's 3,000
+/// points take 39 iterations of some 60 us each).
+const PARTS_FROM: usize = 20_000;
+
+/// New nodes below which a flush updates the parts one after the other.
+const SIDE_BY_SIDE_FROM: usize = 32;
+
+/// Rounds of waiting for the other parts' updates before the calling thread sleeps (some
+/// 0.1-0.5 ms; a 64th of it for parts not started yet).
+const SPIN: usize = 1 << 12;
+
 impl State {
     /// The state before any node: every point alive, numbered in the order of a grid of
     /// cells a third of the influence radius wide (the order pulls are summed in), in a
     /// grid of such cells, or of cells half the influence radius wide where the points are
     /// sparse.
     pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
+        let parts = if pts.len() >= PARTS_FROM && rayon::current_num_threads() > 1 {
+            2
+        } else {
+            1
+        };
+        State::with_parts(pts, influence, parts)
+    }
+
+    /// [`State::new`] with the points in `parts` parts (1 or 2).
+    fn with_parts(pts: Vec<Vec3>, influence: f32, parts: usize) -> State {
         let n = pts.len();
         let alive = vec![true; n];
         // Points that a query reads together then lie together in memory.
@@ -73,15 +162,28 @@ impl State {
         let (points, grid) = match PointGrid::unsplit_order(&pts, &alive, influence / 3.0) {
             // Sparse points (a small tree's crown: a few to a cell, no sub-cells): in larger
             // cells a query reads fewer cells, empty or skipped, for a few more points.
-            Some(order) => {
-                let points = renumbered(order);
-                let grid = PointGrid::new(&points, &alive, influence / 2.0);
-                (points, grid)
-            }
+            Some(order) => (renumbered(order), None),
             None => {
                 let mut grid = PointGrid::new(&pts, &alive, influence / 3.0);
-                (renumbered(grid.renumber()), grid)
+                (renumbered(grid.renumber()), Some(grid))
             }
+        };
+        let cell = if grid.is_some() {
+            influence / 3.0
+        } else {
+            influence / 2.0
+        };
+        let parts = if parts > 1 {
+            let half = n / 2;
+            vec![
+                Part::new(0, PointGrid::new(&points[..half], &alive[..half], cell)),
+                Part::new(half, PointGrid::new(&points[half..], &alive[half..], cell)),
+            ]
+        } else {
+            vec![Part::new(
+                0,
+                grid.unwrap_or_else(|| PointGrid::new(&points, &alive, cell)),
+            )]
         };
         State {
             points,
@@ -92,7 +194,8 @@ impl State {
             active: Vec::new(),
             fresh: Vec::new(),
             spare: Vec::new(),
-            grid,
+            parts,
+            pending: Vec::new(),
             nodes: Vec::new(),
             parents: Vec::new(),
             dirs: Vec::new(),
@@ -138,39 +241,78 @@ impl State {
         index
     }
 
-    /// Adds a node and updates the points it changes: those within the kill distance die,
-    /// those within the influence radius that are closer to it than to their nearest node
-    /// take it as their nearest. The grid skips every other point without reading it (a
-    /// point's reach is its squared distance to its nearest node).
+    /// Adds a node; the points it changes are updated at the next [`State::flush`]: those
+    /// within the kill distance die, those within the influence radius that are closer to
+    /// it than to their nearest node take it as their nearest.
     pub(super) fn add_node(&mut self, position: Vec3, parent: Option<u32>, p: &Params) -> u32 {
         let index = self.push_node(position, parent, p);
-        let k2 = p.kill * p.kill;
-        let State {
-            grid,
-            alive,
-            alive_count,
-            nearest,
-            nearest_d2,
-            fresh,
-            ..
-        } = self;
-        // The grid calls back only for the live points closer to the new node than their
-        // reach, their distance to their nearest node.
-        grid.update_near(position, p.influence, |i, d2| {
-            let i = i as usize;
-            if d2 < k2 {
-                alive[i] = false;
-                *alive_count -= 1;
-                return None;
-            }
-            if nearest[i] == NONE {
-                fresh.push(i as u32);
-            }
-            nearest[i] = index;
-            nearest_d2[i] = d2;
-            Some(d2)
-        });
+        self.pending.push((index, position));
         index
+    }
+
+    /// Applies the updates of the nodes added since the last flush, in the order they were
+    /// added. The grid skips every point a node does not change without reading it (a
+    /// point's reach is its squared distance to its nearest node). With two parts and a few
+    /// nodes, the second part is updated on the pool beside the first.
+    pub(super) fn flush(&mut self, p: &Params) {
+        if self.pending.is_empty() {
+            return;
+        }
+        let (nodes, r, k2) = (&self.pending[..], p.influence, p.kill * p.kill);
+        // Each part with its own ranges of the per-point arrays, the first part last.
+        let mut work = Vec::with_capacity(self.parts.len());
+        let (mut alive, mut nearest, mut nearest_d2) = (
+            &mut self.alive[..],
+            &mut self.nearest[..],
+            &mut self.nearest_d2[..],
+        );
+        for part in self.parts.iter_mut().rev() {
+            let (below, own_alive) = alive.split_at_mut(part.first);
+            let (below_nearest, own_nearest) = nearest.split_at_mut(part.first);
+            let (below_d2, own_d2) = nearest_d2.split_at_mut(part.first);
+            (alive, nearest, nearest_d2) = (below, below_nearest, below_d2);
+            work.push((part, own_alive, own_nearest, own_d2));
+        }
+        if work.len() > 1 && nodes.len() >= SIDE_BY_SIDE_FROM {
+            let others = work.len() - 1;
+            let (started, ended) = (AtomicUsize::new(0), AtomicUsize::new(0));
+            rayon::in_place_scope(|scope| {
+                let mine = work.pop();
+                for (part, alive, nearest, d2) in work {
+                    let (started, ended) = (&started, &ended);
+                    scope.spawn(move |_| {
+                        started.fetch_add(1, Ordering::Relaxed);
+                        part.update(nodes, r, k2, alive, nearest, d2);
+                        ended.fetch_add(1, Ordering::Release);
+                    });
+                }
+                if let Some((part, alive, nearest, d2)) = mine {
+                    part.update(nodes, r, k2, alive, nearest, d2);
+                }
+                // Parts running on the pool usually end within microseconds: waiting for
+                // them here spares the calling thread a sleep and its wake-up (some 10 us).
+                // Parts not started (a busy pool) are left to the scope, which runs them
+                // itself on a pool thread.
+                for round in 0..SPIN {
+                    let waiting = ended.load(Ordering::Acquire) < others;
+                    if !waiting || (round >= SPIN / 64 && started.load(Ordering::Relaxed) < others)
+                    {
+                        break;
+                    }
+                    std::hint::spin_loop();
+                }
+            });
+        } else {
+            for (part, alive, nearest, d2) in work {
+                part.update(nodes, r, k2, alive, nearest, d2);
+            }
+        }
+        for part in &mut self.parts {
+            self.alive_count -= part.killed;
+            part.killed = 0;
+            self.fresh.append(&mut part.fresh);
+        }
+        self.pending.clear();
     }
 
     /// Pulls: each live point with a nearest node, in increasing index order (the order in
@@ -243,9 +385,11 @@ impl State {
     pub(super) fn in_range(&self, q: Vec3, p: &Params) -> bool {
         let k2 = p.kill * p.kill;
         let mut found = false;
-        self.grid.for_each_near(q, p.influence, |_, _, d2| {
-            found |= d2 >= k2;
-        });
+        for part in &self.parts {
+            part.grid.for_each_near(q, p.influence, |_, _, d2| {
+                found |= d2 >= k2;
+            });
+        }
         found
     }
 
@@ -261,22 +405,26 @@ impl State {
             let position = start.positions[i];
             if tip {
                 self.add_node(position, start.parents[i], p);
+                self.flush(p);
                 continue;
             }
             self.push_node(position, start.parents[i], p);
             let State {
-                grid,
+                parts,
                 alive,
                 alive_count,
                 ..
             } = self;
             // A live point's reach is at least the kill distance (a point that close to a
             // node died), so the grid calls back for every point within it.
-            grid.update_near(position, p.kill, |j, _| {
-                alive[j as usize] = false;
-                *alive_count -= 1;
-                None
-            });
+            for part in parts {
+                let first = part.first;
+                part.grid.update_near(position, p.kill, |j, _| {
+                    alive[first + j as usize] = false;
+                    *alive_count -= 1;
+                    None
+                });
+            }
         }
     }
 
@@ -301,12 +449,19 @@ impl State {
         false
     }
 
+    /// The part holding point `i`.
+    fn part_of(&mut self, i: usize) -> &mut Part {
+        let k = self.parts.partition_point(|part| part.first <= i) - 1;
+        &mut self.parts[k]
+    }
+
     /// Removes point `i` (nothing if it is dead already).
     pub(super) fn kill(&mut self, i: usize) {
         if self.alive[i] {
             self.alive[i] = false;
             self.alive_count -= 1;
-            self.grid.remove(i as u32);
+            let part = self.part_of(i);
+            part.grid.remove((i - part.first) as u32);
         }
     }
 }
@@ -359,7 +514,63 @@ fn floor_i32(x: f32) -> i32 {
 
 #[cfg(test)]
 mod tests {
-    use super::floor_i32;
+    use super::*;
+    use crate::shape::Shape;
+    use pge_engine::random::uniform24;
+    use rand_mt::Mt64;
+
+    /// Two parts, updated side by side, leave every point as one part does: the same
+    /// nearest nodes and distances, the same dead, the same pulls to the bit.
+    #[test]
+    fn two_parts_update_as_one() {
+        let mut rng = Mt64::new(11);
+        let mut random = |scale: f32| {
+            Vec3::new(
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+            ) * scale
+        };
+        let pts: Vec<Vec3> = (0..4000).map(|_| random(6.0)).collect();
+        let mut p = Params::new(Shape::Sphere {
+            center: Vec3::splat(3.0),
+            radius: 3.0,
+        });
+        (p.influence, p.kill, p.step) = (1.2, 0.3, 0.15);
+        let mut one = State::with_parts(pts.clone(), p.influence, 1);
+        let mut two = State::with_parts(pts, p.influence, 2);
+        assert_eq!((one.parts.len(), two.parts.len()), (1, 2));
+        for iteration in 1..40 {
+            for _ in 0..iteration % 7 * 9 {
+                let q = random(6.0);
+                one.add_node(q, None, &p);
+                two.add_node(q, None, &p);
+            }
+            one.flush(&p);
+            two.flush(&p);
+            let dying = (iteration * 97) as usize % one.points.len();
+            one.kill(dying);
+            two.kill(dying);
+            one.pull(iteration, None);
+            two.pull(iteration, None);
+            assert_eq!(one.alive, two.alive);
+            assert_eq!(one.alive_count, two.alive_count);
+            assert_eq!(one.nearest, two.nearest);
+            let bits = |v: &[f32]| v.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&one.nearest_d2), bits(&two.nearest_d2));
+            assert_eq!(one.touched, two.touched);
+            assert_eq!(one.sum, two.sum);
+            assert_eq!(one.closest, two.closest);
+            one.touched.clear();
+            two.touched.clear();
+        }
+        let pulling = one.nearest.iter().filter(|n| **n != NONE).count();
+        assert!(
+            one.alive_count < one.points.len() * 9 / 10 && pulling > 2000,
+            "{} of 4000 points left, {pulling} with a nearest node",
+            one.alive_count
+        );
+    }
 
     #[test]
     fn floor_i32_is_floor_cast() {
