@@ -18,8 +18,8 @@
 //! point keeps its nearest node and its distance to it (its *reach*), and a new node visits
 //! only the points it changes: those within the influence radius and closer to it than to
 //! their nearest node (or within the kill distance). The [`PointGrid`](crate::PointGrid)
-//! (cells of a third of the influence radius, split again where points are dense; of half
-//! the influence radius where points are sparse, a few to a cell) keeps the largest reach
+//! (cells of a third of the influence radius, split again where points are dense; of two
+//! thirds of the influence radius where points are sparse) keeps the largest reach
 //! of each cell and sub-cell, and a new node skips, unread, every cell whose distance
 //! exceeds that bound. Dead points leave the grid at once (swap-remove in their sub-cell's
 //! compact run), so no query reads them again. Points are numbered in the order of the grid
