@@ -28,6 +28,7 @@ pub fn uniform64(rng: &mut Mt64) -> f64 {
 /// A uniform `f32` in `[0, 1)` with 24 random bits from one draw of an MT19937-64 (every
 /// value exactly representable, so the result is never rounded up to 1).
 #[must_use]
+#[inline]
 pub fn uniform24(rng: &mut Mt64) -> f32 {
     (rng.next_u64() >> 40) as f32 / (1u32 << 24) as f32
 }

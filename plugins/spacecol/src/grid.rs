@@ -290,6 +290,13 @@ impl PointGrid {
     #[inline]
     fn sub_index(&self, p: Vec3) -> usize {
         let s = self.split;
+        if s == 1 {
+            // The cell alone, its three coordinates at once (as `coord` computes each).
+            let c = (p - self.origin) * self.inv_cell;
+            let [x, y, z] = [c.x, c.y, c.z].map(floor_index);
+            let [nx, ny, nz] = self.dims;
+            return (x.min(nx - 1) * ny + y.min(ny - 1)) * nz + z.min(nz - 1);
+        }
         let (o, fine) = (self.origin, self.inv_cell * s as f32);
         let axis = |v: f32, a: usize, o: f32| {
             let k = self.coord(v, a, o);

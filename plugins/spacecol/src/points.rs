@@ -5,7 +5,7 @@ use pge_engine::random::uniform24;
 use pge_engine::{Error, Location, RunContext};
 use rand_mt::Mt64;
 
-use crate::shape::Shape;
+use crate::shape::{Shape, ellipsoid_contains};
 
 /// How points are taken from the envelope.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,10 +102,12 @@ pub fn generate(
                     uniform24(&mut rng),
                     uniform24(&mut rng),
                 );
-        let keep = match mode {
-            Mode::Surround { thickness } => shape
+        let keep = match (mode, shape) {
+            (Mode::Surround { thickness }, _) => shape
                 .signed_distance(p)
                 .is_some_and(|d| d <= 0.0 && d >= -thickness),
+            // The usual crown, tested inline (as `contains` tests it).
+            (_, Shape::Ellipsoid { center, radii }) => ellipsoid_contains(p - *center, *radii),
             _ => shape.contains(p)?,
         };
         if keep {

@@ -173,10 +173,7 @@ impl Shape {
                 p.cmpge(*min).all() && p.cmple(*max).all() && test(p)?
             }
             Shape::Mesh(m) => m.contains(p),
-            // Inside when the signed distance `k0 (k0 - 1) / k1` is at most 0, which it is
-            // whenever `k0 <= 1` (`k1 > 0`, or the centre): most candidates decide there,
-            // without `k1` and the division.
-            Shape::Ellipsoid { center, radii } if ((p - *center) / *radii).length() <= 1.0 => true,
+            Shape::Ellipsoid { center, radii } => ellipsoid_contains(p - *center, *radii),
             _ => self.signed_distance(p).is_some_and(|d| d <= 0.0),
         })
     }
@@ -191,13 +188,7 @@ impl Shape {
             Shape::Sphere { center, radius } => p.distance(*center) - radius,
             Shape::Ellipsoid { center, radii } => {
                 let q = p - *center;
-                let k0 = (q / *radii).length();
-                let k1 = (q / (*radii * *radii)).length();
-                if k1 == 0.0 {
-                    -radii.min_element()
-                } else {
-                    k0 * (k0 - 1.0) / k1
-                }
+                ellipsoid_distance(q, (q / *radii).length(), *radii)
             }
             Shape::Box { min, max } => {
                 let c = (*min + *max) * 0.5;
@@ -314,6 +305,26 @@ impl Shape {
 }
 
 /// Distance from `p` to the segment `a`-`b`.
+/// The signed distance bound `k0 (k0 - 1) / k1` of an ellipsoid of semi-axes `radii` at
+/// `q` from its centre, where `k0 = |q / radii|` and `k1 = |q / radii²|`.
+fn ellipsoid_distance(q: Vec3, k0: f32, radii: Vec3) -> f32 {
+    let k1 = (q / (radii * radii)).length();
+    if k1 == 0.0 {
+        -radii.min_element()
+    } else {
+        k0 * (k0 - 1.0) / k1
+    }
+}
+
+/// Whether `q` (from the centre) is inside an ellipsoid of semi-axes `radii`, as
+/// [`Shape::contains`] decides it: its signed distance is at most 0, which it is whenever
+/// `k0 <= 1` (`k1 > 0`, or the centre), so most points decide without `k1` and the division.
+#[inline]
+pub(crate) fn ellipsoid_contains(q: Vec3, radii: Vec3) -> bool {
+    let k0 = (q / radii).length();
+    k0 <= 1.0 || ellipsoid_distance(q, k0, radii) <= 0.0
+}
+
 fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
     let ab = b - a;
     let len2 = ab.length_squared();
