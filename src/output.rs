@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
-use pge_engine::export::{ExportMeta, Instancing, glb_file_beside, obj_files};
+use pge_engine::export::{ExportMeta, Instancing, glb_file_with, obj_files};
 use pge_engine::geometry::Model;
 
 /// The metadata a `.glb` records: the seed and the parameters' values, in order.
@@ -65,29 +65,6 @@ impl<'a> AtomicFile<'a> {
             .with_context(|| format!("cannot write in {}", dir.display()))?;
         Ok(AtomicFile { tmp, path })
     }
-
-    /// Reserves the first `len` bytes of the file's space before they are written, the file's
-    /// size unchanged (Linux's `fallocate` with `FALLOC_FL_KEEP_SIZE`), so that the write only
-    /// fills them: on ext4 the blocks are then allocated in one step instead of page by page
-    /// (the oak's 2.5 MB took 0.6-0.7 ms to write instead of 0.9-1.0, the reserve 0.05 ms).
-    /// Not on tmpfs, whose space is the pages the write allocates anyway: reserving them costs
-    /// what the write saves. A hint: where it fails, the write allocates as usual and reports
-    /// a full disk.
-    #[cfg(target_os = "linux")]
-    fn reserve(&self, len: u64) {
-        use rustix::fs::{FallocateFlags, fallocate, fstatfs};
-        /// `f_type` of a tmpfs (`TMPFS_MAGIC` of linux/magic.h).
-        const TMPFS: u64 = 0x0102_1994;
-        let file = self.tmp.as_file();
-        let tmpfs = fstatfs(file).is_ok_and(|fs| u64::try_from(fs.f_type) == Ok(TMPFS));
-        if !tmpfs {
-            let _ = fallocate(file, FallocateFlags::KEEP_SIZE, 0, len);
-        }
-    }
-
-    /// Elsewhere the write allocates the file's space.
-    #[cfg(not(target_os = "linux"))]
-    fn reserve(&self, _: u64) {}
 
     /// Puts the written temporary file in `path`'s place.
     fn finish(self) -> anyhow::Result<()> {
@@ -172,13 +149,13 @@ pub fn write_model(
         write_atomically(output, files.obj.as_bytes())?;
     } else {
         // Streamed from the model's memory: no buffer of the file's size. The temporary file
-        // is created, and its space reserved, while the glb's JSON text is written; the
-        // build's error comes first.
-        let (glb, file) = glb_file_beside(model, meta, instancing, |least| {
-            let file = AtomicFile::create(output)?;
-            file.reserve(least);
-            anyhow::Ok(file)
-        })?;
+        // is created while the glb is built (a tenth of a millisecond on ext4); the build's
+        // error comes first.
+        let (file, glb) = rayon::join(
+            || AtomicFile::create(output),
+            || glb_file_with(model, meta, instancing),
+        );
+        let glb = glb?;
         let mut file = file?;
         glb.write_to(file.tmp.as_file_mut())
             .with_context(|| format!("cannot write {}", output.display()))?;

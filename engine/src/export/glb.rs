@@ -506,21 +506,6 @@ pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) 
 /// The file [`glb_bytes_with`] gives, not yet assembled: [`GlbFile::write_to`] writes it to a
 /// file from the model's own memory, with no buffer of the file's size.
 pub fn glb_file_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<GlbFile> {
-    glb_file_beside(model, meta, instancing, |_| ()).map(|(file, ())| file)
-}
-
-/// [`glb_file_with`], running `beside` with the least length the file can have as soon as
-/// every view of its binary chunk is placed (the file's length but for its JSON text's),
-/// on the rayon pool beside the JSON text's writing: a caller that writes the file reserves
-/// its space meanwhile (most of a fresh file's write is the system's allocating its pages
-/// or blocks). `beside` is not run when building fails before that point; the build's error
-/// comes first either way.
-pub fn glb_file_beside<T: Send>(
-    model: &Model,
-    meta: &ExportMeta,
-    instancing: Instancing,
-    beside: impl FnOnce(u64) -> T + Send,
-) -> Result<(GlbFile, T)> {
     // The model is checked while the file is built (a pass over every number and index, as
     // long as building a big tree's JSON), on the pool's other thread: building reads no
     // index or number in a way that could fail on an invalid model, and a check's error
@@ -531,7 +516,7 @@ pub fn glb_file_beside<T: Send>(
             let mut b = Builder::new();
             b.instancing = instancing;
             b.root.scene = Some(b.scene(model, "pge")?);
-            b.file(model, meta, None, beside)
+            b.file(model, meta, None)
         },
     );
     valid?;
@@ -718,19 +703,11 @@ impl Builder {
         meta: &ExportMeta,
         stages: Option<JsonValue>,
     ) -> Result<Vec<u8>> {
-        let (file, ()) = self.file(model, meta, stages, |_| ())?;
-        file.to_vec()
+        self.file(model, meta, stages)?.to_vec()
     }
 
-    /// The root extras (describing `model`), the buffer and the GLB container; `beside` as
-    /// [`glb_file_beside`] runs it.
-    fn file<T: Send>(
-        self,
-        model: &Model,
-        meta: &ExportMeta,
-        stages: Option<JsonValue>,
-        beside: impl FnOnce(u64) -> T + Send,
-    ) -> Result<(GlbFile, T)> {
+    /// The root extras (describing `model`), the buffer and the GLB container.
+    fn file(self, model: &Model, meta: &ExportMeta, stages: Option<JsonValue>) -> Result<GlbFile> {
         let mut b = self;
         // What the instances of shared variants draw (a tile that refers to them).
         let [sv, st, sn, sl] = b.shared_counts(model);
@@ -784,10 +761,9 @@ impl Builder {
             });
         }
         b.push_shared_buffer();
-        // Every view is placed: the JSON text (the skeletons' numbers most of it) is written
-        // beside `beside` and the conversion of the views the model does not hold as bytes.
-        let least = GlbFile::least_len(bin_len);
-        let (json, out) = rayon::join(
+        // The JSON text (the skeletons' numbers most of it) is written beside the conversion
+        // of the views the model does not hold as the file's bytes (colours).
+        let (json, ()) = rayon::join(
             || {
                 let no_extensions =
                     b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty();
@@ -798,13 +774,9 @@ impl Builder {
                 };
                 JsonText::new(text, &b.skeletons)
             },
-            || {
-                let out = beside(least);
-                b.layout.convert();
-                out
-            },
+            || b.layout.convert(),
         );
-        Ok((GlbFile::new(json?, b.layout, bin_len, GLB_LIMIT)?, out))
+        GlbFile::new(json?, b.layout, bin_len, GLB_LIMIT)
     }
 }
 

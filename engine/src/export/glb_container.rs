@@ -118,13 +118,6 @@ impl GlbFile {
         })
     }
 
-    /// The least length of a file whose binary chunk holds `bin_len` bytes (0: none): its
-    /// length with an empty JSON text.
-    pub(super) fn least_len(bin_len: usize) -> u64 {
-        let bin_chunk = if bin_len == 0 { 0 } else { 8 + bin_len as u64 };
-        20 + bin_chunk
-    }
-
     /// The file's length in bytes.
     #[must_use]
     pub fn len(&self) -> u64 {
