@@ -761,13 +761,22 @@ impl Builder {
             });
         }
         b.push_shared_buffer();
-        let text = if b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty() {
-            b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
-        } else {
-            with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
-        };
-        let json = JsonText::new(text, &b.skeletons)?;
-        GlbFile::new(json, b.layout, bin_len, GLB_LIMIT)
+        // The JSON text (the skeletons' numbers most of it) is written beside the conversion
+        // of the views the model does not hold as the file's bytes (colours).
+        let (json, ()) = rayon::join(
+            || {
+                let no_extensions =
+                    b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty();
+                let text = if no_extensions {
+                    b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
+                } else {
+                    with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
+                };
+                JsonText::new(text, &b.skeletons)
+            },
+            || b.layout.convert(),
+        );
+        GlbFile::new(json?, b.layout, bin_len, GLB_LIMIT)
     }
 }
 

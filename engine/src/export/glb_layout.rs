@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::geometry::{Mesh, Texture};
 
@@ -42,6 +42,8 @@ pub(super) enum Data {
     Floats(Vec<f32>),
     /// An embedded PNG image, as it is.
     Png(Arc<Texture>),
+    /// Bytes converted ahead of the write (see [`Layout::convert`]).
+    Bytes(Vec<u8>),
 }
 
 impl Data {
@@ -51,7 +53,7 @@ impl Data {
             Data::Mesh(_, Attribute::Positions | Attribute::Normals) => 12,
             Data::Mesh(_, Attribute::Uvs) => 8,
             Data::Mesh(_, Attribute::Colors | Attribute::Indices) | Data::Floats(_) => 4,
-            Data::Png(_) => 1,
+            Data::Png(_) | Data::Bytes(_) => 1,
         }
     }
 
@@ -65,6 +67,7 @@ impl Data {
             Data::Mesh(m, Attribute::Indices) => m.indices.len(),
             Data::Floats(f) => f.len(),
             Data::Png(t) => t.png.len(),
+            Data::Bytes(b) => b.len(),
         }
     }
 
@@ -101,15 +104,18 @@ impl Data {
             Data::Mesh(_, Attribute::Colors) => None,
             Data::Floats(f) => Some(cast_slice(f)),
             Data::Png(t) => Some(&t.png),
+            Data::Bytes(b) => Some(b),
         }
     }
 
-    /// The bytes of data whose memory is the file's bytes as they are: only an image's on a
-    /// big-endian host (numbers are written byte by byte, little-endian).
+    /// The bytes of data whose memory is the file's bytes as they are: only an image's and
+    /// converted bytes on a big-endian host (numbers are written byte by byte,
+    /// little-endian).
     #[cfg(target_endian = "big")]
     fn as_bytes(&self) -> Option<&[u8]> {
         match self {
             Data::Png(t) => Some(&t.png),
+            Data::Bytes(b) => Some(b),
             _ => None,
         }
     }
@@ -136,6 +142,7 @@ impl Data {
             }
             Data::Floats(f) => floats(dst, &f[range], |&x| [x]),
             Data::Png(t) => dst.copy_from_slice(&t.png[range]),
+            Data::Bytes(b) => dst.copy_from_slice(&b[range]),
         }
     }
 }
@@ -179,6 +186,17 @@ impl Layout {
         self.len = offset + len;
         self.views.push(View { offset, data });
         (offset, len)
+    }
+
+    /// Converts the views whose bytes the model does not hold as the file does (colours,
+    /// and numbers on a big-endian host) to those bytes, so that writing the file only
+    /// copies.
+    pub(super) fn convert(&mut self) {
+        for view in &mut self.views {
+            if view.data.as_bytes().is_none() {
+                view.data = Data::Bytes(view.data.bytes().into_owned());
+            }
+        }
     }
 
     /// The buffer's length in bytes, padded to 4 bytes.
@@ -243,28 +261,27 @@ pub(super) const BOUNDS_PIECE: usize = 1 << 16;
 /// `min` and `max` as within a piece, so the result is the one-pass fold's to the bit (which
 /// zero of a `-0.0` / `0.0` tie wins included), whatever the number of threads.
 pub(super) fn vec3_bounds(points: &[Vec3]) -> ([f32; 3], [f32; 3]) {
-    let fold = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &Vec3| {
-        for (k, c) in p.to_array().into_iter().enumerate() {
-            lo[k] = lo[k].min(c);
-            hi[k] = hi[k].max(c);
-        }
-        (lo, hi)
+    let empty = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let (lo, hi) = if points.len() <= 2 * BOUNDS_PIECE {
+        points.iter().map(|&p| Vec3A::from(p)).fold(empty, widen)
+    } else {
+        let pieces: Vec<_> = points
+            .par_chunks(BOUNDS_PIECE)
+            .map(|piece| piece.iter().map(|&p| Vec3A::from(p)).fold(empty, widen))
+            .collect();
+        pieces
+            .into_iter()
+            .fold(empty, |(lo, hi), (plo, phi)| (plo.min(lo), phi.max(hi)))
     };
-    let empty = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    if points.len() <= 2 * BOUNDS_PIECE {
-        return points.iter().fold(empty, fold);
-    }
-    let pieces: Vec<_> = points
-        .par_chunks(BOUNDS_PIECE)
-        .map(|piece| piece.iter().fold(empty, fold))
-        .collect();
-    pieces.iter().fold(empty, |(mut lo, mut hi), (plo, phi)| {
-        for k in 0..3 {
-            lo[k] = lo[k].min(plo[k]);
-            hi[k] = hi[k].max(phi[k]);
-        }
-        (lo, hi)
-    })
+    (lo.to_array(), hi.to_array())
+}
+
+/// Bounds `(lo, hi)` widened to hold `p`, the three axes at once (4 lanes: a quarter of the
+/// instructions of one axis at a time). `p.min(lo)`, not `lo.min(p)`: on SSE `minps` keeps
+/// its second operand on a tie or a `NaN`, so a bound keeps the zero it holds against the
+/// other zero (as `f32::min` of one axis at a time does) and skips a `NaN`.
+fn widen((lo, hi): (Vec3A, Vec3A), p: Vec3A) -> (Vec3A, Vec3A) {
+    (p.min(lo), p.max(hi))
 }
 
 #[cfg(test)]

@@ -301,6 +301,19 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
     assert_eq!(streamed, file.to_vec().expect("bytes"));
 }
 
+/// Bounds found one axis at a time with `f32::min` and `f32::max`, point by point.
+fn one_axis_at_a_time(points: &[Vec3]) -> ([u32; 3], [u32; 3]) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for (k, c) in p.to_array().into_iter().enumerate() {
+            lo[k] = lo[k].min(c);
+            hi[k] = hi[k].max(c);
+        }
+    }
+    (lo.map(f32::to_bits), hi.map(f32::to_bits))
+}
+
 #[test]
 fn bounds_in_pieces_are_the_one_pass_fold_to_the_bit() {
     // Enough points for several pieces, with signed zeros at the minimum and the maximum.
@@ -314,17 +327,30 @@ fn bounds_in_pieces_are_the_one_pass_fold_to_the_bit() {
             )
         })
         .collect();
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in &points {
-        for (k, c) in p.to_array().into_iter().enumerate() {
-            lo[k] = lo[k].min(c);
-            hi[k] = hi[k].max(c);
-        }
-    }
-    let bits = |a: [f32; 3]| a.map(f32::to_bits);
     let (plo, phi) = vec3_bounds(&points);
-    assert_eq!((bits(plo), bits(phi)), (bits(lo), bits(hi)));
+    let bits = |a: [f32; 3]| a.map(f32::to_bits);
+    assert_eq!((bits(plo), bits(phi)), one_axis_at_a_time(&points));
+}
+
+#[test]
+fn bounds_keep_the_first_zero_of_a_tie_and_skip_nan_as_f32_min_does() {
+    let nan = f32::NAN;
+    let sets = [
+        vec![Vec3::new(0.0, -0.0, 1.0), Vec3::new(-0.0, 0.0, nan)],
+        vec![Vec3::new(-0.0, 0.0, nan), Vec3::new(0.0, -0.0, -1.0)],
+        vec![Vec3::NAN, Vec3::new(nan, 2.0, -0.0)],
+        vec![Vec3::NAN],
+        vec![],
+    ];
+    let bits = |a: [f32; 3]| a.map(f32::to_bits);
+    for points in sets {
+        let (lo, hi) = vec3_bounds(&points);
+        assert_eq!(
+            (bits(lo), bits(hi)),
+            one_axis_at_a_time(&points),
+            "{points:?}"
+        );
+    }
 }
 
 #[test]
