@@ -125,6 +125,72 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     unusable
 }
 
+/// Most vertices [`usable_by_construction`] handles: its table holds a vertex's number in
+/// 16 bits.
+const BY_CONSTRUCTION_VERTICES: usize = 1 << 16;
+
+/// Whether no triangle of `indices` is unusable, shown without searching for repeats, for a
+/// generator whose triangles are distinct by construction: no two of them have the same
+/// three corners (as vertex numbers, whatever the turning order) once each vertex of a pair
+/// in `twins` is taken as the other. Then two triangles can only have the same corner
+/// positions through two vertices at one place, and it is enough that no triangle is
+/// degenerate and that no two vertices share a position, except the pairs of `twins`
+/// (`(vertex, other)`, in increasing order of `vertex`: the seam of a tube, a cap's copy of
+/// a ring). `false` also when it cannot tell: a repeated position elsewhere, an index past
+/// the vertices, or more than [`BY_CONSTRUCTION_VERTICES`] vertices.
+pub(super) fn usable_by_construction(
+    positions: &[Vec3],
+    indices: &[u32],
+    twins: &[(u32, u32)],
+) -> bool {
+    if positions.len() > BY_CONSTRUCTION_VERTICES {
+        return false;
+    }
+    let (triangles, _) = indices.as_chunks::<3>();
+    let sound = triangles
+        .iter()
+        .all(|tri| corners(positions, tri).is_some_and(|c| !degenerate(c)));
+    if !sound {
+        return false;
+    }
+    let bits = |v: usize| (positions[v] + Vec3::ZERO).to_array().map(f32::to_bits);
+    let len = (2 * positions.len()).max(16).next_power_of_two();
+    let mask = len - 1;
+    // Each slot: the position's hash's top 16 bits (its tag, odd, so never 0) above the
+    // vertex's number.
+    let mut slots = vec![0u32; len];
+    let mut twins = twins.iter().peekable();
+    for v in 0..positions.len() {
+        let mut twin = None;
+        while let Some(&&(a, b)) = twins.peek()
+            && a as usize <= v
+        {
+            if a as usize == v {
+                twin = Some(b as usize);
+            }
+            twins.next();
+        }
+        if twin.is_some_and(|w| w < positions.len() && bits(w) == bits(v)) {
+            continue;
+        }
+        let h = vertex_hash(positions[v]);
+        let tag = ((h >> 48) as u32) | 1;
+        let mut at = h as usize & mask;
+        loop {
+            let slot = slots[at];
+            if slot == 0 {
+                slots[at] = (tag << 16) | v as u32;
+                break;
+            }
+            if slot >> 16 == tag && bits((slot & 0xFFFF) as usize) == bits(v) {
+                return false;
+            }
+            at = (at + 1) & mask;
+        }
+    }
+    true
+}
+
 /// The first triangle of every hash met so far: an open-addressing table (linear probing,
 /// at most half full) of the hash's high half (its tag, never 0) above the triangle's
 /// number; 0 is an empty slot.
@@ -375,6 +441,64 @@ mod tests {
         let found = unusable(&positions, &indices);
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         assert!(found.ends_with(&[SHARDED_FROM - 2]), "{:?}", found.last());
+    }
+
+    #[test]
+    fn triangles_distinct_by_construction_are_usable_unless_two_vertices_meet() {
+        // A strip of 40 quads around a cylinder: its last column of vertices repeats the
+        // first (the seam), named as twins.
+        let (columns, rows) = (41u32, 3u32);
+        let mut positions: Vec<Vec3> = (0..rows * columns)
+            .map(|v| {
+                let (row, k) = (v / columns, (v % columns) % (columns - 1));
+                let a = std::f32::consts::TAU * k as f32 / (columns - 1) as f32;
+                Vec3::new(a.cos(), row as f32, a.sin())
+            })
+            .collect();
+        let mut indices = Vec::new();
+        for row in 0..rows - 1 {
+            for k in 0..columns - 1 {
+                let (a, b) = (row * columns + k, (row + 1) * columns + k);
+                indices.extend([a, a + 1, b + 1, a, b + 1, b]);
+            }
+        }
+        let twins: Vec<(u32, u32)> = (0..rows)
+            .map(|row| (row * columns + columns - 1, row * columns))
+            .collect();
+        let by_construction = |p: &[Vec3], i: &[u32], t: &[(u32, u32)]| {
+            let usable = usable_by_construction(p, i, t);
+            assert!(
+                !usable || unusable(p, i).is_empty(),
+                "usable, yet some are not"
+            );
+            usable
+        };
+        assert!(by_construction(&positions, &indices, &twins));
+        // Unnamed, the seam is two vertices at one place: no longer shown.
+        assert!(!by_construction(&positions, &indices, &twins[1..]));
+        // A twin elsewhere than its other is an ordinary vertex.
+        positions[columns as usize - 1].y = 0.5;
+        assert!(by_construction(&positions, &indices, &twins));
+        // -0.0 and 0.0 are one place.
+        positions[columns as usize - 1] = positions[0] * Vec3::new(1.0, -1.0, 1.0);
+        assert!(by_construction(&positions, &indices, &twins));
+        // Another vertex moved onto one of a row above: a repeat is possible.
+        positions[5] = positions[columns as usize + 5];
+        assert!(!by_construction(&positions, &indices, &twins));
+        positions[5] = positions[6] * 1.5;
+        assert!(by_construction(&positions, &indices, &twins));
+        // A degenerate triangle, an index past the vertices, too many vertices.
+        let mut flat = positions.clone();
+        flat[columns as usize + 1] = (flat[0] + flat[1]) * 0.5;
+        assert!(!by_construction(&flat, &indices, &twins));
+        let mut past = indices.clone();
+        past[4] = positions.len() as u32;
+        assert!(!usable_by_construction(&positions, &past, &twins));
+        let many: Vec<Vec3> = (0..=BY_CONSTRUCTION_VERTICES)
+            .map(|k| Vec3::new(k as f32, 0.0, 0.0))
+            .collect();
+        assert!(!usable_by_construction(&many, &[], &[]));
+        assert!(usable_by_construction(&many[1..], &[], &[]));
     }
 
     #[test]
