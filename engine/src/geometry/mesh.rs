@@ -299,8 +299,7 @@ impl Mesh {
     /// vertex of a pair in `twins` is taken as the other. It checks that no triangle is
     /// degenerate and that no two vertices share a position except the pairs of `twins`
     /// (`(vertex, other)` in increasing order of `vertex`, e.g. a tube's seam vertex and the
-    /// first of its ring). `false` when that does not hold or it cannot tell (more than 65,536
-    /// vertices): then search.
+    /// first of its ring). `false` when that does not hold: then search.
     #[must_use]
     pub fn usable_by_construction(&self, twins: &[(u32, u32)]) -> bool {
         !self.may_drop_triangles()
