@@ -294,8 +294,10 @@ pub fn build_tree(
                     ..Mesh::default()
                 };
                 append_leaf_quads(&points, style, &mut rng, &mut mesh);
-                // With levels of detail the mesh is replaced, and never cleaned up.
-                let clean = options.lod.is_none() && mesh.unusable_triangles().is_empty();
+                // A small tree's leaf mesh is searched here, beside the bark; a big tree's
+                // by the model's clean-up, after the textures. With levels of detail the
+                // mesh is replaced, and never cleaned up.
+                let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
                 (mesh, clean)
             });
             (points, mesh)
