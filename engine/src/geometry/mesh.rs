@@ -292,6 +292,20 @@ impl Mesh {
         triangles::unusable(&self.positions, &self.indices)
     }
 
+    /// Whether the mesh has no unusable triangle (none that
+    /// [`Mesh::remove_unusable_triangles`] would remove), shown without searching for
+    /// repeats, for a generator whose triangles are distinct by construction: no two have
+    /// the same three corners (as vertex numbers, whatever the turning order) once each
+    /// vertex of a pair in `twins` is taken as the other. It checks that no triangle is
+    /// degenerate and that no two vertices share a position except the pairs of `twins`
+    /// (`(vertex, other)` in increasing order of `vertex`, e.g. a tube's seam vertex and the
+    /// first of its ring). `false` when that does not hold: then search.
+    #[must_use]
+    pub fn usable_by_construction(&self, twins: &[(u32, u32)]) -> bool {
+        !self.may_drop_triangles()
+            || triangles::usable_by_construction(&self.positions, &self.indices, twins)
+    }
+
     /// Removes the triangles listed in `dropped` (numbers from 0, in increasing order, as
     /// [`Mesh::unusable_triangles`] gives them; a number out of order or past the last
     /// triangle is ignored).

@@ -135,6 +135,11 @@ pub struct Model {
     /// as an image referenced by the root `extras.pge.environment` and drawn by the preview
     /// as the background.
     pub environment: Option<Arc<Texture>>,
+    /// Meshes of `meshes` known to have no unusable triangle (their generator showed it, e.g.
+    /// with [`Mesh::usable_by_construction`]), which [`Model::remove_unusable_triangles`]
+    /// does not search. Each is a second reference to its mesh, so a listed mesh cannot
+    /// change: `Arc::make_mut` copies a shared mesh, and the copy is searched.
+    pub clean: Vec<Arc<Mesh>>,
 }
 
 impl Model {
@@ -197,6 +202,11 @@ impl Model {
                 leaves: group.leaves.clone(),
             });
         }
+        for mesh in &other.clean {
+            if !self.clean.iter().any(|m| Arc::ptr_eq(m, mesh)) {
+                self.clean.push(mesh.clone());
+            }
+        }
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
@@ -234,6 +244,9 @@ impl Model {
     pub fn remove_unusable_triangles(&mut self) -> usize {
         let mut removed = 0;
         for mesh in &mut self.meshes {
+            if self.clean.iter().any(|clean| Arc::ptr_eq(clean, mesh)) {
+                continue;
+            }
             let dropped = mesh.unusable_triangles();
             if !dropped.is_empty() {
                 Arc::make_mut(mesh).remove_triangles(&dropped);
@@ -401,6 +414,27 @@ mod tests {
         assert_eq!(lo, Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(hi, Vec3::new(2.0, 2.0, 1.0));
         outer.validate().expect("valid");
+    }
+
+    #[test]
+    fn meshes_listed_clean_are_not_searched_until_changed() {
+        // The triangle twice: the second is a repeat.
+        let mut twice = (*triangle()).clone();
+        twice.indices.extend([1, 2, 0]);
+        let twice = Arc::new(twice);
+        let mut inner = Model::from_mesh(twice.clone());
+        inner.clean.push(twice.clone());
+        let mut outer = Model::new();
+        outer.add_model(&inner, Mat4::IDENTITY);
+        outer.add_model(&inner, Mat4::IDENTITY);
+        assert_eq!(outer.clean.len(), 1);
+        assert_eq!(outer.remove_unusable_triangles(), 0);
+        assert!(Arc::ptr_eq(&outer.meshes[0], &twice));
+        // A change makes a copy, which is searched.
+        Arc::make_mut(&mut outer.meshes[0]).name = "changed".into();
+        assert_eq!(outer.remove_unusable_triangles(), 1);
+        assert_eq!(outer.meshes[0].indices, [0, 1, 2]);
+        assert_eq!(twice.indices.len(), 6);
     }
 
     #[test]

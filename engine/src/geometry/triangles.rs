@@ -125,6 +125,127 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
     unusable
 }
 
+/// Whether no triangle of `indices` is unusable, shown without searching for repeats, for a
+/// generator whose triangles are distinct by construction: no two of them have the same
+/// three corners (as vertex numbers, whatever the turning order) once each vertex of a pair
+/// in `twins` is taken as the other. Then two triangles can only have the same corner
+/// positions through two vertices at one place, and it is enough that no triangle is
+/// degenerate and that no two vertices share a position, except the pairs of `twins`
+/// (`(vertex, other)`, in increasing order of `vertex`: the seam of a tube, a cap's copy of
+/// a ring). `false` also when it cannot tell: a repeated position elsewhere, or an index
+/// past the vertices.
+pub(super) fn usable_by_construction(
+    positions: &[Vec3],
+    indices: &[u32],
+    twins: &[(u32, u32)],
+) -> bool {
+    let (triangles, _) = indices.as_chunks::<3>();
+    !any_degenerate(positions, triangles) && distinct_positions(positions, twins)
+}
+
+/// Whether a triangle is degenerate ([`degenerate`]) or has a corner past the vertices:
+/// eight triangles at a time, their corners laid out by coordinate so that [`degenerate`]'s
+/// operations, the same in the same order, run side by side.
+fn any_degenerate(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
+    const LANES: usize = 8;
+    let mut batches = triangles.chunks_exact(LANES);
+    for batch in &mut batches {
+        // Corner, axis, lane.
+        let mut at = [[[0f32; LANES]; 3]; 3];
+        for (lane, tri) in batch.iter().enumerate() {
+            let Some(c) = corners(positions, tri) else {
+                return true;
+            };
+            for (k, corner) in c.iter().enumerate() {
+                for axis in 0..3 {
+                    at[k][axis][lane] = corner[axis];
+                }
+            }
+        }
+        let [a, b, c] = at;
+        let mut flat = false;
+        for l in 0..LANES {
+            let edge = |p: &[[f32; LANES]; 3], q: &[[f32; LANES]; 3]| {
+                [q[0][l] - p[0][l], q[1][l] - p[1][l], q[2][l] - p[2][l]]
+            };
+            let dot = |p: [f32; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+            let (u, v) = (edge(&a, &b), edge(&a, &c));
+            // `u.cross(v)` as glam writes it.
+            let cross = [
+                u[1] * v[2] - v[1] * u[2],
+                u[2] * v[0] - v[2] * u[0],
+                u[0] * v[1] - v[0] * u[1],
+            ];
+            let twice_area = dot(cross).sqrt();
+            let longest = dot(u).max(dot(edge(&b, &c))).max(dot(edge(&c, &a)));
+            flat |= twice_area <= 1e-6 * longest;
+        }
+        if flat {
+            return true;
+        }
+    }
+    batches
+        .remainder()
+        .iter()
+        .any(|tri| corners(positions, tri).is_none_or(degenerate))
+}
+
+/// Whether no two vertices share a position, except a vertex and its other in `twins` (see
+/// [`usable_by_construction`]). A bit a position (from its hash) in a table that stays in
+/// the cache finds the few vertices whose bit another set too; only those are compared, by
+/// their positions, after sorting.
+fn distinct_positions(positions: &[Vec3], twins: &[(u32, u32)]) -> bool {
+    // At least eight bits a vertex: at most about one vertex in eight shares its bit.
+    let table_bits = (8 * positions.len()).max(1 << 12).next_power_of_two();
+    let shift = 64 - table_bits.trailing_zeros();
+    let mut once = vec![0u64; table_bits / 64];
+    let mut twice = vec![0u64; table_bits / 64];
+    for_each_placed(positions, twins, |_, h| {
+        let bit = (h >> shift) as usize;
+        let (word, mask) = (bit / 64, 1u64 << (bit % 64));
+        twice[word] |= once[word] & mask;
+        once[word] |= mask;
+    });
+    let mut shared = Vec::new();
+    for_each_placed(positions, twins, |v, h| {
+        let bit = (h >> shift) as usize;
+        if twice[bit / 64] & (1 << (bit % 64)) != 0 {
+            shared.push(position_bits(positions[v]));
+        }
+    });
+    shared.sort_unstable();
+    shared.windows(2).all(|w| w[0] != w[1])
+}
+
+/// Calls `f` with every vertex not at the place of its other in `twins` (see
+/// [`usable_by_construction`]) and its position's [`vertex_hash`].
+#[inline]
+fn for_each_placed(positions: &[Vec3], twins: &[(u32, u32)], mut f: impl FnMut(usize, u64)) {
+    let mut twins = twins.iter().peekable();
+    for (v, &p) in positions.iter().enumerate() {
+        let mut twin = None;
+        while let Some(&&(a, b)) = twins.peek()
+            && a as usize <= v
+        {
+            if a as usize == v {
+                twin = Some(b as usize);
+            }
+            twins.next();
+        }
+        let at_twin = twin
+            .and_then(|w| positions.get(w))
+            .is_some_and(|&q| position_bits(q) == position_bits(p));
+        if !at_twin {
+            f(v, vertex_hash(p));
+        }
+    }
+}
+
+/// A position's bits, `-0.0` as `0.0`: equal for the same place.
+fn position_bits(p: Vec3) -> [u32; 3] {
+    (p + Vec3::ZERO).to_array().map(f32::to_bits)
+}
+
 /// The first triangle of every hash met so far: an open-addressing table (linear probing,
 /// at most half full) of the hash's high half (its tag, never 0) above the triangle's
 /// number; 0 is an empty slot.
@@ -375,6 +496,102 @@ mod tests {
         let found = unusable(&positions, &indices);
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         assert!(found.ends_with(&[SHARDED_FROM - 2]), "{:?}", found.last());
+    }
+
+    #[test]
+    fn triangles_distinct_by_construction_are_usable_unless_two_vertices_meet() {
+        // A strip of 40 quads around a cylinder: its last column of vertices repeats the
+        // first (the seam), named as twins.
+        let (columns, rows) = (41u32, 3u32);
+        let mut positions: Vec<Vec3> = (0..rows * columns)
+            .map(|v| {
+                let (row, k) = (v / columns, (v % columns) % (columns - 1));
+                let a = std::f32::consts::TAU * k as f32 / (columns - 1) as f32;
+                Vec3::new(a.cos(), row as f32, a.sin())
+            })
+            .collect();
+        let mut indices = Vec::new();
+        for row in 0..rows - 1 {
+            for k in 0..columns - 1 {
+                let (a, b) = (row * columns + k, (row + 1) * columns + k);
+                indices.extend([a, a + 1, b + 1, a, b + 1, b]);
+            }
+        }
+        let twins: Vec<(u32, u32)> = (0..rows)
+            .map(|row| (row * columns + columns - 1, row * columns))
+            .collect();
+        let by_construction = |p: &[Vec3], i: &[u32], t: &[(u32, u32)]| {
+            let usable = usable_by_construction(p, i, t);
+            assert!(
+                !usable || unusable(p, i).is_empty(),
+                "usable, yet some are not"
+            );
+            usable
+        };
+        assert!(by_construction(&positions, &indices, &twins));
+        // Unnamed, the seam is two vertices at one place: no longer shown.
+        assert!(!by_construction(&positions, &indices, &twins[1..]));
+        // A twin elsewhere than its other is an ordinary vertex.
+        positions[columns as usize - 1].y = 0.5;
+        assert!(by_construction(&positions, &indices, &twins));
+        // -0.0 and 0.0 are one place.
+        positions[columns as usize - 1] = positions[0] * Vec3::new(1.0, -1.0, 1.0);
+        assert!(by_construction(&positions, &indices, &twins));
+        // Another vertex moved onto one of a row above: a repeat is possible.
+        positions[5] = positions[columns as usize + 5];
+        assert!(!by_construction(&positions, &indices, &twins));
+        positions[5] = positions[6] * 1.5;
+        assert!(by_construction(&positions, &indices, &twins));
+        // A degenerate triangle, an index past the vertices.
+        let mut flat = positions.clone();
+        flat[columns as usize + 1] = (flat[0] + flat[1]) * 0.5;
+        assert!(!by_construction(&flat, &indices, &twins));
+        let mut past = indices.clone();
+        past[4] = positions.len() as u32;
+        assert!(!usable_by_construction(&positions, &past, &twins));
+        // Many vertices, most sharing a bit of the table with another.
+        let mut many: Vec<Vec3> = (0..100_000)
+            .map(|k| Vec3::new(k as f32, (k % 7) as f32, 0.0))
+            .collect();
+        assert!(usable_by_construction(&many, &[], &[]));
+        many[99_999] = many[3];
+        assert!(!usable_by_construction(&many, &[], &[]));
+        assert!(usable_by_construction(&many, &[], &[(99_999, 3)]));
+    }
+
+    #[test]
+    fn triangles_tested_eight_at_a_time_are_degenerate_as_one_at_a_time() {
+        // Triangles around the threshold: a base of length 1..4 and a height near a
+        // millionth of it, at places far from the origin; -0.0 and NaN too.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut positions = Vec::new();
+        for _ in 0..3000 {
+            let origin = Vec3::new(next(), next(), next()) * 100.0 - 50.0;
+            let base = Vec3::new(next(), next(), next()).normalize() * (1.0 + 3.0 * next());
+            let up = base.any_orthonormal_vector() * base.length() * 2e-6 * next();
+            positions.extend([origin, origin + base, origin + base * next() + up]);
+        }
+        positions.extend([Vec3::new(-0.0, 0.0, 1.0), Vec3::Z, Vec3::NAN]);
+        let n = positions.len() as u32;
+        let mut triangles: Vec<[u32; 3]> =
+            (0..n / 3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        triangles.extend([[n - 3, n - 2, 0], [n - 1, 0, 1], [0, 1, n]]);
+        let mut both = 0;
+        for tri in &triangles {
+            let one = corners(&positions, tri).is_none_or(degenerate);
+            both += usize::from(one);
+            assert_eq!(any_degenerate(&positions, &[*tri; 8]), one, "{tri:?}");
+            let mut mixed = [[1, 2, 3]; 11];
+            mixed[5] = *tri;
+            assert_eq!(any_degenerate(&positions, &mixed), one, "{tri:?}");
+        }
+        assert!(both > 100 && both < triangles.len() - 100, "{both}");
     }
 
     #[test]

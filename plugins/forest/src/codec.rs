@@ -198,6 +198,7 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
         extras,
         stats,
         environment,
+        clean: _,
     } = model;
     // Shared parts once, in tables: textures, materials, skeletons. The materials are
     // written first into a buffer of their own, which collects the textures they use; the
@@ -595,5 +596,6 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
         extras,
         stats,
         environment,
+        clean: Vec::new(),
     })
 }

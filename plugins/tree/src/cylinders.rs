@@ -39,6 +39,19 @@ use rings::{Shape, Sink};
 /// finite when the skeleton is; a branch of zero length keeps the direction of the segment
 /// before it.
 pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) {
+    append_bark_with_twins(skeleton, options, mesh, None);
+}
+
+/// [`append_bark`], pushing to `twins` (when given and the mesh is written on the calling
+/// thread) each vertex made at the place of another by construction, with that other (see
+/// [`Mesh::usable_by_construction`]); `false` when the mesh was written in parallel and
+/// `twins` left as it was.
+fn append_bark_with_twins(
+    skeleton: &Skeleton,
+    options: &MeshOptions,
+    mesh: &mut Mesh,
+    mut twins: Option<&mut Vec<(u32, u32)>>,
+) -> bool {
     let sides = options.sides.clamp(3, 1024) as usize;
     let caps = options.caps;
     let trig: Vec<(f32, f32)> = (0..=sides)
@@ -166,8 +179,15 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
     if vertices < PARALLEL_FROM {
         let mut directions = Vec::new();
         for ((k, t), mut sink) in tubes.iter().enumerate().zip(sinks) {
-            shape.emit(t, rings(k), &mut directions, &mut sink);
+            shape.emit(
+                t,
+                rings(k),
+                &mut directions,
+                &mut sink,
+                twins.as_deref_mut(),
+            );
         }
+        true
     } else {
         tubes
             .par_iter()
@@ -175,8 +195,9 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
             .zip(sinks)
             .with_min_len(16)
             .for_each_init(Vec::new, |directions, ((k, t), mut sink)| {
-                shape.emit(t, rings(k), directions, &mut sink);
+                shape.emit(t, rings(k), directions, &mut sink, None);
             });
+        false
     }
 }
 
@@ -194,6 +215,21 @@ pub fn bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> Mesh {
     };
     append_bark(skeleton, options, &mut mesh);
     mesh
+}
+
+/// [`bark_mesh`], and whether it is shown to have no unusable triangle by construction
+/// ([`Mesh::usable_by_construction`]: its tubes' triangles are distinct, so only degenerate
+/// triangles and vertices at one place can make one); `false` when that was not shown
+/// (then search it).
+pub(crate) fn clean_bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> (Mesh, bool) {
+    let mut mesh = Mesh {
+        name: "bark".into(),
+        ..Mesh::default()
+    };
+    let mut twins = Vec::new();
+    let clean = append_bark_with_twins(skeleton, options, &mut mesh, Some(&mut twins))
+        && mesh.usable_by_construction(&twins);
+    (mesh, clean)
 }
 
 /// Follows the continuing children from `start` to a tip, pushing positions and radii.
@@ -439,6 +475,51 @@ mod tests {
 
     fn column_mesh() -> Mesh {
         mesh_of(&column(), 5, true)
+    }
+
+    #[test]
+    fn a_bark_shown_clean_by_construction_has_no_unusable_triangle() {
+        let shown = |s: &Skeleton, options: &MeshOptions| {
+            let (mesh, clean) = clean_bark_mesh(s, options);
+            assert_eq!(mesh, bark_mesh(s, options));
+            let unusable = mesh.unusable_triangles();
+            assert!(!clean || unusable.is_empty(), "clean, yet {unusable:?}");
+            clean
+        };
+        let flared = MeshOptions {
+            flare: Some(Flare {
+                roots: 5,
+                spread: 0.9,
+                height: 1.0,
+            }),
+            ..MeshOptions::default()
+        };
+        let mut s = Skeleton::new();
+        s.push(Vec3::ZERO, None, 0.0, 0);
+        for i in 1..2000u32 {
+            let parent = if i % 5 == 0 { i / 3 } else { i - 1 };
+            let t = i as f32 * 0.37;
+            let p = s.positions[parent as usize] + Vec3::new(t.sin() * 0.2, 0.3, t.cos() * 0.2);
+            s.push(p, Some(parent), 0.0, u32::from(i % 5 == 0));
+        }
+        crate::pipe_radii(&mut s, 0.01, 2.3);
+        for options in [MeshOptions::default(), flared.clone()] {
+            assert!(shown(&s, &options));
+            assert!(shown(&column(), &options));
+        }
+        // Two laterals from one fork to one point: the same tube twice, every triangle a
+        // repeat.
+        let mut twins = column();
+        twins.push(Vec3::new(1.0, 3.0, 0.0), Some(1), 0.1, 1);
+        twins.push(Vec3::new(1.0, 3.0, 0.0), Some(1), 0.1, 1);
+        assert!(!shown(&twins, &MeshOptions::default()));
+        // A zero-length segment: a flat ring of triangles where the radius changes,
+        // degenerate ones where it does not.
+        let mut flat = column();
+        flat.push(Vec3::new(0.0, 2.0, 0.0), Some(1), 0.2, 0);
+        assert!(shown(&flat, &flared));
+        flat.radii[2] = flat.radii[1];
+        assert!(!shown(&flat, &flared));
     }
 
     #[test]

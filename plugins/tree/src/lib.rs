@@ -268,11 +268,13 @@ pub fn build_tree(
     // a small tree's are made side by side (a big tree's each use the whole pool already);
     // each phase counts its own time.
     let small = prepared.len() * (options.mesh.sides as usize + 1) < SIDE_BY_SIDE_BELOW;
+    // Each mesh comes with whether it has no unusable triangle (the search, or the bark's
+    // construction, showed it): the model's clean-up then skips it.
     let ((bark, meshing_time), (leaves, mut leaves_time)) = beside(
         small,
         || {
             // At least one segment, so the bark mesh has triangles.
-            has_bark.then(|| bark_mesh(&prepared, &options.mesh))
+            has_bark.then(|| cylinders::clean_bark_mesh(&prepared, &options.mesh))
         },
         || {
             let mut rng = Mt64::new(seed);
@@ -292,7 +294,11 @@ pub fn build_tree(
                     ..Mesh::default()
                 };
                 append_leaf_quads(&points, style, &mut rng, &mut mesh);
-                mesh
+                // A small tree's leaf mesh is searched here, beside the bark; a big tree's
+                // by the model's clean-up, after the textures. With levels of detail the
+                // mesh is replaced, and never cleaned up.
+                let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
+                (mesh, clean)
             });
             (points, mesh)
         },
@@ -319,19 +325,19 @@ pub fn build_tree(
         },
     );
     let textures_time = t.elapsed().as_secs_f64();
-    if let (Some(mut mesh), Some(material)) = (bark, bark_material?) {
+    if let (Some((mut mesh, clean)), Some(material)) = (bark, bark_material?) {
         mesh.material = material;
         mesh.skeleton = Some(prepared.clone());
-        model.add_mesh(mesh, Mat4::IDENTITY);
+        add_mesh(&mut model, mesh, clean);
     }
 
     let t = Instant::now();
-    if let (Some(mut mesh), Some(material)) = (leaf_mesh, leaf_material?) {
+    if let (Some((mut mesh, clean)), Some(material)) = (leaf_mesh, leaf_material?) {
         mesh.material = material;
         if let Some(lod) = &options.lod {
             mesh = lod_leaves(&mesh, lod, &prepared)?;
         }
-        model.add_mesh(mesh, Mat4::IDENTITY);
+        add_mesh(&mut model, mesh, clean);
     } else if let Some(lod) = &options.lod {
         let at = if lod.source.is_empty() {
             String::new()
@@ -348,6 +354,16 @@ pub fn build_tree(
     model.stats.nodes = prepared.len() as u64;
     model.stats.leaves = prepared.leaves.len() as u64;
     Ok(model)
+}
+
+/// Adds `mesh` at the origin, listed as clean (see [`Model::clean`]) when it has no unusable
+/// triangle.
+fn add_mesh(model: &mut Model, mesh: Mesh, clean: bool) {
+    let mesh = Arc::new(mesh);
+    if clean {
+        model.clean.push(mesh.clone());
+    }
+    model.add_mesh(mesh, Mat4::IDENTITY);
 }
 
 /// Nodes times sides plus one (about half the bark's vertices) below which a tree's bark and

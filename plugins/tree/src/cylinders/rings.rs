@@ -53,13 +53,16 @@ pub(super) struct Shape<'a> {
 
 impl Shape<'_> {
     /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)) into
-    /// `out`; `seg` is scratch space.
+    /// `out`; `seg` is scratch space. With `twins`, pushes each vertex made at the place of
+    /// another by construction (a ring's seam vertex, a cap's copy of a ring vertex) with
+    /// that other, in increasing order (see `Mesh::usable_by_construction`).
     pub(super) fn emit(
         &self,
         tube: &TubeSpec,
         pts: &[(Vec3, f32, f32)],
         seg: &mut Vec<Vec3>,
         out: &mut Sink,
+        mut twins: Option<&mut Vec<(u32, u32)>>,
     ) {
         if pts.len() < 2 {
             return;
@@ -101,7 +104,10 @@ impl Shape<'_> {
         let mut side = seam_side(dir, dir.any_orthonormal_vector());
         let mut v = 0.0f32;
         if tube.base_cap && pts[0].1 > 0.0 && flare.is_none() {
-            self.cap(out, (pts[0].0, pts[0].1), (side, dir), -1.0, v);
+            // The first ring follows the cap.
+            let ring = out.next_index() + 1 + self.sides as u32;
+            let cap = (pts[0].0, pts[0].1, ring);
+            self.cap(out, cap, (side, dir), -1.0, v, twins.as_deref_mut());
         }
         let first_index = out.next_index();
         for j in 0..pts.len() {
@@ -144,6 +150,10 @@ impl Shape<'_> {
                     Vec2::new(around * k as f32 / self.sides as f32, v),
                 );
             }
+            if let Some(twins) = twins.as_deref_mut() {
+                let ring = first_index + j as u32 * stride;
+                twins.push((ring + self.sides as u32, ring));
+            }
             if j > 0 {
                 let a0 = first_index + (j as u32 - 1) * stride;
                 let b0 = a0 + stride;
@@ -155,19 +165,22 @@ impl Shape<'_> {
         }
         let (centre, radius, _) = pts[pts.len() - 1];
         if tube.tip_cap && radius > 0.0 {
-            self.cap(out, (centre, radius), (side, dir), 1.0, v);
+            let ring = first_index + (pts.len() as u32 - 1) * stride;
+            self.cap(out, (centre, radius, ring), (side, dir), 1.0, v, twins);
         }
     }
 
-    /// A flat cap of the ring at `centre` with `radius`, framed by `side` and `dir`: a
-    /// centre vertex and one ring of `sides` vertices facing `sign * dir`.
+    /// A flat cap of the ring at `centre` with `radius` (whose first vertex is `ring`),
+    /// framed by `side` and `dir`: a centre vertex and one ring of `sides` vertices facing
+    /// `sign * dir`, each pushed to `twins` with the ring's vertex it copies.
     fn cap(
         &self,
         out: &mut Sink,
-        (centre, radius): (Vec3, f32),
+        (centre, radius, ring): (Vec3, f32, u32),
         (side, dir): (Vec3, Vec3),
         sign: f32,
         v: f32,
+        twins: Option<&mut Vec<(u32, u32)>>,
     ) {
         let binormal = dir.cross(side);
         let normal = dir * sign;
@@ -182,6 +195,9 @@ impl Shape<'_> {
             );
         }
         let n = self.sides as u32;
+        if let Some(twins) = twins {
+            twins.extend((0..n).map(|k| (base + 1 + k, ring + k)));
+        }
         for k in 0..n {
             let (a, b) = (base + 1 + k, base + 1 + (k + 1) % n);
             if sign > 0.0 {
