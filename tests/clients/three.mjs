@@ -33,8 +33,10 @@ mkdirSync(out, { recursive: true });
 const WIDTH = 640;
 const HEIGHT = 480;
 
+// The page names an empty icon: else Chromium asks for /favicon.ico, and the 404's console
+// error could land while the first file is shown (a flake seen once in CI).
 const page_html = `<!doctype html>
-<html><head><meta charset="utf-8"><style>body{margin:0;background:#000}</style>
+<html><head><meta charset="utf-8"><link rel="icon" href="data:,"><style>body{margin:0;background:#000}</style>
 <script type="importmap">{"imports": {"three": "/three/build/three.module.js",
  "three/addons/": "/three/examples/jsm/"}}</script></head>
 <body><canvas id="view" width="${WIDTH}" height="${HEIGHT}"></canvas>

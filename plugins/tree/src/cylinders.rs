@@ -425,18 +425,25 @@ mod tests {
         assert!(!is_closed(&open), "without caps the ends are open");
     }
 
-    #[test]
-    fn any_thread_count_gives_the_same_mesh_appended_after_another() {
-        // A branching skeleton of a few thousand nodes: many tubes, some with caps.
+    /// A branching skeleton of `n` nodes with pipe-model radii: every fifth node starts a
+    /// lateral from a node a third of its number.
+    fn branching(n: u32) -> Skeleton {
         let mut s = Skeleton::new();
         s.push(Vec3::ZERO, None, 0.0, 0);
-        for i in 1..3000u32 {
+        for i in 1..n {
             let parent = if i % 5 == 0 { i / 3 } else { i - 1 };
             let t = i as f32 * 0.37;
             let p = s.positions[parent as usize] + Vec3::new(t.sin() * 0.2, 0.3, t.cos() * 0.2);
             s.push(p, Some(parent), 0.0, u32::from(i % 5 == 0));
         }
         crate::pipe_radii(&mut s, 0.01, 2.3);
+        s
+    }
+
+    #[test]
+    fn any_thread_count_gives_the_same_mesh_appended_after_another() {
+        // A branching skeleton of a few thousand nodes: many tubes, some with caps.
+        let s = branching(3000);
         let options = MeshOptions {
             flare: Some(Flare {
                 roots: 4,
@@ -494,15 +501,7 @@ mod tests {
             }),
             ..MeshOptions::default()
         };
-        let mut s = Skeleton::new();
-        s.push(Vec3::ZERO, None, 0.0, 0);
-        for i in 1..2000u32 {
-            let parent = if i % 5 == 0 { i / 3 } else { i - 1 };
-            let t = i as f32 * 0.37;
-            let p = s.positions[parent as usize] + Vec3::new(t.sin() * 0.2, 0.3, t.cos() * 0.2);
-            s.push(p, Some(parent), 0.0, u32::from(i % 5 == 0));
-        }
-        crate::pipe_radii(&mut s, 0.01, 2.3);
+        let s = branching(2000);
         for options in [MeshOptions::default(), flared.clone()] {
             assert!(shown(&s, &options));
             assert!(shown(&column(), &options));
