@@ -427,39 +427,6 @@ impl Builder {
     }
 }
 
-/// The `extras.pge.lod = {leaves = [...], level = [...]}` of a group's instancing node: the
-/// leaves and level of every placement, in the order of the instancing accessors (`None`
-/// when the group has no leaf counts).
-fn group_leaves_extras(group: &InstanceGroup) -> Result<json::Extras> {
-    let Some(leaves) = &group.leaves else {
-        return Ok(None);
-    };
-    // Written straight as text (serde_json's number formatting, no `Value` tree): a forest's
-    // nodes hold millions of these numbers.
-    let levels: Vec<i64> = (0..leaves.counts.len()).map(|k| leaves.level(k)).collect();
-    let mut text = Vec::with_capacity(48 + 10 * levels.len());
-    text.extend_from_slice(br#"{"pge":{"lod":{"leaves":"#);
-    let export = |e: serde_json::Error| Error::Export(e.to_string());
-    serde_json::to_writer(&mut text, &leaves.counts).map_err(export)?;
-    text.extend_from_slice(br#","level":"#);
-    serde_json::to_writer(&mut text, &levels).map_err(export)?;
-    text.extend_from_slice(b"}}}");
-    let text = String::from_utf8(text).map_err(|e| Error::Export(e.to_string()))?;
-    serde_json::value::RawValue::from_string(text)
-        .map(Some)
-        .map_err(export)
-}
-
-/// The `extras.pge.lod = {leaves, level}` of the node of placement `k` of a group written
-/// one node per placement (`None` when the group has no leaf counts).
-fn placement_leaves_extras(group: &InstanceGroup, k: usize) -> Result<json::Extras> {
-    let Some(leaves) = &group.leaves else {
-        return Ok(None);
-    };
-    let count = leaves.counts.get(k).copied().unwrap_or(0);
-    raw(&json!({ "pge": { "lod": { "leaves": count, "level": leaves.level(k) } } }))
-}
-
 /// A node placing `mesh` by `m`: translation/rotation/scale when `m` decomposes exactly,
 /// the matrix otherwise.
 fn node(mesh: json::Index<json::Mesh>, m: &Mat4) -> json::Node {
@@ -782,8 +749,11 @@ impl Builder {
 
 #[path = "glb_extensions.rs"]
 mod extensions;
+#[path = "glb_lod_extras.rs"]
+mod lod_extras;
 pub use extensions::DIFFUSE_TRANSMISSION;
 use extensions::with_extensions;
+use lod_extras::{group_leaves_extras, placement_leaves_extras};
 
 #[path = "glb_shared.rs"]
 pub(super) mod shared;
