@@ -304,7 +304,6 @@ impl Shape {
     }
 }
 
-/// Distance from `p` to the segment `a`-`b`.
 /// The signed distance bound `k0 (k0 - 1) / k1` of an ellipsoid of semi-axes `radii` at
 /// `q` from its centre, where `k0 = |q / radii|` and `k1 = |q / radii²|`.
 fn ellipsoid_distance(q: Vec3, k0: f32, radii: Vec3) -> f32 {
@@ -325,6 +324,7 @@ pub(crate) fn ellipsoid_contains(q: Vec3, radii: Vec3) -> bool {
     k0 <= 1.0 || ellipsoid_distance(q, k0, radii) <= 0.0
 }
 
+/// Distance from `p` to the segment `a`-`b`.
 fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
     let ab = b - a;
     let len2 = ab.length_squared();
