@@ -739,7 +739,7 @@ impl Builder {
                 } else {
                     with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
                 };
-                JsonText::new(text, &b.skeletons)
+                JsonText::new(text, &b.skeletons, &model.skeleton_texts)
             },
             || b.layout.convert(),
         );

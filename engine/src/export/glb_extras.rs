@@ -102,7 +102,9 @@ impl<const N: usize, T: Serialize> Serialize for Entries<N, T> {
 pub(super) struct JsonText {
     /// The text with the markers.
     text: Vec<u8>,
-    /// The text around the markers, and the skeletons' pieces, in order.
+    /// The skeletons' texts, in the order of their markers.
+    skeletons: Vec<Text>,
+    /// The text around the markers, and the skeletons, in order.
     parts: Vec<Part>,
     /// The length of the whole text.
     len: usize,
@@ -112,10 +114,25 @@ pub(super) struct JsonText {
 enum Part {
     /// Bytes of the text around the markers.
     Text(Range<usize>),
-    /// A fixed piece of a skeleton's text.
-    Fixed(&'static [u8]),
-    /// Formatted numbers of a skeleton.
-    Numbers(Vec<u8>),
+    /// The text of the skeleton of that marker.
+    Skeleton(usize),
+}
+
+/// A skeleton's text in a [`JsonText`].
+enum Text {
+    /// Formatted ahead of the export.
+    Prepared(Arc<SkeletonText>),
+    /// Formatted by the export.
+    Formatted(Formatted),
+}
+
+impl Text {
+    fn formatted(&self) -> &Formatted {
+        match self {
+            Text::Prepared(text) => &text.formatted,
+            Text::Formatted(formatted) => formatted,
+        }
+    }
 }
 
 /// The arrays of a skeleton, in the order they are written.
@@ -182,10 +199,104 @@ fn float(out: &mut Vec<u8>, v: f32) -> std::io::Result<()> {
     }
 }
 
+/// A skeleton's numbers formatted: the pieces of each array, in the order of [`Array::ALL`].
+#[derive(Debug)]
+struct Formatted([Vec<Vec<u8>>; 4]);
+
+impl Formatted {
+    /// The numbers of the skeleton's arrays, in pieces of [`PIECE_NUMBERS`] formatted on the
+    /// rayon pool when they are [`FORMAT_IN_PARALLEL`] or more.
+    fn new(sk: &Skeleton) -> std::io::Result<Formatted> {
+        let jobs: Vec<(Array, Range<usize>)> = Array::ALL
+            .into_iter()
+            .flat_map(|array| {
+                let n = array.len(sk);
+                (0..n)
+                    .step_by(PIECE_NUMBERS)
+                    .map(move |s| (array, s..(s + PIECE_NUMBERS).min(n)))
+            })
+            .collect();
+        let format = |(array, range): (Array, Range<usize>)| array.format(sk, range);
+        let pieces = if Formatted::numbers(sk) < FORMAT_IN_PARALLEL {
+            jobs.into_iter()
+                .map(format)
+                .collect::<std::io::Result<Vec<_>>>()?
+        } else {
+            jobs.into_par_iter()
+                .map(format)
+                .collect::<std::io::Result<Vec<_>>>()?
+        };
+        let mut pieces = pieces.into_iter();
+        Ok(Formatted(Array::ALL.map(|array| {
+            let n = array.len(sk).div_ceil(PIECE_NUMBERS);
+            pieces.by_ref().take(n).collect()
+        })))
+    }
+
+    /// How many numbers the skeleton's text has.
+    fn numbers(sk: &Skeleton) -> usize {
+        Array::ALL.into_iter().map(|array| array.len(sk)).sum()
+    }
+
+    /// The skeleton's text: `{"parents":[...],...}`.
+    fn slices(&self) -> impl Iterator<Item = &[u8]> {
+        Array::ALL
+            .into_iter()
+            .zip(&self.0)
+            .flat_map(|(array, pieces)| {
+                std::iter::once(array.opening()).chain(pieces.iter().map(Vec::as_slice))
+            })
+            .chain(std::iter::once(&b"]}"[..]))
+    }
+}
+
+/// A skeleton's text in a mesh's `extras.pge`, formatted ahead of the export (see
+/// [`Model::skeleton_texts`](crate::geometry::Model::skeleton_texts)): a tree's bark
+/// formats it beside the leaves, on a core the export would leave idle. The export uses it
+/// for a skeleton of the same numbers, compared bit for bit (a thirtieth of the time of
+/// formatting them), and formats any other.
+#[derive(Debug)]
+pub struct SkeletonText {
+    /// The skeleton's numbers it was formatted from (its leaves are not written).
+    from: Skeleton,
+    formatted: Formatted,
+}
+
+impl SkeletonText {
+    /// The text of `skeleton`.
+    pub fn new(skeleton: &Skeleton) -> Result<SkeletonText> {
+        let formatted = Formatted::new(skeleton).map_err(|e| Error::Export(e.to_string()))?;
+        let from = Skeleton {
+            positions: skeleton.positions.clone(),
+            parents: skeleton.parents.clone(),
+            radii: skeleton.radii.clone(),
+            orders: skeleton.orders.clone(),
+            leaves: Vec::new(),
+        };
+        Ok(SkeletonText { from, formatted })
+    }
+
+    /// Whether this is the text of `skeleton`: the same numbers, bit for bit.
+    pub(super) fn made_from(&self, skeleton: &Skeleton) -> bool {
+        fn bits<T: bytemuck::Pod>(v: &[T]) -> &[u32] {
+            bytemuck::cast_slice(v)
+        }
+        self.from.parents == skeleton.parents
+            && self.from.orders == skeleton.orders
+            && bits(&self.from.positions) == bits(&skeleton.positions)
+            && bits(&self.from.radii) == bits(&skeleton.radii)
+    }
+}
+
 impl JsonText {
     /// `text` with each skeleton marker replaced by the skeleton of that mesh of
-    /// `skeletons` (an empty one if it has none).
-    pub(super) fn new(text: Vec<u8>, skeletons: &[Arc<Mesh>]) -> Result<JsonText> {
+    /// `skeletons` (an empty one if it has none): the text of `prepared` made from the same
+    /// numbers where there is one, formatted now otherwise.
+    pub(super) fn new(
+        text: Vec<u8>,
+        skeletons: &[Arc<Mesh>],
+        prepared: &[Arc<SkeletonText>],
+    ) -> Result<JsonText> {
         let bad = || Error::Export("a skeleton marker in the glTF JSON is damaged".into());
         // The markers, in order: skeleton k's is the k-th (the meshes are written in the
         // order their extras were), found by the next line feed that is part of it (one in
@@ -200,55 +311,56 @@ impl JsonText {
                 .map(|p| p - 1)
                 .find(|&p| text[p..].starts_with(want.as_bytes()))
                 .ok_or_else(bad)?;
-            markers.push((start..start + want.len(), k));
+            markers.push(start..start + want.len());
             at = start + want.len();
         }
         let empty = Skeleton::default();
-        let skeleton = |k: usize| -> Result<&Skeleton> {
-            let mesh = skeletons.get(k).ok_or_else(bad)?;
-            Ok(mesh.skeleton.as_deref().unwrap_or(&empty))
-        };
-        // Every skeleton's pieces, formatted in parallel.
-        let mut jobs = Vec::new();
-        for &(_, k) in &markers {
-            let sk = skeleton(k)?;
-            for array in Array::ALL {
-                let n = array.len(sk);
-                jobs.extend(
-                    (0..n)
-                        .step_by(PIECE_NUMBERS)
-                        .map(|s| (sk, array, s..(s + PIECE_NUMBERS).min(n))),
-                );
-            }
-        }
-        let numbers: usize = jobs.iter().map(|(_, _, range)| range.len()).sum();
-        let format = |(sk, array, range): (&Skeleton, Array, Range<usize>)| array.format(sk, range);
-        let formatted = if numbers < FORMAT_IN_PARALLEL {
-            jobs.into_iter()
-                .map(format)
+        let sks: Vec<&Skeleton> = skeletons
+            .iter()
+            .map(|mesh| mesh.skeleton.as_deref().unwrap_or(&empty))
+            .collect();
+        // Each skeleton's text: prepared, or formatted now (skeletons side by side when
+        // they are many numbers in all; a big one's pieces side by side too).
+        let found: Vec<Option<Arc<SkeletonText>>> = sks
+            .iter()
+            .map(|sk| prepared.iter().find(|t| t.made_from(sk)).cloned())
+            .collect();
+        let missing: Vec<&Skeleton> = sks
+            .iter()
+            .zip(&found)
+            .filter(|(_, f)| f.is_none())
+            .map(|(sk, _)| *sk)
+            .collect();
+        let numbers: usize = missing.iter().map(|sk| Formatted::numbers(sk)).sum();
+        let formatted = if numbers < FORMAT_IN_PARALLEL || missing.len() < 2 {
+            missing
+                .into_iter()
+                .map(Formatted::new)
                 .collect::<std::io::Result<Vec<_>>>()
         } else {
-            jobs.into_par_iter().map(format).collect()
+            missing.into_par_iter().map(Formatted::new).collect()
         };
         let mut formatted = formatted
             .map_err(|e| Error::Export(e.to_string()))?
             .into_iter();
+        let mut texts = Vec::with_capacity(skeletons.len());
+        for f in found {
+            texts.push(match f {
+                Some(text) => Text::Prepared(text),
+                None => Text::Formatted(formatted.next().ok_or_else(bad)?),
+            });
+        }
         let mut parts = Vec::with_capacity(2 * markers.len() + 1);
         let mut from = 0;
-        for (range, k) in markers {
+        for (k, range) in markers.into_iter().enumerate() {
             parts.push(Part::Text(from..range.start));
+            parts.push(Part::Skeleton(k));
             from = range.end;
-            let sk = skeleton(k)?;
-            for array in Array::ALL {
-                parts.push(Part::Fixed(array.opening()));
-                let pieces = array.len(sk).div_ceil(PIECE_NUMBERS);
-                parts.extend(formatted.by_ref().take(pieces).map(Part::Numbers));
-            }
-            parts.push(Part::Fixed(b"]}"));
         }
         parts.push(Part::Text(from..text.len()));
         let mut json = JsonText {
             text,
+            skeletons: texts,
             parts,
             len: 0,
         };
@@ -258,10 +370,13 @@ impl JsonText {
 
     /// The text's bytes, part by part.
     pub(super) fn slices(&self) -> impl Iterator<Item = &[u8]> {
-        self.parts.iter().map(|p| match p {
-            Part::Text(range) => &self.text[range.clone()],
-            Part::Fixed(bytes) => bytes,
-            Part::Numbers(bytes) => bytes.as_slice(),
+        self.parts.iter().flat_map(|p| {
+            let (text, skeleton) = match p {
+                Part::Text(range) => (Some(&self.text[range.clone()]), None),
+                Part::Skeleton(k) => (None, self.skeletons.get(*k).map(Text::formatted)),
+            };
+            text.into_iter()
+                .chain(skeleton.into_iter().flat_map(Formatted::slices))
         })
     }
 

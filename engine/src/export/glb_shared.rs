@@ -224,7 +224,7 @@ pub fn variants_files(
     } else {
         with_extensions(&mut b.root, &[], &b.unlit, &b.transmissive)?
     };
-    let text = JsonText::new(text, &b.skeletons)?.into_vec();
+    let text = JsonText::new(text, &b.skeletons, &variants.skeleton_texts)?.into_vec();
     let mut bin = vec![0; bin_len];
     b.layout.write(&mut bin);
     Ok((text, bin))

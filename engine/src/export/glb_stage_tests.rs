@@ -1,6 +1,7 @@
 //! Tests of stages as scenes and of empty models.
 
 use super::*;
+use crate::export::SkeletonText;
 use crate::geometry::Skeleton;
 
 #[test]
@@ -110,7 +111,7 @@ fn streamed_mesh_extras_match_a_value_tree() {
         let (_, pge) = b.primitive(&mesh).expect("primitive");
         let mut skeletons = Vec::new();
         let marked = pge.extras(&mut skeletons).expect("extras").expect("some");
-        let text = JsonText::new(marked.get().as_bytes().to_vec(), &skeletons).expect("text");
+        let text = JsonText::new(marked.get().as_bytes().to_vec(), &skeletons, &[]).expect("text");
         String::from_utf8(text.into_vec()).expect("utf-8")
     };
     assert_eq!(streamed(&mesh), expected(&mesh));
@@ -147,4 +148,39 @@ fn streamed_mesh_extras_match_a_value_tree() {
     let mut b = Builder::new();
     let empty = Arc::new(empty);
     assert!(b.primitive(&empty).expect("primitive").1.0.is_empty());
+}
+
+/// A skeleton's text prepared ahead of the export takes the place of its marker, one of
+/// other numbers (a zero of the other sign) is left aside: the file is the same either way.
+#[test]
+fn prepared_skeleton_texts_give_the_same_file() {
+    let mut s = Skeleton::new();
+    for k in 0..3_000u32 {
+        let parent = k.checked_sub(1);
+        s.push(Vec3::new(k as f32 * 0.1, 1.0, -0.5), parent, 0.0, k % 3);
+    }
+    let mut mesh =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    mesh.skeleton = Some(Arc::new(s.clone()));
+    let model = Model::from_mesh(mesh);
+    let plain = glb_bytes(&model, &ExportMeta::default()).expect("glb");
+    let mut other = s.clone();
+    other.radii[2_999] = -0.0;
+    let text = SkeletonText::new(&s).expect("formatted");
+    assert!(text.made_from(&s));
+    assert!(!text.made_from(&other));
+    for prepared in [&s, &other] {
+        let mut with_text = Model::new();
+        let mut inner = model.clone();
+        inner.prepare_skeleton_text(prepared);
+        // Kept by a model the tree is added to.
+        with_text.add_model(&inner, Mat4::IDENTITY);
+        assert_eq!(with_text.skeleton_texts.len(), 1);
+        let bytes = glb_bytes(&with_text, &ExportMeta::default()).expect("glb");
+        assert!(
+            bytes == plain,
+            "prepared from another skeleton: {}",
+            prepared == &other
+        );
+    }
 }

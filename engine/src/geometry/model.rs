@@ -2,7 +2,8 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::{GeometryError, Mesh, Texture};
+use super::{GeometryError, Mesh, Skeleton, Texture};
+use crate::export::SkeletonText;
 
 /// One placement of a mesh in the model (a glTF node).
 #[derive(Clone, Debug, PartialEq)]
@@ -140,6 +141,10 @@ pub struct Model {
     /// does not search. Each is a second reference to its mesh, so a listed mesh cannot
     /// change: `Arc::make_mut` copies a shared mesh, and the copy is searched.
     pub clean: Vec<Arc<Mesh>>,
+    /// Texts of the meshes' skeletons for the glb, formatted ahead of the export where a
+    /// core had time to spare ([`Model::prepare_skeleton_text`]); the export uses each for
+    /// the skeletons with its numbers and formats the others.
+    pub skeleton_texts: Vec<Arc<SkeletonText>>,
 }
 
 impl Model {
@@ -207,12 +212,26 @@ impl Model {
                 self.clean.push(mesh.clone());
             }
         }
+        for text in &other.skeleton_texts {
+            if !self.skeleton_texts.iter().any(|t| Arc::ptr_eq(t, text)) {
+                self.skeleton_texts.push(text.clone());
+            }
+        }
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
         }
         if self.environment.is_none() {
             self.environment.clone_from(&other.environment);
+        }
+    }
+
+    /// Formats the text of `skeleton` for the glb now (see [`Model::skeleton_texts`]), as
+    /// a tree's bark does beside its leaves. Formatting into memory does not fail; should it,
+    /// the export formats the skeleton and reports why.
+    pub fn prepare_skeleton_text(&mut self, skeleton: &Skeleton) {
+        if let Ok(text) = SkeletonText::new(skeleton) {
+            self.skeleton_texts.push(Arc::new(text));
         }
     }
 

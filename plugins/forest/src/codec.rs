@@ -199,6 +199,7 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
         stats,
         environment,
         clean: _,
+        skeleton_texts: _,
     } = model;
     // Shared parts once, in tables: textures, materials, skeletons. The materials are
     // written first into a buffer of their own, which collects the textures they use; the
@@ -597,5 +598,6 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
         stats,
         environment,
         clean: Vec::new(),
+        skeleton_texts: Vec::new(),
     })
 }

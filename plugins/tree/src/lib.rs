@@ -300,6 +300,11 @@ pub fn build_tree(
                 let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
                 (mesh, clean)
             });
+            // The bark's skeleton as the glb writes it, formatted here, where the bark takes
+            // longer than the leaves, rather than in the export.
+            if has_bark {
+                model.prepare_skeleton_text(&prepared);
+            }
             (points, mesh)
         },
     );
