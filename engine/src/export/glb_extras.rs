@@ -204,9 +204,9 @@ fn float(out: &mut Vec<u8>, v: f32) -> std::io::Result<()> {
 struct Formatted([Vec<Vec<u8>>; 4]);
 
 impl Formatted {
-    /// The numbers of the skeleton's arrays, in pieces of [`PIECE_NUMBERS`] formatted on the
-    /// rayon pool when they are [`FORMAT_IN_PARALLEL`] or more.
-    fn new(sk: &Skeleton) -> std::io::Result<Formatted> {
+    /// The numbers of the skeleton's arrays, in pieces of [`PIECE_NUMBERS`], formatted on the
+    /// rayon pool when `share` and they are [`FORMAT_IN_PARALLEL`] or more.
+    fn new(sk: &Skeleton, share: bool) -> std::io::Result<Formatted> {
         let jobs: Vec<(Array, Range<usize>)> = Array::ALL
             .into_iter()
             .flat_map(|array| {
@@ -217,7 +217,7 @@ impl Formatted {
             })
             .collect();
         let format = |(array, range): (Array, Range<usize>)| array.format(sk, range);
-        let pieces = if Formatted::numbers(sk) < FORMAT_IN_PARALLEL {
+        let pieces = if !share || Formatted::numbers(sk) < FORMAT_IN_PARALLEL {
             jobs.into_iter()
                 .map(format)
                 .collect::<std::io::Result<Vec<_>>>()?
@@ -263,9 +263,11 @@ pub struct SkeletonText {
 }
 
 impl SkeletonText {
-    /// The text of `skeleton`.
+    /// The text of `skeleton`, formatted on the calling thread (one with time to spare: the
+    /// pool's threads may be busy).
     pub fn new(skeleton: &Skeleton) -> Result<SkeletonText> {
-        let formatted = Formatted::new(skeleton).map_err(|e| Error::Export(e.to_string()))?;
+        let formatted =
+            Formatted::new(skeleton, false).map_err(|e| Error::Export(e.to_string()))?;
         let from = Skeleton {
             positions: skeleton.positions.clone(),
             parents: skeleton.parents.clone(),
@@ -335,10 +337,13 @@ impl JsonText {
         let formatted = if numbers < FORMAT_IN_PARALLEL || missing.len() < 2 {
             missing
                 .into_iter()
-                .map(Formatted::new)
+                .map(|sk| Formatted::new(sk, true))
                 .collect::<std::io::Result<Vec<_>>>()
         } else {
-            missing.into_par_iter().map(Formatted::new).collect()
+            missing
+                .into_par_iter()
+                .map(|sk| Formatted::new(sk, true))
+                .collect()
         };
         let mut formatted = formatted
             .map_err(|e| Error::Export(e.to_string()))?

@@ -226,9 +226,9 @@ impl Model {
         }
     }
 
-    /// Formats the text of `skeleton` for the glb now (see [`Model::skeleton_texts`]), as
-    /// a tree's bark does beside its leaves. Formatting into memory does not fail; should it,
-    /// the export formats the skeleton and reports why.
+    /// Formats the text of `skeleton` for the glb now, on the calling thread (see
+    /// [`Model::skeleton_texts`]), as a small tree's leaves do beside its bark. Formatting
+    /// into memory does not fail; should it, the export formats the skeleton and reports why.
     pub fn prepare_skeleton_text(&mut self, skeleton: &Skeleton) {
         if let Ok(text) = SkeletonText::new(skeleton) {
             self.skeleton_texts.push(Arc::new(text));

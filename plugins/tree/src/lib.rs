@@ -300,9 +300,9 @@ pub fn build_tree(
                 let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
                 (mesh, clean)
             });
-            // The bark's skeleton as the glb writes it, formatted here, where the bark takes
-            // longer than the leaves, rather than in the export.
-            if has_bark {
+            // The bark's skeleton as the glb writes it, formatted here beside a small tree's
+            // bark (which takes longer than its leaves) rather than in the export.
+            if has_bark && small {
                 model.prepare_skeleton_text(&prepared);
             }
             (points, mesh)
