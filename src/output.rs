@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
-use pge_engine::export::{ExportMeta, Instancing, glb_file_with, obj_files};
+use pge_engine::export::{ExportMeta, Instancing, obj_files, write_glb_with};
 use pge_engine::geometry::Model;
 
 /// The metadata a `.glb` records: the seed and the parameters' values, in order.
@@ -149,16 +149,19 @@ pub fn write_model(
         write_atomically(output, files.obj.as_bytes())?;
     } else {
         // Streamed from the model's memory: no buffer of the file's size. The temporary file
-        // is created while the glb is built (a tenth of a millisecond on ext4); the build's
-        // error comes first.
-        let (file, glb) = rayon::join(
+        // is created while the glb is built (a tenth of a millisecond on ext4) and written
+        // while the model is checked; it takes the file's place once the check passed.
+        let file = write_glb_with(
+            model,
+            meta,
+            instancing,
             || AtomicFile::create(output),
-            || glb_file_with(model, meta, instancing),
-        );
-        let glb = glb?;
-        let mut file = file?;
-        glb.write_to(file.tmp.as_file_mut())
-            .with_context(|| format!("cannot write {}", output.display()))?;
+            |mut file, glb| {
+                glb.write_to(file.tmp.as_file_mut())
+                    .with_context(|| format!("cannot write {}", output.display()))?;
+                Ok(file)
+            },
+        )?;
         file.finish()?;
     }
     Ok(())

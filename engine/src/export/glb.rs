@@ -370,7 +370,7 @@ impl Builder {
         use json::accessor::{ComponentType, Type};
         use json::mesh::Semantic;
         // Reads every attribute by its own length: nothing here fails on an invalid mesh
-        // (`glb_file_with` checks the model while it builds).
+        // (`write_glb_with` checks the model while it builds and writes).
         let mut attributes = std::collections::BTreeMap::new();
         attributes.insert(
             Valid(Semantic::Positions),
@@ -473,21 +473,46 @@ pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) 
 /// The file [`glb_bytes_with`] gives, not yet assembled: [`GlbFile::write_to`] writes it to a
 /// file from the model's own memory, with no buffer of the file's size.
 pub fn glb_file_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<GlbFile> {
-    // The model is checked while the file is built (a pass over every number and index, as
-    // long as building a big tree's JSON), on the pool's other thread: building reads no
-    // index or number in a way that could fail on an invalid model, and a check's error
-    // comes first, as if it had run before.
-    let (valid, file) = rayon::join(
-        || model.validate(),
-        || {
-            let mut b = Builder::new();
-            b.instancing = instancing;
-            b.root.scene = Some(b.scene(model, "pge")?);
-            b.file(model, meta, None)
-        },
-    );
-    valid?;
-    file
+    write_glb_with(model, meta, instancing, || Ok(()), |(), file| Ok(file))
+}
+
+/// [`glb_file_with`], handed to `write` as soon as it is built, with what `open` made beside
+/// the build (the temporary file it goes to), while the model is checked (a pass over every
+/// number and index) on the rayon pool. Building reads no index or number in a way that
+/// could fail on an invalid model, and the check's error comes first (then the build's,
+/// `open`'s and `write`'s), as if it had run before: what `open` and `write` made is then
+/// dropped, so `write` must write where that takes it back (a temporary file).
+pub fn write_glb_with<F, T, E>(
+    model: &Model,
+    meta: &ExportMeta,
+    instancing: Instancing,
+    open: impl FnOnce() -> std::result::Result<F, E> + Send,
+    write: impl FnOnce(F, GlbFile) -> std::result::Result<T, E> + Send,
+) -> std::result::Result<T, E>
+where
+    F: Send,
+    T: Send,
+    E: From<Error> + Send,
+{
+    let mut valid = Ok(());
+    // One hand-off to the pool from a thread outside it. `open` is queued first, so the
+    // pool's other thread takes it; the check is queued last and runs beside `write`.
+    let written = rayon::scope(|s| {
+        let (file, opened) = rayon::join(
+            || {
+                let mut b = Builder::new();
+                b.instancing = instancing;
+                b.root.scene = Some(b.scene(model, "pge")?);
+                b.file(model, meta, None)
+            },
+            open,
+        );
+        s.spawn(|_| valid = model.validate());
+        let file = file?;
+        write(opened?, file)
+    });
+    valid.map_err(Error::from)?;
+    written
 }
 
 /// The `.glb` bytes of several stages of one growth (`pge run --stages`): one scene per
@@ -728,22 +753,15 @@ impl Builder {
             });
         }
         b.push_shared_buffer();
-        // The JSON text (the skeletons' numbers most of it) is written beside the conversion
-        // of the views the model does not hold as the file's bytes (colours).
-        let (json, ()) = rayon::join(
-            || {
-                let no_extensions =
-                    b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty();
-                let text = if no_extensions {
-                    b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
-                } else {
-                    with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
-                };
-                JsonText::new(text, &b.skeletons, &model.skeleton_texts)
-            },
-            || b.layout.convert(),
-        );
-        GlbFile::new(json?, b.layout, bin_len, GLB_LIMIT)
+        let no_extensions =
+            b.gpu_nodes.is_empty() && b.unlit.is_empty() && b.transmissive.is_empty();
+        let text = if no_extensions {
+            b.root.to_vec().map_err(|e| Error::Export(e.to_string()))?
+        } else {
+            with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
+        };
+        let json = JsonText::new(text, &b.skeletons, &model.skeleton_texts)?;
+        GlbFile::new(json, b.layout, bin_len, GLB_LIMIT)
     }
 }
 

@@ -143,36 +143,55 @@ impl GlbFile {
     }
 
     /// Writes the file to `out` without assembling it: the header, the JSON text's parts and
-    /// the views straight from the meshes' and textures' memory where it holds their bytes
-    /// (converted first otherwise: colours, and numbers on a big-endian host), in vectored
-    /// writes. The same bytes as [`GlbFile::to_vec`].
-    pub fn write_to(&self, out: &mut impl Write) -> std::io::Result<()> {
+    /// the views straight from the meshes' and textures' memory where it holds their bytes,
+    /// in vectored writes; the views it does not hold so (colours, and numbers on a
+    /// big-endian host) are converted on the rayon pool while the ones before them are
+    /// written. The same bytes as [`GlbFile::to_vec`].
+    pub fn write_to(&self, out: &mut (impl Write + Send)) -> std::io::Result<()> {
         const SPACES: &[u8] = b"   ";
         const ZEROS: &[u8] = &[0; 4];
-        let mut parts: Vec<Cow<'_, [u8]>> = vec![Cow::Borrowed(&self.heads.file)];
-        parts.extend(self.json.slices().map(Cow::Borrowed));
+        let mut head: Vec<Cow<'_, [u8]>> = vec![Cow::Borrowed(&self.heads.file)];
+        head.extend(self.json.slices().map(Cow::Borrowed));
         let text_len = self.json.len().next_multiple_of(4);
-        parts.push(Cow::Borrowed(&SPACES[..text_len - self.json.len()]));
-        if self.bin_len > 0 {
-            parts.push(Cow::Borrowed(&self.heads.bin));
-            parts.extend(self.layout.slices());
-            let padding = self.bin_len.saturating_sub(self.layout.padded_len());
-            parts.push(Cow::Borrowed(&ZEROS[..padding.min(ZEROS.len())]));
+        head.push(Cow::Borrowed(&SPACES[..text_len - self.json.len()]));
+        if self.bin_len == 0 {
+            return write_all(out, &head);
         }
-        let mut slices: Vec<IoSlice<'_>> = parts
-            .iter()
-            .filter(|p| !p.is_empty())
-            .map(|p| IoSlice::new(p))
-            .collect();
-        let mut rest = slices.as_mut_slice();
-        while !rest.is_empty() {
-            match out.write_vectored(rest) {
-                Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
-                Ok(n) => IoSlice::advance_slices(&mut rest, n),
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
+        head.push(Cow::Borrowed(&self.heads.bin));
+        let views = self.layout.view_count();
+        let first = self.layout.first_converted();
+        head.extend(self.layout.slices(0..first));
+        let padding = self.bin_len.saturating_sub(self.layout.padded_len());
+        let padding = Cow::Borrowed(&ZEROS[..padding.min(ZEROS.len())]);
+        if first == views {
+            head.push(padding);
+            return write_all(out, &head);
         }
-        Ok(())
+        let (written, mut tail) = rayon::join(
+            || write_all(out, &head),
+            || self.layout.slices(first..views),
+        );
+        written?;
+        tail.push(padding);
+        write_all(out, &tail)
     }
+}
+
+/// Writes `parts` to `out` in order, in vectored writes.
+fn write_all(out: &mut impl Write, parts: &[Cow<'_, [u8]>]) -> std::io::Result<()> {
+    let mut slices: Vec<IoSlice<'_>> = parts
+        .iter()
+        .filter(|p| !p.is_empty())
+        .map(|p| IoSlice::new(p))
+        .collect();
+    let mut rest = slices.as_mut_slice();
+    while !rest.is_empty() {
+        match out.write_vectored(rest) {
+            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+            Ok(n) => IoSlice::advance_slices(&mut rest, n),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }

@@ -5,6 +5,7 @@
 //! number of threads.
 
 use std::borrow::Cow;
+use std::ops::Range;
 use std::sync::Arc;
 
 use rayon::prelude::*;
@@ -42,8 +43,6 @@ pub(super) enum Data {
     Floats(Vec<f32>),
     /// An embedded PNG image, as it is.
     Png(Arc<Texture>),
-    /// Bytes converted ahead of the write (see [`Layout::convert`]).
-    Bytes(Vec<u8>),
 }
 
 impl Data {
@@ -53,7 +52,7 @@ impl Data {
             Data::Mesh(_, Attribute::Positions | Attribute::Normals) => 12,
             Data::Mesh(_, Attribute::Uvs) => 8,
             Data::Mesh(_, Attribute::Colors | Attribute::Indices) | Data::Floats(_) => 4,
-            Data::Png(_) | Data::Bytes(_) => 1,
+            Data::Png(_) => 1,
         }
     }
 
@@ -67,7 +66,6 @@ impl Data {
             Data::Mesh(m, Attribute::Indices) => m.indices.len(),
             Data::Floats(f) => f.len(),
             Data::Png(t) => t.png.len(),
-            Data::Bytes(b) => b.len(),
         }
     }
 
@@ -104,18 +102,15 @@ impl Data {
             Data::Mesh(_, Attribute::Colors) => None,
             Data::Floats(f) => Some(cast_slice(f)),
             Data::Png(t) => Some(&t.png),
-            Data::Bytes(b) => Some(b),
         }
     }
 
-    /// The bytes of data whose memory is the file's bytes as they are: only an image's and
-    /// converted bytes on a big-endian host (numbers are written byte by byte,
-    /// little-endian).
+    /// The bytes of data whose memory is the file's bytes as they are: only an image's on a
+    /// big-endian host (numbers are written byte by byte, little-endian).
     #[cfg(target_endian = "big")]
     fn as_bytes(&self) -> Option<&[u8]> {
         match self {
             Data::Png(t) => Some(&t.png),
-            Data::Bytes(b) => Some(b),
             _ => None,
         }
     }
@@ -142,7 +137,6 @@ impl Data {
             }
             Data::Floats(f) => floats(dst, &f[range], |&x| [x]),
             Data::Png(t) => dst.copy_from_slice(&t.png[range]),
-            Data::Bytes(b) => dst.copy_from_slice(&b[range]),
         }
     }
 }
@@ -188,15 +182,19 @@ impl Layout {
         (offset, len)
     }
 
-    /// Converts the views whose bytes the model does not hold as the file does (colours,
-    /// and numbers on a big-endian host) to those bytes, so that writing the file only
-    /// copies.
-    pub(super) fn convert(&mut self) {
-        for view in &mut self.views {
-            if view.data.as_bytes().is_none() {
-                view.data = Data::Bytes(view.data.bytes().into_owned());
-            }
-        }
+    /// The number of views.
+    pub(super) fn view_count(&self) -> usize {
+        self.views.len()
+    }
+
+    /// The first view whose bytes the model does not hold as the file does (colours, and
+    /// numbers on a big-endian host), converted when written: the views before it are
+    /// written straight from the model's memory. The number of views when there is none.
+    pub(super) fn first_converted(&self) -> usize {
+        self.views
+            .iter()
+            .position(|view| view.data.as_bytes().is_none())
+            .unwrap_or(self.views.len())
     }
 
     /// The buffer's length in bytes, padded to 4 bytes.
@@ -231,14 +229,22 @@ impl Layout {
             .for_each(|(data, first, piece)| data.fill(first, piece));
     }
 
-    /// The binary chunk as slices to write in order ([`Layout::padded_len`] bytes in all):
-    /// each view's bytes ([`Data::bytes`]: borrowed from the model where they can be), after
-    /// the zero bytes that align it, and the zero bytes that pad the chunk.
-    pub(super) fn slices(&self) -> Vec<Cow<'_, [u8]>> {
+    /// The views `views` of the binary chunk as slices to write in order: each view's bytes
+    /// ([`Data::bytes`]: borrowed from the model where they can be), after the zero bytes
+    /// that align it, and after the last view of the chunk the zero bytes that pad it (all
+    /// the views: [`Layout::padded_len`] bytes).
+    pub(super) fn slices(&self, views: Range<usize>) -> Vec<Cow<'_, [u8]>> {
         const ZEROS: &[u8] = &[0; 3];
-        let mut out = Vec::with_capacity(2 * self.views.len() + 1);
-        let mut at = 0;
-        for view in &self.views {
+        let end = |view: &View| view.offset + view.data.count() * view.data.element_bytes();
+        let mut at = views
+            .start
+            .checked_sub(1)
+            .and_then(|k| self.views.get(k))
+            .map_or(0, end);
+        let last = views.end == self.views.len();
+        let views = self.views.get(views).unwrap_or_default();
+        let mut out = Vec::with_capacity(2 * views.len() + 1);
+        for view in views {
             if view.offset > at {
                 out.push(Cow::Borrowed(&ZEROS[..view.offset - at]));
             }
@@ -246,7 +252,7 @@ impl Layout {
             at = view.offset + bytes.len();
             out.push(bytes);
         }
-        if self.padded_len() > at {
+        if last && self.padded_len() > at {
             out.push(Cow::Borrowed(&ZEROS[..self.padded_len() - at]));
         }
         out

@@ -370,4 +370,17 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
         .expect("invalid");
     let want = Error::from(model.validate().expect_err("invalid"));
     assert_eq!(err.to_string(), want.to_string());
+    // Written while the check runs: what was opened and written is dropped, the check's
+    // error returned.
+    let written = write_glb_with(
+        &model,
+        &ExportMeta::default(),
+        Instancing::Gpu,
+        || Ok::<_, Error>(vec![1u8]),
+        |mut out, glb| {
+            out.extend(glb.to_vec()?);
+            Ok(out)
+        },
+    );
+    assert_eq!(written.err().map(|e| e.to_string()), Some(want.to_string()));
 }
