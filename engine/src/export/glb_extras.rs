@@ -1,7 +1,8 @@
 //! A mesh's `extras.pge` (its skeleton and own extras), serialized from borrowed views of
 //! the model. A skeleton (most of a tree's JSON: four numbers a node) is not serialized
-//! with the rest: its place holds a marker, and its text is formatted in parallel pieces
-//! when the file is written ([`JsonText`]), straight into the file's JSON chunk.
+//! with the rest: its place holds a marker, and its text, formatted ahead of the export
+//! ([`SkeletonText`]) or in parallel pieces when the file is written, takes the marker's
+//! place in the file's JSON chunk ([`JsonText`]).
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -251,10 +252,10 @@ impl Formatted {
 }
 
 /// A skeleton's text in a mesh's `extras.pge`, formatted ahead of the export (see
-/// [`Model::skeleton_texts`](crate::geometry::Model::skeleton_texts)): a tree's bark
-/// formats it beside the leaves, on a core the export would leave idle. The export uses it
-/// for a skeleton of the same numbers, compared bit for bit (a thirtieth of the time of
-/// formatting them), and formats any other.
+/// [`Model::skeleton_texts`](crate::geometry::Model::skeleton_texts)): a small tree's
+/// leaves' thread formats it while the bark is still being meshed. The export uses it for a
+/// skeleton of the same numbers, compared bit for bit (a thirtieth of the time of formatting
+/// them), and formats any other.
 #[derive(Debug)]
 pub struct SkeletonText {
     /// The skeleton's numbers it was formatted from (its leaves are not written).
