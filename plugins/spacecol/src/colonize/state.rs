@@ -21,10 +21,8 @@ pub(super) struct State {
     pub(super) points: Vec<Vec3>,
     pub(super) alive: Vec<bool>,
     pub(super) alive_count: usize,
-    /// Each point's nearest node within the influence radius ([`NONE`]: none yet)...
-    pub(super) nearest: Vec<u32>,
-    /// ... and its squared distance to it (its reach in the grid).
-    pub(super) nearest_d2: Vec<f32>,
+    /// Each point's nearest node within the influence radius and its squared distance to it.
+    nearest: Vec<Nearest>,
     /// Points with a nearest node, in increasing index order (some may have died since).
     active: Vec<u32>,
     /// Points given their first nearest node since `active` was last read, in any order.
@@ -56,10 +54,42 @@ pub(super) struct State {
     pub(super) trunk_tips: Vec<(u32, f32)>,
     pub(super) iteration: u32,
     // Per-step scratch.
-    pub(super) sum: Vec<Vec3>,
-    pub(super) count: Vec<u32>,
-    pub(super) closest: Vec<(f32, u32)>,
+    /// Each node's pull in the current iteration.
+    pub(super) pulls: Vec<Pull>,
     pub(super) touched: Vec<u32>,
+}
+
+/// A point's nearest node, in one record as the pulls and the updates read it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Nearest {
+    /// The node ([`NONE`]: none yet)...
+    node: u32,
+    /// ... and the squared distance to it (the point's reach in the grid).
+    d2: f32,
+}
+
+impl Nearest {
+    const NONE: Nearest = Nearest {
+        node: NONE,
+        d2: f32::INFINITY,
+    };
+}
+
+/// A node's pull in an iteration: the sum of its points' unit vectors and its closest
+/// point ([`NONE`]: not pulled).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Pull {
+    pub(super) sum: Vec3,
+    pub(super) closest_d2: f32,
+    pub(super) closest: u32,
+}
+
+impl Pull {
+    pub(super) const NONE: Pull = Pull {
+        sum: Vec3::ZERO,
+        closest_d2: f32::INFINITY,
+        closest: NONE,
+    };
 }
 
 /// The live points numbered from `first` up to the next part's `first`, in a grid of their
@@ -142,8 +172,7 @@ impl Clone for Parts {
 /// The state's per-point arrays, as the parts' updates change them.
 struct Changed<'a> {
     alive: &'a mut [bool],
-    nearest: &'a mut [u32],
-    nearest_d2: &'a mut [f32],
+    nearest: &'a mut [Nearest],
     fresh: &'a mut Vec<u32>,
     alive_count: &'a mut usize,
 }
@@ -158,11 +187,11 @@ impl Changed<'_> {
             *self.alive_count -= 1;
             return;
         }
-        if self.nearest[i] == NONE {
+        let nearest = &mut self.nearest[i];
+        if nearest.node == NONE {
             self.fresh.push(i as u32);
         }
-        self.nearest[i] = node;
-        self.nearest_d2[i] = d2;
+        *nearest = Nearest { node, d2 };
     }
 }
 
@@ -254,12 +283,15 @@ impl State {
             )]
         };
         let parts = Parts { here, beside: None };
+        // A crown grows some 0.4-0.9 nodes a point (the oak 1,219 for 3,000): room for half
+        // as many spares the duplicate-growth guard's map most of its rehashes.
+        let mut node_cells = HashMap::default();
+        node_cells.reserve(n / 2);
         State {
             points,
             alive,
             alive_count: n,
-            nearest: vec![NONE; n],
-            nearest_d2: vec![f32::INFINITY; n],
+            nearest: vec![Nearest::NONE; n],
             active: Vec::new(),
             fresh: Vec::new(),
             spare: Vec::new(),
@@ -270,14 +302,12 @@ impl State {
             dirs: Vec::new(),
             headings: Vec::new(),
             has_child: Vec::new(),
-            node_cells: HashMap::default(),
+            node_cells,
             earlier_in_cell: Vec::new(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
             iteration: 0,
-            sum: Vec::new(),
-            count: Vec::new(),
-            closest: Vec::new(),
+            pulls: Vec::new(),
             touched: Vec::new(),
         }
     }
@@ -302,9 +332,7 @@ impl State {
         self.headings.push(heading);
         self.has_child.push(false);
         self.refused.push(NONE);
-        self.sum.push(Vec3::ZERO);
-        self.count.push(0);
-        self.closest.push((f32::INFINITY, NONE));
+        self.pulls.push(Pull::NONE);
         let earlier = self.node_cells.insert(cell_of(position, p.step), index);
         self.earlier_in_cell.push(earlier.unwrap_or(NONE));
         index
@@ -332,7 +360,6 @@ impl State {
             pending,
             alive,
             nearest,
-            nearest_d2,
             fresh,
             alive_count,
             ..
@@ -341,7 +368,6 @@ impl State {
         let mut points = Changed {
             alive,
             nearest,
-            nearest_d2,
             fresh,
             alive_count,
         };
@@ -402,14 +428,14 @@ impl State {
             if !self.alive[i] {
                 continue;
             }
-            let n = self.nearest[i] as usize;
+            let Nearest { node, d2 } = self.nearest[i];
+            let n = node as usize;
             if self.refused[n] == iteration - 1 {
                 // The node could not grow toward these points last time: unreachable.
                 self.kill(i);
                 continue;
             }
             kept.push(i as u32);
-            let d2 = self.nearest_d2[i];
             let to = (self.points[i] - self.nodes[n]) / d2.sqrt();
             if let Some(cos) = perceive
                 && !self.has_child[n]
@@ -418,13 +444,13 @@ impl State {
             {
                 continue;
             }
-            if self.count[n] == 0 {
+            let pull = &mut self.pulls[n];
+            if pull.closest == NONE {
                 self.touched.push(n as u32);
             }
-            self.sum[n] += to;
-            self.count[n] += 1;
-            if d2 < self.closest[n].0 {
-                self.closest[n] = (d2, i as u32);
+            pull.sum += to;
+            if d2 < pull.closest_d2 {
+                (pull.closest_d2, pull.closest) = (d2, i as u32);
             }
         }
         fresh.clear();
@@ -630,12 +656,14 @@ mod tests {
             for other in [&two, &beside] {
                 assert_eq!(one.alive, other.alive);
                 assert_eq!(one.alive_count, other.alive_count);
-                assert_eq!(one.nearest, other.nearest);
-                let bits = |v: &[f32]| v.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&one.nearest_d2), bits(&other.nearest_d2));
+                let bits = |v: &[Nearest]| {
+                    v.iter()
+                        .map(|n| (n.node, n.d2.to_bits()))
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&one.nearest), bits(&other.nearest));
                 assert_eq!(one.touched, other.touched);
-                assert_eq!(one.sum, other.sum);
-                assert_eq!(one.closest, other.closest);
+                assert_eq!(one.pulls, other.pulls);
             }
             for state in [&mut one, &mut two, &mut beside] {
                 state.touched.clear();
@@ -643,7 +671,7 @@ mod tests {
         }
         beside.end_partner();
         assert_eq!(beside.parts.here.len(), 2);
-        let pulling = one.nearest.iter().filter(|n| **n != NONE).count();
+        let pulling = one.nearest.iter().filter(|n| n.node != NONE).count();
         assert!(
             one.alive_count < one.points.len() * 9 / 10 && pulling > 2000,
             "{} of 4000 points left, {pulling} with a nearest node",
