@@ -38,7 +38,6 @@
 //! point, and the iteration cap bounds the rest (with a warning).
 
 mod params;
-mod partner;
 mod state;
 #[cfg(test)]
 mod tests;
@@ -199,6 +198,7 @@ impl Algorithm for SpaceColonization {
             return Ok(Step::Done);
         }
         let t = Instant::now();
+        ctx.check_deadline(&self.location)?;
         let p = &self.params;
         let Some(st) = self.state.as_mut() else {
             return Err(Error::script(
@@ -206,11 +206,6 @@ impl Algorithm for SpaceColonization {
                 "space colonization stepped before init",
             ));
         };
-        if let Err(e) = ctx.check_deadline(&self.location) {
-            // A cancelled or timed-out run stops growing here.
-            st.end_partner();
-            return Err(e);
-        }
         st.iteration += 1;
         let iteration = st.iteration;
 
@@ -331,9 +326,6 @@ impl Algorithm for SpaceColonization {
 
         let finished = st.alive_count == 0 || (st.none_active() && st.trunk_tips.is_empty());
         let stuck = attempted == 0;
-        if finished || stuck || iteration >= p.max_iterations {
-            st.end_partner();
-        }
         self.growth_seconds += t.elapsed().as_secs_f64();
         if finished || stuck {
             self.done = true;
@@ -370,10 +362,6 @@ impl Algorithm for SpaceColonization {
     }
 
     fn finish(&mut self, ctx: &RunContext) -> Result<Model> {
-        // A run stopped before its end (`--steps`) grows no further.
-        if let Some(st) = self.state.as_mut() {
-            st.end_partner();
-        }
         let mut skeleton = SpaceColonization::skeleton(self).ok_or_else(|| {
             Error::script(
                 self.location.clone(),

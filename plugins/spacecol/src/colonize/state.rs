@@ -3,12 +3,12 @@
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
 
 use super::Params;
-use super::partner::Partner;
 use crate::grid::PointGrid;
 
 pub(super) const NONE: u32 = u32::MAX;
@@ -29,8 +29,8 @@ pub(super) struct State {
     fresh: Vec<u32>,
     /// The buffer the next `active` is built in.
     spare: Vec<u32>,
-    /// The live points: one part, or two whose updates run side by side.
-    parts: Parts,
+    /// The live points: one part, or two whose updates run side by side on the pool.
+    parts: Vec<Part>,
     /// Nodes added whose updates to the points are not applied yet (see [`State::flush`]).
     pending: Vec<(u32, Vec3)>,
     pub(super) nodes: Vec<Vec3>,
@@ -98,112 +98,74 @@ impl Pull {
 /// nothing of the other's: the parts can be updated side by side, each in the nodes' order,
 /// with the bytes of one after the other.
 #[derive(Clone)]
-pub(super) struct Part {
+struct Part {
     first: usize,
     grid: PointGrid,
+    /// Points given their first nearest node by the last updates, in any order.
+    fresh: Vec<u32>,
+    /// Points killed by the last updates.
+    killed: usize,
 }
 
 impl Part {
     fn new(first: usize, grid: PointGrid) -> Part {
-        Part { first, grid }
+        Part {
+            first,
+            grid,
+            fresh: Vec::new(),
+            killed: 0,
+        }
     }
 
     /// Applies the updates of `nodes` (index and position, in order) to the part's points,
-    /// for the influence radius and the squared kill distance `k2`: `change(i, node, d2)`
-    /// for each point `i` (numbered within the part) that a node changes, in order, with
-    /// its new nearest node and its squared distance to it, or [`NONE`] when it dies.
-    pub(super) fn update(
+    /// for the influence radius and the squared kill distance `k2`; `alive` and `nearest`
+    /// are the part's own ranges of the state's arrays.
+    fn update(
         &mut self,
         nodes: &[(u32, Vec3)],
         influence: f32,
         k2: f32,
-        mut change: impl FnMut(usize, u32, f32),
+        alive: &mut [bool],
+        nearest: &mut [Nearest],
     ) {
+        let Part {
+            first,
+            grid,
+            fresh,
+            killed,
+        } = self;
         for &(index, q) in nodes {
             // The grid calls back only for the live points closer to the new node than
             // their reach, their distance to their nearest node.
-            self.grid.update_near(q, influence, |i, d2| {
+            grid.update_near(q, influence, |i, d2| {
+                let i = i as usize;
                 if d2 < k2 {
-                    change(i as usize, NONE, d2);
+                    alive[i] = false;
+                    *killed += 1;
                     return None;
                 }
-                change(i as usize, index, d2);
+                let point = &mut nearest[i];
+                if point.node == NONE {
+                    fresh.push((*first + i) as u32);
+                }
+                *point = Nearest { node: index, d2 };
                 Some(d2)
             });
         }
     }
 }
 
-/// The parts of the live points: those updated on the calling thread, in order, and the
-/// last one, when it has a partner thread of its own.
-struct Parts {
-    here: Vec<Part>,
-    beside: Option<Partner>,
-}
-
-impl Parts {
-    /// Every part, the partner's locked, in order.
-    fn each(&mut self, mut f: impl FnMut(&mut Part)) {
-        self.here.iter_mut().for_each(&mut f);
-        if let Some(partner) = &self.beside {
-            f(&mut partner.lock().part);
-        }
-    }
-
-    /// Stops the partner, its part back on the calling thread.
-    fn end_partner(&mut self) {
-        if let Some(partner) = self.beside.take() {
-            self.here.push(partner.end());
-        }
-    }
-}
-
-/// A copy (a preview's snapshot) updates its parts on the calling thread.
-impl Clone for Parts {
-    fn clone(&self) -> Parts {
-        let mut here = self.here.clone();
-        if let Some(partner) = &self.beside {
-            here.push(partner.lock().part.clone());
-        }
-        Parts { here, beside: None }
-    }
-}
-
-/// The state's per-point arrays, as the parts' updates change them.
-struct Changed<'a> {
-    alive: &'a mut [bool],
-    nearest: &'a mut [Nearest],
-    fresh: &'a mut Vec<u32>,
-    alive_count: &'a mut usize,
-}
-
-impl Changed<'_> {
-    /// Point `i` took `node` as its nearest node at squared distance `d2`, or died
-    /// ([`NONE`]).
-    #[inline]
-    fn change(&mut self, i: usize, node: u32, d2: f32) {
-        if node == NONE {
-            self.alive[i] = false;
-            *self.alive_count -= 1;
-            return;
-        }
-        let nearest = &mut self.nearest[i];
-        if nearest.node == NONE {
-            self.fresh.push(i as u32);
-        }
-        *nearest = Nearest { node, d2 };
-    }
-}
-
-/// Points below which the updates stay in one part: the second grid (its set-up, and the
-/// queries near the middle that read both), the partner's start and the rayon workers
-/// still spinning beside it after the pool's start cost more than the second thread saves
-/// for a small tree (the oak's 3,000 points in `pge run`: points 1.56x, growth 1.21x; alone
-/// in a loop of colonizations, 6,000 points 0.8x).
+/// Points below which the updates stay in one part: the pool's hand-over (some 20 us an
+/// iteration) and the second grid cost about what the second thread saves (the oak's 3,000
+/// points take 39 iterations of some 60 us each).
 const PARTS_FROM: usize = 20_000;
 
-/// New nodes below which a flush updates the partner's part on the calling thread.
+/// New nodes below which a flush updates the parts one after the other.
 const SIDE_BY_SIDE_FROM: usize = 32;
+
+/// Rounds of waiting for the other parts' updates before the calling thread sleeps (some
+/// 0.1-0.5 ms; a 64th of it for parts not started yet).
+const SPIN: usize = 1 << 12;
 
 impl State {
     /// The state before any node: every point alive, numbered in the order of a grid of
@@ -211,39 +173,12 @@ impl State {
     /// grid of such cells, or of cells two thirds of the influence radius wide where the
     /// points are sparse.
     pub(super) fn new(pts: Vec<Vec3>, influence: f32) -> State {
-        // A colonization on a pool thread (a forest's trees side by side) leaves the other
-        // cores to the pool.
-        if pts.len() >= PARTS_FROM
-            && rayon::current_num_threads() > 1
-            && rayon::current_thread_index().is_none()
-        {
-            let mut state = State::with_parts(pts, influence, 2);
-            state.start_partner();
-            state
+        let parts = if pts.len() >= PARTS_FROM && rayon::current_num_threads() > 1 {
+            2
         } else {
-            State::with_parts(pts, influence, 1)
-        }
-    }
-
-    /// Moves the last part to a partner thread (nothing if there is one part, or a
-    /// partner already, or no thread starts).
-    fn start_partner(&mut self) {
-        let parts = &mut self.parts;
-        if parts.here.len() < 2 || parts.beside.is_some() {
-            return;
-        }
-        if let Some(last) = parts.here.pop() {
-            match Partner::start(last) {
-                Ok(partner) => parts.beside = Some(partner),
-                Err(last) => parts.here.push(*last),
-            }
-        }
-    }
-
-    /// Stops the partner thread (at the colonization's end), its part back on the calling
-    /// thread.
-    pub(super) fn end_partner(&mut self) {
-        self.parts.end_partner();
+            1
+        };
+        State::with_parts(pts, influence, parts)
     }
 
     /// [`State::new`] with the points in `parts` parts (1 or 2).
@@ -270,7 +205,7 @@ impl State {
         } else {
             influence / 1.5
         };
-        let here = if parts > 1 {
+        let parts = if parts > 1 {
             let half = n / 2;
             vec![
                 Part::new(0, PointGrid::new(&points[..half], &alive[..half], cell)),
@@ -282,7 +217,6 @@ impl State {
                 grid.unwrap_or_else(|| PointGrid::new(&points, &alive, cell)),
             )]
         };
-        let parts = Parts { here, beside: None };
         // A crown grows some 0.4-0.9 nodes a point (the oak 1,219 for 3,000): room for half
         // as many spares the duplicate-growth guard's map most of its rehashes.
         let mut node_cells = HashMap::default();
@@ -349,60 +283,67 @@ impl State {
 
     /// Applies the updates of the nodes added since the last flush, in the order they were
     /// added. The grid skips every point a node does not change without reading it (a
-    /// point's reach is its squared distance to its nearest node). With a partner and a few
-    /// nodes, the partner updates its part beside the calling thread.
+    /// point's reach is its squared distance to its nearest node). With two parts and a few
+    /// nodes, the second part is updated on the pool beside the first.
     pub(super) fn flush(&mut self, p: &Params) {
         if self.pending.is_empty() {
             return;
         }
-        let State {
-            parts,
-            pending,
-            alive,
-            nearest,
-            fresh,
-            alive_count,
-            ..
-        } = self;
-        let (nodes, r, k2) = (&pending[..], p.influence, p.kill * p.kill);
-        let mut points = Changed {
-            alive,
-            nearest,
-            fresh,
-            alive_count,
-        };
-        let beside = parts
-            .beside
-            .as_ref()
-            .filter(|_| nodes.len() >= SIDE_BY_SIDE_FROM);
-        if let Some(partner) = beside {
-            partner.hand_over(nodes, r, k2);
-            for part in &mut parts.here {
-                let first = part.first;
-                part.update(nodes, r, k2, |i, node, d2| {
-                    points.change(first + i, node, d2)
-                });
-            }
-            let work = partner.wait();
-            let first = work.part.first;
-            for &(i, node, d2) in &work.changes {
-                points.change(first + i as usize, node, d2);
-            }
-        } else {
-            parts.each(|part| {
-                let first = part.first;
-                part.update(nodes, r, k2, |i, node, d2| {
-                    points.change(first + i, node, d2)
-                });
-            });
+        let (nodes, r, k2) = (&self.pending[..], p.influence, p.kill * p.kill);
+        // Each part with its own ranges of the per-point arrays, the first part last.
+        let mut work = Vec::with_capacity(self.parts.len());
+        let (mut alive, mut nearest) = (&mut self.alive[..], &mut self.nearest[..]);
+        for part in self.parts.iter_mut().rev() {
+            let (below, own_alive) = alive.split_at_mut(part.first);
+            let (below_nearest, own_nearest) = nearest.split_at_mut(part.first);
+            (alive, nearest) = (below, below_nearest);
+            work.push((part, own_alive, own_nearest));
         }
-        pending.clear();
+        if work.len() > 1 && nodes.len() >= SIDE_BY_SIDE_FROM {
+            let others = work.len() - 1;
+            let (started, ended) = (AtomicUsize::new(0), AtomicUsize::new(0));
+            rayon::in_place_scope(|scope| {
+                let mine = work.pop();
+                for (part, alive, nearest) in work {
+                    let (started, ended) = (&started, &ended);
+                    scope.spawn(move |_| {
+                        started.fetch_add(1, Ordering::Relaxed);
+                        part.update(nodes, r, k2, alive, nearest);
+                        ended.fetch_add(1, Ordering::Release);
+                    });
+                }
+                if let Some((part, alive, nearest)) = mine {
+                    part.update(nodes, r, k2, alive, nearest);
+                }
+                // Parts running on the pool usually end within microseconds: waiting for
+                // them here spares the calling thread a sleep and its wake-up (some 10 us).
+                // Parts not started (a busy pool) are left to the scope, which runs them
+                // itself on a pool thread.
+                for round in 0..SPIN {
+                    let waiting = ended.load(Ordering::Acquire) < others;
+                    if !waiting || (round >= SPIN / 64 && started.load(Ordering::Relaxed) < others)
+                    {
+                        break;
+                    }
+                    std::hint::spin_loop();
+                }
+            });
+        } else {
+            for (part, alive, nearest) in work {
+                part.update(nodes, r, k2, alive, nearest);
+            }
+        }
+        for part in &mut self.parts {
+            self.alive_count -= part.killed;
+            part.killed = 0;
+            self.fresh.append(&mut part.fresh);
+        }
+        self.pending.clear();
     }
 
     /// Pulls: each live point with a nearest node, in increasing index order (the order in
-    /// which the pulls are summed), adds its unit direction to its nearest node's `sum`
-    /// (and counts itself, and may be its `closest`), and the pulled nodes are listed in
-    /// `touched`. A tip only perceives the points whose direction has a cosine of at least
+    /// which the pulls are summed), adds its unit direction to its nearest node's pull's
+    /// `sum` (and may be its `closest`), and the pulled nodes are listed in `touched`. A tip only perceives the points whose direction has a cosine of at least
     /// `perceive` with its own. Points whose node was refused at the last iteration are
     /// dropped as unreachable.
     ///
@@ -469,19 +410,10 @@ impl State {
     pub(super) fn in_range(&self, q: Vec3, p: &Params) -> bool {
         let k2 = p.kill * p.kill;
         let mut found = false;
-        for part in &self.parts.here {
+        for part in &self.parts {
             part.grid.for_each_near(q, p.influence, |_, _, d2| {
                 found |= d2 >= k2;
             });
-        }
-        if let Some(partner) = &self.parts.beside {
-            partner
-                .lock()
-                .part
-                .grid
-                .for_each_near(q, p.influence, |_, _, d2| {
-                    found |= d2 >= k2;
-                });
         }
         found
     }
@@ -510,14 +442,14 @@ impl State {
             } = self;
             // A live point's reach is at least the kill distance (a point that close to a
             // node died), so the grid calls back for every point within it.
-            parts.each(|part| {
+            for part in parts {
                 let first = part.first;
                 part.grid.update_near(position, p.kill, |j, _| {
                     alive[first + j as usize] = false;
                     *alive_count -= 1;
                     None
                 });
-            });
+            }
         }
     }
 
@@ -542,21 +474,18 @@ impl State {
         false
     }
 
+    /// The part holding point `i`.
+    fn part_of(&mut self, i: usize) -> &mut Part {
+        let k = self.parts.partition_point(|part| part.first <= i) - 1;
+        &mut self.parts[k]
+    }
+
     /// Removes point `i` (nothing if it is dead already).
     pub(super) fn kill(&mut self, i: usize) {
         if self.alive[i] {
             self.alive[i] = false;
             self.alive_count -= 1;
-            let parts = &mut self.parts;
-            if let Some(partner) = &parts.beside {
-                let part = &mut partner.lock().part;
-                if part.first <= i {
-                    part.grid.remove((i - part.first) as u32);
-                    return;
-                }
-            }
-            let k = parts.here.partition_point(|part| part.first <= i) - 1;
-            let part = &mut parts.here[k];
+            let part = self.part_of(i);
             part.grid.remove((i - part.first) as u32);
         }
     }
@@ -615,9 +544,8 @@ mod tests {
     use pge_engine::random::uniform24;
     use rand_mt::Mt64;
 
-    /// Two parts, one after the other or side by side (the second on a partner thread),
-    /// leave every point as one part does: the same nearest nodes and distances, the same
-    /// dead, the same pulls to the bit.
+    /// Two parts, updated side by side, leave every point as one part does: the same
+    /// nearest nodes and distances, the same dead, the same pulls to the bit.
     #[test]
     fn two_parts_update_as_one() {
         let mut rng = Mt64::new(11);
@@ -635,42 +563,34 @@ mod tests {
         });
         (p.influence, p.kill, p.step) = (1.2, 0.3, 0.15);
         let mut one = State::with_parts(pts.clone(), p.influence, 1);
-        let mut two = State::with_parts(pts.clone(), p.influence, 2);
-        let mut beside = State::with_parts(pts, p.influence, 2);
-        beside.start_partner();
-        assert_eq!((one.parts.here.len(), two.parts.here.len()), (1, 2));
-        assert!(beside.parts.beside.is_some());
+        let mut two = State::with_parts(pts, p.influence, 2);
+        assert_eq!((one.parts.len(), two.parts.len()), (1, 2));
         for iteration in 1..40 {
             for _ in 0..iteration % 7 * 9 {
                 let q = random(6.0);
-                for state in [&mut one, &mut two, &mut beside] {
-                    state.add_node(q, None, &p);
-                }
+                one.add_node(q, None, &p);
+                two.add_node(q, None, &p);
             }
+            one.flush(&p);
+            two.flush(&p);
             let dying = (iteration * 97) as usize % one.points.len();
-            for state in [&mut one, &mut two, &mut beside] {
-                state.flush(&p);
-                state.kill(dying);
-                state.pull(iteration, None);
-            }
-            for other in [&two, &beside] {
-                assert_eq!(one.alive, other.alive);
-                assert_eq!(one.alive_count, other.alive_count);
-                let bits = |v: &[Nearest]| {
-                    v.iter()
-                        .map(|n| (n.node, n.d2.to_bits()))
-                        .collect::<Vec<_>>()
-                };
-                assert_eq!(bits(&one.nearest), bits(&other.nearest));
-                assert_eq!(one.touched, other.touched);
-                assert_eq!(one.pulls, other.pulls);
-            }
-            for state in [&mut one, &mut two, &mut beside] {
-                state.touched.clear();
-            }
+            one.kill(dying);
+            two.kill(dying);
+            one.pull(iteration, None);
+            two.pull(iteration, None);
+            assert_eq!(one.alive, two.alive);
+            assert_eq!(one.alive_count, two.alive_count);
+            let bits = |v: &[Nearest]| {
+                v.iter()
+                    .map(|n| (n.node, n.d2.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&one.nearest), bits(&two.nearest));
+            assert_eq!(one.touched, two.touched);
+            assert_eq!(one.pulls, two.pulls);
+            one.touched.clear();
+            two.touched.clear();
         }
-        beside.end_partner();
-        assert_eq!(beside.parts.here.len(), 2);
         let pulling = one.nearest.iter().filter(|n| n.node != NONE).count();
         assert!(
             one.alive_count < one.points.len() * 9 / 10 && pulling > 2000,
