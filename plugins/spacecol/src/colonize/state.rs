@@ -217,10 +217,6 @@ impl State {
                 grid.unwrap_or_else(|| PointGrid::new(&points, &alive, cell)),
             )]
         };
-        // A crown grows some 0.4-0.9 nodes a point (the oak 1,219 for 3,000): room for half
-        // as many spares the duplicate-growth guard's map most of its rehashes.
-        let mut node_cells = HashMap::default();
-        node_cells.reserve(n / 2);
         State {
             points,
             alive,
@@ -236,7 +232,7 @@ impl State {
             dirs: Vec::new(),
             headings: Vec::new(),
             has_child: Vec::new(),
-            node_cells,
+            node_cells: HashMap::default(),
             earlier_in_cell: Vec::new(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
