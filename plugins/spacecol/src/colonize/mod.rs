@@ -49,7 +49,7 @@ use pge_engine::geometry::{Model, Skeleton};
 use pge_engine::{Algorithm, Error, Location, Result, RunContext, Step};
 
 pub use params::Params;
-use state::{NONE, State};
+use state::{Pull, State};
 
 use crate::points;
 
@@ -227,16 +227,14 @@ impl Algorithm for SpaceColonization {
                 .any(|&(tip, left)| tip as usize == n && left > 0.0)
             {
                 // A straight trunk still growing is not pulled aside.
-                st.sum[n] = Vec3::ZERO;
-                st.count[n] = 0;
-                st.closest[n] = (f32::INFINITY, NONE);
+                st.pulls[n] = Pull::NONE;
                 continue;
             }
-            let sum = st.sum[n];
-            let dir = if sum.length() > 0.1 {
-                sum.normalize()
+            let pull = std::mem::replace(&mut st.pulls[n], Pull::NONE);
+            let dir = if pull.sum.length() > 0.1 {
+                pull.sum.normalize()
             } else {
-                (st.points[st.closest[n].1 as usize] - st.nodes[n]).normalize_or_zero()
+                (st.points[pull.closest as usize] - st.nodes[n]).normalize_or_zero()
             };
             let dir = if p.persistence > 0.0 {
                 (dir + p.persistence * st.dirs[n]).normalize_or_zero()
@@ -249,9 +247,6 @@ impl Algorithm for SpaceColonization {
                 _ => d,
             });
             growth.push((n as u32, dir, None));
-            st.sum[n] = Vec3::ZERO;
-            st.count[n] = 0;
-            st.closest[n] = (f32::INFINITY, NONE);
         }
         st.touched.clear();
 

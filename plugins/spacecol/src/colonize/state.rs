@@ -21,10 +21,8 @@ pub(super) struct State {
     pub(super) points: Vec<Vec3>,
     pub(super) alive: Vec<bool>,
     pub(super) alive_count: usize,
-    /// Each point's nearest node within the influence radius ([`NONE`]: none yet)...
-    pub(super) nearest: Vec<u32>,
-    /// ... and its squared distance to it (its reach in the grid).
-    pub(super) nearest_d2: Vec<f32>,
+    /// Each point's nearest node within the influence radius and its squared distance to it.
+    nearest: Vec<Nearest>,
     /// Points with a nearest node, in increasing index order (some may have died since).
     active: Vec<u32>,
     /// Points given their first nearest node since `active` was last read, in any order.
@@ -56,10 +54,42 @@ pub(super) struct State {
     pub(super) trunk_tips: Vec<(u32, f32)>,
     pub(super) iteration: u32,
     // Per-step scratch.
-    pub(super) sum: Vec<Vec3>,
-    pub(super) count: Vec<u32>,
-    pub(super) closest: Vec<(f32, u32)>,
+    /// Each node's pull in the current iteration.
+    pub(super) pulls: Vec<Pull>,
     pub(super) touched: Vec<u32>,
+}
+
+/// A point's nearest node, in one record as the pulls and the updates read it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Nearest {
+    /// The node ([`NONE`]: none yet)...
+    node: u32,
+    /// ... and the squared distance to it (the point's reach in the grid).
+    d2: f32,
+}
+
+impl Nearest {
+    const NONE: Nearest = Nearest {
+        node: NONE,
+        d2: f32::INFINITY,
+    };
+}
+
+/// A node's pull in an iteration: the sum of its points' unit vectors and its closest
+/// point ([`NONE`]: not pulled).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Pull {
+    pub(super) sum: Vec3,
+    pub(super) closest_d2: f32,
+    pub(super) closest: u32,
+}
+
+impl Pull {
+    pub(super) const NONE: Pull = Pull {
+        sum: Vec3::ZERO,
+        closest_d2: f32::INFINITY,
+        closest: NONE,
+    };
 }
 
 /// The live points numbered from `first` up to the next part's `first`, in a grid of their
@@ -88,16 +118,15 @@ impl Part {
     }
 
     /// Applies the updates of `nodes` (index and position, in order) to the part's points,
-    /// for the influence radius and the squared kill distance `k2`; `alive`, `nearest` and
-    /// `nearest_d2` are the part's own ranges of the state's arrays.
+    /// for the influence radius and the squared kill distance `k2`; `alive` and `nearest`
+    /// are the part's own ranges of the state's arrays.
     fn update(
         &mut self,
         nodes: &[(u32, Vec3)],
         influence: f32,
         k2: f32,
         alive: &mut [bool],
-        nearest: &mut [u32],
-        nearest_d2: &mut [f32],
+        nearest: &mut [Nearest],
     ) {
         let Part {
             first,
@@ -115,11 +144,11 @@ impl Part {
                     *killed += 1;
                     return None;
                 }
-                if nearest[i] == NONE {
+                let point = &mut nearest[i];
+                if point.node == NONE {
                     fresh.push((*first + i) as u32);
                 }
-                nearest[i] = index;
-                nearest_d2[i] = d2;
+                *point = Nearest { node: index, d2 };
                 Some(d2)
             });
         }
@@ -192,8 +221,7 @@ impl State {
             points,
             alive,
             alive_count: n,
-            nearest: vec![NONE; n],
-            nearest_d2: vec![f32::INFINITY; n],
+            nearest: vec![Nearest::NONE; n],
             active: Vec::new(),
             fresh: Vec::new(),
             spare: Vec::new(),
@@ -209,9 +237,7 @@ impl State {
             refused: Vec::new(),
             trunk_tips: Vec::new(),
             iteration: 0,
-            sum: Vec::new(),
-            count: Vec::new(),
-            closest: Vec::new(),
+            pulls: Vec::new(),
             touched: Vec::new(),
         }
     }
@@ -236,9 +262,7 @@ impl State {
         self.headings.push(heading);
         self.has_child.push(false);
         self.refused.push(NONE);
-        self.sum.push(Vec3::ZERO);
-        self.count.push(0);
-        self.closest.push((f32::INFINITY, NONE));
+        self.pulls.push(Pull::NONE);
         let earlier = self.node_cells.insert(cell_of(position, p.step), index);
         self.earlier_in_cell.push(earlier.unwrap_or(NONE));
         index
@@ -264,33 +288,28 @@ impl State {
         let (nodes, r, k2) = (&self.pending[..], p.influence, p.kill * p.kill);
         // Each part with its own ranges of the per-point arrays, the first part last.
         let mut work = Vec::with_capacity(self.parts.len());
-        let (mut alive, mut nearest, mut nearest_d2) = (
-            &mut self.alive[..],
-            &mut self.nearest[..],
-            &mut self.nearest_d2[..],
-        );
+        let (mut alive, mut nearest) = (&mut self.alive[..], &mut self.nearest[..]);
         for part in self.parts.iter_mut().rev() {
             let (below, own_alive) = alive.split_at_mut(part.first);
             let (below_nearest, own_nearest) = nearest.split_at_mut(part.first);
-            let (below_d2, own_d2) = nearest_d2.split_at_mut(part.first);
-            (alive, nearest, nearest_d2) = (below, below_nearest, below_d2);
-            work.push((part, own_alive, own_nearest, own_d2));
+            (alive, nearest) = (below, below_nearest);
+            work.push((part, own_alive, own_nearest));
         }
         if work.len() > 1 && nodes.len() >= SIDE_BY_SIDE_FROM {
             let others = work.len() - 1;
             let (started, ended) = (AtomicUsize::new(0), AtomicUsize::new(0));
             rayon::in_place_scope(|scope| {
                 let mine = work.pop();
-                for (part, alive, nearest, d2) in work {
+                for (part, alive, nearest) in work {
                     let (started, ended) = (&started, &ended);
                     scope.spawn(move |_| {
                         started.fetch_add(1, Ordering::Relaxed);
-                        part.update(nodes, r, k2, alive, nearest, d2);
+                        part.update(nodes, r, k2, alive, nearest);
                         ended.fetch_add(1, Ordering::Release);
                     });
                 }
-                if let Some((part, alive, nearest, d2)) = mine {
-                    part.update(nodes, r, k2, alive, nearest, d2);
+                if let Some((part, alive, nearest)) = mine {
+                    part.update(nodes, r, k2, alive, nearest);
                 }
                 // Parts running on the pool usually end within microseconds: waiting for
                 // them here spares the calling thread a sleep and its wake-up (some 10 us).
@@ -306,8 +325,8 @@ impl State {
                 }
             });
         } else {
-            for (part, alive, nearest, d2) in work {
-                part.update(nodes, r, k2, alive, nearest, d2);
+            for (part, alive, nearest) in work {
+                part.update(nodes, r, k2, alive, nearest);
             }
         }
         for part in &mut self.parts {
@@ -319,9 +338,8 @@ impl State {
     }
 
     /// Pulls: each live point with a nearest node, in increasing index order (the order in
-    /// which the pulls are summed), adds its unit direction to its nearest node's `sum`
-    /// (and counts itself, and may be its `closest`), and the pulled nodes are listed in
-    /// `touched`. A tip only perceives the points whose direction has a cosine of at least
+    /// which the pulls are summed), adds its unit direction to its nearest node's pull's
+    /// `sum` (and may be its `closest`), and the pulled nodes are listed in `touched`. A tip only perceives the points whose direction has a cosine of at least
     /// `perceive` with its own. Points whose node was refused at the last iteration are
     /// dropped as unreachable.
     ///
@@ -347,14 +365,14 @@ impl State {
             if !self.alive[i] {
                 continue;
             }
-            let n = self.nearest[i] as usize;
+            let Nearest { node, d2 } = self.nearest[i];
+            let n = node as usize;
             if self.refused[n] == iteration - 1 {
                 // The node could not grow toward these points last time: unreachable.
                 self.kill(i);
                 continue;
             }
             kept.push(i as u32);
-            let d2 = self.nearest_d2[i];
             let to = (self.points[i] - self.nodes[n]) / d2.sqrt();
             if let Some(cos) = perceive
                 && !self.has_child[n]
@@ -363,13 +381,13 @@ impl State {
             {
                 continue;
             }
-            if self.count[n] == 0 {
+            let pull = &mut self.pulls[n];
+            if pull.closest == NONE {
                 self.touched.push(n as u32);
             }
-            self.sum[n] += to;
-            self.count[n] += 1;
-            if d2 < self.closest[n].0 {
-                self.closest[n] = (d2, i as u32);
+            pull.sum += to;
+            if d2 < pull.closest_d2 {
+                (pull.closest_d2, pull.closest) = (d2, i as u32);
             }
         }
         fresh.clear();
@@ -558,16 +576,18 @@ mod tests {
             two.pull(iteration, None);
             assert_eq!(one.alive, two.alive);
             assert_eq!(one.alive_count, two.alive_count);
-            assert_eq!(one.nearest, two.nearest);
-            let bits = |v: &[f32]| v.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&one.nearest_d2), bits(&two.nearest_d2));
+            let bits = |v: &[Nearest]| {
+                v.iter()
+                    .map(|n| (n.node, n.d2.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&one.nearest), bits(&two.nearest));
             assert_eq!(one.touched, two.touched);
-            assert_eq!(one.sum, two.sum);
-            assert_eq!(one.closest, two.closest);
+            assert_eq!(one.pulls, two.pulls);
             one.touched.clear();
             two.touched.clear();
         }
-        let pulling = one.nearest.iter().filter(|n| **n != NONE).count();
+        let pulling = one.nearest.iter().filter(|n| n.node != NONE).count();
         assert!(
             one.alive_count < one.points.len() * 9 / 10 && pulling > 2000,
             "{} of 4000 points left, {pulling} with a nearest node",
