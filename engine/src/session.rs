@@ -80,7 +80,6 @@ impl Session {
                 plugin: "lua".into(),
                 message: e.to_string(),
             })?;
-        let library = engine.library().and_then(|l| l.canonicalize().ok());
         lua.set_app_data(SessionState {
             ctx: RunContext {
                 seed: options.seed,
@@ -89,8 +88,6 @@ impl Session {
                 max_modules: limits.max_modules,
                 cancel: options.cancel.clone(),
             },
-            roots: library.iter().cloned().collect(),
-            library,
             memory_limit: limits.memory,
             instruction_limit: limits.instructions,
             ..SessionState::default()
