@@ -170,7 +170,8 @@ impl Session {
     }
 
     /// The folder the run's output goes to: files a script writes (`img:save`) go there
-    /// instead of the main script's folder (it is created when a script first writes).
+    /// instead of the main script's folder (it is created when a script first writes, and
+    /// only then resolved: most scripts write nothing).
     pub fn set_output_folder(&self, dir: &Path) -> Result<()> {
         let absolute = std::env::current_dir()
             .map(|cwd| cwd.join(dir))
@@ -178,9 +179,8 @@ impl Session {
                 plugin: "output".into(),
                 message: format!("{}: {e}", dir.display()),
             })?;
-        let folder = absolute.canonicalize().unwrap_or(absolute);
         if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
-            st.output_dir = Some(folder);
+            st.output_dir = Some(absolute);
         }
         Ok(())
     }

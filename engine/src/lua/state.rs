@@ -22,7 +22,7 @@ pub(crate) struct SessionState {
     pub roots: Vec<PathBuf>,
     /// The main script's folder (canonical), once a script runs.
     pub main_dir: Option<PathBuf>,
-    /// The folder the output goes to (canonical), where scripts write their files.
+    /// The folder the output goes to (absolute), where scripts write their files.
     pub output_dir: Option<PathBuf>,
     pub chunks: Vec<Chunk>,
     /// Every file read: scripts, modules, meshes, textures (for live reload).
