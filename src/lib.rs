@@ -50,7 +50,8 @@ fn find_library(start: &Path) -> Option<PathBuf> {
         .find(|candidate| candidate.join(LIBRARY_MARKER).is_file())
 }
 
-/// An engine builder with every PGE plugin and the script library ([`library_folder`]).
+/// An engine builder with every PGE plugin and the script library ([`library_folder`],
+/// looked for when a script first needs it).
 #[must_use]
 pub fn default_engine() -> pge_engine::EngineBuilder {
     engine_with_forest(pge_forest::ForestPlugin::default())
@@ -60,11 +61,8 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
 /// `pge run --variant-cache`).
 #[must_use]
 pub fn engine_with_forest(forest: pge_forest::ForestPlugin) -> pge_engine::EngineBuilder {
-    let builder = match library_folder() {
-        Some(folder) => pge_engine::Engine::builder().library(folder),
-        None => pge_engine::Engine::builder(),
-    };
-    builder
+    pge_engine::Engine::builder()
+        .library_found_by(library_folder)
         .plugin(pge_lsystem::LSystemPlugin)
         .plugin(pge_turtle::TurtlePlugin)
         .plugin(pge_spacecol::SpaceColonizationPlugin)

@@ -155,19 +155,19 @@ fn generate_forest(
     })
 }
 
-/// The progress bar of a run: hidden with `--quiet`, and when stderr is not a terminal
-/// (where indicatif would draw nothing either; making a drawn bar costs a short run tens of
-/// microseconds).
-pub(crate) fn progress_bar(quiet: bool) -> ProgressBar {
+/// The progress bar of a run, drawn on stderr; none with `--quiet`, or when stderr is not a
+/// terminal (where indicatif would draw nothing either: a hidden bar still costs a short run
+/// tens of microseconds to make and a clock read at every step).
+pub(crate) fn progress_bar(quiet: bool) -> Option<ProgressBar> {
     if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
+        return None;
     }
     let bar = ProgressBar::new(0);
     bar.set_style(
         ProgressStyle::with_template("{spinner} {msg} step {pos}{len_suffix} [{elapsed}]")
             .unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
-    bar
+    Some(bar)
 }
 
 /// Runs `pge run`.
@@ -279,12 +279,16 @@ fn run_one(
     // Files a script writes (`img:save`) go beside the output.
     session.set_output_folder(output.parent().unwrap_or(std::path::Path::new("")))?;
     let bar = progress_bar(args.quiet);
-    bar.set_message(args.script.script.display().to_string());
+    if let Some(bar) = &bar {
+        bar.set_message(args.script.script.display().to_string());
+    }
     let mut progress = |taken: u32, planned: Option<u32>| {
-        if let Some(n) = planned {
-            bar.set_length(n as u64);
+        if let Some(bar) = &bar {
+            if let Some(n) = planned {
+                bar.set_length(n as u64);
+            }
+            bar.set_position(taken as u64);
         }
-        bar.set_position(taken as u64);
     };
     let script = &args.script.script;
     let check_params = |params: &[pge_engine::ParamInfo]| match (&shared, &args.variants) {
@@ -320,7 +324,9 @@ fn run_one(
             &mut progress,
         ),
     };
-    bar.finish_and_clear();
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
     let mut generated = generated?;
     for w in &generated.model.stats.warnings {
         eprintln!("{w}");
@@ -369,6 +375,8 @@ fn run_one(
         }
     }
     if args.stats {
+        // The run ends with its file written: what follows only reports on it.
+        let seconds = t0.elapsed().as_secs_f64();
         let m = &generated.model;
         let phases: serde_json::Map<String, serde_json::Value> = m
             .stats
@@ -391,7 +399,7 @@ fn run_one(
             "meshes": m.meshes.len(),
             "instances": m.extras.get("forest").and_then(|f| f.get("instances")).cloned()
                 .unwrap_or_else(|| m.instances.len().into()),
-            "seconds": t0.elapsed().as_secs_f64(),
+            "seconds": seconds,
             "phases": phases,
             "warnings": m.stats.warnings,
             "output": output.display().to_string(),

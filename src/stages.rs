@@ -96,7 +96,7 @@ fn generate_stages(args: &RunArgs, stages: &[u32], bar: &ProgressBar) -> anyhow:
 /// `pge run --stages`: every stage a scene of one .glb.
 pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let bar = progress_bar(args.quiet);
+    let bar = progress_bar(args.quiet).unwrap_or_else(ProgressBar::hidden);
     bar.set_message(args.script.script.display().to_string());
     let generated = generate_stages(args, stages, &bar);
     bar.finish_and_clear();

@@ -1,7 +1,7 @@
 //! The engine: plugins, limits and the library folder; it creates sessions.
 
-use std::path::PathBuf;
-use std::sync::Arc;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use crate::{Error, Plugin, Result, Session, SessionOptions};
@@ -30,12 +30,53 @@ impl Default for Limits {
     }
 }
 
+/// Where an engine's library folder comes from.
+enum LibrarySource {
+    None,
+    Folder(PathBuf),
+    Find(fn() -> Option<PathBuf>),
+}
+
+/// An engine's library folder, as given and canonical, resolved when first asked for (by
+/// [`Engine::library`], or by a script that reads a file or requires a module): a run
+/// whose scripts read nothing outside their own folder never looks for it. Shared by the
+/// engine's clones, so every session of a process resolves it once.
+struct Library {
+    source: LibrarySource,
+    folder: OnceLock<Option<(PathBuf, Option<PathBuf>)>>,
+}
+
+impl Library {
+    fn resolved(&self) -> Option<&(PathBuf, Option<PathBuf>)> {
+        self.folder
+            .get_or_init(|| {
+                let folder = match &self.source {
+                    LibrarySource::None => None,
+                    LibrarySource::Folder(folder) => Some(folder.clone()),
+                    LibrarySource::Find(find) => find(),
+                }?;
+                let canonical = folder.canonicalize().ok();
+                Some((folder, canonical))
+            })
+            .as_ref()
+    }
+}
+
 /// Builds an [`Engine`]: plugins, limits, library folder.
-#[derive(Default)]
 pub struct EngineBuilder {
     plugins: Vec<Arc<dyn Plugin>>,
     limits: Limits,
-    library: Option<PathBuf>,
+    library: LibrarySource,
+}
+
+impl Default for EngineBuilder {
+    fn default() -> Self {
+        EngineBuilder {
+            plugins: Vec::new(),
+            limits: Limits::default(),
+            library: LibrarySource::None,
+        }
+    }
 }
 
 impl EngineBuilder {
@@ -79,7 +120,16 @@ impl EngineBuilder {
     /// script's own folder tree.
     #[must_use]
     pub fn library(mut self, folder: impl Into<PathBuf>) -> Self {
-        self.library = Some(folder.into());
+        self.library = LibrarySource::Folder(folder.into());
+        self
+    }
+
+    /// The engine's script library, found by `find` when first needed (a script's
+    /// `require` of a module, `pge.load` or a file it reads; [`Engine::library`]): the
+    /// search costs a run whose scripts read nothing outside their folder nothing.
+    #[must_use]
+    pub fn library_found_by(mut self, find: fn() -> Option<PathBuf>) -> Self {
+        self.library = LibrarySource::Find(find);
         self
     }
 
@@ -93,7 +143,10 @@ impl EngineBuilder {
         Ok(Engine {
             plugins: self.plugins,
             limits: self.limits,
-            library: self.library,
+            library: Arc::new(Library {
+                source: self.library,
+                folder: OnceLock::new(),
+            }),
         })
     }
 }
@@ -104,7 +157,7 @@ impl EngineBuilder {
 pub struct Engine {
     plugins: Vec<Arc<dyn Plugin>>,
     limits: Limits,
-    library: Option<PathBuf>,
+    library: Arc<Library>,
 }
 
 impl Engine {
@@ -120,10 +173,17 @@ impl Engine {
         &self.limits
     }
 
-    /// The library folder, if any.
+    /// The library folder, if any (found now if the engine was built to find it).
     #[must_use]
-    pub fn library(&self) -> Option<&std::path::Path> {
-        self.library.as_deref()
+    pub fn library(&self) -> Option<&Path> {
+        self.library.resolved().map(|(folder, _)| folder.as_path())
+    }
+
+    /// The library folder, canonical: `None` without one, or when it cannot be read.
+    pub(crate) fn canonical_library(&self) -> Option<&Path> {
+        self.library
+            .resolved()
+            .and_then(|(_, canonical)| canonical.as_deref())
     }
 
     /// The plugins, in the order they were added.
@@ -154,6 +214,27 @@ mod tests {
         fn register(&self, _: &mlua::Lua, _: &mlua::Table) -> mlua::Result<()> {
             Ok(())
         }
+    }
+
+    #[test]
+    fn a_library_to_find_is_looked_for_once_and_only_when_needed() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static SEARCHES: AtomicUsize = AtomicUsize::new(0);
+        fn find() -> Option<PathBuf> {
+            SEARCHES.fetch_add(1, Ordering::Relaxed);
+            Some(PathBuf::from(env!("CARGO_MANIFEST_DIR")))
+        }
+        let engine = Engine::builder()
+            .library_found_by(find)
+            .build()
+            .expect("engine");
+        let session = engine.session(SessionOptions::default()).expect("session");
+        assert_eq!(session.eval::<i64>("return 1 + 1").expect("runs"), 2);
+        assert_eq!(SEARCHES.load(Ordering::Relaxed), 0);
+        let clone = engine.clone();
+        assert_eq!(clone.library(), Some(Path::new(env!("CARGO_MANIFEST_DIR"))));
+        assert!(engine.canonical_library().is_some());
+        assert_eq!(SEARCHES.load(Ordering::Relaxed), 1);
     }
 
     #[test]

@@ -80,7 +80,6 @@ impl Session {
                 plugin: "lua".into(),
                 message: e.to_string(),
             })?;
-        let library = engine.library().and_then(|l| l.canonicalize().ok());
         lua.set_app_data(SessionState {
             ctx: RunContext {
                 seed: options.seed,
@@ -89,8 +88,6 @@ impl Session {
                 max_modules: limits.max_modules,
                 cancel: options.cancel.clone(),
             },
-            roots: library.iter().cloned().collect(),
-            library,
             memory_limit: limits.memory,
             instruction_limit: limits.instructions,
             ..SessionState::default()
@@ -173,7 +170,8 @@ impl Session {
     }
 
     /// The folder the run's output goes to: files a script writes (`img:save`) go there
-    /// instead of the main script's folder (it is created when a script first writes).
+    /// instead of the main script's folder (it is created when a script first writes, and
+    /// only then resolved: most scripts write nothing).
     pub fn set_output_folder(&self, dir: &Path) -> Result<()> {
         let absolute = std::env::current_dir()
             .map(|cwd| cwd.join(dir))
@@ -181,9 +179,8 @@ impl Session {
                 plugin: "output".into(),
                 message: format!("{}: {e}", dir.display()),
             })?;
-        let folder = absolute.canonicalize().unwrap_or(absolute);
         if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
-            st.output_dir = Some(folder);
+            st.output_dir = Some(absolute);
         }
         Ok(())
     }

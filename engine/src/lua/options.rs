@@ -51,7 +51,7 @@
 
 mod typed;
 
-use std::cell::RefCell;
+use std::cell::{OnceCell, RefCell};
 use std::fmt;
 
 use mlua::{Lua, Table, Value};
@@ -113,6 +113,13 @@ pub enum KeyStyle {
     Quoted,
 }
 
+/// The string-keyed entries of an option table, in `next` order, and whether it has other
+/// keys too (positional values, or mistakes [`Options::finish`] reports).
+struct Entries {
+    named: Vec<(Box<[u8]>, Value)>,
+    others: bool,
+}
+
 /// A script's option table being read into typed values; see the [module docs](self).
 ///
 /// Getters return `Ok(None)` for an absent option (the caller picks the default) and a
@@ -122,6 +129,11 @@ pub enum KeyStyle {
 pub struct Options {
     lua: Lua,
     table: Option<Table>,
+    /// The table's string-keyed entries, read in one pass at the first getter, which then
+    /// finds its key among them in Rust: a key asked of the table would be a new Lua
+    /// string, made under a protected call, for each of the tens of options a constructor
+    /// asks for. `None` for a table with a metatable, whose keys are read through it.
+    entries: OnceCell<Option<Entries>>,
     what: String,
     prefix: String,
     style: KeyStyle,
@@ -164,6 +176,7 @@ impl Options {
         Options {
             lua: lua.clone(),
             table,
+            entries: OnceCell::new(),
             what: what.to_string(),
             prefix: String::new(),
             style: KeyStyle::Plain,
@@ -263,13 +276,48 @@ impl Options {
         let Some(t) = &self.table else {
             return Ok(Value::Nil);
         };
-        let v: Value = t.get(key)?;
+        let v = match self.entries()? {
+            Some(entries) => entries
+                .named
+                .iter()
+                .find(|(name, _)| **name == *key.as_bytes())
+                .map_or(Value::Nil, |(_, v)| v.clone()),
+            None => t.get(key)?,
+        };
         if v.is_nil()
             && let Some(i) = self.positional.iter().position(|k| *k == key)
         {
             return t.raw_get(i + 1);
         }
         Ok(v)
+    }
+
+    /// The table's string-keyed entries, read the first time they are asked for; `None`
+    /// without a table, or for a table with a metatable.
+    fn entries(&self) -> mlua::Result<Option<&Entries>> {
+        if let Some(entries) = self.entries.get() {
+            return Ok(entries.as_ref());
+        }
+        let entries = match &self.table {
+            Some(t) if t.metatable().is_none() => {
+                let mut entries = Entries {
+                    named: Vec::new(),
+                    others: false,
+                };
+                t.for_each::<Value, Value>(|key, value| {
+                    match key {
+                        Value::String(s) => {
+                            entries.named.push((Box::from(&s.as_bytes()[..]), value))
+                        }
+                        _ => entries.others = true,
+                    }
+                    Ok(())
+                })?;
+                Some(entries)
+            }
+            _ => None,
+        };
+        Ok(self.entries.get_or_init(|| entries).as_ref())
     }
 
     /// Marks `keys` as known without reading them (another reader takes them).
@@ -289,6 +337,7 @@ impl Options {
         Options {
             lua: self.lua.clone(),
             table: Some(t),
+            entries: OnceCell::new(),
             what: self.what.clone(),
             prefix: format!("{}{key}.", self.prefix),
             style: self.style,
@@ -305,28 +354,40 @@ impl Options {
         let Some(t) = &self.table else {
             return Ok(());
         };
-        let known = self.known.borrow();
-        for pair in t.pairs::<Value, Value>() {
-            let (k, _) = pair?;
-            let ok = match &k {
-                Value::String(s) => known.iter().any(|n| s.as_bytes() == n.as_bytes()),
-                Value::Integer(i) => *i >= 1 && (*i as usize) <= self.positional.len(),
-                _ => false,
-            };
-            if !ok {
-                let key = match &k {
-                    Value::String(s) => s.to_string_lossy(),
-                    Value::Integer(i) => format!("[{i}]"),
-                    other => format!("[{}]", other.type_name()),
-                };
-                let key = format!("{}{key}", self.prefix);
-                return Err(self.error(format!(
-                    "unknown option '{key}': '{key}' is not an option (known: {})",
-                    known.join(", ")
-                )));
-            }
+        match self.entries()? {
+            // Only string keys, in the order `pairs` gives them.
+            Some(entries) if !entries.others => entries
+                .named
+                .iter()
+                .try_for_each(|(name, _)| self.check_name(name)),
+            _ => t
+                .pairs::<Value, Value>()
+                .try_for_each(|pair| match pair?.0 {
+                    Value::String(s) => self.check_name(&s.as_bytes()),
+                    Value::Integer(i) if i >= 1 && (i as usize) <= self.positional.len() => Ok(()),
+                    Value::Integer(i) => Err(self.unknown(&format!("[{i}]"))),
+                    other => Err(self.unknown(&format!("[{}]", other.type_name()))),
+                }),
         }
-        Ok(())
+    }
+
+    /// Refuses the string key `name` unless a getter asked for it.
+    fn check_name(&self, name: &[u8]) -> mlua::Result<()> {
+        if self.known.borrow().iter().any(|n| name == n.as_bytes()) {
+            Ok(())
+        } else {
+            Err(self.unknown(&String::from_utf8_lossy(name)))
+        }
+    }
+
+    /// `unknown option 'KEY'`, for a key no getter asked for.
+    fn unknown(&self, key: &str) -> mlua::Error {
+        let known = self.known.borrow();
+        let key = format!("{}{key}", self.prefix);
+        self.error(format!(
+            "unknown option '{key}': '{key}' is not an option (known: {})",
+            known.join(", ")
+        ))
     }
 }
 
@@ -414,6 +475,32 @@ mod tests {
                 "eval:1: pge.Test: unknown option 'leaf': 'leaf' is not an option (known: leaves)"
                     .into()
             )
+        );
+    }
+
+    #[test]
+    fn a_table_with_a_metatable_is_read_through_it() {
+        let f = |o: &Options| {
+            let size = o.positive("size")?;
+            let depth = o.positive("depth")?;
+            Ok(format!("{size:?} {depth:?}"))
+        };
+        let inherits = "setmetatable(t, { __index = { size = 2 } })";
+        assert_eq!(
+            read(
+                &format!("local t = {{ depth = 1 }}\n{inherits}\nreturn read(t)"),
+                f
+            ),
+            Ok("Some(2.0) Some(1.0)".into())
+        );
+        // Its own keys are still checked, the inherited ones are not its keys.
+        assert_eq!(
+            read(&format!("local t = {{ dept = 1 }}\n{inherits}\nreturn read(t)"), f),
+            Err("eval:3: pge.Test: unknown option 'dept': 'dept' is not an option (known: size, depth)".into())
+        );
+        assert_eq!(
+            read("return read{ size = 3, depth = 1, [2] = 1 }", f),
+            Err("eval:1: pge.Test: unknown option '[2]': '[2]' is not an option (known: size, depth)".into())
         );
     }
 

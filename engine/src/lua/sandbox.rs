@@ -8,7 +8,7 @@ use mlua::{Lua, Table, Value};
 use super::chunks::engine_chunk;
 use super::errors::{caller_location, script_error};
 use super::params;
-use super::state::{Chunk, SessionState};
+use super::state::{self, Chunk, SessionState};
 use crate::{Error, Location};
 
 const LOADED_KEY: &str = "pge.loaded";
@@ -173,6 +173,7 @@ fn shown_from_cwd(dir: &Path) -> PathBuf {
 fn is_allowed(lua: &Lua, canonical: &Path) -> bool {
     lua.app_data_ref::<SessionState>()
         .is_some_and(|s| s.roots.iter().any(|r| canonical.starts_with(r)))
+        || state::library(lua).is_some_and(|l| canonical.starts_with(l))
 }
 
 /// Resolves `relative` against the calling script's folder: the shown path and the
@@ -308,10 +309,10 @@ fn find_module(lua: &Lua, name: &str) -> mlua::Result<(String, PathBuf)> {
     }
     let rel = name.replace('.', "/");
     let (shown_dir, real_dir) = caller_dir(lua);
-    let (main, library) = lua
+    let main = lua
         .app_data_ref::<SessionState>()
-        .map(|s| (s.main_dir.clone(), s.library.clone()))
-        .unwrap_or_default();
+        .and_then(|s| s.main_dir.clone());
+    let library = state::library(lua);
     let mut dirs = vec![(shown_dir, real_dir)];
     for d in [main, library].into_iter().flatten() {
         dirs.push((shown_from_cwd(&d), d));

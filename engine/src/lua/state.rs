@@ -17,13 +17,12 @@ pub(crate) struct Chunk {
 #[derive(Debug, Default)]
 pub(crate) struct SessionState {
     pub ctx: RunContext,
-    /// Canonical folders scripts may read from: the main script's folder, the library.
+    /// Canonical folders scripts may read from besides the engine's library folder: the
+    /// folders of the main scripts run.
     pub roots: Vec<PathBuf>,
     /// The main script's folder (canonical), once a script runs.
     pub main_dir: Option<PathBuf>,
-    /// The library folder (canonical), if any.
-    pub library: Option<PathBuf>,
-    /// The folder the output goes to (canonical), where scripts write their files.
+    /// The folder the output goes to (absolute), where scripts write their files.
     pub output_dir: Option<PathBuf>,
     pub chunks: Vec<Chunk>,
     /// Every file read: scripts, modules, meshes, textures (for live reload).
@@ -56,3 +55,10 @@ impl SessionState {
 /// The engine that created the session, so that plugins can open sessions of their own
 /// (a forest grows each species variant in a fresh session); read with [`super::engine`].
 pub(crate) struct EngineHandle(pub crate::Engine);
+
+/// The engine's library folder (canonical), if any: found the first time a session of the
+/// engine needs it.
+pub(crate) fn library(lua: &mlua::Lua) -> Option<PathBuf> {
+    lua.app_data_ref::<EngineHandle>()
+        .and_then(|e| e.0.canonical_library().map(PathBuf::from))
+}
