@@ -309,8 +309,7 @@ impl Mesh {
     /// The half of [`Mesh::usable_by_construction`] left to a generator that ran each
     /// triangle it wrote through a [`DegenerateTest`](super::DegenerateTest) as it wrote it and found none
     /// degenerate: whether no two vertices share a position except the pairs of `twins` (as
-    /// there). Then the mesh has no unusable triangle. (A [`DistinctTest`](super::DistinctTest)
-    /// can be given the vertices as they are written.)
+    /// there). Then the mesh has no unusable triangle.
     #[must_use]
     pub fn distinct_positions(&self, twins: &[(u32, u32)]) -> bool {
         triangles::distinct_positions(&self.positions, twins)

@@ -277,102 +277,44 @@ fn flat_lanes(at: &[[[f32; LANES]; 3]; 3]) -> bool {
 }
 
 /// Whether no two vertices share a position, except a vertex and its other in `twins` (see
-/// [`usable_by_construction`]).
+/// [`usable_by_construction`]). A bit a position (from its hash) in a table that stays in
+/// the cache finds the few vertices whose bit another set too; only those are compared, by
+/// their positions, after sorting.
 pub(super) fn distinct_positions(positions: &[Vec3], twins: &[(u32, u32)]) -> bool {
-    let mut test = DistinctTest::new(positions.len());
-    test.add(0, positions, twins);
-    test.distinct(positions, twins)
+    // At least eight bits a vertex: at most about one vertex in eight shares its bit.
+    let table_bits = (8 * positions.len()).max(1 << 12).next_power_of_two();
+    let shift = 64 - table_bits.trailing_zeros();
+    let mut once = vec![0u64; table_bits / 64];
+    let mut twice = vec![0u64; table_bits / 64];
+    for_each_placed(positions, twins, |_, h| {
+        let bit = (h >> shift) as usize;
+        let (word, mask) = (bit / 64, 1u64 << (bit % 64));
+        twice[word] |= once[word] & mask;
+        once[word] |= mask;
+    });
+    let mut shared = Vec::new();
+    for_each_placed(positions, twins, |v, h| {
+        let bit = (h >> shift) as usize;
+        if twice[bit / 64] & (1 << (bit % 64)) != 0 {
+            shared.push(position_bits(positions[v]));
+        }
+    });
+    shared.sort_unstable();
+    shared.windows(2).all(|w| w[0] != w[1])
 }
 
-/// Whether no two of a mesh's vertices share a position, except pairs of twins made at one
-/// place by construction (see [`Mesh::usable_by_construction`]), with the vertices added in
-/// parts, possibly by several threads (a test each, then merged), while they are in the
-/// cache: a bit a position (from its hash) in a table that stays in the cache, set once or
-/// twice; then [`DistinctTest::distinct`] compares only the few vertices whose bit another
-/// set too, by their positions, after sorting.
-///
-/// [`Mesh::usable_by_construction`]: super::Mesh::usable_by_construction
-#[derive(Clone, Debug)]
-pub struct DistinctTest {
-    once: Vec<u64>,
-    twice: Vec<u64>,
-    /// A hash's bit is its top bits: the hash shifted right by this.
-    shift: u32,
-}
-
-impl DistinctTest {
-    /// A test for a mesh of `vertices` vertices.
-    #[must_use]
-    pub fn new(vertices: usize) -> DistinctTest {
-        // At least eight bits a vertex: at most about one vertex in eight shares its bit.
-        let table_bits = (8 * vertices).max(1 << 12).next_power_of_two();
-        DistinctTest {
-            once: vec![0; table_bits / 64],
-            twice: vec![0; table_bits / 64],
-            shift: 64 - table_bits.trailing_zeros(),
-        }
-    }
-
-    /// Adds the mesh's vertices from number `first` on, at `positions`, except each at the
-    /// place of its other in `twins` (`(vertex, other)` numbered in the mesh, in increasing
-    /// order of `vertex`; an other that is not among these vertices counts as elsewhere).
-    pub fn add(&mut self, first: usize, positions: &[Vec3], twins: &[(u32, u32)]) {
-        for_each_placed(first, positions, twins, |_, h| {
-            let bit = (h >> self.shift) as usize;
-            let (word, mask) = (bit / 64, 1u64 << (bit % 64));
-            self.twice[word] |= self.once[word] & mask;
-            self.once[word] |= mask;
-        });
-    }
-
-    /// Adds what `other`, a test of the same mesh, added.
-    pub fn merge(&mut self, other: &DistinctTest) {
-        if other.once.len() != self.once.len() {
-            // Not the same mesh: every vertex is compared.
-            self.twice.fill(u64::MAX);
-            return;
-        }
-        let words = self.once.iter_mut().zip(&mut self.twice);
-        for ((once, twice), (o, t)) in words.zip(other.once.iter().zip(&other.twice)) {
-            *twice |= *t | (*once & *o);
-            *once |= *o;
-        }
-    }
-
-    /// Whether no two of the vertices at `positions` (the whole mesh, every vertex added)
-    /// share a position, except a vertex and its other in `twins` (all of the mesh's).
-    #[must_use]
-    pub fn distinct(&self, positions: &[Vec3], twins: &[(u32, u32)]) -> bool {
-        let mut shared = Vec::new();
-        for_each_placed(0, positions, twins, |v, h| {
-            let bit = (h >> self.shift) as usize;
-            if self.twice[bit / 64] & (1 << (bit % 64)) != 0 {
-                shared.push(position_bits(positions[v]));
-            }
-        });
-        shared.sort_unstable();
-        shared.windows(2).all(|w| w[0] != w[1])
-    }
-}
-
-/// Calls `f` with every vertex of `positions` (numbered from `first` in the mesh, passed to
-/// `f` from 0) not at the place of its other in `twins` (see [`DistinctTest::add`]) and its
-/// position's [`vertex_hash`].
+/// Calls `f` with every vertex not at the place of its other in `twins` (see
+/// [`usable_by_construction`]) and its position's [`vertex_hash`].
 #[inline]
-fn for_each_placed(
-    first: usize,
-    positions: &[Vec3],
-    twins: &[(u32, u32)],
-    mut f: impl FnMut(usize, u64),
-) {
+fn for_each_placed(positions: &[Vec3], twins: &[(u32, u32)], mut f: impl FnMut(usize, u64)) {
     let mut twins = twins.iter().peekable();
     for (v, &p) in positions.iter().enumerate() {
         let mut twin = None;
         while let Some(&&(a, b)) = twins.peek()
-            && a as usize <= first + v
+            && a as usize <= v
         {
-            if a as usize == first + v {
-                twin = Some((b as usize).wrapping_sub(first));
+            if a as usize == v {
+                twin = Some(b as usize);
             }
             twins.next();
         }
@@ -694,23 +636,6 @@ mod tests {
         past[4] = positions.len() as u32;
         assert!(!usable_by_construction(&positions, &past, &twins));
         // Many vertices, most sharing a bit of the table with another.
-        // Added in parts by two tests, merged: the same answers; a twin whose other is in
-        // another part is added, and still only compared with the vertices at its place.
-        let by_parts = |p: &[Vec3], t: &[(u32, u32)]| {
-            let (mut one, mut two) = (DistinctTest::new(p.len()), DistinctTest::new(p.len()));
-            let (cut, later) = (columns as usize + 3, 2 * columns as usize);
-            one.add(0, &p[..cut], t);
-            two.add(cut, &p[cut..later], t);
-            one.add(later, &p[later..], t);
-            one.merge(&two);
-            one.distinct(p, t)
-        };
-        assert!(by_parts(&positions, &twins));
-        assert!(!by_parts(&positions, &twins[1..]));
-        let mut moved = positions.clone();
-        moved[3] = moved[2 * columns as usize + 7];
-        assert!(!by_parts(&moved, &twins));
-        assert!(!usable_by_construction(&moved, &indices, &twins));
         let mut many: Vec<Vec3> = (0..100_000)
             .map(|k| Vec3::new(k as f32, (k % 7) as f32, 0.0))
             .collect();

@@ -15,7 +15,6 @@
 
 mod flare;
 mod rings;
-mod shared;
 
 use std::f32::consts::TAU;
 
@@ -26,8 +25,7 @@ use rayon::prelude::*;
 use crate::options::{Flare, MeshOptions};
 use crate::radii::{Children, main_child};
 use flare::with_flare_rings;
-use rings::{Appended, Checks, Scratch, Shape, Sink, Slices};
-pub(crate) use shared::{Chunks, SharedBark};
+use rings::{Appended, Checks, Scratch, Shape, Slices};
 
 /// Appends the bark tubes of `skeleton` to `mesh` (positions, normals, uvs, indices; the
 /// mesh's other attributes must be empty or are left short). Radii are used as they are.
@@ -41,8 +39,100 @@ pub(crate) use shared::{Chunks, SharedBark};
 /// finite when the skeleton is; a branch of zero length keeps the direction of the segment
 /// before it.
 pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) {
-    let tubes = Tubes::of(skeleton, options);
-    let (vertices, indices) = tubes.size();
+    append_checked_bark(skeleton, options, mesh, None);
+}
+
+/// [`append_bark`], checked by `checks` (when given and the mesh is written on the calling
+/// thread) as it is written; whether it was (`false` when the mesh was written in parallel
+/// and `checks` left as they were).
+fn append_checked_bark(
+    skeleton: &Skeleton,
+    options: &MeshOptions,
+    mesh: &mut Mesh,
+    mut checks: Option<&mut Checks>,
+) -> bool {
+    let sides = options.sides.clamp(3, 1024) as usize;
+    let caps = options.caps;
+    let trig: Vec<(f32, f32)> = (0..=sides)
+        .map(|k| {
+            if k == sides {
+                (1.0, 0.0)
+            } else {
+                let a = TAU * k as f32 / sides as f32;
+                (a.cos(), a.sin())
+            }
+        })
+        .collect();
+    let children = Children::of(skeleton);
+    let main: Vec<Option<u32>> = (0..skeleton.len())
+        .map(|i| main_child(skeleton, i, children.of_node(i)))
+        .collect();
+    let scale = if options.texture_scale > 0.0 && options.texture_scale.is_finite() {
+        options.texture_scale
+    } else {
+        MeshOptions::default().texture_scale
+    };
+    let shape = Shape {
+        trig: &trig,
+        sides,
+        scale,
+        away: -options.light.try_normalize().unwrap_or(Vec3::ZERO),
+    };
+    let flare = options
+        .flare
+        .filter(|f| f.height > 0.0 && f.spread > 0.0 && f.roots > 0);
+
+    // The tubes in the order they are written: a root's, then its node's laterals, node by
+    // node.
+    let mut tubes = Vec::new();
+    for (i, &main_child) in main.iter().enumerate() {
+        if skeleton.parents[i].is_none() {
+            tubes.push(TubeSpec {
+                start: i,
+                fork: None,
+                base_cap: caps,
+                tip_cap: caps,
+                fallback: Vec3::Y,
+                flare,
+            });
+        }
+        for &c in children.of_node(i) {
+            if Some(c) != main_child {
+                let attach = skeleton.positions[i];
+                let incoming = skeleton.parents[i]
+                    .and_then(|p| (attach - skeleton.positions[p as usize]).try_normalize())
+                    .unwrap_or(Vec3::Y);
+                tubes.push(TubeSpec {
+                    start: c as usize,
+                    fork: Some(i),
+                    base_cap: false,
+                    tip_cap: caps,
+                    fallback: incoming,
+                    flare: None,
+                });
+            }
+        }
+    }
+
+    // Every tube's rings, one after another, and how many vertices and indices it writes;
+    // then, a prefix sum having placed each tube in the mesh, its vertices and indices,
+    // written into slices of its own, in parallel when the mesh is large. A tube's numbers
+    // depend only on the tube: the same mesh for any number of threads.
+    let mut points = Vec::new();
+    let mut ends = Vec::with_capacity(tubes.len());
+    let mut walked = Vec::new();
+    for t in &tubes {
+        tube_points(skeleton, &main, t, &mut walked, &mut points);
+        ends.push(points.len());
+    }
+    let rings = |k: usize| &points[if k == 0 { 0 } else { ends[k - 1] }..ends[k]];
+    let counts: Vec<(usize, usize)> = tubes
+        .iter()
+        .enumerate()
+        .map(|(k, t)| t.counts(rings(k), sides))
+        .collect();
+    let vertices: usize = counts.iter().map(|c| c.0).sum();
+    let indices: usize = counts.iter().map(|c| c.1).sum();
     if vertices < PARALLEL_FROM {
         // Appended: written once, not zero-filled first.
         let base = mesh.positions.len();
@@ -54,10 +144,10 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
         mesh.indices.reserve(indices);
         let mut out = Appended(mesh);
         let mut scratch = Scratch::default();
-        for k in 0..tubes.specs.len() {
-            tubes.emit(k, &mut scratch, &mut out, None);
+        for (k, t) in tubes.iter().enumerate() {
+            shape.emit(t, rings(k), &mut scratch, &mut out, checks.as_deref_mut());
         }
-        return;
+        return true;
     }
     // Fresh memory zeroed in parallel: its pages are touched by both threads.
     let base = mesh.positions.len();
@@ -68,14 +158,41 @@ pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) 
     mesh.normals.par_extend(zeros(vertices).map(|_| Vec3::ZERO));
     mesh.uvs.par_extend(zeros(vertices).map(|_| Vec2::ZERO));
     mesh.indices.par_extend(zeros(indices).map(|_| 0));
-    let sinks = tubes.sinks(mesh, base, index_base);
-    sinks
-        .into_par_iter()
-        .enumerate()
-        .with_min_len(16)
-        .for_each_init(Scratch::default, |scratch, (k, mut sink)| {
-            tubes.emit(k, scratch, &mut sink, None);
+    let mut sinks = Vec::with_capacity(tubes.len());
+    let mut positions = &mut mesh.positions[base..];
+    let mut normals = &mut mesh.normals[base..];
+    let mut uvs = &mut mesh.uvs[base..];
+    let mut index_slots = &mut mesh.indices[index_base..];
+    let mut first = base as u32;
+    for &(v, i) in &counts {
+        let (p, rest) = positions.split_at_mut(v);
+        positions = rest;
+        let (n, rest) = normals.split_at_mut(v);
+        normals = rest;
+        let (u, rest) = uvs.split_at_mut(v);
+        uvs = rest;
+        let (x, rest) = index_slots.split_at_mut(i);
+        index_slots = rest;
+        sinks.push(Slices {
+            positions: p,
+            normals: n,
+            uvs: u,
+            indices: x,
+            first,
+            vertices: 0,
+            indices_written: 0,
         });
+        first += v as u32;
+    }
+    tubes
+        .par_iter()
+        .enumerate()
+        .zip(sinks)
+        .with_min_len(16)
+        .for_each_init(Scratch::default, |scratch, ((k, t), mut sink)| {
+            shape.emit(t, rings(k), scratch, &mut sink, None);
+        });
+    false
 }
 
 /// Bark meshes with fewer vertices are written on the calling thread: handing tubes to
@@ -94,162 +211,20 @@ pub fn bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> Mesh {
     mesh
 }
 
-/// The bark's tubes in the order they are written, with their rings and what every tube
-/// shares: everything but the writing. A tube's numbers depend only on the tube, so the
-/// tubes can be written in any order and by any thread, once each is placed in the mesh
-/// (a prefix sum of [`Tubes::counts`]).
-struct Tubes {
-    shape: Shape,
-    specs: Vec<TubeSpec>,
-    /// Every tube's rings, one after another (see [`tube_points`]).
-    points: Vec<(Vec3, f32, f32)>,
-    /// Where each tube's rings end in `points`.
-    ends: Vec<usize>,
-    /// The vertices and indices each tube writes.
-    counts: Vec<(usize, usize)>,
-}
-
-impl Tubes {
-    fn of(skeleton: &Skeleton, options: &MeshOptions) -> Tubes {
-        let sides = options.sides.clamp(3, 1024) as usize;
-        let caps = options.caps;
-        let trig: Vec<(f32, f32)> = (0..=sides)
-            .map(|k| {
-                if k == sides {
-                    (1.0, 0.0)
-                } else {
-                    let a = TAU * k as f32 / sides as f32;
-                    (a.cos(), a.sin())
-                }
-            })
-            .collect();
-        let children = Children::of(skeleton);
-        let main: Vec<Option<u32>> = (0..skeleton.len())
-            .map(|i| main_child(skeleton, i, children.of_node(i)))
-            .collect();
-        let scale = if options.texture_scale > 0.0 && options.texture_scale.is_finite() {
-            options.texture_scale
-        } else {
-            MeshOptions::default().texture_scale
-        };
-        let shape = Shape {
-            trig,
-            sides,
-            scale,
-            away: -options.light.try_normalize().unwrap_or(Vec3::ZERO),
-        };
-        let flare = options
-            .flare
-            .filter(|f| f.height > 0.0 && f.spread > 0.0 && f.roots > 0);
-
-        // The tubes in the order they are written: a root's, then its node's laterals, node
-        // by node.
-        let mut specs = Vec::new();
-        for (i, &main_child) in main.iter().enumerate() {
-            if skeleton.parents[i].is_none() {
-                specs.push(TubeSpec {
-                    start: i,
-                    fork: None,
-                    base_cap: caps,
-                    tip_cap: caps,
-                    fallback: Vec3::Y,
-                    flare,
-                });
-            }
-            for &c in children.of_node(i) {
-                if Some(c) != main_child {
-                    let attach = skeleton.positions[i];
-                    let incoming = skeleton.parents[i]
-                        .and_then(|p| (attach - skeleton.positions[p as usize]).try_normalize())
-                        .unwrap_or(Vec3::Y);
-                    specs.push(TubeSpec {
-                        start: c as usize,
-                        fork: Some(i),
-                        base_cap: false,
-                        tip_cap: caps,
-                        fallback: incoming,
-                        flare: None,
-                    });
-                }
-            }
-        }
-
-        let mut points = Vec::new();
-        let mut ends = Vec::with_capacity(specs.len());
-        let mut walked = Vec::new();
-        for t in &specs {
-            tube_points(skeleton, &main, t, &mut walked, &mut points);
-            ends.push(points.len());
-        }
-        let mut tubes = Tubes {
-            shape,
-            specs,
-            points,
-            ends,
-            counts: Vec::new(),
-        };
-        tubes.counts = (0..tubes.specs.len())
-            .map(|k| tubes.specs[k].counts(tubes.rings(k), sides))
-            .collect();
-        tubes
-    }
-
-    /// Tube `k`'s rings.
-    fn rings(&self, k: usize) -> &[(Vec3, f32, f32)] {
-        let start = if k == 0 { 0 } else { self.ends[k - 1] };
-        &self.points[start..self.ends[k]]
-    }
-
-    /// The vertices and indices of all the tubes.
-    fn size(&self) -> (usize, usize) {
-        self.counts
-            .iter()
-            .fold((0, 0), |(v, i), &(tv, ti)| (v + tv, i + ti))
-    }
-
-    /// Writes tube `k` into `out`, checked by `checks` when given.
-    fn emit(
-        &self,
-        k: usize,
-        scratch: &mut Scratch,
-        out: &mut impl Sink,
-        checks: Option<&mut Checks>,
-    ) {
-        self.shape
-            .emit(&self.specs[k], self.rings(k), scratch, out, checks);
-    }
-
-    /// Every tube's own slices of `mesh`'s arrays, which hold them from vertex `base` and
-    /// index `index_base` on.
-    fn sinks<'a>(&self, mesh: &'a mut Mesh, base: usize, index_base: usize) -> Vec<Slices<'a>> {
-        let mut sinks = Vec::with_capacity(self.counts.len());
-        let mut positions = &mut mesh.positions[base..];
-        let mut normals = &mut mesh.normals[base..];
-        let mut uvs = &mut mesh.uvs[base..];
-        let mut index_slots = &mut mesh.indices[index_base..];
-        let mut first = base as u32;
-        for &(v, i) in &self.counts {
-            let (p, rest) = positions.split_at_mut(v);
-            positions = rest;
-            let (n, rest) = normals.split_at_mut(v);
-            normals = rest;
-            let (u, rest) = uvs.split_at_mut(v);
-            uvs = rest;
-            let (x, rest) = index_slots.split_at_mut(i);
-            index_slots = rest;
-            sinks.push(Slices {
-                positions: p,
-                normals: n,
-                uvs: u,
-                indices: x,
-                first,
-                vertices: 0,
-                indices_written: 0,
-            });
-            first += v as u32;
-        }
-        sinks
-    }
+/// [`bark_mesh`], and whether it is shown to have no unusable triangle by construction
+/// ([`Mesh::usable_by_construction`]: its tubes' triangles are distinct, so only degenerate
+/// triangles and vertices at one place can make one; the triangles are tested as they are
+/// written); `false` when that was not shown (then search it).
+pub(crate) fn clean_bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> (Mesh, bool) {
+    let mut mesh = Mesh {
+        name: "bark".into(),
+        ..Mesh::default()
+    };
+    let mut checks = Checks::default();
+    let clean = append_checked_bark(skeleton, options, &mut mesh, Some(&mut checks))
+        && !checks.test.found()
+        && mesh.distinct_positions(&checks.twins);
+    (mesh, clean)
 }
 
 /// Follows the continuing children from `start` to a tip, pushing positions and radii.
@@ -507,15 +482,7 @@ mod tests {
     #[test]
     fn a_bark_shown_clean_by_construction_has_no_unusable_triangle() {
         let shown = |s: &Skeleton, options: &MeshOptions| {
-            // Written by two threads, one from each end.
-            let mut shared = SharedBark::new(s, options);
-            let chunks = shared.chunks();
-            let written = std::thread::scope(|scope| {
-                let back = scope.spawn(|| chunks.write(false));
-                [chunks.write(true), back.join().expect("written")]
-            });
-            drop(chunks);
-            let (mesh, clean) = shared.finish(written);
+            let (mesh, clean) = clean_bark_mesh(s, options);
             assert_eq!(mesh, bark_mesh(s, options));
             let unusable = mesh.unusable_triangles();
             assert!(!clean || unusable.is_empty(), "clean, yet {unusable:?}");

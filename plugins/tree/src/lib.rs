@@ -42,7 +42,7 @@ mod textures;
 mod tree_lua;
 
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Mat4, Vec3};
@@ -51,7 +51,6 @@ use pge_engine::geometry::{
 };
 use rand_mt::Mt64;
 
-use cylinders::{Chunks, SharedBark};
 pub use cylinders::{append_bark, bark_mesh};
 pub use leaves::{append_leaf_quads, tip_leaves};
 pub use merge::merge_straight;
@@ -262,31 +261,22 @@ pub fn build_tree(
     let mut prepared = prepare_skeleton(skeleton, &options.mesh)?;
     model.stats.add_phase("radii", t.elapsed().as_secs_f64());
 
-    // At least one segment, so the bark mesh has triangles.
     let has_bark = prepared.parents.iter().any(Option::is_some);
     let default_style = LeafOptions::default();
     let style = options.leaves.as_ref().unwrap_or(&default_style);
     // The bark draws nothing from the generator and the leaves read nothing of the bark, so
-    // a small tree's are made side by side (a big tree's each use the whole pool already):
-    // the calling thread writes the bark while the pool makes the leaves, then helps with
-    // the bark's tubes left. `meshing` counts the bark until its last tube is written,
-    // `leaves` the leaves alone.
+    // a small tree's are made side by side (a big tree's each use the whole pool already);
+    // each phase counts its own time.
     let small = prepared.len() * (options.mesh.sides as usize + 1) < SIDE_BY_SIDE_BELOW;
-    let mut shared = None;
-    // The bark's chunks, once placed: the leaves' thread helps with those left.
-    let chunks = OnceLock::new();
-    let bark_start = Instant::now();
-    let (front, ((points, leaf_mesh, mut leaves_time), back)) = beside(
+    // Each mesh comes with whether it has no unusable triangle (the search, or the bark's
+    // construction, showed it): the model's clean-up then skips it.
+    let ((bark, meshing_time), (leaves, mut leaves_time)) = beside(
         small,
         || {
-            (has_bark && small).then(|| {
-                let bark: &mut SharedBark =
-                    shared.insert(SharedBark::new(&prepared, &options.mesh));
-                chunks.get_or_init(|| bark.chunks()).write(true)
-            })
+            // At least one segment, so the bark mesh has triangles.
+            has_bark.then(|| cylinders::clean_bark_mesh(&prepared, &options.mesh))
         },
         || {
-            let t = Instant::now();
             let mut rng = Mt64::new(seed);
             let tips = match &options.leaves {
                 Some(leaf_options) => tip_leaves(&prepared, leaf_options, &mut rng),
@@ -310,30 +300,11 @@ pub fn build_tree(
                 let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
                 (mesh, clean)
             });
-            let leaves = (points, mesh, t.elapsed().as_secs_f64());
-            (leaves, chunks.get().map(|c: &Chunks| c.write(false)))
+            (points, mesh)
         },
     );
-    drop(chunks);
-    let bark = match shared {
-        Some(shared) => {
-            let written: Vec<_> = [front, back].into_iter().flatten().collect();
-            let done = written.iter().filter_map(|w| w.done).max();
-            let before = done.map_or_else(Default::default, |d| d - bark_start);
-            let finishing = Instant::now();
-            let bark = shared.finish(written);
-            model
-                .stats
-                .add_phase("meshing", (before + finishing.elapsed()).as_secs_f64());
-            Some(bark)
-        }
-        None => {
-            let t = Instant::now();
-            let bark = has_bark.then(|| (cylinders::bark_mesh(&prepared, &options.mesh), false));
-            model.stats.add_phase("meshing", t.elapsed().as_secs_f64());
-            bark
-        }
-    };
+    model.stats.add_phase("meshing", meshing_time);
+    let (points, leaf_mesh) = leaves;
     prepared.leaves = points;
     let prepared = Arc::new(prepared);
 
@@ -401,19 +372,24 @@ fn add_mesh(model: &mut Model, mesh: Mesh, clean: bool) {
 const SIDE_BY_SIDE_BELOW: usize = 1 << 16;
 
 /// `a` on the calling thread beside `b` on the rayon pool when `together` and the pool has
-/// more than one thread (one after the other otherwise).
+/// more than one thread (one after the other otherwise), each with the seconds it took.
 fn beside<A, B: Send>(
     together: bool,
     a: impl FnOnce() -> A,
     b: impl FnOnce() -> B + Send,
-) -> (A, B) {
+) -> ((A, f64), (B, f64)) {
+    fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+        let t = Instant::now();
+        let out = f();
+        (out, t.elapsed().as_secs_f64())
+    }
     if !together || rayon::current_num_threads() == 1 {
-        return (a(), b());
+        return (timed(a), timed(b));
     }
     let mut b_out = None;
     let a_out = rayon::in_place_scope(|scope| {
-        scope.spawn(|_| b_out = Some(b()));
-        a()
+        scope.spawn(|_| b_out = Some(timed(b)));
+        timed(a)
     });
     // The scope returns when every task it spawned has run.
     (a_out, b_out.expect("b ran in the scope"))

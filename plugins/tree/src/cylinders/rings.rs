@@ -97,8 +97,8 @@ pub(super) struct Scratch {
 }
 
 /// What every tube shares: the ring's cosines and sines, the UV scale and the seam's side.
-pub(super) struct Shape {
-    pub(super) trig: Vec<(f32, f32)>,
+pub(super) struct Shape<'a> {
+    pub(super) trig: &'a [(f32, f32)],
     pub(super) sides: usize,
     /// Metres of bark per texture tile.
     pub(super) scale: f32,
@@ -106,7 +106,7 @@ pub(super) struct Shape {
     pub(super) away: Vec3,
 }
 
-impl Shape {
+impl Shape<'_> {
     /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)) into
     /// `out`, checked by `checks` when given.
     pub(super) fn emit(
