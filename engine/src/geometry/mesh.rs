@@ -306,6 +306,15 @@ impl Mesh {
             || triangles::usable_by_construction(&self.positions, &self.indices, twins)
     }
 
+    /// The half of [`Mesh::usable_by_construction`] left to a generator that ran each
+    /// triangle it wrote through a [`DegenerateTest`](super::DegenerateTest) as it wrote it and found none
+    /// degenerate: whether no two vertices share a position except the pairs of `twins` (as
+    /// there). Then the mesh has no unusable triangle.
+    #[must_use]
+    pub fn distinct_positions(&self, twins: &[(u32, u32)]) -> bool {
+        triangles::distinct_positions(&self.positions, twins)
+    }
+
     /// Removes the triangles listed in `dropped` (numbers from 0, in increasing order, as
     /// [`Mesh::unusable_triangles`] gives them; a number out of order or past the last
     /// triangle is ignored).

@@ -14,3 +14,4 @@ pub use material::{AlphaMode, DiffuseTransmission, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};
 pub use model::{Instance, InstanceGroup, InstanceTransform, Model, PlacementLeaves, Stats};
 pub use skeleton::{LeafPoint, Skeleton};
+pub use triangles::DegenerateTest;

@@ -143,58 +143,144 @@ pub(super) fn usable_by_construction(
     !any_degenerate(positions, triangles) && distinct_positions(positions, twins)
 }
 
-/// Whether a triangle is degenerate ([`degenerate`]) or has a corner past the vertices:
-/// eight triangles at a time, their corners laid out by coordinate so that [`degenerate`]'s
-/// operations, the same in the same order, run side by side.
+/// Whether a triangle is degenerate ([`degenerate`]) or has a corner past the vertices.
 fn any_degenerate(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
-    const LANES: usize = 8;
-    let mut batches = triangles.chunks_exact(LANES);
-    for batch in &mut batches {
-        // Corner, axis, lane.
-        let mut at = [[[0f32; LANES]; 3]; 3];
-        for (lane, tri) in batch.iter().enumerate() {
-            let Some(c) = corners(positions, tri) else {
-                return true;
-            };
-            for (k, corner) in c.iter().enumerate() {
-                for axis in 0..3 {
-                    at[k][axis][lane] = corner[axis];
-                }
+    let mut test = DegenerateTest::default();
+    for tri in triangles {
+        let Some(c) = corners(positions, tri) else {
+            return true;
+        };
+        test.push(c);
+    }
+    test.found()
+}
+
+/// Triangles a [`DegenerateTest`] tests side by side.
+const LANES: usize = 8;
+
+/// Whether a triangle is degenerate, by the test [`Mesh::remove_unusable_triangles`] applies
+/// (twice its area at most a millionth of its longest side squared), for many triangles:
+/// eight at a time, their corners laid out by coordinate so that the test's operations, the
+/// same in the same order, run side by side. A generator can test its triangles as it
+/// writes them, while their corners are at hand, and then show its mesh usable with
+/// [`Mesh::distinct_positions`].
+///
+/// [`Mesh::remove_unusable_triangles`]: super::Mesh::remove_unusable_triangles
+/// [`Mesh::distinct_positions`]: super::Mesh::distinct_positions
+#[derive(Clone, Debug, Default)]
+pub struct DegenerateTest {
+    /// Corner, axis, lane of the triangles not tested yet.
+    at: [[[f32; LANES]; 3]; 3],
+    /// Lanes filled.
+    len: usize,
+    found: bool,
+}
+
+impl DegenerateTest {
+    /// Tests a triangle given by its corners in turning order (the order of its indices).
+    #[inline]
+    pub fn push(&mut self, corners: [Vec3; 3]) {
+        let lane = self.len % LANES;
+        for (k, corner) in corners.iter().enumerate() {
+            for axis in 0..3 {
+                self.at[k][axis][lane] = corner[axis];
             }
         }
-        let [a, b, c] = at;
-        let mut flat = false;
-        for l in 0..LANES {
-            let edge = |p: &[[f32; LANES]; 3], q: &[[f32; LANES]; 3]| {
-                [q[0][l] - p[0][l], q[1][l] - p[1][l], q[2][l] - p[2][l]]
-            };
-            let dot = |p: [f32; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-            let (u, v) = (edge(&a, &b), edge(&a, &c));
-            // `u.cross(v)` as glam writes it.
-            let cross = [
-                u[1] * v[2] - v[1] * u[2],
-                u[2] * v[0] - v[2] * u[0],
-                u[0] * v[1] - v[0] * u[1],
-            ];
-            let twice_area = dot(cross).sqrt();
-            let longest = dot(u).max(dot(edge(&b, &c))).max(dot(edge(&c, &a)));
-            flat |= twice_area <= 1e-6 * longest;
-        }
-        if flat {
-            return true;
+        self.len = lane + 1;
+        if self.len == LANES {
+            self.found |= flat_lanes(&self.at);
+            self.len = 0;
         }
     }
-    batches
-        .remainder()
-        .iter()
-        .any(|tri| corners(positions, tri).is_none_or(degenerate))
+
+    /// Tests the strip of quads between two rows of vertices given by coordinate (`[x, y,
+    /// z]`; rows of `n + 1` vertices make `n` quads, a longer row is cut to the other's
+    /// length): quad `k` as the triangles `(below[k], below[k + 1], above[k + 1])` and
+    /// `(below[k], above[k + 1], above[k])`, in that turning order (a tube between two of
+    /// its rings). The same decisions as [`DegenerateTest::push`] of each triangle: the same
+    /// operations on the same numbers, a quad's diagonal computed once for its two triangles,
+    /// and an edge's square length taken from the edge the other way round (`a - b` is
+    /// `-(b - a)` exactly, so their squares are equal), side by side along the strip.
+    pub fn strip(&mut self, below: [&[f32]; 3], above: [&[f32]; 3]) {
+        let len = below
+            .iter()
+            .chain(&above)
+            .map(|c| c.len())
+            .min()
+            .unwrap_or(0);
+        if len < 2 {
+            return;
+        }
+        let [bx, by, bz] = below.map(|c| &c[..len]);
+        let [ax, ay, az] = above.map(|c| &c[..len]);
+        let mut flat = false;
+        for k in 0..len - 1 {
+            let (p0, p1) = ([bx[k], by[k], bz[k]], [bx[k + 1], by[k + 1], bz[k + 1]]);
+            let (c0, c1) = ([ax[k], ay[k], az[k]], [ax[k + 1], ay[k + 1], az[k + 1]]);
+            let edge = |p: [f32; 3], q: [f32; 3]| [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+            let dot = |p: [f32; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+            // `u.cross(v)` as glam writes it.
+            let cross = |u: [f32; 3], v: [f32; 3]| {
+                [
+                    u[1] * v[2] - v[1] * u[2],
+                    u[2] * v[0] - v[2] * u[0],
+                    u[0] * v[1] - v[0] * u[1],
+                ]
+            };
+            let diagonal = edge(p0, c1);
+            let diagonal_squared = dot(diagonal);
+            // (p0, p1, c1): sides p1 - p0, c1 - p1 and p0 - c1 (the diagonal's square).
+            let u = edge(p0, p1);
+            let twice_area = dot(cross(u, diagonal)).sqrt();
+            let longest = dot(u).max(dot(edge(p1, c1))).max(diagonal_squared);
+            flat |= twice_area <= 1e-6 * longest;
+            // (p0, c1, c0): sides c1 - p0, c0 - c1 and p0 - c0 (c0 - p0's square).
+            let v = edge(p0, c0);
+            let twice_area = dot(cross(diagonal, v)).sqrt();
+            let longest = diagonal_squared.max(dot(edge(c1, c0))).max(dot(v));
+            flat |= twice_area <= 1e-6 * longest;
+        }
+        self.found |= flat;
+    }
+
+    /// Whether a triangle pushed so far is degenerate.
+    #[must_use]
+    pub fn found(&self) -> bool {
+        let corner = |k: usize, l: usize| Vec3::from_array(self.at[k].map(|axis| axis[l]));
+        self.found || (0..self.len).any(|l| degenerate([0, 1, 2].map(|k| corner(k, l))))
+    }
+}
+
+/// Whether one of the [`LANES`] triangles of `at` (corner, axis, lane) is [`degenerate`]:
+/// the same operations in the same order, side by side.
+#[inline]
+fn flat_lanes(at: &[[[f32; LANES]; 3]; 3]) -> bool {
+    let [a, b, c] = at;
+    let mut flat = false;
+    for l in 0..LANES {
+        let edge = |p: &[[f32; LANES]; 3], q: &[[f32; LANES]; 3]| {
+            [q[0][l] - p[0][l], q[1][l] - p[1][l], q[2][l] - p[2][l]]
+        };
+        let dot = |p: [f32; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        let (u, v) = (edge(a, b), edge(a, c));
+        // `u.cross(v)` as glam writes it.
+        let cross = [
+            u[1] * v[2] - v[1] * u[2],
+            u[2] * v[0] - v[2] * u[0],
+            u[0] * v[1] - v[0] * u[1],
+        ];
+        let twice_area = dot(cross).sqrt();
+        let longest = dot(u).max(dot(edge(b, c))).max(dot(edge(c, a)));
+        flat |= twice_area <= 1e-6 * longest;
+    }
+    flat
 }
 
 /// Whether no two vertices share a position, except a vertex and its other in `twins` (see
 /// [`usable_by_construction`]). A bit a position (from its hash) in a table that stays in
 /// the cache finds the few vertices whose bit another set too; only those are compared, by
 /// their positions, after sorting.
-fn distinct_positions(positions: &[Vec3], twins: &[(u32, u32)]) -> bool {
+pub(super) fn distinct_positions(positions: &[Vec3], twins: &[(u32, u32)]) -> bool {
     // At least eight bits a vertex: at most about one vertex in eight shares its bit.
     let table_bits = (8 * positions.len()).max(1 << 12).next_power_of_two();
     let shift = 64 - table_bits.trailing_zeros();
@@ -587,11 +673,70 @@ mod tests {
             let one = corners(&positions, tri).is_none_or(degenerate);
             both += usize::from(one);
             assert_eq!(any_degenerate(&positions, &[*tri; 8]), one, "{tri:?}");
-            let mut mixed = [[1, 2, 3]; 11];
-            mixed[5] = *tri;
-            assert_eq!(any_degenerate(&positions, &mixed), one, "{tri:?}");
+            // In a full batch and among the last, untested until the end.
+            for at in [5, 9] {
+                let mut mixed = [[1, 2, 3]; 11];
+                mixed[at] = *tri;
+                assert_eq!(any_degenerate(&positions, &mixed), one, "{tri:?}");
+            }
         }
         assert!(both > 100 && both < triangles.len() - 100, "{both}");
+    }
+
+    #[test]
+    fn strips_are_degenerate_as_their_triangles_one_at_a_time() {
+        // Rows of 5 vertices around a ring, one row a little above the other: some quads
+        // nearly flat (a height near a millionth of their size), one row at a time moved far
+        // from the origin; -0.0 and NaN too.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut both = 0;
+        for round in 0..4000 {
+            let origin = Vec3::new(next(), next(), next()) * 100.0 - 50.0;
+            let height = if round % 2 == 0 {
+                2e-6 * next()
+            } else {
+                next()
+            };
+            let row = |lift: f32, next: &mut dyn FnMut() -> f32| -> Vec<Vec3> {
+                (0..5)
+                    .map(|k| {
+                        let a = k as f32 * 1.3 + next() * 0.01;
+                        origin + Vec3::new(a.cos(), lift, a.sin()) * (1.0 + next())
+                    })
+                    .collect()
+            };
+            let below = row(0.0, &mut next);
+            let mut above = if round % 3 == 0 {
+                below.iter().map(|p| *p + Vec3::Y * height).collect()
+            } else {
+                row(height, &mut next)
+            };
+            if round % 97 == 0 {
+                above[2] = below[2];
+            }
+            if round % 89 == 0 {
+                above[3] = Vec3::new(-0.0, f32::NAN, 0.0);
+            }
+            let one: bool = (0..4).any(|k| {
+                degenerate([below[k], below[k + 1], above[k + 1]])
+                    || degenerate([below[k], above[k + 1], above[k]])
+            });
+            both += usize::from(one);
+            let by_axis = |row: &[Vec3]| -> [Vec<f32>; 3] {
+                [0, 1, 2].map(|axis| row.iter().map(|p| p[axis]).collect())
+            };
+            let (b, a) = (by_axis(&below), by_axis(&above));
+            let mut test = DegenerateTest::default();
+            test.strip([&b[0], &b[1], &b[2]], [&a[0], &a[1], &a[2]]);
+            assert_eq!(test.found(), one, "round {round}");
+        }
+        assert!(both > 100 && both < 3900, "{both}");
     }
 
     #[test]

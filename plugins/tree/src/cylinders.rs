@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use crate::options::{Flare, MeshOptions};
 use crate::radii::{Children, main_child};
 use flare::with_flare_rings;
-use rings::{Shape, Sink};
+use rings::{Appended, Checks, Scratch, Shape, Slices};
 
 /// Appends the bark tubes of `skeleton` to `mesh` (positions, normals, uvs, indices; the
 /// mesh's other attributes must be empty or are left short). Radii are used as they are.
@@ -39,18 +39,17 @@ use rings::{Shape, Sink};
 /// finite when the skeleton is; a branch of zero length keeps the direction of the segment
 /// before it.
 pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) {
-    append_bark_with_twins(skeleton, options, mesh, None);
+    append_checked_bark(skeleton, options, mesh, None);
 }
 
-/// [`append_bark`], pushing to `twins` (when given and the mesh is written on the calling
-/// thread) each vertex made at the place of another by construction, with that other (see
-/// [`Mesh::usable_by_construction`]); `false` when the mesh was written in parallel and
-/// `twins` left as it was.
-fn append_bark_with_twins(
+/// [`append_bark`], checked by `checks` (when given and the mesh is written on the calling
+/// thread) as it is written; whether it was (`false` when the mesh was written in parallel
+/// and `checks` left as they were).
+fn append_checked_bark(
     skeleton: &Skeleton,
     options: &MeshOptions,
     mesh: &mut Mesh,
-    mut twins: Option<&mut Vec<(u32, u32)>>,
+    mut checks: Option<&mut Checks>,
 ) -> bool {
     let sides = options.sides.clamp(3, 1024) as usize;
     let caps = options.caps;
@@ -132,24 +131,33 @@ fn append_bark_with_twins(
         .enumerate()
         .map(|(k, t)| t.counts(rings(k), sides))
         .collect();
-    let base = mesh.positions.len();
-    let index_base = mesh.indices.len();
     let vertices: usize = counts.iter().map(|c| c.0).sum();
     let indices: usize = counts.iter().map(|c| c.1).sum();
     if vertices < PARALLEL_FROM {
-        mesh.positions.resize(base + vertices, Vec3::ZERO);
-        mesh.normals.resize(base + vertices, Vec3::ZERO);
-        mesh.uvs.resize(base + vertices, Vec2::ZERO);
-        mesh.indices.resize(index_base + indices, 0);
-    } else {
-        // Fresh memory zeroed in parallel: its pages are touched by both threads.
-        let zeros = |n: usize| rayon::iter::repeat_n(0u8, n).with_min_len(1 << 14);
-        mesh.positions
-            .par_extend(zeros(vertices).map(|_| Vec3::ZERO));
-        mesh.normals.par_extend(zeros(vertices).map(|_| Vec3::ZERO));
-        mesh.uvs.par_extend(zeros(vertices).map(|_| Vec2::ZERO));
-        mesh.indices.par_extend(zeros(indices).map(|_| 0));
+        // Appended: written once, not zero-filled first.
+        let base = mesh.positions.len();
+        mesh.normals.resize(base, Vec3::ZERO);
+        mesh.uvs.resize(base, Vec2::ZERO);
+        mesh.positions.reserve(vertices);
+        mesh.normals.reserve(vertices);
+        mesh.uvs.reserve(vertices);
+        mesh.indices.reserve(indices);
+        let mut out = Appended(mesh);
+        let mut scratch = Scratch::default();
+        for (k, t) in tubes.iter().enumerate() {
+            shape.emit(t, rings(k), &mut scratch, &mut out, checks.as_deref_mut());
+        }
+        return true;
     }
+    // Fresh memory zeroed in parallel: its pages are touched by both threads.
+    let base = mesh.positions.len();
+    let index_base = mesh.indices.len();
+    let zeros = |n: usize| rayon::iter::repeat_n(0u8, n).with_min_len(1 << 14);
+    mesh.positions
+        .par_extend(zeros(vertices).map(|_| Vec3::ZERO));
+    mesh.normals.par_extend(zeros(vertices).map(|_| Vec3::ZERO));
+    mesh.uvs.par_extend(zeros(vertices).map(|_| Vec2::ZERO));
+    mesh.indices.par_extend(zeros(indices).map(|_| 0));
     let mut sinks = Vec::with_capacity(tubes.len());
     let mut positions = &mut mesh.positions[base..];
     let mut normals = &mut mesh.normals[base..];
@@ -165,7 +173,7 @@ fn append_bark_with_twins(
         uvs = rest;
         let (x, rest) = index_slots.split_at_mut(i);
         index_slots = rest;
-        sinks.push(Sink {
+        sinks.push(Slices {
             positions: p,
             normals: n,
             uvs: u,
@@ -176,29 +184,15 @@ fn append_bark_with_twins(
         });
         first += v as u32;
     }
-    if vertices < PARALLEL_FROM {
-        let mut directions = Vec::new();
-        for ((k, t), mut sink) in tubes.iter().enumerate().zip(sinks) {
-            shape.emit(
-                t,
-                rings(k),
-                &mut directions,
-                &mut sink,
-                twins.as_deref_mut(),
-            );
-        }
-        true
-    } else {
-        tubes
-            .par_iter()
-            .enumerate()
-            .zip(sinks)
-            .with_min_len(16)
-            .for_each_init(Vec::new, |directions, ((k, t), mut sink)| {
-                shape.emit(t, rings(k), directions, &mut sink, None);
-            });
-        false
-    }
+    tubes
+        .par_iter()
+        .enumerate()
+        .zip(sinks)
+        .with_min_len(16)
+        .for_each_init(Scratch::default, |scratch, ((k, t), mut sink)| {
+            shape.emit(t, rings(k), scratch, &mut sink, None);
+        });
+    false
 }
 
 /// Bark meshes with fewer vertices are written on the calling thread: handing tubes to
@@ -219,16 +213,17 @@ pub fn bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> Mesh {
 
 /// [`bark_mesh`], and whether it is shown to have no unusable triangle by construction
 /// ([`Mesh::usable_by_construction`]: its tubes' triangles are distinct, so only degenerate
-/// triangles and vertices at one place can make one); `false` when that was not shown
-/// (then search it).
+/// triangles and vertices at one place can make one; the triangles are tested as they are
+/// written); `false` when that was not shown (then search it).
 pub(crate) fn clean_bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> (Mesh, bool) {
     let mut mesh = Mesh {
         name: "bark".into(),
         ..Mesh::default()
     };
-    let mut twins = Vec::new();
-    let clean = append_bark_with_twins(skeleton, options, &mut mesh, Some(&mut twins))
-        && mesh.usable_by_construction(&twins);
+    let mut checks = Checks::default();
+    let clean = append_checked_bark(skeleton, options, &mut mesh, Some(&mut checks))
+        && !checks.test.found()
+        && mesh.distinct_positions(&checks.twins);
     (mesh, clean)
 }
 

@@ -5,12 +5,46 @@
 use std::f32::consts::TAU;
 
 use glam::{Quat, Vec2, Vec3};
+use pge_engine::geometry::{DegenerateTest, Mesh};
 
 use super::TubeSpec;
 use super::flare::flared;
 
-/// The part of the mesh one tube writes: slices of the attributes and indices of its own.
-pub(super) struct Sink<'a> {
+/// Where a tube is written: the next vertex's index in the mesh, its vertices and its
+/// triangles.
+pub(super) trait Sink {
+    /// The mesh index of the next vertex.
+    fn next_index(&self) -> u32;
+
+    fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2);
+
+    /// Writes triangles (three indices each).
+    fn triangles<const N: usize>(&mut self, indices: [u32; N]);
+}
+
+/// The mesh's own arrays, appended to (so not zero-filled first).
+pub(super) struct Appended<'a>(pub(super) &'a mut Mesh);
+
+impl Sink for Appended<'_> {
+    fn next_index(&self) -> u32 {
+        self.0.positions.len() as u32
+    }
+
+    #[inline]
+    fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2) {
+        self.0.positions.push(position);
+        self.0.normals.push(normal);
+        self.0.uvs.push(uv);
+    }
+
+    #[inline]
+    fn triangles<const N: usize>(&mut self, indices: [u32; N]) {
+        self.0.indices.extend_from_slice(&indices);
+    }
+}
+
+/// Slices of the mesh's arrays of one tube's own, for tubes written in parallel.
+pub(super) struct Slices<'a> {
     pub(super) positions: &'a mut [Vec3],
     pub(super) normals: &'a mut [Vec3],
     pub(super) uvs: &'a mut [Vec2],
@@ -21,12 +55,12 @@ pub(super) struct Sink<'a> {
     pub(super) indices_written: usize,
 }
 
-impl Sink<'_> {
-    /// The mesh index of the next vertex.
+impl Sink for Slices<'_> {
     fn next_index(&self) -> u32 {
         self.first + self.vertices as u32
     }
 
+    #[inline]
     fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2) {
         self.positions[self.vertices] = position;
         self.normals[self.vertices] = normal;
@@ -34,11 +68,32 @@ impl Sink<'_> {
         self.vertices += 1;
     }
 
-    fn indices(&mut self, indices: &[u32]) {
+    #[inline]
+    fn triangles<const N: usize>(&mut self, indices: [u32; N]) {
         let at = self.indices_written;
-        self.indices[at..at + indices.len()].copy_from_slice(indices);
-        self.indices_written += indices.len();
+        self.indices[at..at + N].copy_from_slice(&indices);
+        self.indices_written += N;
     }
+}
+
+/// What the bark's tubes are checked by as they are written, to show the mesh usable by
+/// construction (see `Mesh::distinct_positions`): every triangle through a
+/// [`DegenerateTest`], and each vertex made at the place of another by construction (a
+/// ring's seam vertex, a cap's copy of a ring vertex) with that other, in increasing order.
+#[derive(Default)]
+pub(super) struct Checks {
+    pub(super) test: DegenerateTest,
+    pub(super) twins: Vec<(u32, u32)>,
+}
+
+/// A tube's scratch space: its segments' directions, the last two rings' positions by
+/// coordinate (for [`DegenerateTest::strip`]) and a cap's ring.
+#[derive(Default)]
+pub(super) struct Scratch {
+    seg: Vec<Vec3>,
+    below: [Vec<f32>; 3],
+    above: [Vec<f32>; 3],
+    cap: Vec<Vec3>,
 }
 
 /// What every tube shares: the ring's cosines and sines, the UV scale and the seam's side.
@@ -53,16 +108,14 @@ pub(super) struct Shape<'a> {
 
 impl Shape<'_> {
     /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)) into
-    /// `out`; `seg` is scratch space. With `twins`, pushes each vertex made at the place of
-    /// another by construction (a ring's seam vertex, a cap's copy of a ring vertex) with
-    /// that other, in increasing order (see `Mesh::usable_by_construction`).
+    /// `out`, checked by `checks` when given.
     pub(super) fn emit(
         &self,
         tube: &TubeSpec,
         pts: &[(Vec3, f32, f32)],
-        seg: &mut Vec<Vec3>,
-        out: &mut Sink,
-        mut twins: Option<&mut Vec<(u32, u32)>>,
+        scratch: &mut Scratch,
+        out: &mut impl Sink,
+        mut checks: Option<&mut Checks>,
     ) {
         if pts.len() < 2 {
             return;
@@ -73,6 +126,12 @@ impl Shape<'_> {
             .windows(2)
             .find_map(|w| (w[1].0 - w[0].0).try_normalize())
             .unwrap_or(tube.fallback);
+        let Scratch {
+            seg,
+            below,
+            above,
+            cap: cap_ring,
+        } = scratch;
         seg.clear();
         let mut last = first_dir;
         for w in pts.windows(2) {
@@ -107,7 +166,15 @@ impl Shape<'_> {
             // The first ring follows the cap.
             let ring = out.next_index() + 1 + self.sides as u32;
             let cap = (pts[0].0, pts[0].1, ring);
-            self.cap(out, cap, (side, dir), -1.0, v, twins.as_deref_mut());
+            self.cap(
+                out,
+                cap,
+                (side, dir),
+                -1.0,
+                v,
+                cap_ring,
+                checks.as_deref_mut(),
+            );
         }
         let first_index = out.next_index();
         for j in 0..pts.len() {
@@ -129,6 +196,8 @@ impl Shape<'_> {
                 (Vec3::ZERO, 0.0)
             };
             let around = TAU * radius / self.scale;
+            std::mem::swap(below, above);
+            above.iter_mut().for_each(Vec::clear);
             for (k, &(c, s)) in self.trig.iter().enumerate() {
                 let offset = side * c + binormal * s;
                 let shape = offset + bend * (stretch * offset.dot(bend));
@@ -144,66 +213,90 @@ impl Shape<'_> {
                     ),
                     _ => (1.0, offset),
                 };
+                let position = centre + shape * radius * widen;
                 out.vertex(
-                    centre + shape * radius * widen,
+                    position,
                     normal,
                     Vec2::new(around * k as f32 / self.sides as f32, v),
                 );
+                if checks.is_some() {
+                    for (axis, coordinates) in above.iter_mut().enumerate() {
+                        coordinates.push(position[axis]);
+                    }
+                }
             }
-            if let Some(twins) = twins.as_deref_mut() {
+            if let Some(checks) = checks.as_deref_mut() {
                 let ring = first_index + j as u32 * stride;
-                twins.push((ring + self.sides as u32, ring));
+                checks.twins.push((ring + self.sides as u32, ring));
+                if j > 0 {
+                    let [x, y, z] = &*below;
+                    let [ax, ay, az] = &*above;
+                    checks.test.strip([x, y, z], [ax, ay, az]);
+                }
             }
             if j > 0 {
                 let a0 = first_index + (j as u32 - 1) * stride;
                 let b0 = a0 + stride;
                 for k in 0..self.sides as u32 {
                     let (a, b, c, d) = (a0 + k, a0 + k + 1, b0 + k + 1, b0 + k);
-                    out.indices(&[a, b, c, a, c, d]);
+                    out.triangles([a, b, c, a, c, d]);
                 }
             }
         }
         let (centre, radius, _) = pts[pts.len() - 1];
         if tube.tip_cap && radius > 0.0 {
             let ring = first_index + (pts.len() as u32 - 1) * stride;
-            self.cap(out, (centre, radius, ring), (side, dir), 1.0, v, twins);
+            let cap = (centre, radius, ring);
+            self.cap(out, cap, (side, dir), 1.0, v, cap_ring, checks);
         }
     }
 
     /// A flat cap of the ring at `centre` with `radius` (whose first vertex is `ring`),
     /// framed by `side` and `dir`: a centre vertex and one ring of `sides` vertices facing
-    /// `sign * dir`, each pushed to `twins` with the ring's vertex it copies.
+    /// `sign * dir`, checked by `checks` when given (each ring vertex a twin of the ring's
+    /// vertex it copies). `positions` is scratch space.
+    #[allow(clippy::too_many_arguments)]
     fn cap(
         &self,
-        out: &mut Sink,
+        out: &mut impl Sink,
         (centre, radius, ring): (Vec3, f32, u32),
         (side, dir): (Vec3, Vec3),
         sign: f32,
         v: f32,
-        twins: Option<&mut Vec<(u32, u32)>>,
+        positions: &mut Vec<Vec3>,
+        checks: Option<&mut Checks>,
     ) {
         let binormal = dir.cross(side);
         let normal = dir * sign;
         let base = out.next_index();
         let r = radius / self.scale;
         out.vertex(centre, normal, Vec2::new(0.5, v));
+        positions.clear();
         for &(c, s) in &self.trig[..self.sides] {
-            out.vertex(
-                centre + (side * c + binormal * s) * radius,
-                normal,
-                Vec2::new(0.5 + r * c, v + r * s),
-            );
+            let position = centre + (side * c + binormal * s) * radius;
+            out.vertex(position, normal, Vec2::new(0.5 + r * c, v + r * s));
+            positions.push(position);
         }
         let n = self.sides as u32;
-        if let Some(twins) = twins {
-            twins.extend((0..n).map(|k| (base + 1 + k, ring + k)));
-        }
         for k in 0..n {
             let (a, b) = (base + 1 + k, base + 1 + (k + 1) % n);
             if sign > 0.0 {
-                out.indices(&[base, a, b]);
+                out.triangles([base, a, b]);
             } else {
-                out.indices(&[base, b, a]);
+                out.triangles([base, b, a]);
+            }
+        }
+        if let Some(checks) = checks {
+            checks
+                .twins
+                .extend((0..n).map(|k| (base + 1 + k, ring + k)));
+            for (k, &a) in positions.iter().enumerate() {
+                let b = positions[(k + 1) % positions.len()];
+                checks.test.push(if sign > 0.0 {
+                    [centre, a, b]
+                } else {
+                    [centre, b, a]
+                });
             }
         }
     }
