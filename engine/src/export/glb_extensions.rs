@@ -4,8 +4,8 @@
 
 use gltf_json as json;
 use serde::Serialize;
-use serde_json::json;
 use serde_json::ser::{CompactFormatter, Formatter};
+use serde_json::{Value as JsonValue, json};
 
 use crate::geometry::DiffuseTransmission;
 use crate::{Error, Result};
@@ -23,7 +23,8 @@ pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 /// declared in `extensionsUsed` (gltf-json has no fields for them without its extension
 /// features). The text is the one a `serde_json::Value` of the root with the extensions
 /// inserted would give (files with extensions have always been written so): each
-/// `extensions` object last in its material or node, `extensionsUsed` last in the root,
+/// `extensions` object last in its material or node (in place of an empty one gltf-json
+/// wrote), `extensionsUsed` last in the root,
 /// floats as the `f64` they widen to.
 pub(super) fn with_extensions(
     root: &mut json::Root,
@@ -33,21 +34,21 @@ pub(super) fn with_extensions(
 ) -> Result<Vec<u8>> {
     let export = |e: serde_json::Error| Error::Export(e.to_string());
     let mut materials = vec![Extensions::default(); root.materials.len()];
-    let mut material_extension = |index: usize, name: &'static str, text: Vec<u8>| {
+    let mut material_extension = |index: usize, name: &'static str, ext: JsonValue| {
         materials
             .get_mut(index)
-            .map(|e| e.insert(name, text))
+            .map(|e| e.insert(name, ext))
             .ok_or_else(|| Error::Export(format!("a material with {name} is missing")))
     };
     for &index in unlit {
-        material_extension(index, UNLIT, b"{}".to_vec())?;
+        material_extension(index, UNLIT, json!({}))?;
     }
     for &(index, t) in transmissive {
         let ext = json!({
             "diffuseTransmissionFactor": t.factor,
             "diffuseTransmissionColorFactor": t.color,
         });
-        material_extension(index, DIFFUSE_TRANSMISSION, text(&ext).map_err(export)?)?;
+        material_extension(index, DIFFUSE_TRANSMISSION, ext)?;
     }
     let mut instanced = vec![Extensions::default(); root.nodes.len()];
     for &(index, [t, r, s]) in nodes {
@@ -57,7 +58,7 @@ pub(super) fn with_extensions(
             .ok_or_else(|| Error::Export("an instancing node is missing".into()))?;
         // The node's extensions are this one alone.
         *node = Extensions::default();
-        node.insert(GPU_INSTANCING, text(&ext).map_err(export)?);
+        node.insert(GPU_INSTANCING, ext);
     }
     let mut used = Vec::new();
     if !nodes.is_empty() {
@@ -128,21 +129,21 @@ impl Tail {
     }
 }
 
-/// An object's extensions: names and their values' text, in the order first inserted.
+/// An object's extensions: names and their values, in the order first inserted.
 #[derive(Clone, Default)]
-struct Extensions(Vec<(&'static str, Vec<u8>)>);
+struct Extensions(Vec<(&'static str, JsonValue)>);
 
 impl Extensions {
     /// Adds `name`, or replaces its value where it stands.
-    fn insert(&mut self, name: &'static str, text: Vec<u8>) {
+    fn insert(&mut self, name: &'static str, ext: JsonValue) {
         match self.0.iter_mut().find(|(n, _)| *n == name) {
-            Some(entry) => entry.1 = text,
-            None => self.0.push((name, text)),
+            Some(entry) => entry.1 = ext,
+            None => self.0.push((name, ext)),
         }
     }
 }
 
-/// `,"key":[...]` for a non-empty array, each item with its extensions (if any) added last.
+/// `,"key":[...]` for a non-empty array, each item with its extensions (if any).
 fn array<T: Serialize>(
     out: &mut Vec<u8>,
     key: &str,
@@ -159,25 +160,23 @@ fn array<T: Serialize>(
         if i > 0 {
             out.push(b',');
         }
-        write(out, item)?;
         let Some(Extensions(ext)) = extensions.get(i).filter(|e| !e.0.is_empty()) else {
+            write(out, item)?;
             continue;
         };
-        // The item is an object: its closing brace goes after the extensions.
-        out.pop();
-        if out.last() != Some(&b'{') {
-            out.push(b',');
+        // An item with extensions goes through a `Value` of its own, as the whole root once
+        // did: they take the place of an `extensions` object gltf-json wrote (an empty one, as
+        // its extension features are off: a variant read back from a glb has one), or go last.
+        let mut value = serde_json::to_value(item)?;
+        let entries = value
+            .as_object_mut()
+            .map(|object| object.entry("extensions").or_insert_with(|| json!({})))
+            .and_then(JsonValue::as_object_mut)
+            .ok_or_else(|| serde::ser::Error::custom("an object's extensions are not an object"))?;
+        for (name, ext) in ext {
+            entries.insert((*name).into(), ext.clone());
         }
-        out.extend_from_slice(br#""extensions":{"#);
-        for (k, (name, text)) in ext.iter().enumerate() {
-            if k > 0 {
-                out.push(b',');
-            }
-            write(out, name)?;
-            out.push(b':');
-            out.extend_from_slice(text);
-        }
-        out.extend_from_slice(b"}}");
+        write(out, &value)?;
     }
     out.push(b']');
     Ok(())
@@ -213,7 +212,6 @@ impl Formatter for Widened {
 mod tests {
     use super::*;
     use json::validation::Checked::Valid;
-    use serde_json::Value as JsonValue;
     use serde_json::value::RawValue;
 
     /// The text of the root with the extensions inserted in its `serde_json::Value`.
@@ -300,19 +298,27 @@ mod tests {
             factor: 0.25,
             color: [0.1, 0.7, 1.0],
         };
-        let mut check = |nodes: &[(usize, [usize; 3])],
-                         unlit: &[usize],
-                         transmissive: &[(usize, DiffuseTransmission)]| {
-            let want = through_a_value(&root, nodes, unlit, transmissive);
-            let got = with_extensions(&mut root, nodes, unlit, transmissive).expect("text");
+        let check = |root: &mut json::Root,
+                     nodes: &[(usize, [usize; 3])],
+                     unlit: &[usize],
+                     transmissive: &[(usize, DiffuseTransmission)]| {
+            let want = through_a_value(root, nodes, unlit, transmissive);
+            let got = with_extensions(root, nodes, unlit, transmissive).expect("text");
             assert_eq!(
                 String::from_utf8(got).expect("utf-8"),
                 String::from_utf8(want).expect("utf-8")
             );
         };
-        check(&[(1, [1, 2, 3]), (0, [4, 5, 6])], &[1], &[(0, t), (1, t)]);
-        check(&[], &[], &[(1, t)]);
-        check(&[(1, [1, 2, 3])], &[0, 0], &[]);
+        check(&mut root, &[(1, [1, 2, 3]), (0, [4, 5, 6])], &[1], &[(0, t), (1, t)]);
+        check(&mut root, &[], &[], &[(1, t)]);
+        check(&mut root, &[(1, [1, 2, 3])], &[0, 0], &[]);
+        // Read back from a glb (a forest's shared variants), a material and a node carry an
+        // empty `extensions` object of gltf-json's own: the extensions go in its place.
+        root.materials[1].extensions = Some(Default::default());
+        root.nodes[0].extensions = Some(Default::default());
+        root.materials[1].extras = raw(r#"{"pge":1}"#);
+        check(&mut root, &[(1, [1, 2, 3]), (0, [4, 5, 6])], &[1], &[(0, t), (1, t)]);
+        check(&mut root, &[], &[], &[(1, t)]);
         // A material or node that is not there is an error, not a panic.
         assert!(with_extensions(&mut root, &[], &[2], &[]).is_err());
         assert!(with_extensions(&mut root, &[(2, [0; 3])], &[], &[]).is_err());
