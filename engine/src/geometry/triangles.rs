@@ -494,6 +494,17 @@ fn hash_of_corners([a, b, c]: [u64; 3]) -> u64 {
 mod tests {
     use super::*;
 
+    /// Numbers in [0, 1) from a xorshift generator seeded with `state`: many triangles
+    /// without a dependency.
+    fn xorshift(mut state: u64) -> impl FnMut() -> f32 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
     /// The definition, one triangle at a time with a set of the keys seen.
     fn unusable_by_definition(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
         let mut seen = std::collections::HashSet::new();
@@ -649,13 +660,7 @@ mod tests {
     fn triangles_tested_eight_at_a_time_are_degenerate_as_one_at_a_time() {
         // Triangles around the threshold: a base of length 1..4 and a height near a
         // millionth of it, at places far from the origin; -0.0 and NaN too.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1du64);
         let mut positions = Vec::new();
         for _ in 0..3000 {
             let origin = Vec3::new(next(), next(), next()) * 100.0 - 50.0;
@@ -688,13 +693,7 @@ mod tests {
         // Rows of 5 vertices around a ring, one row a little above the other: some quads
         // nearly flat (a height near a millionth of their size), one row at a time moved far
         // from the origin; -0.0 and NaN too.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15u64);
         let mut both = 0;
         for round in 0..4000 {
             let origin = Vec3::new(next(), next(), next()) * 100.0 - 50.0;
