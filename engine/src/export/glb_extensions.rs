@@ -309,26 +309,23 @@ mod tests {
                 String::from_utf8(want).expect("utf-8")
             );
         };
-        check(
-            &mut root,
-            &[(1, [1, 2, 3]), (0, [4, 5, 6])],
-            &[1],
-            &[(0, t), (1, t)],
-        );
-        check(&mut root, &[], &[], &[(1, t)]);
-        check(&mut root, &[(1, [1, 2, 3])], &[0, 0], &[]);
+        let every_case = |root: &mut json::Root| {
+            check(
+                root,
+                &[(1, [1, 2, 3]), (0, [4, 5, 6])],
+                &[1],
+                &[(0, t), (1, t)],
+            );
+            check(root, &[], &[], &[(1, t)]);
+            check(root, &[(1, [1, 2, 3])], &[0, 0], &[]);
+        };
+        every_case(&mut root);
         // Read back from a glb (a forest's shared variants), a material and a node carry an
         // empty `extensions` object of gltf-json's own: the extensions go in its place.
         root.materials[1].extensions = Some(Default::default());
         root.nodes[0].extensions = Some(Default::default());
         root.materials[1].extras = raw(r#"{"pge":1}"#);
-        check(
-            &mut root,
-            &[(1, [1, 2, 3]), (0, [4, 5, 6])],
-            &[1],
-            &[(0, t), (1, t)],
-        );
-        check(&mut root, &[], &[], &[(1, t)]);
+        every_case(&mut root);
         // A material or node that is not there is an error, not a panic.
         assert!(with_extensions(&mut root, &[], &[2], &[]).is_err());
         assert!(with_extensions(&mut root, &[(2, [0; 3])], &[], &[]).is_err());
