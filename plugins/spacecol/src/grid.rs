@@ -67,17 +67,19 @@ struct Lanes {
 }
 
 impl Lanes {
-    /// Bit `j` set when lane `j` lies within `r2` of `q` and closer than its reach (the
-    /// squared distance summed as `Vec3::distance_squared` sums it, lane by lane).
+    /// Bit `j` set when lane `j` lies within `r2` of `q` and closer than its reach, and the
+    /// lanes' squared distances to `q` (summed as `Vec3::distance_squared` sums them, lane
+    /// by lane: the same bits).
     #[inline(always)]
-    fn hits(&self, q: Vec3, r2: f32) -> u64 {
+    fn hits(&self, q: Vec3, r2: f32) -> (u64, Vec4) {
         let (dx, dy, dz) = (
             self.x - Vec4::splat(q.x),
             self.y - Vec4::splat(q.y),
             self.z - Vec4::splat(q.z),
         );
         let d2 = dx * dx + dy * dy + dz * dz;
-        u64::from((d2.cmplt(Vec4::splat(r2)) & d2.cmplt(self.reach)).bitmask())
+        let hits = d2.cmplt(self.reach.min(Vec4::splat(r2))).bitmask();
+        (u64::from(hits), d2)
     }
 }
 
@@ -545,18 +547,26 @@ impl PointGrid {
         let first = start / 4;
         let mut chunk_end = (start + len).div_ceil(4);
         let mut changed = false;
+        // The squared distances of the chunk's slots, kept for the call-backs.
+        let mut d2s = [Vec4::ZERO; 16];
         while chunk_end > first {
             let chunk_start = chunk_end.saturating_sub(16).max(first);
             let mut hits = 0u64;
-            for (k, lanes) in self.lanes[chunk_start..chunk_end].iter().enumerate() {
-                hits |= lanes.hits(q, r2) << (4 * k);
+            for (k, (lanes, d2)) in self.lanes[chunk_start..chunk_end]
+                .iter()
+                .zip(&mut d2s)
+                .enumerate()
+            {
+                let (bits, group) = lanes.hits(q, r2);
+                hits |= bits << (4 * k);
+                *d2 = group;
             }
             changed |= hits != 0;
             while hits != 0 {
                 let k = 63 - hits.leading_zeros() as usize;
                 hits &= !(1u64 << k);
                 let slot = chunk_start * 4 + k;
-                let d2 = self.position(slot).distance_squared(q);
+                let d2 = d2s[k / 4].as_ref()[k % 4];
                 match f(self.items[slot], d2) {
                     Some(reach) => self.lanes[slot / 4].reach.as_mut()[slot % 4] = reach,
                     None => self.remove_slot(sub, slot),

@@ -23,12 +23,15 @@ pub(super) struct State {
     pub(super) alive_count: usize,
     /// Each point's nearest node within the influence radius and its squared distance to it.
     nearest: Vec<Nearest>,
-    /// Points with a nearest node, in increasing index order (some may have died since).
-    active: Vec<u32>,
-    /// Points given their first nearest node since `active` was last read, in any order.
-    fresh: Vec<u32>,
-    /// The buffer the next `active` is built in.
-    spare: Vec<u32>,
+    /// The points with a nearest node, one bit each (bit `i % 64` of word `i / 64`): read
+    /// in increasing index order, the order pulls are summed in. A point that died keeps
+    /// its bit until the next pull reads and clears it.
+    pulling: Vec<u64>,
+    /// The points the last pull kept pulling (alive, with a nearest node that was not
+    /// refused).
+    pulled: usize,
+    /// The points given their first nearest node since the last pull.
+    fresh: usize,
     /// The live points: one part, or two whose updates run side by side on the pool.
     parts: Vec<Part>,
     /// Nodes added whose updates to the points are not applied yet (see [`State::flush`]).
@@ -222,9 +225,9 @@ impl State {
             alive,
             alive_count: n,
             nearest: vec![Nearest::NONE; n],
-            active: Vec::new(),
-            fresh: Vec::new(),
-            spare: Vec::new(),
+            pulling: vec![0; n.div_ceil(64)],
+            pulled: 0,
+            fresh: 0,
             parts,
             pending: Vec::new(),
             nodes: Vec::new(),
@@ -332,73 +335,71 @@ impl State {
         for part in &mut self.parts {
             self.alive_count -= part.killed;
             part.killed = 0;
-            self.fresh.append(&mut part.fresh);
+            self.fresh += part.fresh.len();
+            for i in part.fresh.drain(..) {
+                self.pulling[i as usize / 64] |= 1 << (i % 64);
+            }
         }
         self.pending.clear();
     }
 
     /// Pulls: each live point with a nearest node, in increasing index order (the order in
     /// which the pulls are summed), adds its unit direction to its nearest node's pull's
-    /// `sum` (and may be its `closest`), and the pulled nodes are listed in `touched`. A tip only perceives the points whose direction has a cosine of at least
-    /// `perceive` with its own. Points whose node was refused at the last iteration are
-    /// dropped as unreachable.
+    /// `sum` (and may be its `closest`), and the pulled nodes are listed in `touched`. A tip
+    /// only perceives the points whose direction has a cosine of at least `perceive` with
+    /// its own. Points whose node was refused at the last iteration are dropped as
+    /// unreachable.
     ///
-    /// One pass: the points pulling since before merged with those given their first
-    /// nearest node since (each list in increasing order), the dead skipped, and the
-    /// points still pulling kept, in order, for the next iteration.
+    /// One pass over the bits of the points with a nearest node: no list to sort or merge,
+    /// and the bits of the points that died since are cleared on the way.
     pub(super) fn pull(&mut self, iteration: u32, perceive: Option<f32>) {
-        let old = std::mem::take(&mut self.active);
-        let mut fresh = std::mem::take(&mut self.fresh);
-        fresh.sort_unstable();
-        let mut kept = std::mem::take(&mut self.spare);
-        kept.clear();
-        kept.reserve(old.len() + fresh.len());
-        let (mut a, mut b) = (0, 0);
-        while a < old.len() || b < fresh.len() {
-            let i = if b == fresh.len() || (a < old.len() && old[a] < fresh[b]) {
-                a += 1;
-                old[a - 1]
-            } else {
-                b += 1;
-                fresh[b - 1]
-            } as usize;
-            if !self.alive[i] {
-                continue;
+        let mut pulled = 0;
+        for w in 0..self.pulling.len() {
+            let mut word = self.pulling[w];
+            let mut bits = word;
+            while bits != 0 {
+                let bit = bits & bits.wrapping_neg();
+                bits ^= bit;
+                let i = w * 64 + bit.trailing_zeros() as usize;
+                if !self.alive[i] {
+                    word ^= bit;
+                    continue;
+                }
+                let Nearest { node, d2 } = self.nearest[i];
+                let n = node as usize;
+                if self.refused[n] == iteration - 1 {
+                    // The node could not grow toward these points last time: unreachable.
+                    word ^= bit;
+                    self.kill(i);
+                    continue;
+                }
+                pulled += 1;
+                let to = (self.points[i] - self.nodes[n]) / d2.sqrt();
+                if let Some(cos) = perceive
+                    && !self.has_child[n]
+                    && self.dirs[n] != Vec3::ZERO
+                    && to.dot(self.dirs[n]) < cos
+                {
+                    continue;
+                }
+                let pull = &mut self.pulls[n];
+                if pull.closest == NONE {
+                    self.touched.push(n as u32);
+                }
+                pull.sum += to;
+                if d2 < pull.closest_d2 {
+                    (pull.closest_d2, pull.closest) = (d2, i as u32);
+                }
             }
-            let Nearest { node, d2 } = self.nearest[i];
-            let n = node as usize;
-            if self.refused[n] == iteration - 1 {
-                // The node could not grow toward these points last time: unreachable.
-                self.kill(i);
-                continue;
-            }
-            kept.push(i as u32);
-            let to = (self.points[i] - self.nodes[n]) / d2.sqrt();
-            if let Some(cos) = perceive
-                && !self.has_child[n]
-                && self.dirs[n] != Vec3::ZERO
-                && to.dot(self.dirs[n]) < cos
-            {
-                continue;
-            }
-            let pull = &mut self.pulls[n];
-            if pull.closest == NONE {
-                self.touched.push(n as u32);
-            }
-            pull.sum += to;
-            if d2 < pull.closest_d2 {
-                (pull.closest_d2, pull.closest) = (d2, i as u32);
-            }
+            self.pulling[w] = word;
         }
-        fresh.clear();
-        self.fresh = fresh;
-        self.active = kept;
-        self.spare = old;
+        self.pulled = pulled;
+        self.fresh = 0;
     }
 
     /// Whether no point pulled at the last iteration nor was given a nearest node since.
     pub(super) fn none_active(&self) -> bool {
-        self.fresh.is_empty() && self.active.is_empty()
+        self.fresh == 0 && self.pulled == 0
     }
 
     /// Whether a live point lies within the influence radius of `q` (and outside the kill
@@ -481,6 +482,7 @@ impl State {
         if self.alive[i] {
             self.alive[i] = false;
             self.alive_count -= 1;
+            self.pulling[i / 64] &= !(1 << (i % 64));
             let part = self.part_of(i);
             part.grid.remove((i - part.first) as u32);
         }
@@ -592,6 +594,77 @@ mod tests {
             one.alive_count < one.points.len() * 9 / 10 && pulling > 2000,
             "{} of 4000 points left, {pulling} with a nearest node",
             one.alive_count
+        );
+    }
+
+    /// A pull sums every live point with a nearest node in increasing index order,
+    /// whatever order the points got their nodes in, drops the points of a node refused at
+    /// the last iteration, and says whether any point still pulls: as a loop over all the
+    /// points does.
+    #[test]
+    fn pulls_sum_the_live_points_in_index_order() {
+        let mut rng = Mt64::new(7);
+        let mut random = |scale: f32| {
+            Vec3::new(
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+            ) * scale
+        };
+        let pts: Vec<Vec3> = (0..3000).map(|_| random(6.0)).collect();
+        let mut p = Params::new(Shape::Sphere {
+            center: Vec3::splat(3.0),
+            radius: 3.0,
+        });
+        (p.influence, p.kill, p.step) = (1.2, 0.3, 0.15);
+        let mut st = State::with_parts(pts, p.influence, 1);
+        let (mut summed, mut dropped) = (0, 0);
+        for iteration in 1..60u32 {
+            for _ in 0..6 {
+                let q = random(6.0);
+                st.add_node(q, None, &p);
+            }
+            st.flush(&p);
+            if iteration % 4 == 0 {
+                let n = (iteration as usize * 37) % st.nodes.len();
+                st.refused[n] = iteration - 1;
+            }
+            let mut want = vec![Pull::NONE; st.nodes.len()];
+            let (mut touched, mut unreachable) = (Vec::new(), Vec::new());
+            for i in 0..st.points.len() {
+                let Nearest { node, d2 } = st.nearest[i];
+                if !st.alive[i] || node == NONE {
+                    continue;
+                }
+                let n = node as usize;
+                if st.refused[n] == iteration - 1 {
+                    unreachable.push(i);
+                    continue;
+                }
+                let pull = &mut want[n];
+                if pull.closest == NONE {
+                    touched.push(node);
+                }
+                pull.sum += (st.points[i] - st.nodes[n]) / d2.sqrt();
+                if d2 < pull.closest_d2 {
+                    (pull.closest_d2, pull.closest) = (d2, i as u32);
+                }
+            }
+            st.pull(iteration, None);
+            assert_eq!(st.touched, touched, "iteration {iteration}");
+            assert_eq!(st.pulls, want, "iteration {iteration}");
+            assert!(unreachable.iter().all(|i| !st.alive[*i]));
+            assert_eq!(st.none_active(), touched.is_empty());
+            summed += touched.len();
+            dropped += unreachable.len();
+            for n in st.touched.drain(..) {
+                st.pulls[n as usize] = Pull::NONE;
+            }
+        }
+        assert!(
+            summed > 100 && dropped > 10 && st.alive_count < 2500,
+            "{summed} pulls, {dropped} points dropped, {} points left",
+            st.alive_count
         );
     }
 
