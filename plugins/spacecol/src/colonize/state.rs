@@ -44,9 +44,9 @@ pub(super) struct State {
     pub(super) headings: Vec<Vec3>,
     /// Whether a node has grown a child.
     pub(super) has_child: Vec<bool>,
-    /// Nodes by cell of side `step`, for the duplicate-growth guard: the last node added
-    /// in each cell...
-    node_cells: HashMap<[i32; 3], u32, BuildHasherDefault<CellHasher>>,
+    /// Nodes by cell of side `step` (by [`cell_key`]), for the duplicate-growth guard: the
+    /// last node added in each cell...
+    node_cells: HashMap<u64, u32, BuildHasherDefault<CellHasher>>,
     /// ... and for each node, the node added before it in its cell ([`NONE`]: none), so
     /// that a cell's nodes are a chain without a list of their own.
     earlier_in_cell: Vec<u32>,
@@ -95,19 +95,27 @@ impl Pull {
     };
 }
 
-/// The live points numbered from `first` up to the next part's `first`, in a grid of their
-/// own. Points are numbered cell by cell along x first, so two parts are two slabs of the
-/// crown (sharing at most one layer of cells), and a new node's updates of one part touch
-/// nothing of the other's: the parts can be updated side by side, each in the nodes' order,
-/// with the bytes of one after the other.
+/// The live points numbered from `first` (a multiple of 64) up to the next part's `first`,
+/// in a grid of their own. Points are numbered cell by cell along x first, so two parts are
+/// two slabs of the crown (sharing at most one layer of cells), and a new node's updates of
+/// one part touch nothing of the other's: the parts can be updated side by side, each in
+/// the nodes' order, with the bytes of one after the other.
 #[derive(Clone)]
 struct Part {
     first: usize,
     grid: PointGrid,
-    /// Points given their first nearest node by the last updates, in any order.
-    fresh: Vec<u32>,
+    /// Points given their first nearest node by the last updates.
+    fresh: usize,
     /// Points killed by the last updates.
     killed: usize,
+}
+
+/// A part's own ranges of the state's per-point arrays: its points' `alive` and `nearest`
+/// records and the words of their bits in `pulling` (a part starts on a word).
+struct Own<'a> {
+    alive: &'a mut [bool],
+    nearest: &'a mut [Nearest],
+    pulling: &'a mut [u64],
 }
 
 impl Part {
@@ -115,28 +123,25 @@ impl Part {
         Part {
             first,
             grid,
-            fresh: Vec::new(),
+            fresh: 0,
             killed: 0,
         }
     }
 
     /// Applies the updates of `nodes` (index and position, in order) to the part's points,
-    /// for the influence radius and the squared kill distance `k2`; `alive` and `nearest`
-    /// are the part's own ranges of the state's arrays.
-    fn update(
-        &mut self,
-        nodes: &[(u32, Vec3)],
-        influence: f32,
-        k2: f32,
-        alive: &mut [bool],
-        nearest: &mut [Nearest],
-    ) {
+    /// for the influence radius and the squared kill distance `k2`.
+    fn update(&mut self, nodes: &[(u32, Vec3)], influence: f32, k2: f32, own: Own<'_>) {
         let Part {
-            first,
             grid,
             fresh,
             killed,
+            ..
         } = self;
+        let Own {
+            alive,
+            nearest,
+            pulling,
+        } = own;
         for &(index, q) in nodes {
             // The grid calls back only for the live points closer to the new node than
             // their reach, their distance to their nearest node.
@@ -147,10 +152,11 @@ impl Part {
                     *killed += 1;
                     return None;
                 }
+                // Without a branch: the point pulls from now on (its bit may be set
+                // already), and is fresh when it had no nearest node.
                 let point = &mut nearest[i];
-                if point.node == NONE {
-                    fresh.push((*first + i) as u32);
-                }
+                *fresh += usize::from(point.node == NONE);
+                pulling[i / 64] |= 1 << (i % 64);
                 *point = Nearest { node: index, d2 };
                 Some(d2)
             });
@@ -209,7 +215,8 @@ impl State {
             influence / 1.5
         };
         let parts = if parts > 1 {
-            let half = n / 2;
+            // On a word of the pulling bits, which each part then owns whole.
+            let half = n / 2 / 64 * 64;
             vec![
                 Part::new(0, PointGrid::new(&points[..half], &alive[..half], cell)),
                 Part::new(half, PointGrid::new(&points[half..], &alive[half..], cell)),
@@ -266,7 +273,8 @@ impl State {
         self.has_child.push(false);
         self.refused.push(NONE);
         self.pulls.push(Pull::NONE);
-        let earlier = self.node_cells.insert(cell_of(position, p.step), index);
+        let cell = cell_key(cell_of(position, 1.0 / p.step));
+        let earlier = self.node_cells.insert(cell, index);
         self.earlier_in_cell.push(earlier.unwrap_or(NONE));
         index
     }
@@ -292,27 +300,34 @@ impl State {
         // Each part with its own ranges of the per-point arrays, the first part last.
         let mut work = Vec::with_capacity(self.parts.len());
         let (mut alive, mut nearest) = (&mut self.alive[..], &mut self.nearest[..]);
+        let mut pulling = &mut self.pulling[..];
         for part in self.parts.iter_mut().rev() {
             let (below, own_alive) = alive.split_at_mut(part.first);
             let (below_nearest, own_nearest) = nearest.split_at_mut(part.first);
-            (alive, nearest) = (below, below_nearest);
-            work.push((part, own_alive, own_nearest));
+            let (below_pulling, own_pulling) = pulling.split_at_mut(part.first / 64);
+            (alive, nearest, pulling) = (below, below_nearest, below_pulling);
+            let own = Own {
+                alive: own_alive,
+                nearest: own_nearest,
+                pulling: own_pulling,
+            };
+            work.push((part, own));
         }
         if work.len() > 1 && nodes.len() >= SIDE_BY_SIDE_FROM {
             let others = work.len() - 1;
             let (started, ended) = (AtomicUsize::new(0), AtomicUsize::new(0));
             rayon::in_place_scope(|scope| {
                 let mine = work.pop();
-                for (part, alive, nearest) in work {
+                for (part, own) in work {
                     let (started, ended) = (&started, &ended);
                     scope.spawn(move |_| {
                         started.fetch_add(1, Ordering::Relaxed);
-                        part.update(nodes, r, k2, alive, nearest);
+                        part.update(nodes, r, k2, own);
                         ended.fetch_add(1, Ordering::Release);
                     });
                 }
-                if let Some((part, alive, nearest)) = mine {
-                    part.update(nodes, r, k2, alive, nearest);
+                if let Some((part, own)) = mine {
+                    part.update(nodes, r, k2, own);
                 }
                 // Parts running on the pool usually end within microseconds: waiting for
                 // them here spares the calling thread a sleep and its wake-up (some 10 us).
@@ -328,17 +343,14 @@ impl State {
                 }
             });
         } else {
-            for (part, alive, nearest) in work {
-                part.update(nodes, r, k2, alive, nearest);
+            for (part, own) in work {
+                part.update(nodes, r, k2, own);
             }
         }
         for part in &mut self.parts {
             self.alive_count -= part.killed;
             part.killed = 0;
-            self.fresh += part.fresh.len();
-            for i in part.fresh.drain(..) {
-                self.pulling[i as usize / 64] |= 1 << (i % 64);
-            }
+            self.fresh += std::mem::take(&mut part.fresh);
         }
         self.pending.clear();
     }
@@ -451,14 +463,17 @@ impl State {
     }
 
     /// Whether a node stands within `eps` of `q`: only the cells that the box of half-side
-    /// `eps` (widened a little above rounding) around `q` overlaps can hold one.
+    /// `eps` (widened a little above rounding) around `q` overlaps can hold one (the cells
+    /// are numbered by a rounded-down product, which only grows with the coordinate).
     pub(super) fn occupied(&self, q: Vec3, eps: f32, step: f32) -> bool {
         let wide = eps * 1.01 + 1e-6 * q.abs().max_element();
-        let (lo, hi) = (cell_of(q - wide, step), cell_of(q + wide, step));
+        let inv_step = 1.0 / step;
+        let (lo, hi) = (cell_of(q - wide, inv_step), cell_of(q + wide, inv_step));
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    let mut n = self.node_cells.get(&[x, y, z]).copied().unwrap_or(NONE);
+                    let cell = cell_key([x, y, z]);
+                    let mut n = self.node_cells.get(&cell).copied().unwrap_or(NONE);
                     while n != NONE {
                         if self.nodes[n as usize].distance_squared(q) < eps * eps {
                             return true;
@@ -489,26 +504,25 @@ impl State {
     }
 }
 
-/// A fast hasher for integer cell keys (multiply-rotate, as rustc's FxHasher); the cell map
-/// is only probed, never iterated, so its order cannot leak into the output.
+/// A fast hasher for the cell keys (multiply-rotate, as rustc's FxHasher: one multiply a
+/// key); the cell map is only probed, never iterated, so its order cannot leak into the
+/// output.
 #[derive(Default)]
 struct CellHasher(u64);
 
 impl Hasher for CellHasher {
+    /// The product's high bits, which every bit of the key reaches, rotated down: the map
+    /// picks its buckets with the low bits, which would otherwise hold only z's.
     fn finish(&self) -> u64 {
-        self.0
+        self.0.rotate_left(26)
     }
 
     fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(4) {
-            let mut word = [0u8; 4];
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
             word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from(u32::from_le_bytes(word)));
+            self.write_u64(u64::from_le_bytes(word));
         }
-    }
-
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(i as u32 as u64);
     }
 
     fn write_u64(&mut self, i: u64) {
@@ -516,10 +530,18 @@ impl Hasher for CellHasher {
     }
 }
 
-/// The cell of side `step` holding `p`.
-pub(super) fn cell_of(p: Vec3, step: f32) -> [i32; 3] {
-    let c = p / step;
+/// The cell holding `p` among cells of side `1 / inv_step` (numbered by the rounded-down
+/// product with `inv_step`, the same for the guard's writes and reads).
+pub(super) fn cell_of(p: Vec3, inv_step: f32) -> [i32; 3] {
+    let c = p * inv_step;
     [floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)]
+}
+
+/// A cell's key in the guard's map: the low 21 bits of each coordinate. Cells 2^21 apart
+/// share a key, and so a chain, which only adds nodes for `occupied` to measure.
+fn cell_key([x, y, z]: [i32; 3]) -> u64 {
+    let bits = |c: i32| u64::from(c as u32) & ((1 << 21) - 1);
+    (bits(x) << 42) | (bits(y) << 21) | bits(z)
 }
 
 /// `x.floor() as i32` without the call to `floor` (a libm call on the baseline x86-64
@@ -666,6 +688,53 @@ mod tests {
             "{summed} pulls, {dropped} points dropped, {} points left",
             st.alive_count
         );
+    }
+
+    /// The duplicate-growth guard finds a node within `eps` exactly when there is one, on
+    /// either side of a cell's border, below zero, and where cells 2^21 apart share a key.
+    #[test]
+    fn the_guard_finds_exactly_the_nodes_within_eps() {
+        let mut rng = Mt64::new(13);
+        let mut random = |scale: f32| {
+            (Vec3::new(
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+            ) - 0.5)
+                * scale
+        };
+        let mut p = Params::new(Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        });
+        p.step = 0.25;
+        let mut st = State::with_parts(vec![Vec3::ZERO], 2.0, 1);
+        // Cells 2^21 steps apart along x share their keys with the cells around the origin.
+        let far = Vec3::X * (p.step * (1 << 21) as f32);
+        for _ in 0..400 {
+            let q = random(4.0);
+            st.push_node(q, None, &p);
+            st.push_node(q + far, None, &p);
+        }
+        let eps = 0.2 * p.step;
+        let (mut near, mut clear) = (0, 0);
+        for k in 0..4000 {
+            let base = random(4.0);
+            // Every other query close to a node, so that both answers are common.
+            let q = if k % 2 == 0 {
+                st.nodes[k % st.nodes.len()] + random(0.08)
+            } else {
+                base
+            };
+            let want = st.nodes.iter().any(|n| n.distance_squared(q) < eps * eps);
+            assert_eq!(st.occupied(q, eps, p.step), want, "query at {q}");
+            if want {
+                near += 1;
+            } else {
+                clear += 1;
+            }
+        }
+        assert!(near > 500 && clear > 500, "{near} near, {clear} clear");
     }
 
     #[test]
