@@ -7,7 +7,7 @@
 use std::fmt;
 use std::rc::Rc;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 
 use crate::trimesh::TriMesh;
 
@@ -188,7 +188,7 @@ impl Shape {
             Shape::Sphere { center, radius } => p.distance(*center) - radius,
             Shape::Ellipsoid { center, radii } => {
                 let q = p - *center;
-                ellipsoid_distance(q, (q / *radii).length(), *radii)
+                ellipsoid_distance(q, ellipsoid_k0(q, *radii), *radii)
             }
             Shape::Box { min, max } => {
                 let c = (*min + *max) * 0.5;
@@ -304,10 +304,19 @@ impl Shape {
     }
 }
 
+/// `k0 = |q / radii|` of an ellipsoid of semi-axes `radii` at `q` from its centre: the
+/// three quotients in one SIMD division (`Vec3A`), each rounded as alone, and the length
+/// summed as `Vec3::length` sums it (x, y, then z): the same bits.
+#[inline]
+fn ellipsoid_k0(q: Vec3, radii: Vec3) -> f32 {
+    (Vec3A::from(q) / Vec3A::from(radii)).length()
+}
+
 /// The signed distance bound `k0 (k0 - 1) / k1` of an ellipsoid of semi-axes `radii` at
-/// `q` from its centre, where `k0 = |q / radii|` and `k1 = |q / radii²|`.
+/// `q` from its centre, where `k0 = |q / radii|` and `k1 = |q / radii²|` (as `k0`, in one
+/// division).
 fn ellipsoid_distance(q: Vec3, k0: f32, radii: Vec3) -> f32 {
-    let k1 = (q / (radii * radii)).length();
+    let k1 = ellipsoid_k0(q, radii * radii);
     if k1 == 0.0 {
         -radii.min_element()
     } else {
@@ -320,7 +329,7 @@ fn ellipsoid_distance(q: Vec3, k0: f32, radii: Vec3) -> f32 {
 /// `k0 <= 1` (`k1 > 0`, or the centre), so most points decide without `k1` and the division.
 #[inline]
 pub(crate) fn ellipsoid_contains(q: Vec3, radii: Vec3) -> bool {
-    let k0 = (q / radii).length();
+    let k0 = ellipsoid_k0(q, radii);
     k0 <= 1.0 || ellipsoid_distance(q, k0, radii) <= 0.0
 }
 
@@ -376,6 +385,33 @@ pub(crate) fn polygon_distance(p: Vec2, poly: &[Vec2]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The SIMD `k0` is `(q / radii).length()` to the bit, for points inside and outside,
+    /// below zero, and radii from tiny to huge.
+    #[test]
+    fn ellipsoid_k0_is_the_scalar_quotients_length() {
+        let mut rng = rand_mt::Mt64::new(17);
+        let mut draw = |scale: f32| {
+            (Vec3::new(
+                pge_engine::random::uniform24(&mut rng),
+                pge_engine::random::uniform24(&mut rng),
+                pge_engine::random::uniform24(&mut rng),
+            ) - 0.5)
+                * scale
+        };
+        for k in 0..20_000 {
+            let scale = [1e-3, 0.7, 5.0, 3e4][k % 4];
+            let radii = draw(scale).abs() + scale * 1e-3;
+            let q = draw(scale * 3.0);
+            for r in [radii, radii * radii] {
+                assert_eq!(
+                    ellipsoid_k0(q, r).to_bits(),
+                    (q / r).length().to_bits(),
+                    "q {q}, radii {r}"
+                );
+            }
+        }
+    }
 
     /// An ellipsoid's inside test (which decides most points without the full distance)
     /// agrees with the sign of its signed distance, on points near its surface too.

@@ -101,10 +101,16 @@ impl SpaceColonization {
     #[must_use]
     pub fn skeleton(&self) -> Option<Skeleton> {
         let st = self.state.as_ref()?;
-        let mut s = Skeleton::new();
-        for (p, parent) in st.nodes.iter().zip(&st.parents) {
-            s.push(*p, *parent, 0.0, 0);
-        }
+        // Nodes are appended after their parents, the skeleton's order: its arrays are
+        // copies of the state's.
+        let n = st.nodes.len();
+        let mut s = Skeleton {
+            positions: st.nodes.clone(),
+            parents: st.parents.clone(),
+            radii: vec![0.0; n],
+            orders: vec![0; n],
+            leaves: Vec::new(),
+        };
         if let Some(start) = &self.params.start {
             let n = start.len().min(s.len());
             s.radii[..n].copy_from_slice(&start.radii[..n]);

@@ -68,6 +68,14 @@ fn every_point_is_reached_or_out_of_reach() {
     }
     let removed = alive.iter().filter(|a| !**a).count();
     assert!(removed > 1900, "only {removed} of 2000 points were reached");
+    // The skeleton's arrays are the state's: every parent before its children, as
+    // `Skeleton::push` requires, one root, radii and orders unset.
+    let mut pushed = pge_engine::geometry::Skeleton::new();
+    for (p, parent) in skeleton.positions.iter().zip(&skeleton.parents) {
+        pushed.push(*p, *parent, 0.0, 0);
+    }
+    assert_eq!(skeleton, pushed);
+    assert_eq!(skeleton.parents.iter().filter(|p| p.is_none()).count(), 1);
     assert!(model.stats.nodes > 100);
     model.validate().expect("valid model");
 }
