@@ -1,6 +1,8 @@
 //! The uniform grid over the attraction points: which live points lie within a radius of a
 //! node, and which of them a new node changes.
 
+use std::ops::Range;
+
 use glam::{Vec3, Vec4};
 
 const NONE: u32 = u32::MAX;
@@ -453,6 +455,19 @@ impl PointGrid {
                     let d = Vec4::splat(dxy) + Vec4::from_slice(dz);
                     let bound = Vec4::from_slice(&self.cell_bound[first..first + 4]);
                     let mut read = (d.cmplt(r2s) & d.cmplt(bound)).bitmask();
+                    if self.split == 1 {
+                        // Each cell is its one sub-cell, whose distance was just tested, and
+                        // the column's cells lie one after the other in the slots: a run of
+                        // cells to read is read as one run of slots.
+                        while read != 0 {
+                            let k = read.trailing_zeros();
+                            let cells = (!(read >> k)).trailing_zeros();
+                            read &= !(((1 << cells) - 1) << k);
+                            let c = first + k as usize;
+                            self.update_run(q, r2, c..c + cells as usize, &mut f);
+                        }
+                        continue;
+                    }
                     while read != 0 {
                         let k = read.trailing_zeros() as usize;
                         read &= read - 1;
@@ -486,7 +501,7 @@ impl PointGrid {
         ])
     }
 
-    /// [`Self::update_near`] within cell `c`.
+    /// [`Self::update_near`] within cell `c` of a split grid.
     fn update_cell(
         &mut self,
         q: Vec3,
@@ -495,11 +510,6 @@ impl PointGrid {
         f: &mut impl FnMut(u32, f32) -> Option<f32>,
     ) {
         let s = self.split;
-        if s == 1 {
-            // The cell is its one sub-cell, whose distance was just tested.
-            self.cell_bound[c] = self.update_sub(q, r2, c, f);
-            return;
-        }
         let (x, y, z) = (
             c / (self.dims[1] * self.dims[2]),
             c / self.dims[2] % self.dims[1],
@@ -520,33 +530,39 @@ impl PointGrid {
                         cell_bound = cell_bound.max(bound);
                         continue;
                     }
-                    let bound = self.update_sub(q, r2, sub, f);
-                    cell_bound = cell_bound.max(bound);
+                    self.update_run(q, r2, sub..sub + 1, f);
+                    cell_bound = cell_bound.max(self.sub_bound[sub]);
                 }
             }
         }
         self.cell_bound[c] = cell_bound;
     }
 
-    /// [`Self::update_near`] within sub-cell `sub`; returns its largest reach (an upper
-    /// bound: when no point changed, the bound it had, unread). Inlined into the cells'
-    /// loop (some 30,000 reads an oak), which keeps the query's values in registers.
+    /// [`Self::update_near`] within the consecutive sub-cells `subs`, whose slots follow one
+    /// another (one sub-cell, or a run of a column's unsplit cells, read as one run of
+    /// slots: one loop where each cell had its own); the largest reach of each sub-cell that
+    /// changed is folded again (an unsplit cell's bound too). Inlined into the cells' loop
+    /// (some 20,000 cells read an oak), which keeps the query's values in registers.
     #[inline(always)]
-    fn update_sub(
+    fn update_run(
         &mut self,
         q: Vec3,
         r2: f32,
-        sub: usize,
+        subs: Range<usize>,
         f: &mut impl FnMut(u32, f32) -> Option<f32>,
-    ) -> f32 {
-        let start = self.starts[sub] as usize;
-        let len = self.lens[sub] as usize;
+    ) {
+        let start = self.starts[subs.start] as usize;
+        let last = subs.end - 1;
+        let end = (self.starts[last] + self.lens[last]) as usize;
         // Up to 16 groups (64 slots) at a time from the last: the points to call back for
-        // are found four at a time without branching, then called back for from the highest
-        // slot down, so that a removal's swap moves in only a point already seen.
+        // are found four at a time without branching (empty slots between the sub-cells,
+        // of reach 0, never hit), then called back for from the highest slot down, so that
+        // a removal's swap (within a sub-cell) moves in only a point already seen.
         let first = start / 4;
-        let mut chunk_end = (start + len).div_ceil(4);
-        let mut changed = false;
+        let mut chunk_end = end.div_ceil(4);
+        // The sub-cell of the slots being called back for (they come in decreasing order),
+        // and the sub-cells that changed, a bit each from `subs.start`.
+        let (mut sub, mut changed) = (last, 0u64);
         // The squared distances of the chunk's slots, kept for the call-backs.
         let mut d2s = [Vec4::ZERO; 16];
         while chunk_end > first {
@@ -561,11 +577,14 @@ impl PointGrid {
                 hits |= bits << (4 * k);
                 *d2 = group;
             }
-            changed |= hits != 0;
             while hits != 0 {
                 let k = 63 - hits.leading_zeros() as usize;
                 hits &= !(1u64 << k);
                 let slot = chunk_start * 4 + k;
+                while self.starts[sub] as usize > slot {
+                    sub -= 1;
+                }
+                changed |= 1 << (sub - subs.start);
                 let d2 = d2s[k / 4].as_ref()[k % 4];
                 match f(self.items[slot], d2) {
                     Some(reach) => self.lanes[slot / 4].reach.as_mut()[slot % 4] = reach,
@@ -574,19 +593,23 @@ impl PointGrid {
             }
             chunk_end = chunk_start;
         }
-        if !changed {
-            // No point changed (most of the sub-cells read): the bound still holds, and
-            // folding the reaches again is skipped.
-            return self.sub_bound[sub];
+        // The sub-cells where no point changed (most of those read) keep their bounds
+        // unread.
+        while changed != 0 {
+            let sub = subs.start + changed.trailing_zeros() as usize;
+            changed &= changed - 1;
+            // Empty slots have reach 0, which leaves the largest reach as it is.
+            let start = self.starts[sub] as usize;
+            let groups = start / 4..(start + self.lens[sub] as usize).div_ceil(4);
+            let kept = self.lanes[groups]
+                .iter()
+                .fold(Vec4::ZERO, |m, l| m.max(l.reach))
+                .max_element();
+            self.sub_bound[sub] = kept;
+            if self.split == 1 {
+                self.cell_bound[sub] = kept;
+            }
         }
-        // Empty slots have reach 0, which leaves the largest reach as it is.
-        let groups = first..(start + self.lens[sub] as usize).div_ceil(4);
-        let kept = self.lanes[groups]
-            .iter()
-            .fold(Vec4::ZERO, |m, l| m.max(l.reach))
-            .max_element();
-        self.sub_bound[sub] = kept;
-        kept
     }
 }
 
