@@ -87,6 +87,24 @@ pub fn generate(
     let mut out = Vec::with_capacity(n);
     let max_attempts = 400 * n as u64 + EMPTY_AFTER;
     let mut attempts = 0u64;
+    let mut draw = || {
+        lo + size
+            * Vec3::new(
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+                uniform24(&mut rng),
+            )
+    };
+    // The usual crown (a filled ellipsoid): candidates drawn and tested a batch at a time,
+    // so that their divisions and square roots overlap instead of waiting on each other,
+    // then taken in order as one at a time takes them. The generator is this function's
+    // own, so the draws after the last point taken change nothing.
+    let ellipsoid = match (mode, shape) {
+        (Mode::Fill, Shape::Ellipsoid { center, radii }) => Some((*center, *radii)),
+        _ => None,
+    };
+    let mut batch = [(Vec3::ZERO, false); 8];
+    let mut next = batch.len();
     while out.len() < n && attempts < max_attempts {
         attempts += 1;
         if attempts.is_multiple_of(8192) {
@@ -95,20 +113,28 @@ pub fn generate(
         if out.is_empty() && attempts > EMPTY_AFTER {
             break;
         }
-        let p = lo
-            + size
-                * Vec3::new(
-                    uniform24(&mut rng),
-                    uniform24(&mut rng),
-                    uniform24(&mut rng),
-                );
-        let keep = match (mode, shape) {
-            (Mode::Surround { thickness }, _) => shape
-                .signed_distance(p)
-                .is_some_and(|d| d <= 0.0 && d >= -thickness),
-            // The usual crown, tested inline (as `contains` tests it).
-            (_, Shape::Ellipsoid { center, radii }) => ellipsoid_contains(p - *center, *radii),
-            _ => shape.contains(p)?,
+        let (p, keep) = if let Some((center, radii)) = ellipsoid {
+            if next == batch.len() {
+                for candidate in &mut batch {
+                    candidate.0 = draw();
+                }
+                for (p, keep) in &mut batch {
+                    // As `contains` tests it.
+                    *keep = ellipsoid_contains(*p - center, radii);
+                }
+                next = 0;
+            }
+            next += 1;
+            batch[next - 1]
+        } else {
+            let p = draw();
+            let keep = match mode {
+                Mode::Surround { thickness } => shape
+                    .signed_distance(p)
+                    .is_some_and(|d| d <= 0.0 && d >= -thickness),
+                _ => shape.contains(p)?,
+            };
+            (p, keep)
         };
         if keep {
             out.push(p);
@@ -168,6 +194,36 @@ mod tests {
                 .iter()
                 .all(|p| (1.7..=2.0).contains(&p.distance(Vec3::Y * 5.0)))
         );
+    }
+
+    /// A filled ellipsoid, drawn a batch at a time, keeps the points a loop of one draw
+    /// and one `contains` at a time keeps, in the same order, whatever the count.
+    #[test]
+    fn ellipsoid_fill_keeps_the_points_of_one_draw_at_a_time() {
+        let shape = Shape::Ellipsoid {
+            center: Vec3::new(0.5, 6.4, -1.0),
+            radii: Vec3::new(5.5, 3.2, 4.95),
+        };
+        let ctx = RunContext::default();
+        let (lo, hi) = shape.bounds();
+        for (seed, n) in [(1, 1), (2, 7), (3, 8), (4, 9), (5, 500), (6, 3001)] {
+            let mut rng = Mt64::new(seed);
+            let mut want = Vec::new();
+            while want.len() < n {
+                let p = lo
+                    + (hi - lo)
+                        * Vec3::new(
+                            uniform24(&mut rng),
+                            uniform24(&mut rng),
+                            uniform24(&mut rng),
+                        );
+                if shape.contains(p).expect("analytic") {
+                    want.push(p);
+                }
+            }
+            let got = generate(&shape, Mode::Fill, Some(n as u32), seed, &ctx, &loc());
+            assert_eq!(got.expect("points"), want, "seed {seed}, {n} points");
+        }
     }
 
     #[test]
