@@ -413,14 +413,13 @@ impl PointGrid {
 
     /// Calls `f(index, squared distance)` for every live point within `r` of `q` that lies
     /// closer to `q` than its reach; `f` returns the point's new reach, or `None` to remove
-    /// the point. Calls come cell by cell in increasing cell order, in no particular order
-    /// within a cell. Cells and sub-cells whose largest reach is below their distance to
-    /// `q` are skipped unread.
+    /// the point. Each point is called for once at most, in no particular order. Cells and
+    /// sub-cells whose largest reach is below their distance to `q` are skipped unread.
     ///
     /// A cell's distance to `q` is the sum of its three per-axis gaps, computed once per
     /// query for the rows, columns and layers the ball spans; a column's cells are tested
     /// four at a time (most cells are skipped once the points near them have a node close
-    /// by).
+    /// by), and unsplit cells to read that follow one another are read as one run of slots.
     pub fn update_near(&mut self, q: Vec3, r: f32, mut f: impl FnMut(u32, f32) -> Option<f32>) {
         let Some([(x0, x1), (y0, y1), (z0, z1)]) = self.span(q, r) else {
             return;
