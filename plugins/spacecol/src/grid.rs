@@ -560,7 +560,9 @@ impl PointGrid {
         let first = start / 4;
         let mut chunk_end = end.div_ceil(4);
         // The sub-cell of the slots being called back for (they come in decreasing order),
-        // and the sub-cells that changed, a bit each from `subs.start`.
+        // and the sub-cells that changed, a bit each from `subs.start` (a run is one
+        // sub-cell, or at most the four cells of a column chunk).
+        debug_assert!(subs.len() <= 4, "a run of {} sub-cells", subs.len());
         let (mut sub, mut changed) = (last, 0u64);
         // The squared distances of the chunk's slots, kept for the call-backs.
         let mut d2s = [Vec4::ZERO; 16];
