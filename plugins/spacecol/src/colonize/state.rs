@@ -242,7 +242,9 @@ impl State {
             dirs: Vec::new(),
             headings: Vec::new(),
             has_child: Vec::new(),
-            node_cells: HashMap::default(),
+            // A sparse crown grows about one node for two points: its map is made once
+            // (denser crowns, and their larger maps, grow theirs as they go).
+            node_cells: HashMap::with_capacity_and_hasher((n / 2).min(4096), Default::default()),
             earlier_in_cell: Vec::new(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
