@@ -148,9 +148,10 @@ pub fn write_model(
         write_atomically(&dir.join(&mtl), files.mtl.as_bytes())?;
         write_atomically(output, files.obj.as_bytes())?;
     } else {
-        // Streamed from the model's memory: no buffer of the file's size. The temporary file
-        // is created while the glb is built (a tenth of a millisecond on ext4) and written
-        // while the model is checked; it takes the file's place once the check passed.
+        // Streamed from the model's memory: no buffer of the file's size. This thread builds
+        // the glb and writes it; the temporary file is created (a tenth of a millisecond on
+        // ext4) and the model checked on the pool meanwhile; the file takes its place once
+        // the check passed.
         let file = write_glb_with(
             model,
             meta,

@@ -294,6 +294,29 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
             "{instancing:?}: the file written at once differs"
         );
     }
+    // Written as `pge run` writes it: built and written by a thread outside the pool (the
+    // colours converted on the pool meanwhile), and everything on the one thread of a pool.
+    let bytes = glb_bytes(&model, &meta).expect("exports");
+    let through = || {
+        write_glb_with(
+            &model,
+            &meta,
+            Instancing::Gpu,
+            || Ok::<_, Error>(Trickle(Vec::new())),
+            |mut out, glb| {
+                glb.write_to(&mut out)
+                    .map_err(|e| Error::Export(e.to_string()))?;
+                Ok(out.0)
+            },
+        )
+        .expect("written")
+    };
+    assert!(through() == bytes, "written from outside the pool");
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool");
+    assert!(one.install(through) == bytes, "written on one thread");
     // An empty model: no binary chunk.
     let file = glb_file_with(&Model::new(), &meta, Instancing::Gpu).expect("exports");
     let mut streamed = Vec::new();
@@ -383,4 +406,24 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
         },
     );
     assert_eq!(written.err().map(|e| e.to_string()), Some(want.to_string()));
+    // On one thread the check runs first: nothing is opened.
+    let opened = std::sync::atomic::AtomicBool::new(false);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool");
+    let written = one.install(|| {
+        write_glb_with(
+            &model,
+            &ExportMeta::default(),
+            Instancing::Gpu,
+            || {
+                opened.store(true, std::sync::atomic::Ordering::Relaxed);
+                Ok::<_, Error>(())
+            },
+            |(), glb| Ok(glb.len()),
+        )
+    });
+    assert_eq!(written.err().map(|e| e.to_string()), Some(want.to_string()));
+    assert!(!opened.load(std::sync::atomic::Ordering::Relaxed));
 }
