@@ -338,6 +338,47 @@ fn one_axis_at_a_time(points: &[Vec3]) -> ([u32; 3], [u32; 3]) {
 }
 
 #[test]
+fn bounds_four_points_at_a_time_are_the_one_pass_fold_to_the_bit() {
+    // Every length up to 40 (the lanes and the last points one at a time), with coordinates
+    // drawn from a few values that tie (signed zeros), skip (NaN) and bound (infinities), in
+    // every lane.
+    let values = [
+        -0.0,
+        0.0,
+        1.0,
+        -1.0,
+        f32::NAN,
+        2.5,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        0.0,
+        -0.0,
+        3.0,
+    ];
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut draw = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        values[(state % values.len() as u64) as usize]
+    };
+    let bits = |a: [f32; 3]| a.map(f32::to_bits);
+    for len in 0..=40 {
+        for _ in 0..50 {
+            let points: Vec<Vec3> = (0..len)
+                .map(|_| Vec3::new(draw(), draw(), draw()))
+                .collect();
+            let (lo, hi) = vec3_bounds(&points);
+            assert_eq!(
+                (bits(lo), bits(hi)),
+                one_axis_at_a_time(&points),
+                "{points:?}"
+            );
+        }
+    }
+}
+
+#[test]
 fn bounds_in_pieces_are_the_one_pass_fold_to_the_bit() {
     // Enough points for several pieces, with signed zeros at the minimum and the maximum.
     let points: Vec<Vec3> = (0..5 * BOUNDS_PIECE)
