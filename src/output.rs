@@ -60,9 +60,14 @@ pub struct Reserved {
     len: u64,
 }
 
-/// [`Reserved`] pages for the next version of `path`, when it is a regular file on tmpfs
-/// (`tmpfs_only`; any file system otherwise) that is not empty; `None` when there is
-/// nothing to reserve or the file system cannot make an unnamed file or reserve.
+/// The most bytes [`reserve`] reserves: a new file much smaller than the old one gives back
+/// the pages reserved past its end when it is cut to its length, on the run's path.
+const RESERVE_AT_MOST: u64 = 64 << 20;
+
+/// [`Reserved`] pages for the next version of `path`, as many as it has (at most
+/// [`RESERVE_AT_MOST`]), when it is a regular file on tmpfs (`tmpfs_only`; any file system
+/// otherwise) that is not empty; `None` when there is nothing to reserve or the file system
+/// cannot make an unnamed file or reserve.
 #[must_use]
 pub fn reserve(path: &Path, tmpfs_only: bool) -> Option<Reserved> {
     #[cfg(target_os = "linux")]
@@ -84,10 +89,12 @@ pub fn reserve(path: &Path, tmpfs_only: bool) -> Option<Reserved> {
         if tmpfs_only && fstatfs(&fd).ok()?.f_type as u64 != TMPFS_MAGIC {
             return None;
         }
-        fallocate(&fd, FallocateFlags::empty(), 0, old.len()).ok()?;
+        // At most [`RESERVE_AT_MOST`]: a much smaller new file is cut back on the run's path.
+        let len = old.len().min(RESERVE_AT_MOST);
+        fallocate(&fd, FallocateFlags::empty(), 0, len).ok()?;
         Some(Reserved {
             file: std::fs::File::from(fd),
-            len: old.len(),
+            len,
         })
     }
     #[cfg(not(target_os = "linux"))]
