@@ -72,7 +72,7 @@ const RESERVE_AT_MOST: u64 = 64 << 20;
 pub fn reserve(path: &Path, tmpfs_only: bool) -> Option<Reserved> {
     #[cfg(target_os = "linux")]
     {
-        use rustix::fs::{CWD, FallocateFlags, Mode, OFlags, fallocate, fstatfs, openat};
+        use rustix::fs::{CWD, FallocateFlags, Mode, OFlags, fallocate, openat, statfs};
         /// `statfs`'s `f_type` of tmpfs.
         const TMPFS_MAGIC: u64 = 0x0102_1994;
         let old = std::fs::symlink_metadata(path).ok()?;
@@ -83,12 +83,12 @@ pub fn reserve(path: &Path, tmpfs_only: bool) -> Option<Reserved> {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
+        if tmpfs_only && statfs(dir).ok()?.f_type as u64 != TMPFS_MAGIC {
+            return None;
+        }
         // The mode of any new file, as the temporary file made at the export has.
         let flags = OFlags::TMPFILE | OFlags::RDWR | OFlags::CLOEXEC;
         let fd = openat(CWD, dir, flags, Mode::from_raw_mode(0o666)).ok()?;
-        if tmpfs_only && fstatfs(&fd).ok()?.f_type as u64 != TMPFS_MAGIC {
-            return None;
-        }
         // At most [`RESERVE_AT_MOST`]: a much smaller new file is cut back on the run's path.
         let len = old.len().min(RESERVE_AT_MOST);
         fallocate(&fd, FallocateFlags::empty(), 0, len).ok()?;
