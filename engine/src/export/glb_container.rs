@@ -146,8 +146,8 @@ impl GlbFile {
     /// the views straight from the meshes' and textures' memory where it holds their bytes,
     /// in vectored writes; the views it does not hold so (colours, and numbers on a
     /// big-endian host) are converted on the rayon pool while the ones before them are
-    /// written. The same bytes as [`GlbFile::to_vec`].
-    pub fn write_to(&self, out: &mut (impl Write + Send)) -> std::io::Result<()> {
+    /// written by the calling thread. The same bytes as [`GlbFile::to_vec`].
+    pub fn write_to(&self, out: &mut impl Write) -> std::io::Result<()> {
         const SPACES: &[u8] = b"   ";
         const ZEROS: &[u8] = &[0; 4];
         let mut head: Vec<Cow<'_, [u8]>> = vec![Cow::Borrowed(&self.heads.file)];
@@ -167,11 +167,19 @@ impl GlbFile {
             head.push(padding);
             return write_all(out, &head);
         }
-        let (written, mut tail) = rayon::join(
-            || write_all(out, &head),
-            || self.layout.slices(first..views),
-        );
-        written?;
+        // The conversion goes to the pool, the calling thread writes (in the pool or not: a
+        // thread outside it does not hand the write over); with one thread, one after the
+        // other.
+        let mut tail = Vec::new();
+        if rayon::current_num_threads() == 1 {
+            write_all(out, &head)?;
+            tail = self.layout.slices(first..views);
+        } else {
+            rayon::in_place_scope(|s| {
+                s.spawn(|_| tail = self.layout.slices(first..views));
+                write_all(out, &head)
+            })?;
+        }
         tail.push(padding);
         write_all(out, &tail)
     }

@@ -294,6 +294,29 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
             "{instancing:?}: the file written at once differs"
         );
     }
+    // Written as `pge run` writes it: built and written by a thread outside the pool (the
+    // colours converted on the pool meanwhile), and everything on the one thread of a pool.
+    let bytes = glb_bytes(&model, &meta).expect("exports");
+    let through = || {
+        write_glb_with(
+            &model,
+            &meta,
+            Instancing::Gpu,
+            || Ok::<_, Error>(Trickle(Vec::new())),
+            |mut out, glb| {
+                glb.write_to(&mut out)
+                    .map_err(|e| Error::Export(e.to_string()))?;
+                Ok(out.0)
+            },
+        )
+        .expect("written")
+    };
+    assert!(through() == bytes, "written from outside the pool");
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool");
+    assert!(one.install(through) == bytes, "written on one thread");
     // An empty model: no binary chunk.
     let file = glb_file_with(&Model::new(), &meta, Instancing::Gpu).expect("exports");
     let mut streamed = Vec::new();
@@ -312,6 +335,47 @@ fn one_axis_at_a_time(points: &[Vec3]) -> ([u32; 3], [u32; 3]) {
         }
     }
     (lo.map(f32::to_bits), hi.map(f32::to_bits))
+}
+
+#[test]
+fn bounds_four_points_at_a_time_are_the_one_pass_fold_to_the_bit() {
+    // Every length up to 40 (the lanes and the last points one at a time), with coordinates
+    // drawn from a few values that tie (signed zeros), skip (NaN) and bound (infinities), in
+    // every lane.
+    let values = [
+        -0.0,
+        0.0,
+        1.0,
+        -1.0,
+        f32::NAN,
+        2.5,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        0.0,
+        -0.0,
+        3.0,
+    ];
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut draw = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        values[(state % values.len() as u64) as usize]
+    };
+    let bits = |a: [f32; 3]| a.map(f32::to_bits);
+    for len in 0..=40 {
+        for _ in 0..50 {
+            let points: Vec<Vec3> = (0..len)
+                .map(|_| Vec3::new(draw(), draw(), draw()))
+                .collect();
+            let (lo, hi) = vec3_bounds(&points);
+            assert_eq!(
+                (bits(lo), bits(hi)),
+                one_axis_at_a_time(&points),
+                "{points:?}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -383,4 +447,24 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
         },
     );
     assert_eq!(written.err().map(|e| e.to_string()), Some(want.to_string()));
+    // On one thread the check runs first: nothing is opened.
+    let opened = std::sync::atomic::AtomicBool::new(false);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool");
+    let written = one.install(|| {
+        write_glb_with(
+            &model,
+            &ExportMeta::default(),
+            Instancing::Gpu,
+            || {
+                opened.store(true, std::sync::atomic::Ordering::Relaxed);
+                Ok::<_, Error>(())
+            },
+            |(), glb| Ok(glb.len()),
+        )
+    });
+    assert_eq!(written.err().map(|e| e.to_string()), Some(want.to_string()));
+    assert!(!opened.load(std::sync::atomic::Ordering::Relaxed));
 }

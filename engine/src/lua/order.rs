@@ -14,7 +14,7 @@ use std::cmp::Ordering;
 
 use mlua::{Function, Lua, Table, Value};
 
-use super::chunks::engine_chunk;
+use super::chunks::{ShippedChunk, engine_chunk, shipped_chunk};
 
 /// The rank of a key's type in the traversal order.
 fn rank(v: &Value) -> u8 {
@@ -156,7 +156,9 @@ return next, pairs
 /// never call them, and compiling it was a tenth of a session's setup), then hand over to
 /// it with a tail call, so its errors still point at the script's line. `pairs` returns
 /// the global `next`, as Lua's own does.
-const ON_FIRST_CALL: &str = r#"
+pub(crate) static ON_FIRST_CALL: ShippedChunk = ShippedChunk {
+    name: "=pge",
+    source: r#"
 local load_ordered = ...
 local ordered_next, ordered_pairs
 local next
@@ -169,7 +171,10 @@ local function pairs(t)
   return ordered_pairs(t)
 end
 return next, pairs
-"#;
+"#,
+    compiled: include_bytes!("compiled/on_first_call.luac"),
+    file: "on_first_call.luac",
+};
 
 /// The `__pairs` metamethod of a table or userdata (read from the real metatable, as Lua's
 /// `pairs` does), or nil.
@@ -202,7 +207,7 @@ pub(crate) fn register(lua: &Lua) -> mlua::Result<()> {
         ))
     })?;
     let (next, pairs): (Function, Function) =
-        engine_chunk(lua, "=pge", ON_FIRST_CALL)?.call(load_ordered)?;
+        shipped_chunk(lua, &ON_FIRST_CALL)?.call(load_ordered)?;
     globals.set("next", next)?;
     globals.set("pairs", pairs)?;
     Ok(())

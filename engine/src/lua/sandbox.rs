@@ -5,13 +5,27 @@ use std::path::{Component, Path, PathBuf};
 
 use mlua::{Lua, Table, Value};
 
-use super::chunks::engine_chunk;
+use super::chunks::{ShippedChunk, shipped_chunk};
 use super::errors::{caller_location, script_error};
 use super::params;
 use super::state::{self, Chunk, SessionState};
 use crate::{Error, Location};
 
 const LOADED_KEY: &str = "pge.loaded";
+
+/// The global `setmetatable`, refusing metatables with a `__gc` field (see [`register`]).
+pub(crate) static GUARDED_SETMETATABLE: ShippedChunk = ShippedChunk {
+    name: "=pge",
+    source: r#"local setmetatable, rawget, type, error = ...
+return function(t, mt, ...)
+  if type(mt) == "table" and rawget(mt, "__gc") ~= nil then
+    error("setmetatable: __gc finalizers are not allowed (Lua runs them outside the time limit)", 2)
+  end
+  return setmetatable(t, mt, ...)
+end"#,
+    compiled: include_bytes!("compiled/setmetatable.luac"),
+    file: "setmetatable.luac",
+};
 
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     let globals = lua.globals();
@@ -41,18 +55,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
     // time limit: metatables with a `__gc` field are refused. (Lua only marks a table for
     // finalization when its metatable has `__gc` as it is set.)
     let setmetatable: mlua::Function = globals.get("setmetatable")?;
-    let guarded = engine_chunk(
-        lua,
-        "=pge",
-        r#"local setmetatable, rawget, type, error = ...
-return function(t, mt, ...)
-  if type(mt) == "table" and rawget(mt, "__gc") ~= nil then
-    error("setmetatable: __gc finalizers are not allowed (Lua runs them outside the time limit)", 2)
-  end
-  return setmetatable(t, mt, ...)
-end"#,
-    )?
-    .call::<mlua::Function>((
+    let guarded = shipped_chunk(lua, &GUARDED_SETMETATABLE)?.call::<mlua::Function>((
         setmetatable,
         globals.get::<mlua::Function>("rawget")?,
         globals.get::<mlua::Function>("type")?,
