@@ -46,64 +46,6 @@ struct AtomicFile<'a> {
     path: &'a Path,
 }
 
-/// The pages of a `.glb` output's next version, made ahead of it on another thread: an
-/// unnamed temporary file in the output's folder (Linux's `O_TMPFILE`, so nothing is left
-/// behind should the run fail or be stopped), as long as the file it will replace, its
-/// pages already allocated. Writing 2.5 MB into tmpfs is half page allocation and memory
-/// cgroup charges, the other half the copy: made here, beside the session and the growth,
-/// the allocation is off the run's path, and the write only copies. Only on tmpfs: a disk
-/// file system allocates blocks for a reserved file at once, and the next run then frees
-/// them when it replaces the file (a 2.5 MB file on ext4: 4 ms instead of 0.5, see the
-/// oakexport section of benches/README.md), where a written one has none yet.
-pub struct Reserved {
-    file: std::fs::File,
-    len: u64,
-}
-
-/// The most bytes [`reserve`] reserves: a new file much smaller than the old one gives back
-/// the pages reserved past its end when it is cut to its length, on the run's path.
-const RESERVE_AT_MOST: u64 = 64 << 20;
-
-/// [`Reserved`] pages for the next version of `path`, as many as it has (at most
-/// [`RESERVE_AT_MOST`]), when it is a regular file on tmpfs (`tmpfs_only`; any file system
-/// otherwise) that is not empty; `None` when there is nothing to reserve or the file system
-/// cannot make an unnamed file or reserve.
-#[must_use]
-pub fn reserve(path: &Path, tmpfs_only: bool) -> Option<Reserved> {
-    #[cfg(target_os = "linux")]
-    {
-        use rustix::fs::{CWD, FallocateFlags, Mode, OFlags, fallocate, openat, statfs};
-        /// `statfs`'s `f_type` of tmpfs.
-        const TMPFS_MAGIC: u64 = 0x0102_1994;
-        let old = std::fs::symlink_metadata(path).ok()?;
-        if !old.is_file() || old.len() == 0 {
-            return None;
-        }
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        if tmpfs_only && statfs(dir).ok()?.f_type as u64 != TMPFS_MAGIC {
-            return None;
-        }
-        // The mode of any new file, as the temporary file made at the export has.
-        let flags = OFlags::TMPFILE | OFlags::RDWR | OFlags::CLOEXEC;
-        let fd = openat(CWD, dir, flags, Mode::from_raw_mode(0o666)).ok()?;
-        // At most [`RESERVE_AT_MOST`]: a much smaller new file is cut back on the run's path.
-        let len = old.len().min(RESERVE_AT_MOST);
-        fallocate(&fd, FallocateFlags::empty(), 0, len).ok()?;
-        Some(Reserved {
-            file: std::fs::File::from(fd),
-            len,
-        })
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = (path, tmpfs_only);
-        None
-    }
-}
-
 impl<'a> AtomicFile<'a> {
     /// The temporary file for `path`, in the same folder.
     fn create(path: &'a Path) -> anyhow::Result<AtomicFile<'a>> {
@@ -122,32 +64,6 @@ impl<'a> AtomicFile<'a> {
             .tempfile_in(&dir)
             .with_context(|| format!("cannot write in {}", dir.display()))?;
         Ok(AtomicFile { tmp, path })
-    }
-
-    /// The temporary file for `path` made of `reserved`: linked into `path`'s folder under
-    /// a temporary name (through `/proc/self/fd`, as an unprivileged process links an
-    /// unnamed file), so that it is written and put in place as [`AtomicFile::create`]'s.
-    #[cfg(target_os = "linux")]
-    fn from_reserved(path: &'a Path, reserved: Reserved) -> std::io::Result<AtomicFile<'a>> {
-        use std::os::fd::AsRawFd;
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let unnamed = format!("/proc/self/fd/{}", reserved.file.as_raw_fd());
-        let mut file = Some(reserved.file);
-        let tmp = tempfile::Builder::new().make_in(dir, |name| {
-            use rustix::fs::{AtFlags, CWD, linkat};
-            linkat(CWD, unnamed.as_str(), CWD, name, AtFlags::SYMLINK_FOLLOW)?;
-            file.take()
-                .ok_or_else(|| std::io::Error::other("the reserved file is linked already"))
-        })?;
-        Ok(AtomicFile { tmp, path })
-    }
-
-    #[cfg(not(target_os = "linux"))]
-    fn from_reserved(_: &'a Path, _: Reserved) -> std::io::Result<AtomicFile<'a>> {
-        Err(std::io::ErrorKind::Unsupported.into())
     }
 
     /// Puts the written temporary file in `path`'s place.
@@ -213,18 +129,6 @@ pub fn write_model(
     output: &Path,
     instancing: Instancing,
 ) -> anyhow::Result<()> {
-    write_model_into(model, meta, output, instancing, None)
-}
-
-/// [`write_model`], a `.glb` into the pages `reserved` for it when given (and when they can
-/// be linked into the folder; a new temporary file otherwise). The same bytes either way.
-pub fn write_model_into(
-    model: &Model,
-    meta: &ExportMeta,
-    output: &Path,
-    instancing: Instancing,
-    reserved: Option<Reserved>,
-) -> anyhow::Result<()> {
     let is_obj = output
         .extension()
         .and_then(|e| e.to_str())
@@ -252,26 +156,10 @@ pub fn write_model_into(
             model,
             meta,
             instancing,
-            || {
-                let reserved = reserved.and_then(|r| {
-                    let len = r.len;
-                    AtomicFile::from_reserved(output, r).ok().map(|f| (f, len))
-                });
-                match reserved {
-                    Some((file, len)) => Ok((file, Some(len))),
-                    None => AtomicFile::create(output).map(|file| (file, None)),
-                }
-            },
-            |(mut file, reserved), glb| {
+            || AtomicFile::create(output),
+            |mut file, glb| {
                 glb.write_to(file.tmp.as_file_mut())
                     .with_context(|| format!("cannot write {}", output.display()))?;
-                // A reserved file is as long as the old one: cut to the new one's length.
-                if reserved.is_some_and(|len| len != glb.len()) {
-                    file.tmp
-                        .as_file()
-                        .set_len(glb.len())
-                        .with_context(|| format!("cannot write {}", output.display()))?;
-                }
                 Ok(file)
             },
         )?;
@@ -319,58 +207,6 @@ mod tests {
         std::fs::create_dir(&path).expect("mkdir");
         write_atomically(&path, b"glTF").expect_err("a folder is in the way");
         assert!(path.is_dir());
-        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
-    }
-
-    /// A model of `n` triangles in a row.
-    fn strip(n: u32) -> Model {
-        use pge_engine::geometry::Mesh;
-        let positions = (0..n + 2)
-            .map(|k| glam::Vec3::new(k as f32, (k % 2) as f32, 0.0))
-            .collect();
-        let indices = (0..n).flat_map(|k| [k, k + 1, k + 2]).collect();
-        let mut model = Model::new();
-        let mesh = Mesh::from_triangles(positions, indices).expect("mesh");
-        model.add_mesh(mesh, glam::Mat4::IDENTITY);
-        model
-    }
-
-    #[cfg(target_os = "linux")]
-    #[test]
-    fn a_glb_written_into_reserved_pages_is_the_same_file_and_leaves_nothing_behind() {
-        use std::os::unix::fs::PermissionsExt;
-        let dir = tempfile::tempdir().expect("tempdir");
-        let meta = ExportMeta::default();
-        let want = |model: &Model| {
-            let path = dir.path().join("want.glb");
-            write_model(model, &meta, &path, Instancing::Gpu).expect("written");
-            let bytes = std::fs::read(&path).expect("read");
-            std::fs::remove_file(&path).expect("removed");
-            bytes
-        };
-        let path = dir.path().join("tree.glb");
-        // Nothing to reserve for a file that is not there.
-        assert!(reserve(&path, false).is_none());
-        // A longer old file (the new one is cut to its length), then a shorter one.
-        for (old, triangles) in [(100_000, 10), (10, 1_000)] {
-            std::fs::write(&path, vec![7u8; old]).expect("old file");
-            let reserved = reserve(&path, false).expect("reserved on any file system");
-            assert_eq!(reserved.len, old as u64);
-            // No name in the folder until it is written.
-            assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
-            let model = strip(triangles);
-            write_model_into(&model, &meta, &path, Instancing::Gpu, Some(reserved))
-                .expect("written");
-            assert!(std::fs::read(&path).expect("read") == want(&model));
-            assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
-            let reference = dir.path().join("reference");
-            std::fs::File::create(&reference).expect("create");
-            let mode = |p: &Path| std::fs::metadata(p).expect("meta").permissions().mode() & 0o777;
-            assert_eq!(mode(&path), mode(&reference));
-            std::fs::remove_file(&reference).expect("removed");
-        }
-        // Pages reserved and never used leave nothing either.
-        drop(reserve(&path, false).expect("reserved"));
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
     }
 

@@ -13,7 +13,7 @@ use pge_engine::{Generated, Session};
 use pge_forest::{ForestPlugin, VariantCache, VariantSharing};
 
 use crate::common::ScriptArgs;
-use crate::output::{export_meta, write_model_into};
+use crate::output::{export_meta, write_model};
 
 /// Arguments of `pge run`.
 #[derive(Args, Debug)]
@@ -89,64 +89,22 @@ fn parse_tile(s: &str) -> Result<(usize, usize), String> {
 
 /// Sets the global rayon pool to `threads` workers (every core when `None`) and starts them
 /// now, while the session is made, rather than when the first parallel work would wait for
-/// them (a few hundred microseconds). `ahead` then runs beside this thread (on the thread
-/// that started the pool, or on the pool), unless there is one thread: with `--threads 1`
-/// nothing runs beside the run.
-pub fn set_threads(
-    threads: Option<usize>,
-    ahead: impl FnOnce() + Send + 'static,
-) -> anyhow::Result<()> {
+/// them (a few hundred microseconds).
+pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     match threads {
         Some(0) => crate::common::usage!("--threads must be at least 1"),
-        Some(1) => rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
             .build_global()
             .context("cannot start the worker threads")?,
-        Some(n) => {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build_global()
-                .context("cannot start the worker threads")?;
-            rayon::spawn(ahead);
-        }
         // The default pool, started by a thread of its own: this one goes on making the
         // session while the pool counts the cores and starts its workers. Should no thread
         // start now, the pool starts on first use.
         None => {
-            let _ = std::thread::Builder::new().spawn(|| {
-                rayon::spawn(|| {});
-                if rayon::current_num_threads() > 1 {
-                    ahead();
-                }
-            });
+            let _ = std::thread::Builder::new().spawn(|| rayon::spawn(|| {}));
         }
     }
     Ok(())
-}
-
-/// The file `pge run` writes for `args`: `--output`, or the script's name with `.glb`.
-fn output_path(args: &RunArgs) -> PathBuf {
-    match &args.output {
-        Some(o) => o.clone(),
-        None => {
-            PathBuf::from(args.script.script.file_stem().unwrap_or_default()).with_extension("glb")
-        }
-    }
-}
-
-/// The `.glb` whose next version's pages can be reserved at the start of a run (see
-/// [`crate::output::Reserved`]): the run's one plain `.glb` output (no tiles to a folder,
-/// stages or shared variants).
-fn reserved_output(args: &RunArgs) -> Option<PathBuf> {
-    let plain = args.out_dir.is_none()
-        && args.stages.is_none()
-        && args.variants_out.is_none()
-        && args.variants.is_none();
-    let output = output_path(args);
-    let glb = output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    (plain && glb).then_some(output)
 }
 
 /// Like [`Session::generate`], for the forest the script returns (an error naming `option`
@@ -215,15 +173,7 @@ pub(crate) fn progress_bar(quiet: bool) -> Option<ProgressBar> {
 /// Runs `pge run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    // The output's pages are reserved beside the session and the growth, and taken at the
-    // export if they are ready by then.
-    let (reserved_tx, reserved) = std::sync::mpsc::channel();
-    let to_reserve = reserved_output(args);
-    set_threads(args.threads, move || {
-        if let Some(reserved) = to_reserve.and_then(|path| crate::output::reserve(&path, true)) {
-            let _ = reserved_tx.send(reserved);
-        }
-    })?;
+    set_threads(args.threads)?;
     if let Some(dir) = &args.out_dir {
         return run_tiles(args, dir);
     }
@@ -233,7 +183,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             args.tile.len()
         );
     }
-    let output = output_path(args);
+    let output = match &args.output {
+        Some(o) => o.clone(),
+        None => {
+            PathBuf::from(args.script.script.file_stem().unwrap_or_default()).with_extension("glb")
+        }
+    };
     let ext = output
         .extension()
         .and_then(|e| e.to_str())
@@ -258,14 +213,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         );
     }
     let prepared = prepare(args)?;
-    run_one(
-        args,
-        &prepared,
-        args.tile.first().copied(),
-        &output,
-        Some(&reserved),
-        t0,
-    )
+    run_one(args, &prepared, args.tile.first().copied(), &output, t0)
 }
 
 /// `pge run SCRIPT --tile I,J [--tile I,J]... --out-dir DIR`: the tiles one after the other
@@ -278,7 +226,7 @@ fn run_tiles(args: &RunArgs, dir: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     for &(i, j) in &args.tile {
         let output = dir.join(format!("{i}_{j}.glb"));
-        run_one(args, &prepared, Some((i, j)), &output, None, Instant::now())
+        run_one(args, &prepared, Some((i, j)), &output, Instant::now())
             .with_context(|| format!("tile {i},{j}"))?;
     }
     Ok(())
@@ -316,14 +264,12 @@ fn prepare(args: &RunArgs) -> anyhow::Result<Prepared> {
     })
 }
 
-/// Runs the script once (tile `tile` of its forest, when given) and writes `output`, into
-/// the pages `reserved` sends for it if they are ready by then.
+/// Runs the script once (tile `tile` of its forest, when given) and writes `output`.
 fn run_one(
     args: &RunArgs,
     prepared: &Prepared,
     tile: Option<(usize, usize)>,
     output: &Path,
-    reserved: Option<&std::sync::mpsc::Receiver<crate::output::Reserved>>,
     t0: Instant,
 ) -> anyhow::Result<()> {
     let shared = &prepared.shared;
@@ -412,8 +358,7 @@ fn run_one(
             output.to_path_buf()
         }
         _ => {
-            let reserved = reserved.and_then(|r| r.try_recv().ok());
-            write_model_into(&generated.model, &meta, output, instancing, reserved)?;
+            write_model(&generated.model, &meta, output, instancing)?;
             output.to_path_buf()
         }
     };
