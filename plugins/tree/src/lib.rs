@@ -298,6 +298,7 @@ pub fn build_tree_in(
             let mut rng = Mt64::new(seed);
             let memory::LeafBuffers {
                 tips,
+                search,
                 positions,
                 normals,
                 uvs,
@@ -330,7 +331,8 @@ pub fn build_tree_in(
                 // A small tree's leaf mesh is searched here, beside the bark; a big tree's
                 // by the model's clean-up, after the textures. With levels of detail the
                 // mesh is replaced, and never cleaned up.
-                let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
+                let clean =
+                    small && options.lod.is_none() && mesh.unusable_triangles_in(search).is_empty();
                 (mesh, clean)
             });
             // The bark's skeleton as the glb writes it, formatted here beside a small tree's
@@ -529,7 +531,12 @@ mod tests {
         for k in 0..40 {
             let parent = s.len() as u32 - 1;
             let y = 2.5 + 0.3 * k as f32;
-            s.push(Vec3::new(0.1 * (k % 3) as f32, y, 0.0), Some(parent), 0.0, 1);
+            s.push(
+                Vec3::new(0.1 * (k % 3) as f32, y, 0.0),
+                Some(parent),
+                0.0,
+                1,
+            );
         }
         let options = TreeOptions {
             leaves: Some(LeafOptions::default()),
@@ -553,7 +560,9 @@ mod tests {
             assert_eq!(leaves(&ahead), leaves(&fresh));
         }
         let memory = MeshMemory::made_now(MeshSizes::of_nodes(400, &options));
-        let bark = &build_tree_in(&s, &options, 5, &memory).expect("builds").meshes[0];
+        let bark = &build_tree_in(&s, &options, 5, &memory)
+            .expect("builds")
+            .meshes[0];
         assert!(bark.positions.capacity() >= MeshSizes::of_nodes(400, &options).bark_vertices);
     }
 

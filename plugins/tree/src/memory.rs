@@ -11,11 +11,10 @@
 //! the tree uses fresh memory as [`build_tree`](crate::build_tree) does; an array smaller
 //! than the mesh grows as a fresh one would.
 
-use std::mem::size_of;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::{Vec2, Vec3, Vec4};
-use pge_engine::geometry::LeafPoint;
+use pge_engine::geometry::{LeafPoint, SearchMemory, resident_vec};
 
 use crate::TreeOptions;
 
@@ -67,10 +66,11 @@ pub(crate) struct BarkBuffers {
     pub(crate) indices: Vec<u32>,
 }
 
-/// The leaf mesh's arrays and the tip leaves.
+/// The leaf mesh's arrays, the tip leaves and the leaf mesh's search.
 #[derive(Default)]
 pub(crate) struct LeafBuffers {
     pub(crate) tips: Vec<LeafPoint>,
+    pub(crate) search: SearchMemory,
     pub(crate) positions: Vec<Vec3>,
     pub(crate) normals: Vec<Vec3>,
     pub(crate) uvs: Vec<Vec2>,
@@ -158,45 +158,61 @@ fn make(ready: &Mutex<Option<Buffers>>, sizes: MeshSizes) {
         size: 0.0,
     };
     let (v, i, l) = (sizes.bark_vertices, sizes.bark_indices, sizes.leaves);
-    put(ready, v, Vec3::ZERO, |b| &mut b.bark.positions);
-    put(ready, v, Vec3::ZERO, |b| &mut b.bark.normals);
-    put(ready, v, Vec2::ZERO, |b| &mut b.bark.uvs);
-    put(ready, i, 0, |b| &mut b.bark.indices);
-    put(ready, l, origin, |b| &mut b.leaves.tips);
-    put(ready, 4 * l, Vec3::ZERO, |b| &mut b.leaves.positions);
-    put(ready, 4 * l, Vec3::ZERO, |b| &mut b.leaves.normals);
-    put(ready, 4 * l, Vec2::ZERO, |b| &mut b.leaves.uvs);
-    put(ready, 4 * l, Vec4::ZERO, |b| &mut b.leaves.colors);
-    put(ready, 6 * l, 0, |b| &mut b.leaves.indices);
+    put(
+        ready,
+        || resident_vec(v, Vec3::ZERO),
+        |b| &mut b.bark.positions,
+    );
+    put(
+        ready,
+        || resident_vec(v, Vec3::ZERO),
+        |b| &mut b.bark.normals,
+    );
+    put(ready, || resident_vec(v, Vec2::ZERO), |b| &mut b.bark.uvs);
+    put(ready, || resident_vec(i, 0), |b| &mut b.bark.indices);
+    put(ready, || resident_vec(l, origin), |b| &mut b.leaves.tips);
+    put(
+        ready,
+        || resident_vec(4 * l, Vec3::ZERO),
+        |b| &mut b.leaves.positions,
+    );
+    put(
+        ready,
+        || resident_vec(4 * l, Vec3::ZERO),
+        |b| &mut b.leaves.normals,
+    );
+    put(
+        ready,
+        || resident_vec(4 * l, Vec2::ZERO),
+        |b| &mut b.leaves.uvs,
+    );
+    put(
+        ready,
+        || resident_vec(4 * l, Vec4::ZERO),
+        |b| &mut b.leaves.colors,
+    );
+    put(ready, || resident_vec(6 * l, 0), |b| &mut b.leaves.indices);
+    put(
+        ready,
+        || SearchMemory::resident(4 * l, 2 * l),
+        |b| &mut b.leaves.search,
+    );
 }
 
-/// An empty array with room for `n` elements, every page of the room written once (with
-/// `fill`), put where `field` says in `ready` unless the arrays were taken.
-fn put<T: Copy>(
+/// Makes one part (`make`) and puts it where `field` says in `ready`, unless the arrays were
+/// taken.
+fn put<T>(
     ready: &Mutex<Option<Buffers>>,
-    n: usize,
-    fill: T,
-    field: impl FnOnce(&mut Buffers) -> &mut Vec<T>,
+    make: impl FnOnce() -> T,
+    field: impl FnOnce(&mut Buffers) -> &mut T,
 ) {
     if lock(ready).is_none() {
         return;
     }
-    let array = touched(n, fill);
+    let part = make();
     if let Some(buffers) = lock(ready).as_mut() {
-        *field(buffers) = array;
+        *field(buffers) = part;
     }
-}
-
-/// An empty vector with room for `n` elements, one element of the room written in every
-/// 4 kB, so every page of it is resident (written elements are not part of the vector).
-fn touched<T: Copy>(n: usize, fill: T) -> Vec<T> {
-    let mut array = Vec::with_capacity(n);
-    // At most 4 kB apart: every page holds a written byte.
-    let stride = (4096 / size_of::<T>().max(1)).max(1);
-    for slot in array.spare_capacity_mut().iter_mut().step_by(stride) {
-        slot.write(fill);
-    }
-    array
 }
 
 #[cfg(test)]
@@ -261,15 +277,5 @@ mod tests {
         drop(memory.take());
         make(&ready, MeshSizes::of_nodes(10, &TreeOptions::default()));
         assert!(lock(&ready).is_none());
-    }
-
-    #[test]
-    fn touched_vectors_are_empty_with_their_room() {
-        for n in [0, 1, 341, 342, 10_000] {
-            let v = touched(n, Vec3::ONE);
-            assert!(v.is_empty());
-            assert!(v.capacity() >= n);
-        }
-        assert!(touched(100, ()).capacity() >= 100);
     }
 }
