@@ -78,9 +78,10 @@ pub(crate) struct LeafBuffers {
     pub(crate) indices: Vec<u32>,
 }
 
-/// Memory for a tree's meshes, being made resident on the rayon pool (see the
-/// [module](self)); give it to [`build_tree_in`](crate::build_tree_in). Cloning shares it:
-/// the first tree built takes what is ready, the others get fresh memory.
+/// Memory for a tree's meshes, being made resident on the rayon pool while the tree grows
+/// (a fault a page taken there, off the meshing's path); give it to
+/// [`build_tree_in`](crate::build_tree_in), which writes the same meshes into it. Cloning
+/// shares it: the first tree built takes what is ready, the others get fresh memory.
 #[derive(Clone, Default)]
 pub struct MeshMemory {
     /// What the job has made so far; `None` once taken.
