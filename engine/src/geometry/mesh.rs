@@ -3,7 +3,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::{Material, Skeleton, triangles};
+use super::{Material, SearchMemory, Skeleton, triangles};
 
 /// Elements a thread checks at a time when a mesh is validated.
 const CHECK_CHUNK: usize = 1 << 15;
@@ -286,10 +286,17 @@ impl Mesh {
     /// number of threads.
     #[must_use]
     pub fn unusable_triangles(&self) -> Vec<usize> {
+        self.unusable_triangles_in(SearchMemory::default())
+    }
+
+    /// [`Mesh::unusable_triangles`], searched in `memory` (made resident ahead) when the
+    /// mesh is small enough to be searched in one pass and it has room.
+    #[must_use]
+    pub fn unusable_triangles_in(&self, memory: SearchMemory) -> Vec<usize> {
         if !self.may_drop_triangles() {
             return Vec::new();
         }
-        triangles::unusable(&self.positions, &self.indices)
+        triangles::unusable(&self.positions, &self.indices, memory)
     }
 
     /// Whether the mesh has no unusable triangle (none that

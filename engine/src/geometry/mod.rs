@@ -7,11 +7,13 @@
 mod material;
 mod mesh;
 mod model;
+mod resident;
 mod skeleton;
 mod triangles;
 
 pub use material::{AlphaMode, DiffuseTransmission, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};
 pub use model::{Instance, InstanceGroup, InstanceTransform, Model, PlacementLeaves, Stats};
+pub use resident::{SearchMemory, resident_vec};
 pub use skeleton::{LeafPoint, Skeleton};
 pub use triangles::DegenerateTest;

@@ -18,6 +18,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::SearchMemory;
+
 /// Triangles a thread hashes at a time.
 const KEY_CHUNK: usize = 1 << 15;
 
@@ -46,8 +48,9 @@ enum Look {
 /// The triangles of `indices` (three a triangle) that no client can use, in increasing
 /// order: degenerate ones (two corners at the same place, or all three on a line: zero
 /// area) and repeats of an earlier triangle (the same three corner positions in the same
-/// turning order; a back face is not a repeat).
-pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
+/// turning order; a back face is not a repeat). A small mesh is searched in `memory`'s
+/// arrays (when they have room).
+pub(super) fn unusable(positions: &[Vec3], indices: &[u32], memory: SearchMemory) -> Vec<usize> {
     let (triangles, _) = indices.as_chunks::<3>();
     // Whether triangles `a` and `b` have the same corners in the same turning order.
     let same = |a: u32, b: u32| {
@@ -55,8 +58,13 @@ pub(super) fn unusable(positions: &[Vec3], indices: &[u32]) -> Vec<usize> {
         key_of(a) == key_of(b)
     };
     if triangles.len() < SHARDED_FROM {
-        let vertex_hashes: Vec<u64> = positions.iter().map(|&p| vertex_hash(p)).collect();
-        let mut firsts = SmallFirsts::with_room(triangles.len());
+        let SearchMemory {
+            hashes: mut vertex_hashes,
+            slots,
+        } = memory;
+        vertex_hashes.clear();
+        vertex_hashes.extend(positions.iter().map(|&p| vertex_hash(p)));
+        let mut firsts = SmallFirsts::in_memory(triangles.len(), slots);
         let mut unusable = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {
             match look(positions, &vertex_hashes, tri) {
@@ -381,12 +389,24 @@ struct SmallFirsts {
 /// Bits of a triangle's number in a [`SmallFirsts`] slot.
 const SMALL_BITS: u32 = SHARDED_FROM.trailing_zeros();
 
+/// The slots of a [`SmallFirsts`] for `n` triangles.
+pub(super) fn small_table_len(n: usize) -> usize {
+    (2 * n).max(16).next_power_of_two()
+}
+
 impl SmallFirsts {
-    /// A table for up to `n` triangles (`n <= SHARDED_FROM`).
-    fn with_room(n: usize) -> SmallFirsts {
-        let len = (2 * n).max(16).next_power_of_two();
+    /// A table for up to `n` triangles (`n <= SHARDED_FROM`), in `slots` when it has room
+    /// (fresh zeroed memory otherwise).
+    fn in_memory(n: usize, mut slots: Vec<u32>) -> SmallFirsts {
+        let len = small_table_len(n);
+        if slots.capacity() >= len {
+            slots.clear();
+            slots.resize(len, 0);
+        } else {
+            slots = vec![0; len];
+        }
         SmallFirsts {
-            slots: vec![0; len],
+            slots,
             mask: len - 1,
         }
     }
@@ -551,7 +571,7 @@ mod tests {
         indices.extend([1, (n * n) as u32, n as u32 + 1]);
         indices.extend([2, 9, (n * n + 1) as u32]); // past the vertices: kept
         assert!(indices.len() / 3 >= SHARDED_FROM);
-        let found = unusable(&positions, &indices);
+        let found = unusable(&positions, &indices, SearchMemory::default());
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         // The repeats of the 7th triangles (not made degenerate), the degenerate ones, and
         // the one at -0.0.
@@ -560,7 +580,7 @@ mod tests {
         assert!(found.contains(&(indices.len() / 3 - 2)));
         let kept = without(&indices, &found);
         assert_eq!(kept.len(), indices.len() - 3 * found.len());
-        assert!(unusable(&positions, &kept).is_empty());
+        assert!(unusable(&positions, &kept, SearchMemory::default()).is_empty());
     }
 
     #[test]
@@ -573,9 +593,20 @@ mod tests {
         positions.push(Vec3::new(-0.0, 0.0, -0.0));
         let indices: Vec<u32> = (0..3 * 5000u32).map(|i| (i * 7919 + i / 7) % 61).collect();
         assert!(indices.len() / 3 < SHARDED_FROM);
-        let found = unusable(&positions, &indices);
+        let found = unusable(&positions, &indices, SearchMemory::default());
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         assert!(found.len() > 100 && found.len() < 5000, "{}", found.len());
+        // In resident memory with room, without enough room, and memory used before (its
+        // table left full of another mesh's slots): the same triangles.
+        let room = SearchMemory::resident(positions.len(), indices.len() / 3);
+        assert_eq!(unusable(&positions, &indices, room), found);
+        let short = SearchMemory::resident(10, 10);
+        assert_eq!(unusable(&positions, &indices, short), found);
+        let used = SearchMemory {
+            hashes: vec![7; 3 * positions.len()],
+            slots: vec![u32::MAX; 4 * super::small_table_len(indices.len() / 3)],
+        };
+        assert_eq!(unusable(&positions, &indices, used), found);
     }
 
     #[test]
@@ -590,7 +621,7 @@ mod tests {
             .collect();
         indices.extend_from_within(..30);
         assert_eq!(indices.len() / 3, SHARDED_FROM - 1);
-        let found = unusable(&positions, &indices);
+        let found = unusable(&positions, &indices, SearchMemory::default());
         assert_eq!(found, unusable_by_definition(&positions, &indices));
         assert!(found.ends_with(&[SHARDED_FROM - 2]), "{:?}", found.last());
     }
@@ -620,7 +651,7 @@ mod tests {
         let by_construction = |p: &[Vec3], i: &[u32], t: &[(u32, u32)]| {
             let usable = usable_by_construction(p, i, t);
             assert!(
-                !usable || unusable(p, i).is_empty(),
+                !usable || unusable(p, i, SearchMemory::default()).is_empty(),
                 "usable, yet some are not"
             );
             usable
@@ -749,7 +780,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .expect("a pool")
-                .install(|| unusable(&positions, &indices))
+                .install(|| unusable(&positions, &indices, SearchMemory::default()))
         };
         let one = on(1);
         assert_eq!(one, on(4));

@@ -22,6 +22,7 @@ use glam::{Vec2, Vec3};
 use pge_engine::geometry::{Mesh, Skeleton};
 use rayon::prelude::*;
 
+use crate::memory::BarkBuffers;
 use crate::options::{Flare, MeshOptions};
 use crate::radii::{Children, main_child};
 use flare::with_flare_rings;
@@ -211,13 +212,28 @@ pub fn bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> Mesh {
     mesh
 }
 
-/// [`bark_mesh`], and whether it is shown to have no unusable triangle by construction
-/// ([`Mesh::usable_by_construction`]: its tubes' triangles are distinct, so only degenerate
-/// triangles and vertices at one place can make one; the triangles are tested as they are
-/// written); `false` when that was not shown (then search it).
-pub(crate) fn clean_bark_mesh(skeleton: &Skeleton, options: &MeshOptions) -> (Mesh, bool) {
+/// [`bark_mesh`] written into `memory`'s arrays, and whether it is shown to have no
+/// unusable triangle by construction ([`Mesh::usable_by_construction`]: its tubes' triangles
+/// are distinct, so only degenerate triangles and vertices at one place can make one; the
+/// triangles are tested as they are written); `false` when that was not shown (then search
+/// it).
+pub(crate) fn clean_bark_mesh(
+    skeleton: &Skeleton,
+    options: &MeshOptions,
+    memory: BarkBuffers,
+) -> (Mesh, bool) {
+    let BarkBuffers {
+        positions,
+        normals,
+        uvs,
+        indices,
+    } = memory;
     let mut mesh = Mesh {
         name: "bark".into(),
+        positions,
+        normals,
+        uvs,
+        indices,
         ..Mesh::default()
     };
     let mut checks = Checks::default();
@@ -482,7 +498,7 @@ mod tests {
     #[test]
     fn a_bark_shown_clean_by_construction_has_no_unusable_triangle() {
         let shown = |s: &Skeleton, options: &MeshOptions| {
-            let (mesh, clean) = clean_bark_mesh(s, options);
+            let (mesh, clean) = clean_bark_mesh(s, options, BarkBuffers::default());
             assert_eq!(mesh, bark_mesh(s, options));
             let unusable = mesh.unusable_triangles();
             assert!(!clean || unusable.is_empty(), "clean, yet {unusable:?}");

@@ -48,12 +48,21 @@ const PARALLEL_FROM: usize = 1 << 14;
 /// same state of `rng` afterwards for any number of threads.
 #[must_use]
 pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) -> Vec<LeafPoint> {
+    tip_leaves_into(skeleton, options, rng, Vec::new())
+}
+
+/// [`tip_leaves`] pushed onto `out` (empty), whose room it uses.
+pub(crate) fn tip_leaves_into(
+    skeleton: &Skeleton,
+    options: &LeafOptions,
+    rng: &mut Mt64,
+    mut out: Vec<LeafPoint>,
+) -> Vec<LeafPoint> {
     let (lo, hi) = options.per_tip;
     let per_leaf = 5 + usize::from(options.max_depth > 0);
     let tips = skeleton.tips();
     if rayon::current_num_threads() == 1 || tips.len() * hi.max(lo) as usize <= PARALLEL_FROM {
         // Every leaf from its draws as they are taken, without storing them.
-        let mut out = Vec::new();
         for &tip in &tips {
             if skeleton.parents[tip as usize].is_none() {
                 continue;
@@ -82,16 +91,15 @@ pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) ->
         leaf(skeleton, options, owners[j], d)
     };
     if owners.len() < PARALLEL_FROM {
-        (0..owners.len()).map(leaf_of).collect()
+        out.extend((0..owners.len()).map(leaf_of));
     } else {
-        let mut out = Vec::new();
         (0..owners.len())
             .into_par_iter()
             .with_min_len(1024)
             .map(leaf_of)
             .collect_into_vec(&mut out);
-        out
     }
+    out
 }
 
 /// One leaf of `tip` from its draws (the depth, if `max_depth > 0`, then five uniforms).

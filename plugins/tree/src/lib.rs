@@ -33,6 +33,7 @@ mod cylinders;
 mod leaves;
 #[cfg(feature = "lua")]
 pub mod lua;
+mod memory;
 mod merge;
 mod options;
 mod radii;
@@ -53,6 +54,7 @@ use rand_mt::Mt64;
 
 pub use cylinders::{append_bark, bark_mesh};
 pub use leaves::{append_leaf_quads, tip_leaves};
+pub use memory::{MeshMemory, MeshSizes};
 pub use merge::merge_straight;
 pub use options::{
     BarkStyle, Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TextureSource, TreeOptions,
@@ -256,6 +258,17 @@ pub fn build_tree(
     options: &TreeOptions,
     seed: u64,
 ) -> Result<Model, TreeError> {
+    build_tree_in(skeleton, options, seed, &MeshMemory::none())
+}
+
+/// [`build_tree`] with its meshes written into `memory` (made resident ahead, see
+/// [`MeshMemory`]) as far as it is ready: the same model, to the byte.
+pub fn build_tree_in(
+    skeleton: &Skeleton,
+    options: &TreeOptions,
+    seed: u64,
+    memory: &MeshMemory,
+) -> Result<Model, TreeError> {
     let mut model = Model::new();
     let t = Instant::now();
     let mut prepared = prepare_skeleton(skeleton, &options.mesh)?;
@@ -268,18 +281,34 @@ pub fn build_tree(
     // a small tree's are made side by side (a big tree's each use the whole pool already);
     // each phase counts its own time.
     let small = prepared.len() * (options.mesh.sides as usize + 1) < SIDE_BY_SIDE_BELOW;
+    // Taken as late as can be: the job making it may still be at work.
+    let memory::Buffers {
+        bark: bark_memory,
+        leaves: leaf_memory,
+    } = memory.take();
     // Each mesh comes with whether it has no unusable triangle (the search, or the bark's
     // construction, showed it): the model's clean-up then skips it.
     let ((bark, meshing_time), (leaves, mut leaves_time)) = beside(
         small,
         || {
             // At least one segment, so the bark mesh has triangles.
-            has_bark.then(|| cylinders::clean_bark_mesh(&prepared, &options.mesh))
+            has_bark.then(|| cylinders::clean_bark_mesh(&prepared, &options.mesh, bark_memory))
         },
         || {
             let mut rng = Mt64::new(seed);
+            let memory::LeafBuffers {
+                tips,
+                search,
+                positions,
+                normals,
+                uvs,
+                colors,
+                indices,
+            } = leaf_memory;
             let tips = match &options.leaves {
-                Some(leaf_options) => tip_leaves(&prepared, leaf_options, &mut rng),
+                Some(leaf_options) => {
+                    leaves::tip_leaves_into(&prepared, leaf_options, &mut rng, tips)
+                }
                 None => Vec::new(),
             };
             // The skeleton's own leaves first, then the tip leaves (not copied when alone).
@@ -291,13 +320,19 @@ pub fn build_tree(
             let mesh = (!points.is_empty()).then(|| {
                 let mut mesh = Mesh {
                     name: "leaves".into(),
+                    positions,
+                    normals,
+                    uvs,
+                    colors,
+                    indices,
                     ..Mesh::default()
                 };
                 append_leaf_quads(&points, style, &mut rng, &mut mesh);
                 // A small tree's leaf mesh is searched here, beside the bark; a big tree's
                 // by the model's clean-up, after the textures. With levels of detail the
                 // mesh is replaced, and never cleaned up.
-                let clean = small && options.lod.is_none() && mesh.unusable_triangles().is_empty();
+                let clean =
+                    small && options.lod.is_none() && mesh.unusable_triangles_in(search).is_empty();
                 (mesh, clean)
             });
             // The bark's skeleton as the glb writes it, formatted here beside a small tree's
@@ -487,6 +522,48 @@ mod tests {
         assert_eq!(leaves.positions.len() as u64, 4 * a.stats.leaves);
         let phases: Vec<&str> = a.stats.phases.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(phases, ["radii", "meshing", "leaves", "textures"]);
+    }
+
+    #[test]
+    fn a_tree_built_in_memory_made_ahead_is_the_same() {
+        let mut s = y_tree();
+        // A longer trunk, so the bark has several tubes and rings.
+        for k in 0..40 {
+            let parent = s.len() as u32 - 1;
+            let y = 2.5 + 0.3 * k as f32;
+            s.push(
+                Vec3::new(0.1 * (k % 3) as f32, y, 0.0),
+                Some(parent),
+                0.0,
+                1,
+            );
+        }
+        let options = TreeOptions {
+            leaves: Some(LeafOptions::default()),
+            ..TreeOptions::default()
+        };
+        let fresh = build_tree(&s, &options, 5).expect("builds");
+        // Room for all of it, for part of it (the arrays grow), for none.
+        for nodes in [400, 10, 0] {
+            let memory = MeshMemory::made_now(MeshSizes::of_nodes(nodes, &options));
+            let ahead = build_tree_in(&s, &options, 5, &memory).expect("builds");
+            for (a, b) in ahead.meshes.iter().zip(&fresh.meshes) {
+                assert_eq!(a.positions, b.positions, "{nodes}");
+                assert_eq!(a.normals, b.normals, "{nodes}");
+                assert_eq!(a.uvs, b.uvs, "{nodes}");
+                assert_eq!(a.colors, b.colors, "{nodes}");
+                assert_eq!(a.indices, b.indices, "{nodes}");
+            }
+            assert_eq!(ahead.meshes.len(), fresh.meshes.len());
+            assert_eq!(ahead.clean.len(), fresh.clean.len());
+            let leaves = |m: &Model| m.meshes[0].skeleton.as_ref().map(|k| k.leaves.clone());
+            assert_eq!(leaves(&ahead), leaves(&fresh));
+        }
+        let memory = MeshMemory::made_now(MeshSizes::of_nodes(400, &options));
+        let bark = &build_tree_in(&s, &options, 5, &memory)
+            .expect("builds")
+            .meshes[0];
+        assert!(bark.positions.capacity() >= MeshSizes::of_nodes(400, &options).bark_vertices);
     }
 
     #[test]

@@ -64,6 +64,8 @@ pub struct SpaceColonization {
     points_seconds: f64,
     growth_seconds: f64,
     warnings: Vec<String>,
+    /// The tree's mesh memory, made resident on the pool while the tree grows.
+    memory: pge_tree::MeshMemory,
 }
 
 impl SpaceColonization {
@@ -81,6 +83,7 @@ impl SpaceColonization {
             points_seconds: 0.0,
             growth_seconds: 0.0,
             warnings: Vec::new(),
+            memory: pge_tree::MeshMemory::none(),
         })
     }
 
@@ -171,6 +174,11 @@ impl Algorithm for SpaceColonization {
     fn init(&mut self, ctx: &RunContext) -> Result<()> {
         let t = Instant::now();
         let p = &self.params;
+        // The tree's mesh memory made ahead while it grows: a crown's merged skeleton has
+        // at most about two nodes for three points.
+        let nodes = p.points.unwrap_or(points::DEFAULT_POINTS) as usize * 2 / 3;
+        let sizes = pge_tree::MeshSizes::of_nodes(nodes, &p.tree);
+        self.memory = pge_tree::MeshMemory::prepare(sizes);
         let pts = points::generate(
             &p.envelope,
             p.mode,
@@ -379,7 +387,8 @@ impl Algorithm for SpaceColonization {
         pge_tree::assign_orders(&mut skeleton);
         let mut options = self.params.tree.clone();
         options.mesh.radii = pge_tree::RadiiMode::Keep;
-        let tree = pge_tree::build_tree(&skeleton, &options, mix(ctx.seed, self.params.seed))
+        let seed = mix(ctx.seed, self.params.seed);
+        let tree = pge_tree::build_tree_in(&skeleton, &options, seed, &self.memory)
             .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
         let mut model = Model::new();
         model.stats.warnings.extend(self.warnings.iter().cloned());
