@@ -476,59 +476,6 @@ pub fn glb_file_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -
     write_glb_with(model, meta, instancing, || Ok(()), |(), file| Ok(file))
 }
 
-/// [`glb_file_with`], handed to `write` as soon as it is built, with what `open` made beside
-/// the build (the temporary file it goes to), while the model is checked (a pass over every
-/// number and index) on the rayon pool. Building reads no index or number in a way that
-/// could fail on an invalid model, and the check's error comes first (then the build's,
-/// `open`'s and `write`'s), as if it had run before: what `open` and `write` made is then
-/// dropped, so `write` must write where that takes it back (a temporary file).
-///
-/// The calling thread builds and writes: only `open` and the check go to the pool (with one
-/// thread, everything runs on the calling thread, the check first), so a caller outside the
-/// pool (`pge run`'s main thread) neither hands the work over nor waits to be woken after it.
-pub fn write_glb_with<F, T, E>(
-    model: &Model,
-    meta: &ExportMeta,
-    instancing: Instancing,
-    open: impl FnOnce() -> std::result::Result<F, E> + Send,
-    write: impl FnOnce(F, GlbFile) -> std::result::Result<T, E>,
-) -> std::result::Result<T, E>
-where
-    F: Send,
-    E: From<Error> + Send,
-{
-    let build = || {
-        let mut b = Builder::new();
-        b.instancing = instancing;
-        b.root.scene = Some(b.scene(model, "pge")?);
-        b.file(model, meta, None)
-    };
-    if rayon::current_num_threads() == 1 {
-        model.validate().map_err(Error::from)?;
-        let file = build()?;
-        return write(open()?, file);
-    }
-    let mut valid = Ok(());
-    let written = rayon::in_place_scope(|s| {
-        // `open` is queued first, so the pool's first free thread takes it; the file is
-        // handed back through a channel of one (nothing waits: it is made while the glb is
-        // built). Should the build fail, the file made is dropped with the channel.
-        let (opened_tx, opened) = std::sync::mpsc::sync_channel(1);
-        s.spawn(move |_| {
-            let _ = opened_tx.send(open());
-        });
-        s.spawn(|_| valid = model.validate());
-        let file = build()?;
-        match opened.recv() {
-            Ok(opened) => write(opened?, file),
-            // `open` panicked: the scope resumes its panic as it ends.
-            Err(_) => Err(Error::Export("the output could not be opened".into()).into()),
-        }
-    });
-    valid.map_err(Error::from)?;
-    written
-}
-
 /// The `.glb` bytes of several stages of one growth (`pge run --stages`): one scene per
 /// stage, named as given (`step 10`), each with its own meshes (materials and textures
 /// shared); the default scene is the last stage. The root `extras.pge` describes the last
@@ -783,9 +730,12 @@ impl Builder {
 mod extensions;
 #[path = "glb_lod_extras.rs"]
 mod lod_extras;
+#[path = "glb_write.rs"]
+mod write;
 pub use extensions::DIFFUSE_TRANSMISSION;
 use extensions::with_extensions;
 use lod_extras::{group_leaves_extras, placement_leaves_extras};
+pub use write::write_glb_with;
 
 #[path = "glb_shared.rs"]
 pub(super) mod shared;

@@ -468,3 +468,54 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
     assert_eq!(written.err().map(|e| e.to_string()), Some(want.to_string()));
     assert!(!opened.load(std::sync::atomic::Ordering::Relaxed));
 }
+
+#[test]
+fn the_calling_thread_opens_the_file_when_the_pool_is_busy() {
+    use std::sync::{Barrier, Mutex, mpsc};
+    let threads = rayon::current_num_threads();
+    if threads == 1 {
+        // Everything runs on the calling thread (the test above).
+        return;
+    }
+    let model = textured_model();
+    let meta = ExportMeta::default();
+    let want = glb_bytes(&model, &meta).expect("exports");
+    // Every thread of the pool waits until the file is being written (or, should the
+    // calling thread wait for the pool to open it, five seconds).
+    let started = Arc::new(Barrier::new(threads + 1));
+    let (release, released) = mpsc::channel::<()>();
+    let released = Arc::new(Mutex::new(released));
+    rayon::spawn_broadcast({
+        let started = started.clone();
+        move |_| {
+            started.wait();
+            let released = released.lock().expect("lock");
+            let _ = released.recv_timeout(std::time::Duration::from_secs(5));
+        }
+    });
+    started.wait();
+    let opened_on = Mutex::new(Vec::new());
+    let written = write_glb_with(
+        &model,
+        &meta,
+        Instancing::Gpu,
+        || {
+            opened_on
+                .lock()
+                .expect("lock")
+                .push(std::thread::current().id());
+            Ok::<_, Error>(Vec::new())
+        },
+        |mut out, glb| {
+            for _ in 0..threads {
+                let _ = release.send(());
+            }
+            out.extend(glb.to_vec()?);
+            Ok(out)
+        },
+    );
+    assert!(written.expect("written") == want);
+    // Opened once, by the calling thread: the pool's threads were all busy.
+    let opened_on = opened_on.into_inner().expect("lock");
+    assert_eq!(opened_on, vec![std::thread::current().id()]);
+}
