@@ -52,8 +52,6 @@ fn main() -> ExitCode {
             .engine()
             .and_then(|engine| derive::derive(&engine, args)),
     };
-    // The old files' temporary names unlinked on the pool: none is left behind.
-    output::wait_aside();
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<common::Usage>().is_some() => {

@@ -3,8 +3,6 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, TryRecvError, sync_channel};
-use std::sync::{Mutex, PoisonError};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
@@ -72,14 +70,12 @@ impl<'a> AtomicFile<'a> {
     fn finish(self) -> anyhow::Result<()> {
         let AtomicFile { tmp, path } = self;
         if let Some(old) = exchanged(&tmp, path) {
-            // The temporary name now holds the old file: dropping `tmp` unlinks it and
-            // closes the new file; as `old` still holds the old file, its pages and blocks
-            // are freed only when `old` is closed (10-25 ms for a 64 MB file, 0.3-0.5 ms for
-            // 2.5 MB). Both off the caller's thread when they can be.
-            aside(move || {
-                drop(tmp);
-                drop(old);
-            });
+            // The temporary name now holds the old file, which dropping `tmp` unlinks; as
+            // `old` still holds it, its pages and blocks are freed only when `old` is closed
+            // (10-25 ms for a 64 MB file, 0.3-0.5 ms for 2.5 MB), off the caller's thread
+            // when it can be.
+            drop(tmp);
+            close_aside(old);
             return Ok(());
         }
         tmp.persist(path)
@@ -88,35 +84,14 @@ impl<'a> AtomicFile<'a> {
     }
 }
 
-/// The clean-ups [`aside`] handed to the rayon pool that may not have run yet: the process
-/// waits for them ([`wait_aside`]) before it ends, so that no temporary name is left behind.
-static ASIDE: Mutex<Vec<Receiver<()>>> = Mutex::new(Vec::new());
-
-/// Runs `clean_up` on the rayon pool when it has more than one thread (the caller goes on
-/// at once; [`wait_aside`] waits for it), on the calling thread otherwise.
-fn aside(clean_up: impl FnOnce() + Send + 'static) {
-    if rayon::current_num_threads() == 1 {
-        clean_up();
-        return;
-    }
-    let (done_tx, done) = sync_channel(1);
-    let mut pending = ASIDE.lock().unwrap_or_else(PoisonError::into_inner);
-    // Those already done are forgotten (a preview exports many times).
-    pending.retain(|done| matches!(done.try_recv(), Err(TryRecvError::Empty)));
-    pending.push(done);
-    drop(pending);
-    rayon::spawn(move || {
-        clean_up();
-        let _ = done_tx.send(());
-    });
-}
-
-/// Waits until every clean-up [`aside`] handed to the pool has run (one that panicked
-/// counts as run): called before the process ends.
-pub fn wait_aside() {
-    let pending = std::mem::take(&mut *ASIDE.lock().unwrap_or_else(PoisonError::into_inner));
-    for done in pending {
-        let _ = done.recv();
+/// Closes `file` on the rayon pool when it has more than one thread (the caller goes on at
+/// once), on the calling thread otherwise. Should the process end first, the kernel closes
+/// it on the way out.
+fn close_aside(file: std::fs::File) {
+    if rayon::current_num_threads() > 1 {
+        rayon::spawn(move || drop(file));
+    } else {
+        drop(file);
     }
 }
 
@@ -213,8 +188,6 @@ mod tests {
         std::fs::write(&path, b"an older and longer content").expect("write");
         write_atomically(&path, b"new").expect("replaced");
         assert_eq!(std::fs::read(&path).expect("read"), b"new");
-        // The old file's temporary name is unlinked aside, before the process ends.
-        wait_aside();
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
         // Again over the new file, and a failed write leaves it as it was.
         write_atomically(&path, b"newer").expect("replaced");
@@ -224,7 +197,6 @@ mod tests {
         });
         assert!(format!("{:#}", failed.expect_err("fails")).contains("disk is full"));
         assert_eq!(std::fs::read(&path).expect("read"), b"newer");
-        wait_aside();
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
     }
 

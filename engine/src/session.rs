@@ -59,10 +59,6 @@ pub struct Generated {
 /// read only the main script's folder tree and the engine's library folder; memory, time and
 /// instructions are limited. A session is not `Send`: create one per thread.
 pub struct Session {
-    /// The algorithm of the last [`Session::generate`], kept until the next one or the
-    /// session's end: freeing its state (the space colonization's points and nodes, tens of
-    /// microseconds) is then no part of the run a caller times and writes.
-    finished: std::cell::RefCell<Option<Box<dyn Algorithm>>>,
     lua: Lua,
     limits: Limits,
     overrides: Vec<(String, String)>,
@@ -131,7 +127,6 @@ impl Session {
         })?;
         lua.gc_restart();
         Ok(Session {
-            finished: std::cell::RefCell::new(None),
             lua,
             limits,
             overrides: options.params,
@@ -257,7 +252,6 @@ impl Session {
         let ctx = self.context();
         let planned = ctx.steps.or(algorithm.planned_steps());
         let mut model = run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
-        self.keep_finished(algorithm);
         model
             .stats
             .phases
@@ -268,12 +262,6 @@ impl Session {
             params: self.declared_params(),
             seconds: t0.elapsed().as_secs_f64(),
         })
-    }
-
-    /// Keeps `algorithm`, done with, until the next generation or the session's end (the
-    /// one kept before is dropped now).
-    fn keep_finished(&self, algorithm: Box<dyn Algorithm>) {
-        drop(self.finished.replace(Some(algorithm)));
     }
 
     /// The main script's declared parameters, once it has run.
@@ -348,44 +336,4 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
         }
     })?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::algorithm::{RunContext, Step};
-
-    /// An algorithm that counts its drops.
-    struct Counted(Arc<std::sync::atomic::AtomicUsize>);
-
-    impl Drop for Counted {
-        fn drop(&mut self) {
-            self.0.fetch_add(1, Ordering::SeqCst);
-        }
-    }
-
-    impl Algorithm for Counted {
-        fn init(&mut self, _: &RunContext) -> Result<()> {
-            Ok(())
-        }
-        fn step(&mut self, _: &RunContext) -> Result<Step> {
-            Ok(Step::Done)
-        }
-        fn finish(&mut self, _: &RunContext) -> Result<Model> {
-            Ok(Model::default())
-        }
-    }
-
-    #[test]
-    fn a_finished_algorithm_is_dropped_at_the_next_generation_or_with_the_session() {
-        let engine = Engine::builder().build().expect("engine");
-        let session = engine.session(SessionOptions::default()).expect("session");
-        let drops = Arc::new(std::sync::atomic::AtomicUsize::new(0));
-        session.keep_finished(Box::new(Counted(drops.clone())));
-        assert_eq!(drops.load(Ordering::SeqCst), 0);
-        session.keep_finished(Box::new(Counted(drops.clone())));
-        assert_eq!(drops.load(Ordering::SeqCst), 1);
-        drop(session);
-        assert_eq!(drops.load(Ordering::SeqCst), 2);
-    }
 }
