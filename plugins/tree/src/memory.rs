@@ -105,6 +105,13 @@ impl MeshMemory {
     /// otherwise.
     #[must_use]
     pub fn prepare(sizes: MeshSizes) -> MeshMemory {
+        MeshMemory::prepare_after(sizes, || {})
+    }
+
+    /// [`prepare`](Self::prepare), the job first running `first` (the generator's own
+    /// memory, needed sooner than the meshes'); `first` is not run when no job starts.
+    #[must_use]
+    pub fn prepare_after(sizes: MeshSizes, first: impl FnOnce() + Send + 'static) -> MeshMemory {
         let idle_pool = rayon::current_thread_index().is_none() && rayon::current_num_threads() > 1;
         if !idle_pool || sizes.bark_vertices >= AHEAD_BELOW {
             return MeshMemory::none();
@@ -112,6 +119,7 @@ impl MeshMemory {
         let memory = MeshMemory::made_ahead();
         let ready = memory.ready.clone();
         rayon::spawn(move || {
+            first();
             if let Some(ready) = ready {
                 make(&ready, sizes);
             }
@@ -269,6 +277,20 @@ mod tests {
         // Taken: a clone (or a second tree) gets fresh memory.
         assert_eq!(shared.take().bark.positions.capacity(), 0);
         assert_eq!(MeshMemory::none().take().leaves.tips.capacity(), 0);
+    }
+
+    #[test]
+    fn a_big_tree_starts_no_job_and_runs_nothing_first() {
+        let ran = Arc::new(Mutex::new(false));
+        let flag = Arc::clone(&ran);
+        let sizes = MeshSizes {
+            bark_vertices: AHEAD_BELOW,
+            bark_indices: 0,
+            leaves: 0,
+        };
+        let memory = MeshMemory::prepare_after(sizes, move || *lock(&flag) = true);
+        assert!(memory.ready.is_none());
+        assert!(!*lock(&ran));
     }
 
     #[test]

@@ -37,6 +37,7 @@
 //! that node are dropped as unreachable. Every iteration therefore adds a node or removes a
 //! point, and the iteration cap bounds the rest (with a warning).
 
+mod ahead;
 mod params;
 mod state;
 #[cfg(test)]
@@ -66,6 +67,8 @@ pub struct SpaceColonization {
     warnings: Vec<String>,
     /// The tree's mesh memory, made resident on the pool while the tree grows.
     memory: pge_tree::MeshMemory,
+    /// The growth's per-node arrays, made resident by the same job first.
+    node_memory: ahead::NodeMemory,
 }
 
 impl SpaceColonization {
@@ -84,6 +87,7 @@ impl SpaceColonization {
             growth_seconds: 0.0,
             warnings: Vec::new(),
             memory: pge_tree::MeshMemory::none(),
+            node_memory: ahead::NodeMemory::default(),
         })
     }
 
@@ -178,7 +182,9 @@ impl Algorithm for SpaceColonization {
         // at most about two nodes for three points.
         let nodes = p.points.unwrap_or(points::DEFAULT_POINTS) as usize * 2 / 3;
         let sizes = pge_tree::MeshSizes::of_nodes(nodes, &p.tree);
-        self.memory = pge_tree::MeshMemory::prepare(sizes);
+        self.node_memory = ahead::NodeMemory::default();
+        let first = self.node_memory.job(nodes);
+        self.memory = pge_tree::MeshMemory::prepare_after(sizes, first);
         let pts = points::generate(
             &p.envelope,
             p.mode,
@@ -220,6 +226,7 @@ impl Algorithm for SpaceColonization {
                 "space colonization stepped before init",
             ));
         };
+        self.node_memory.adopt(st);
         st.iteration += 1;
         let iteration = st.iteration;
 
