@@ -22,7 +22,14 @@ pub fn merge_straight(skeleton: &Skeleton, max_angle_degrees: f32) -> Skeleton {
     // For each node: its index in the output if kept, else the output index of the kept
     // ancestor that stands in for it.
     let mut new_index = vec![0u32; n];
-    let mut out = Skeleton::new();
+    // Made for every node, so that no push reallocates.
+    let mut out = Skeleton {
+        positions: Vec::with_capacity(n),
+        parents: Vec::with_capacity(n),
+        radii: Vec::with_capacity(n),
+        orders: Vec::with_capacity(n),
+        leaves: Vec::new(),
+    };
     for i in 0..n {
         let keep = match skeleton.parents[i] {
             None => true,
