@@ -207,7 +207,7 @@ mod tests {
             s.push(Vec3::ZERO, None, 0.0, 0);
             for i in 1..(50 + rng.next_u64() % 400) as u32 {
                 // Mostly the last node (a chain), sometimes an earlier one (a fork).
-                let parent = if rng.next_u64() % 4 == 0 {
+                let parent = if rng.next_u64().is_multiple_of(4) {
                     (rng.next_u64() % u64::from(i)) as u32
                 } else {
                     i - 1
