@@ -60,24 +60,41 @@ pub(crate) fn main_child(skeleton: &Skeleton, i: usize, kids: &[u32]) -> Option<
     if rest.is_empty() {
         return Some(first);
     }
-    let incoming = skeleton.parents[i]
-        .and_then(|p| (pos[i] - pos[p as usize]).try_normalize())
-        .unwrap_or(glam::Vec3::Y);
-    let key = |c: u32| {
+    // Compared as the tuple (same order, radius, turn) compares, but the turn (and the
+    // incoming direction) computed only when order and radius tie.
+    let head = |c: u32| {
         let c = c as usize;
-        let same_order = skeleton.orders[c] == skeleton.orders[i];
-        let turn = (pos[c] - pos[i])
-            .try_normalize()
-            .map_or(-2.0, |d| d.dot(incoming));
-        (same_order, skeleton.radii[c], turn)
+        (skeleton.orders[c] == skeleton.orders[i], skeleton.radii[c])
     };
-    let mut best = first;
-    let mut best_key = key(first);
+    let mut incoming = None;
+    let mut turn = |c: u32| {
+        let incoming = *incoming.get_or_insert_with(|| {
+            skeleton.parents[i]
+                .and_then(|p| (pos[i] - pos[p as usize]).try_normalize())
+                .unwrap_or(glam::Vec3::Y)
+        });
+        (pos[c as usize] - pos[i])
+            .try_normalize()
+            .map_or(-2.0, |d| d.dot(incoming))
+    };
+    let (mut best, mut best_head, mut best_turn) = (first, head(first), None);
     for &c in rest {
-        let k = key(c);
-        if k > best_key {
-            best = c;
-            best_key = k;
+        let h = head(c);
+        match h.partial_cmp(&best_head) {
+            Some(std::cmp::Ordering::Equal) => {
+                let t = turn(c);
+                let b = match best_turn {
+                    Some(b) => b,
+                    None => turn(best),
+                };
+                if t > b {
+                    (best, best_head, best_turn) = (c, h, Some(t));
+                } else {
+                    best_turn = Some(b);
+                }
+            }
+            Some(std::cmp::Ordering::Greater) => (best, best_head, best_turn) = (c, h, None),
+            _ => {}
         }
     }
     Some(best)
@@ -224,6 +241,73 @@ mod tests {
                 bits(&s),
                 bits(&expected),
                 "round {round}, tip {tip}, exponent {e}"
+            );
+        }
+    }
+
+    /// The main child as it was first written: the whole key of every child.
+    fn main_child_by_key(skeleton: &Skeleton, i: usize, kids: &[u32]) -> Option<u32> {
+        let pos = &skeleton.positions;
+        let incoming = skeleton.parents[i]
+            .and_then(|p| (pos[i] - pos[p as usize]).try_normalize())
+            .unwrap_or(glam::Vec3::Y);
+        let key = |c: u32| {
+            let c = c as usize;
+            let same_order = skeleton.orders[c] == skeleton.orders[i];
+            let turn = (pos[c] - pos[i])
+                .try_normalize()
+                .map_or(-2.0, |d| d.dot(incoming));
+            (same_order, skeleton.radii[c], turn)
+        };
+        let (&first, rest) = kids.split_first()?;
+        let mut best = first;
+        for &c in rest {
+            if key(c) > key(best) {
+                best = c;
+            }
+        }
+        Some(best)
+    }
+
+    #[test]
+    fn main_children_are_the_ones_the_whole_key_picks() {
+        // Forks of up to 5 children with tied radii and orders, NaN radii, -0.0 and 0.0,
+        // children on their parent (no turn) and in its direction.
+        let mut rng = rand_mt::Mt64::new(11);
+        let mut pick = |n: u64| (rng.next_u64() % n) as usize;
+        let radii = [0.1f32, 0.1, 0.2, f32::NAN, 0.0, -0.0];
+        let spots = [
+            Vec3::ZERO,
+            Vec3::Y,
+            Vec3::X,
+            Vec3::new(0.5, 1.0, 0.0),
+            Vec3::NEG_Y,
+        ];
+        for round in 0..2000 {
+            let mut s = Skeleton::new();
+            let root = s.push(Vec3::ZERO, None, 1.0, 0);
+            let parent = if round % 5 == 0 {
+                root
+            } else {
+                s.push(spots[pick(5)] + Vec3::Y, Some(root), 1.0, 0)
+            };
+            let at = s.positions[parent as usize];
+            let kids: Vec<u32> = (0..1 + pick(5))
+                .map(|_| {
+                    s.push(
+                        at + spots[pick(5)],
+                        Some(parent),
+                        radii[pick(6)],
+                        pick(2) as u32,
+                    )
+                })
+                .collect();
+            s.orders[parent as usize] = pick(2) as u32;
+            let i = parent as usize;
+            assert_eq!(
+                main_child(&s, i, &kids),
+                main_child_by_key(&s, i, &kids),
+                "round {round}"
             );
         }
     }
