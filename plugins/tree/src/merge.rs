@@ -13,8 +13,8 @@ pub fn merge_straight(skeleton: &Skeleton, max_angle_degrees: f32) -> Skeleton {
 }
 
 /// [`smooth`](crate::smooth) then [`merge_straight`], without the smoothed copy of the
-/// skeleton: each node's smoothed position is computed from the original ones as it is read
-/// (the same operations, so the same bits as the two in turn).
+/// skeleton: only the smoothed positions are made (the same operations, so the same bits as
+/// the two in turn), and the merge reads the rest from `skeleton`.
 #[must_use]
 pub(crate) fn smooth_and_merge(
     skeleton: &Skeleton,
@@ -22,21 +22,25 @@ pub(crate) fn smooth_and_merge(
     max_angle_degrees: f32,
 ) -> Skeleton {
     let amount = amount.clamp(0.0, 1.0);
+    if amount == 0.0 {
+        return merge_straight(skeleton, max_angle_degrees);
+    }
     let positions = &skeleton.positions;
-    // `smooth` leaves everything as it is for 0 (`v + 0 * d` would turn a -0.0 into 0.0).
-    let smoothed = |i: usize| match skeleton.parents[i] {
-        Some(p) if amount != 0.0 => positions[i] + amount * (positions[p as usize] - positions[i]),
-        _ => positions[i],
-    };
-    let mut out = merge_by(skeleton, smoothed, max_angle_degrees);
-    if amount != 0.0 {
-        // The leaves move with their nodes, as `smooth` moves them; `merge_by` kept their
-        // order and positions.
-        for (leaf, original) in out.leaves.iter_mut().zip(&skeleton.leaves) {
-            let n = original.node as usize;
-            if n < positions.len().min(skeleton.parents.len()) {
-                leaf.position += smoothed(n) - positions[n];
-            }
+    let smoothed: Vec<glam::Vec3> = positions
+        .iter()
+        .zip(&skeleton.parents)
+        .map(|(&v, parent)| match parent {
+            Some(p) => v + amount * (positions[*p as usize] - v),
+            None => v,
+        })
+        .collect();
+    let mut out = merge_by(skeleton, |i| smoothed[i], max_angle_degrees);
+    // The leaves move with their nodes, as `smooth` moves them; `merge_by` kept their order
+    // and positions.
+    for (leaf, original) in out.leaves.iter_mut().zip(&skeleton.leaves) {
+        let n = original.node as usize;
+        if n < smoothed.len() {
+            leaf.position += smoothed[n] - positions[n];
         }
     }
     out
