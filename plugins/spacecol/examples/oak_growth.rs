@@ -1,7 +1,9 @@
 //! The small oak's points and growth (`init` and every step, no meshing) in a loop, for
 //! profilers (`perf`, `valgrind --tool=callgrind`): `cargo run --release -p pge-spacecol
 //! --example oak_growth -- [ROUNDS] [POINTS]`. Prints the iterations and nodes of the last round and
-//! the fastest round's `points` and `growth` times.
+//! the fastest round's `points` and `growth` times, then the fastest of the finish's skeleton
+//! (pipe radii and orders, as `finish` makes it) and of the tree's `radii` phase
+//! (`prepare_skeleton`: smoothing and straight chains merged) on the last round's tree.
 
 use std::time::Instant;
 
@@ -21,6 +23,10 @@ fn oak(points: u32) -> Params {
     p.influence = 2.4;
     p.kill = 0.6;
     p.tropism = Vec3::new(0.0, 0.05, 0.0);
+    p.tree.mesh.tip_radius = 0.025;
+    p.tree.mesh.exponent = 2.2;
+    p.tree.mesh.smoothing = 0.5;
+    p.tree.mesh.merge_straight = Some(6.0);
     p
 }
 
@@ -43,6 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ctx = RunContext::default();
     let (mut best_points, mut best_growth) = (f64::INFINITY, f64::INFINITY);
     let mut last = (0, 0, 0);
+    let mut grown = None;
     for _ in 0..rounds {
         let mut sc = SpaceColonization::new(oak(points), Location::new("oak", 1))?;
         let t = Instant::now();
@@ -55,6 +62,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         best_growth = best_growth.min(growth);
         let skeleton = sc.skeleton().unwrap_or_default();
         last = (sc.iterations(), skeleton.len(), checksum(&skeleton));
+        grown = Some(sc);
+    }
+    let (mut best_finish, mut best_radii) = (f64::INFINITY, f64::INFINITY);
+    let mut prepared = 0;
+    if let Some(sc) = grown {
+        let mut mesh = sc.params().tree.mesh.clone();
+        mesh.radii = pge_tree::RadiiMode::Keep;
+        for _ in 0..rounds {
+            let t = Instant::now();
+            let skeleton = Algorithm::skeleton(&sc).unwrap_or_default();
+            best_finish = best_finish.min(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            let s = pge_tree::prepare_skeleton(&skeleton, &mesh)?;
+            best_radii = best_radii.min(t.elapsed().as_secs_f64());
+            prepared = s.len();
+        }
     }
     println!(
         "{} iterations, {} nodes (checksum {:016x}); fastest of {rounds}: points {:.3} ms, growth {:.3} ms",
@@ -63,6 +86,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         last.2,
         best_points * 1e3,
         best_growth * 1e3
+    );
+    println!(
+        "finish's skeleton {:.4} ms, radii {:.4} ms ({prepared} nodes prepared)",
+        best_finish * 1e3,
+        best_radii * 1e3
     );
     Ok(())
 }

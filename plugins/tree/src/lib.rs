@@ -143,6 +143,12 @@ pub fn check_skeleton(skeleton: &Skeleton) -> Result<(), TreeError> {
 /// `tip_radius` with `exponent`, or kept), then smoothed, then straight chains merged.
 pub fn prepare_skeleton(skeleton: &Skeleton, options: &MeshOptions) -> Result<Skeleton, TreeError> {
     check_skeleton(skeleton)?;
+    if options.radii == RadiiMode::Keep
+        && let Some(angle) = options.merge_straight
+    {
+        // The radii are the skeleton's: no copy to change them in.
+        return Ok(merge::smooth_and_merge(skeleton, options.smoothing, angle));
+    }
     let mut s = skeleton.clone();
     if options.radii == RadiiMode::Pipe {
         pipe_radii(&mut s, options.tip_radius, options.exponent);
