@@ -6,7 +6,7 @@ use glam::{Mat4, Vec3};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
-use serde_json::{Map, Value as JsonValue, json};
+use serde_json::{Value as JsonValue, json};
 
 use crate::geometry::{
     AlphaMode, DiffuseTransmission, InstanceGroup, Material, Mesh, Model, Primitive, Texture,
@@ -664,37 +664,23 @@ impl Builder {
         let mut b = self;
         // What the instances of shared variants draw (a tile that refers to them).
         let [sv, st, sn, sl] = b.shared_counts(model);
-        let params: Map<String, JsonValue> = meta.params.iter().cloned().collect();
-        let mut pge = Map::new();
-        pge.insert("generator".into(), GENERATOR.into());
-        pge.insert("seed".into(), meta.seed.into());
-        pge.insert("params".into(), JsonValue::Object(params));
-        pge.insert(
-            "stats".into(),
-            json!({
-                "vertices": model.vertex_count() as u64 + sv,
-                "triangles": model.triangle_count() as u64 + st,
-                "nodes": model.stats.nodes + sn,
-                "leaves": model.stats.leaves + sl,
-                "modules": model.stats.modules,
-            }),
-        );
-        if let Some(env) = &model.environment {
-            let image = b.image(env).value();
-            pge.insert(
-                "environment".into(),
-                json!({ "image": image, "mapping": "equirectangular" }),
-            );
-        }
-        for (k, v) in &model.extras {
-            pge.entry(k.clone()).or_insert_with(|| v.clone());
-        }
-        if let Some(stages) = stages {
-            pge.insert("stages".into(), stages);
-        }
+        let environment = model.environment.as_ref().map(|env| b.image(env).value());
         // Blender keeps a scene's extras but drops the root's, three.js shows a scene's as
         // `userData`: every scene carries the run's extras too.
-        let extras = raw(&json!({ "pge": pge }))?;
+        let extras = RootExtras {
+            meta,
+            stats: [
+                model.vertex_count() as u64 + sv,
+                model.triangle_count() as u64 + st,
+                model.stats.nodes + sn,
+                model.stats.leaves + sl,
+                model.stats.modules,
+            ],
+            environment,
+            extras: &model.extras,
+            stages: stages.as_ref(),
+        }
+        .extras()?;
         for scene in &mut b.root.scenes {
             scene.extras.clone_from(&extras);
         }
@@ -730,11 +716,14 @@ impl Builder {
 mod extensions;
 #[path = "glb_lod_extras.rs"]
 mod lod_extras;
+#[path = "glb_root_extras.rs"]
+mod root_extras;
 #[path = "glb_write.rs"]
 mod write;
 pub use extensions::DIFFUSE_TRANSMISSION;
 use extensions::with_extensions;
 use lod_extras::{group_leaves_extras, placement_leaves_extras};
+use root_extras::RootExtras;
 pub use write::write_glb_with;
 
 #[path = "glb_shared.rs"]

@@ -3,6 +3,7 @@
 use super::*;
 use crate::export::SkeletonText;
 use crate::geometry::Skeleton;
+use serde_json::Map;
 
 #[test]
 fn stages_are_named_scenes_sharing_their_textures() {
