@@ -14,6 +14,7 @@
 use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::{Vec2, Vec3, Vec4};
+use pge_engine::export::TextMemory;
 use pge_engine::geometry::{LeafPoint, SearchMemory, resident_vec};
 
 use crate::TreeOptions;
@@ -28,6 +29,8 @@ pub struct MeshSizes {
     pub bark_indices: usize,
     /// The leaves (four vertices and six indices each).
     pub leaves: usize,
+    /// The prepared skeleton's nodes (its text for the glb).
+    pub nodes: usize,
 }
 
 impl MeshSizes {
@@ -46,6 +49,7 @@ impl MeshSizes {
             bark_vertices: nodes * (sides + 1) * 8 / 5,
             bark_indices: nodes * sides * 7,
             leaves: nodes * per_tip / 4,
+            nodes,
         }
     }
 }
@@ -76,6 +80,8 @@ pub(crate) struct LeafBuffers {
     pub(crate) uvs: Vec<Vec2>,
     pub(crate) colors: Vec<Vec4>,
     pub(crate) indices: Vec<u32>,
+    /// The skeleton's text for the glb, formatted beside the bark.
+    pub(crate) text: TextMemory,
 }
 
 /// Memory for a tree's meshes, being made resident on the rayon pool while the tree grows
@@ -206,6 +212,11 @@ fn make(ready: &Mutex<Option<Buffers>>, sizes: MeshSizes) {
         || SearchMemory::resident(4 * l, 2 * l),
         |b| &mut b.leaves.search,
     );
+    put(
+        ready,
+        || TextMemory::resident(sizes.nodes),
+        |b| &mut b.leaves.text,
+    );
 }
 
 /// Makes one part (`make`) and puts it where `field` says in `ready`, unless the arrays were
@@ -249,6 +260,7 @@ mod tests {
                 bark_vertices: 17_600,
                 bark_indices: 70_000,
                 leaves: 2_250,
+                nodes: 1000,
             }
         );
         let bare = TreeOptions {
@@ -264,6 +276,7 @@ mod tests {
             bark_vertices: 5000,
             bark_indices: 20_000,
             leaves: 300,
+            nodes: 0,
         };
         let memory = MeshMemory::made_now(sizes);
         let shared = memory.clone();
@@ -287,6 +300,7 @@ mod tests {
             bark_vertices: AHEAD_BELOW,
             bark_indices: 0,
             leaves: 0,
+            nodes: 0,
         };
         let memory = MeshMemory::prepare_after(sizes, move || *lock(&flag) = true);
         assert!(memory.ready.is_none());
