@@ -14,9 +14,7 @@ use serde_json::Value as JsonValue;
 use serde_json::ser::{CompactFormatter, Formatter};
 use serde_json::value::RawValue;
 
-use glam::Vec3;
-
-use crate::geometry::{Mesh, Skeleton, resident_vec};
+use crate::geometry::{Mesh, Skeleton};
 use crate::{Error, Result};
 
 /// Numbers of a skeleton's array a thread formats at a time (about 60 µs of floats).
@@ -174,35 +172,9 @@ impl Array {
         }
     }
 
-    /// The most bytes a number of the array and its comma take in a skeleton of `nodes`
-    /// nodes, about (a longer one makes its piece grow): a float as an `f64` (at most 24
-    /// characters), a parent's number or -1, an order of up to three digits.
-    fn most_bytes(self, nodes: usize) -> usize {
-        match self {
-            Array::Parents => nodes.max(10).ilog10() as usize + 2,
-            Array::Positions | Array::Radii => 25,
-            Array::Orders => 4,
-        }
-    }
-
-    /// How many numbers the array has in a skeleton of `nodes` nodes.
-    fn numbers(self, nodes: usize) -> usize {
-        match self {
-            Array::Positions => 3 * nodes,
-            Array::Parents | Array::Radii | Array::Orders => nodes,
-        }
-    }
-
-    /// The numbers `range` of the array, each after a comma but the array's first, written
-    /// into `out` (emptied first).
-    fn format(
-        self,
-        sk: &Skeleton,
-        range: Range<usize>,
-        mut out: Vec<u8>,
-    ) -> std::io::Result<Vec<u8>> {
-        out.clear();
-        out.reserve(12 * range.len());
+    /// The numbers `range` of the array, each after a comma but the array's first.
+    fn format(self, sk: &Skeleton, range: Range<usize>) -> std::io::Result<Vec<u8>> {
+        let mut out = Vec::with_capacity(12 * range.len());
         let mut f = CompactFormatter;
         for k in range {
             if k > 0 {
@@ -236,13 +208,7 @@ impl Formatted {
     /// The numbers of the skeleton's arrays, in pieces of [`PIECE_NUMBERS`], formatted on the
     /// rayon pool when `share` and they are [`FORMAT_IN_PARALLEL`] or more.
     fn new(sk: &Skeleton, share: bool) -> std::io::Result<Formatted> {
-        Formatted::new_in(sk, share, Vec::new())
-    }
-
-    /// [`Formatted::new`], piece `k` written into `room[k]` (fresh memory past its end).
-    fn new_in(sk: &Skeleton, share: bool, room: Vec<Vec<u8>>) -> std::io::Result<Formatted> {
-        let mut room = room.into_iter();
-        let jobs: Vec<(Array, Range<usize>, Vec<u8>)> = Array::ALL
+        let jobs: Vec<(Array, Range<usize>)> = Array::ALL
             .into_iter()
             .flat_map(|array| {
                 let n = array.len(sk);
@@ -250,10 +216,8 @@ impl Formatted {
                     .step_by(PIECE_NUMBERS)
                     .map(move |s| (array, s..(s + PIECE_NUMBERS).min(n)))
             })
-            .map(|(array, range)| (array, range, room.next().unwrap_or_default()))
             .collect();
-        let format =
-            |(array, range, out): (Array, Range<usize>, Vec<u8>)| array.format(sk, range, out);
+        let format = |(array, range): (Array, Range<usize>)| array.format(sk, range);
         let pieces = if !share || Formatted::numbers(sk) < FORMAT_IN_PARALLEL {
             jobs.into_iter()
                 .map(format)
@@ -299,64 +263,19 @@ pub struct SkeletonText {
     formatted: Formatted,
 }
 
-/// Memory for a [`SkeletonText`] ([`SkeletonText::new_in`]): its pieces' and its copy of
-/// the numbers, made resident ahead by a generator with an idle thread. The default has
-/// none (fresh memory).
-#[derive(Debug, Default)]
-pub struct TextMemory {
-    /// Room for each piece, in the order they are formatted.
-    pieces: Vec<Vec<u8>>,
-    /// Room for the copy of the numbers.
-    from: Skeleton,
-}
-
-impl TextMemory {
-    /// Room for the text of a skeleton of up to `nodes` nodes, every page of it written once
-    /// ([`resident_vec`]). A bigger skeleton's text grows as a fresh one would.
-    #[must_use]
-    pub fn resident(nodes: usize) -> TextMemory {
-        let pieces = Array::ALL
-            .into_iter()
-            .flat_map(|array| {
-                let n = array.numbers(nodes);
-                (0..n).step_by(PIECE_NUMBERS).map(move |s| {
-                    let numbers = (n - s).min(PIECE_NUMBERS);
-                    resident_vec(numbers * array.most_bytes(nodes), 0u8)
-                })
-            })
-            .collect();
-        let from = Skeleton {
-            positions: resident_vec(nodes, Vec3::ZERO),
-            parents: resident_vec(nodes, None),
-            radii: resident_vec(nodes, 0.0),
-            orders: resident_vec(nodes, 0),
-            leaves: Vec::new(),
-        };
-        TextMemory { pieces, from }
-    }
-}
-
 impl SkeletonText {
     /// The text of `skeleton`, formatted on the calling thread (one with time to spare: the
     /// pool's threads may be busy).
     pub fn new(skeleton: &Skeleton) -> Result<SkeletonText> {
-        SkeletonText::new_in(skeleton, TextMemory::default())
-    }
-
-    /// [`SkeletonText::new`] written into `memory`: the same text.
-    pub fn new_in(skeleton: &Skeleton, memory: TextMemory) -> Result<SkeletonText> {
-        let TextMemory { pieces, mut from } = memory;
         let formatted =
-            Formatted::new_in(skeleton, false, pieces).map_err(|e| Error::Export(e.to_string()))?;
-        from.positions.clear();
-        from.positions.extend_from_slice(&skeleton.positions);
-        from.parents.clear();
-        from.parents.extend_from_slice(&skeleton.parents);
-        from.radii.clear();
-        from.radii.extend_from_slice(&skeleton.radii);
-        from.orders.clear();
-        from.orders.extend_from_slice(&skeleton.orders);
-        from.leaves = Vec::new();
+            Formatted::new(skeleton, false).map_err(|e| Error::Export(e.to_string()))?;
+        let from = Skeleton {
+            positions: skeleton.positions.clone(),
+            parents: skeleton.parents.clone(),
+            radii: skeleton.radii.clone(),
+            orders: skeleton.orders.clone(),
+            leaves: Vec::new(),
+        };
         Ok(SkeletonText { from, formatted })
     }
 
@@ -496,59 +415,5 @@ impl JsonText {
         let mut out = vec![0; self.len];
         self.write(&mut out);
         out
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn skeleton(nodes: usize) -> Skeleton {
-        let mut sk = Skeleton::default();
-        for k in 0..nodes {
-            let x = k as f32;
-            sk.positions.push(Vec3::new(x * 0.37, -x / 7.0, 1e-7 * x));
-            sk.parents.push(k.checked_sub(1).map(|p| p as u32));
-            sk.radii
-                .push(if k == 5 { f32::NAN } else { 0.1 / (x + 1.0) });
-            sk.orders.push((k % 300) as u32);
-        }
-        sk
-    }
-
-    fn text(t: &SkeletonText) -> Vec<u8> {
-        t.formatted.slices().flatten().copied().collect()
-    }
-
-    #[test]
-    fn text_in_memory_made_ahead_is_the_same() {
-        for nodes in [0, 1, 700, 2049, 5000] {
-            let sk = skeleton(nodes);
-            let fresh = SkeletonText::new(&sk).expect("formatted");
-            // Room for all, for fewer nodes (grows), for more, and memory left full.
-            for room in [nodes, nodes / 3, 2 * nodes + 10] {
-                let mut memory = TextMemory::resident(room);
-                if let Some(piece) = memory.pieces.first_mut() {
-                    piece.extend_from_slice(b"left over");
-                }
-                memory.from.radii.push(9.0);
-                let made = SkeletonText::new_in(&sk, memory).expect("formatted");
-                assert_eq!(text(&made), text(&fresh), "{nodes} nodes, room {room}");
-                assert!(made.made_from(&sk) && made.from.radii.len() == nodes);
-            }
-        }
-    }
-
-    #[test]
-    fn memory_has_room_for_the_longest_numbers() {
-        let memory = TextMemory::resident(2000);
-        // Parents, positions (three pieces), radii, orders.
-        let rooms: Vec<usize> = memory.pieces.iter().map(Vec::capacity).collect();
-        assert_eq!(rooms.len(), 6);
-        assert!(rooms[1] >= 2048 * 25 && rooms[3] >= 1904 * 25 && rooms[0] >= 2000 * 5);
-        assert!(memory.from.positions.capacity() >= 2000);
-        let mut out = Vec::new();
-        float(&mut out, -2.225_073_9e-38).expect("formatted");
-        assert!(out.len() < Array::Radii.most_bytes(1));
     }
 }

@@ -3,7 +3,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use super::{GeometryError, Mesh, Skeleton, Texture};
-use crate::export::{SkeletonText, TextMemory};
+use crate::export::SkeletonText;
 
 /// One placement of a mesh in the model (a glTF node).
 #[derive(Clone, Debug, PartialEq)]
@@ -230,13 +230,7 @@ impl Model {
     /// [`Model::skeleton_texts`]), as a small tree's leaves do beside its bark. Formatting
     /// into memory does not fail; should it, the export formats the skeleton and reports why.
     pub fn prepare_skeleton_text(&mut self, skeleton: &Skeleton) {
-        self.prepare_skeleton_text_in(skeleton, TextMemory::default());
-    }
-
-    /// [`Model::prepare_skeleton_text`] written into `memory` (made resident ahead): the same
-    /// text.
-    pub fn prepare_skeleton_text_in(&mut self, skeleton: &Skeleton, memory: TextMemory) {
-        if let Ok(text) = SkeletonText::new_in(skeleton, memory) {
+        if let Ok(text) = SkeletonText::new(skeleton) {
             self.skeleton_texts.push(Arc::new(text));
         }
     }

@@ -310,7 +310,6 @@ pub fn build_tree_in(
                 uvs,
                 colors,
                 indices,
-                text,
             } = leaf_memory;
             let tips = match &options.leaves {
                 Some(leaf_options) => {
@@ -345,7 +344,7 @@ pub fn build_tree_in(
             // The bark's skeleton as the glb writes it, formatted here beside a small tree's
             // bark (which takes longer than its leaves) rather than in the export.
             if has_bark && small {
-                model.prepare_skeleton_text_in(&prepared, text);
+                model.prepare_skeleton_text(&prepared);
             }
             (points, mesh)
         },

@@ -14,7 +14,6 @@
 use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::{Vec2, Vec3, Vec4};
-use pge_engine::export::TextMemory;
 use pge_engine::geometry::{LeafPoint, SearchMemory, resident_vec};
 
 use crate::TreeOptions;
@@ -29,8 +28,6 @@ pub struct MeshSizes {
     pub bark_indices: usize,
     /// The leaves (four vertices and six indices each).
     pub leaves: usize,
-    /// The prepared skeleton's nodes (its text for the glb).
-    pub nodes: usize,
 }
 
 impl MeshSizes {
@@ -49,7 +46,6 @@ impl MeshSizes {
             bark_vertices: nodes * (sides + 1) * 8 / 5,
             bark_indices: nodes * sides * 7,
             leaves: nodes * per_tip / 4,
-            nodes,
         }
     }
 }
@@ -80,8 +76,6 @@ pub(crate) struct LeafBuffers {
     pub(crate) uvs: Vec<Vec2>,
     pub(crate) colors: Vec<Vec4>,
     pub(crate) indices: Vec<u32>,
-    /// The skeleton's text for the glb, formatted beside the bark.
-    pub(crate) text: TextMemory,
 }
 
 /// Memory for a tree's meshes, being made resident on the rayon pool while the tree grows
@@ -212,11 +206,6 @@ fn make(ready: &Mutex<Option<Buffers>>, sizes: MeshSizes) {
         || SearchMemory::resident(4 * l, 2 * l),
         |b| &mut b.leaves.search,
     );
-    put(
-        ready,
-        || TextMemory::resident(sizes.nodes),
-        |b| &mut b.leaves.text,
-    );
 }
 
 /// Makes one part (`make`) and puts it where `field` says in `ready`, unless the arrays were
@@ -260,7 +249,6 @@ mod tests {
                 bark_vertices: 17_600,
                 bark_indices: 70_000,
                 leaves: 2_250,
-                nodes: 1000,
             }
         );
         let bare = TreeOptions {
@@ -276,7 +264,6 @@ mod tests {
             bark_vertices: 5000,
             bark_indices: 20_000,
             leaves: 300,
-            nodes: 0,
         };
         let memory = MeshMemory::made_now(sizes);
         let shared = memory.clone();
@@ -300,7 +287,6 @@ mod tests {
             bark_vertices: AHEAD_BELOW,
             bark_indices: 0,
             leaves: 0,
-            nodes: 0,
         };
         let memory = MeshMemory::prepare_after(sizes, move || *lock(&flag) = true);
         assert!(memory.ready.is_none());
