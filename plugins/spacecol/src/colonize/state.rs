@@ -23,9 +23,10 @@ pub(super) struct State {
     pub(super) alive_count: usize,
     /// Each point's nearest node within the influence radius and its squared distance to it.
     nearest: Vec<Nearest>,
-    /// The points with a nearest node, one bit each (bit `i % 64` of word `i / 64`): read
-    /// in increasing index order, the order pulls are summed in. A point that died keeps
-    /// its bit until the next pull reads and clears it.
+    /// The live points with a nearest node, one bit each (bit `i % 64` of word `i / 64`):
+    /// read in increasing index order, the order pulls are summed in. A point's bit is
+    /// cleared as it dies, so the pulls read no `alive` (a mispredicted branch as points
+    /// die).
     pulling: Vec<u64>,
     /// The points the last pull kept pulling (alive, with a nearest node that was not
     /// refused).
@@ -149,6 +150,7 @@ impl Part {
                 let i = i as usize;
                 if d2 < k2 {
                     alive[i] = false;
+                    pulling[i / 64] &= !(1 << (i % 64));
                     *killed += 1;
                     return None;
                 }
@@ -364,8 +366,8 @@ impl State {
     /// its own. Points whose node was refused at the last iteration are dropped as
     /// unreachable.
     ///
-    /// One pass over the bits of the points with a nearest node: no list to sort or merge,
-    /// and the bits of the points that died since are cleared on the way.
+    /// One pass over the bits of the live points with a nearest node: no list to sort or
+    /// merge.
     pub(super) fn pull(&mut self, iteration: u32, perceive: Option<f32>) {
         let mut pulled = 0;
         for w in 0..self.pulling.len() {
@@ -374,11 +376,8 @@ impl State {
             while bits != 0 {
                 let bit = bits & bits.wrapping_neg();
                 bits ^= bit;
+                // A point's bit is cleared as it dies: every point read here is alive.
                 let i = w * 64 + bit.trailing_zeros() as usize;
-                if !self.alive[i] {
-                    word ^= bit;
-                    continue;
-                }
                 let Nearest { node, d2 } = self.nearest[i];
                 let n = node as usize;
                 if self.refused[n] == iteration - 1 {
@@ -449,6 +448,7 @@ impl State {
                 parts,
                 alive,
                 alive_count,
+                pulling,
                 ..
             } = self;
             // A live point's reach is at least the kill distance (a point that close to a
@@ -456,7 +456,9 @@ impl State {
             for part in parts {
                 let first = part.first;
                 part.grid.update_near(position, p.kill, |j, _| {
-                    alive[first + j as usize] = false;
+                    let i = first + j as usize;
+                    alive[i] = false;
+                    pulling[i / 64] &= !(1 << (i % 64));
                     *alive_count -= 1;
                     None
                 });
@@ -625,6 +627,47 @@ mod tests {
     /// whatever order the points got their nodes in, drops the points of a node refused at
     /// the last iteration, and says whether any point still pulls: as a loop over all the
     /// points does.
+    /// Every point with a pulling bit is alive and has a nearest node.
+    fn assert_only_live_points_pull(st: &State) {
+        for i in 0..st.points.len() {
+            if st.pulling[i / 64] >> (i % 64) & 1 == 1 {
+                assert!(st.alive[i] && st.nearest[i].node != NONE, "point {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_start_skeleton_clears_the_bits_of_the_points_it_kills() {
+        let pts: Vec<Vec3> = (0..400)
+            .map(|i| Vec3::new((i % 20) as f32, (i / 20) as f32, 0.0) * 0.1)
+            .collect();
+        let mut p = Params::new(Shape::Sphere {
+            center: Vec3::ONE,
+            radius: 1.0,
+        });
+        (p.influence, p.kill, p.step) = (0.5, 0.15, 0.1);
+        let mut st = State::with_parts(pts, p.influence, 1);
+        // A root, a short tip (it gives points their nearest node), then a branch of inner
+        // nodes that kill some of those points, parents before children.
+        let mut positions = vec![Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.05, 1.0, 0.0)];
+        let mut parents = vec![None, Some(0)];
+        for k in 2..12 {
+            positions.push(Vec3::new(1.0 - (k - 1) as f32 * 0.08, 1.0, 0.0));
+            parents.push(Some(if k == 2 { 0 } else { k as u32 - 1 }));
+        }
+        let n = positions.len();
+        let start = Skeleton {
+            positions,
+            parents,
+            radii: vec![0.01; n],
+            orders: vec![0; n],
+            leaves: Vec::new(),
+        };
+        st.seed_from(&start, &p);
+        assert!(st.alive_count < 400, "no point killed");
+        assert_only_live_points_pull(&st);
+    }
+
     #[test]
     fn pulls_sum_the_live_points_in_index_order() {
         let mut rng = Mt64::new(7);
@@ -649,6 +692,7 @@ mod tests {
                 st.add_node(q, None, &p);
             }
             st.flush(&p);
+            assert_only_live_points_pull(&st);
             if iteration % 4 == 0 {
                 let n = (iteration as usize * 37) % st.nodes.len();
                 st.refused[n] = iteration - 1;
