@@ -26,13 +26,8 @@ pub(crate) fn smooth_and_merge(
         return merge_straight(skeleton, max_angle_degrees);
     }
     let positions = &skeleton.positions;
-    let smoothed: Vec<glam::Vec3> = positions
-        .iter()
-        .zip(&skeleton.parents)
-        .map(|(&v, parent)| match parent {
-            Some(p) => v + amount * (positions[*p as usize] - v),
-            None => v,
-        })
+    let smoothed: Vec<glam::Vec3> = (0..positions.len())
+        .map(|i| crate::smooth::smoothed(positions, &skeleton.parents, i, amount))
         .collect();
     let mut out = merge_by(skeleton, |i| smoothed[i], max_angle_degrees);
     // The leaves move with their nodes, as `smooth` moves them; `merge_by` kept their order

@@ -13,21 +13,26 @@ pub fn smooth(skeleton: &mut Skeleton, amount: f32) {
         return;
     }
     let positions = &mut skeleton.positions;
-    let moved = |positions: &[Vec3], i: usize, parent: Option<u32>| match parent {
-        Some(p) => positions[i] + amount * (positions[p as usize] - positions[i]),
-        None => positions[i],
-    };
     // The leaves first, while every position is the original.
     for leaf in &mut skeleton.leaves {
         let n = leaf.node as usize;
-        if let Some(&parent) = skeleton.parents.get(n) {
-            leaf.position += moved(positions, n, parent) - positions[n];
+        if n < positions.len() {
+            leaf.position += smoothed(positions, &skeleton.parents, n, amount) - positions[n];
         }
     }
     // Backwards: a parent precedes its children, so it is still where it was when they move
     // (no copy of the positions).
     for i in (0..positions.len()).rev() {
-        positions[i] = moved(positions, i, skeleton.parents[i]);
+        positions[i] = smoothed(positions, &skeleton.parents, i, amount);
+    }
+}
+
+/// Where smoothing by `amount` (already clamped) puts node `i`, from the original
+/// `positions`.
+pub(crate) fn smoothed(positions: &[Vec3], parents: &[Option<u32>], i: usize, amount: f32) -> Vec3 {
+    match parents[i] {
+        Some(p) => positions[i] + amount * (positions[p as usize] - positions[i]),
+        None => positions[i],
     }
 }
 
