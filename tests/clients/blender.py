@@ -31,14 +31,22 @@ def gltf_json(path):
 
 
 def expected(doc):
-    """What Blender should build from the glTF document `doc`."""
-    scene = doc["scenes"][doc.get("scene", 0)]
+    """What Blender should build from the glTF document `doc`.
+
+    Blender imports every scene of the file (a `--stages` glb has one per stage), so the
+    placements are counted over the nodes of all scenes, each node once.
+    """
     nodes = doc.get("nodes", [])
     accessors = doc.get("accessors", [])
     placements = 0
-    stack = list(scene.get("nodes", []))
+    seen = set()
+    stack = [n for scene in doc.get("scenes", []) for n in scene.get("nodes", [])]
     while stack:
-        node = nodes[stack.pop()]
+        index = stack.pop()
+        if index in seen:
+            continue
+        seen.add(index)
+        node = nodes[index]
         stack.extend(node.get("children", []))
         if "mesh" not in node:
             continue
@@ -53,6 +61,7 @@ def expected(doc):
         "materials": len(doc.get("materials", [])),
         "objects": placements,
         "mesh_extras": sorted(m["name"] for m in meshes if "pge" in m.get("extras", {})),
+        "scenes": max(len(doc.get("scenes", [])), 1),
     }
 
 
@@ -71,8 +80,10 @@ def imported(path):
     result = bpy.ops.import_scene.gltf(filepath=path)
     if result != {"FINISHED"}:
         raise RuntimeError(f"the importer returned {result}")
+    # The scene that holds the run's extras is the file's default scene, the one the importer
+    # makes active; objects are counted over every scene it made.
     scene = bpy.context.scene
-    mesh_objects = [o for o in scene.objects if o.type == "MESH"]
+    mesh_objects = [o for o in bpy.data.objects if o.type == "MESH" and o.users_scene]
     used_meshes = {o.data.name: o.data for o in mesh_objects}
     return {
         "meshes": len(bpy.data.meshes),
@@ -84,6 +95,7 @@ def imported(path):
         "scene_extras": to_python(scene["pge"]) if "pge" in scene.keys() else None,
         "faces": sum(len(o.data.polygons) for o in mesh_objects),
         "edges": sum(len(o.data.edges) for o in mesh_objects),
+        "scenes": len(bpy.data.scenes),
     }
 
 
@@ -93,7 +105,7 @@ def check(path):
     want = expected(doc)
     got = imported(path)
     problems = []
-    for key in ("meshes", "materials", "objects"):
+    for key in ("meshes", "materials", "objects", "scenes"):
         if got[key] != want[key]:
             problems.append(f"{key}: Blender has {got[key]}, the file has {want[key]}")
     # Blender names meshes after the glTF mesh; names may repeat, so compare the sets.
@@ -133,7 +145,7 @@ def main(paths):
         else:
             print(
                 f"ok   {path}: {got['meshes']} meshes, {got['materials']} materials, "
-                f"{got['objects']} objects, {got['faces']} faces, "
+                f"{got['objects']} objects in {got['scenes']} scenes, {got['faces']} faces, "
                 f"{len(want['mesh_extras'])} meshes with extras, scene extras "
                 f"{sorted(got['scene_extras'])}"
             )

@@ -12,22 +12,15 @@
 // 127.0.0.1 only, each file by its path, so a glb whose buffer is a file beside it (a tile
 // that refers to its world's `../variants.bin`) is loaded as a viewer loads it from disk.
 
-import { createServer } from "node:http";
-import { createRequire } from "node:module";
-import { readFileSync, writeFileSync, mkdirSync, existsSync } from "node:fs";
-import { basename, dirname, join, resolve, extname } from "node:path";
+import { writeFileSync, mkdirSync } from "node:fs";
+import { basename, join } from "node:path";
+import { importMap, open } from "./harness.mjs";
 
 const [modules, out, ...files] = process.argv.slice(2);
 if (!modules || !out || files.length === 0) {
   console.error("usage: node three.mjs NODE_MODULES OUT_DIR FILE.glb...");
   process.exit(2);
 }
-const require = createRequire(join(resolve(modules), "noop.js"));
-// The folders whose files the server may send: each file's folder's parent.
-const roots = [...new Set(files.map((f) => dirname(dirname(resolve(f)))))];
-const fileUrl = (f) => "/fs" + resolve(f).split("/").map(encodeURIComponent).join("/");
-const { chromium } = require("playwright-core");
-const threeDir = join(resolve(modules), "three");
 mkdirSync(out, { recursive: true });
 
 const WIDTH = 640;
@@ -37,8 +30,7 @@ const HEIGHT = 480;
 // error could land while the first file is shown (a flake seen once in CI).
 const page_html = `<!doctype html>
 <html><head><meta charset="utf-8"><link rel="icon" href="data:,"><style>body{margin:0;background:#000}</style>
-<script type="importmap">{"imports": {"three": "/three/build/three.module.js",
- "three/addons/": "/three/examples/jsm/"}}</script></head>
+${importMap}</head>
 <body><canvas id="view" width="${WIDTH}" height="${HEIGHT}"></canvas>
 <script type="module">
 import * as THREE from "three";
@@ -146,71 +138,19 @@ window.show = async (url, expectEmpty) => {
 window.ready = true;
 </script></body></html>`;
 
-const types = { ".js": "text/javascript", ".mjs": "text/javascript", ".html": "text/html" };
-
-const server = createServer((req, res) => {
-  const url = new URL(req.url, "http://127.0.0.1");
-  let body = null;
-  let type = "application/octet-stream";
-  if (url.pathname === "/") {
-    body = page_html;
-    type = "text/html";
-  } else if (url.pathname.startsWith("/three/")) {
-    const path = resolve(threeDir, "." + decodeURIComponent(url.pathname.slice(6)));
-    if (path.startsWith(threeDir + "/") && existsSync(path)) {
-      body = readFileSync(path);
-      type = types[extname(path)] ?? type;
-    }
-  } else if (url.pathname.startsWith("/fs/")) {
-    // A file by its absolute path, so that the URIs of a glb's external buffers resolve as
-    // on disk (a tile's "../variants.bin"): the given files and what lies in their folders
-    // and the folders above them, nothing else.
-    const path = resolve("/" + url.pathname.slice(4).split("/").map(decodeURIComponent).join("/"));
-    if (roots.some((root) => path.startsWith(root + "/")) && existsSync(path)) {
-      body = readFileSync(path);
-      type = extname(path) === ".glb" ? "model/gltf-binary" : type;
-    }
-  }
-  if (body === null) {
-    res.writeHead(404);
-    res.end();
-    return;
-  }
-  res.writeHead(200, { "content-type": type });
-  res.end(body);
-});
-await new Promise((ok) => server.listen(0, "127.0.0.1", ok));
-const base = `http://127.0.0.1:${server.address().port}`;
-
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium",
-  headless: true,
-  args: [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-    // WebGL without a GPU: Chromium's software rasterizer (SwiftShader) must be asked for.
-    "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-  ],
-});
+const h = await open(modules, files, page_html, { width: WIDTH, height: HEIGHT });
 const summary = {};
 let failures = 0;
 try {
-  const page = await browser.newPage({ viewport: { width: WIDTH, height: HEIGHT } });
-  let messages = [];
-  page.on("console", (m) => {
-    if (m.type() === "error" || m.type() === "warning") messages.push(`${m.type()}: ${m.text()}`);
-  });
-  page.on("pageerror", (e) => messages.push(`page error: ${e.message}`));
-  await page.goto(base + "/");
-  await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
+  const { page, messages } = h;
   for (const file of files) {
     const name = basename(file, ".glb");
-    messages = [];
+    messages.length = 0;
     const t0 = Date.now();
     let result;
     try {
       result = await page.evaluate(([url, empty]) => window.show(url, empty),
-        [base + fileUrl(file), name.startsWith("empty_")]);
+        [h.url(file), name.startsWith("empty_")]);
     } catch (e) {
       result = { error: String(e.message ?? e).split("\n")[0] };
     }
@@ -237,8 +177,7 @@ try {
     }
   }
 } finally {
-  await browser.close();
-  server.close();
+  await h.close();
 }
 writeFileSync(join(out, "three.json"), JSON.stringify(summary, null, 1) + "\n");
 if (failures > 0) {
