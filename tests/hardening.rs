@@ -264,12 +264,34 @@ fn img_save_writes_only_png_files_inside_the_output_folder() {
         case.fails_at(1, &["leads outside"]);
         assert!(!outside.path().join("x.png").exists());
     }
-    // A PNG goes beside the output.
+    // A dangling link planted at the target itself is refused, not followed to write the
+    // file it names outside.
+    #[cfg(unix)]
+    {
+        let outside = tempfile::tempdir().expect("tempdir");
+        let case = Case::new(&format!("pge.Image.new(1, 1):save(\"x.png\")\n{keep}"));
+        std::fs::create_dir_all(case.path("out")).expect("out");
+        let planted = outside.path().join("planted.png");
+        std::os::unix::fs::symlink(&planted, case.path("out/x.png")).expect("link");
+        case.fails_at(1, &["leads outside", "symbolic link"]);
+        assert!(
+            !planted.exists(),
+            "img:save followed a dangling link out of the folder"
+        );
+    }
+    // A PNG goes beside the output, replacing what was there, and no temporary file stays.
     let case = Case::new(&format!("pge.Image.new(2, 2):save(\"maps/a.png\")\n{keep}"));
+    std::fs::create_dir_all(case.path("out/maps")).expect("maps");
+    std::fs::write(case.path("out/maps/a.png"), "old").expect("old file");
     case.succeeds(&[]);
     let png = std::fs::read(case.path("out/maps/a.png")).expect("the image beside the output");
     assert!(png.starts_with(b"\x89PNG"));
     assert!(!case.path("maps").exists());
+    let names: Vec<_> = std::fs::read_dir(case.path("out/maps"))
+        .expect("maps")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(names, ["a.png"], "only the image is left in its folder");
 }
 
 fn usage_error(args: &[&str]) {

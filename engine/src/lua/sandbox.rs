@@ -221,7 +221,9 @@ pub fn resolve_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
 /// Where a script may write `relative`: a relative path without `..`, taken from the
 /// output's folder when the session has one ([`crate::Session::set_output_folder`], `pge
 /// run -o`), else from the main script's folder; missing folders on the way are created by
-/// the caller. Never outside those folders (a symbolic link that leads out is refused).
+/// the caller. Never outside those folders: a symbolic link anywhere below the folder, at the
+/// target included (a dangling one too), is refused. Write with [`write_inside`], which
+/// also never follows a link planted after this check.
 pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
     let p = Path::new(relative);
     if relative.is_empty()
@@ -245,26 +247,54 @@ pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
     };
     std::fs::create_dir_all(&base)
         .map_err(|e| script_error(lua, format!("cannot write '{relative}': {e}")))?;
-    let target = base.join(p);
-    // An existing folder or file on the way must not lead out through a link.
-    let mut existing = target.as_path();
-    while !existing.exists() {
-        match existing.parent() {
-            Some(parent) => existing = parent,
-            None => break,
+    // Every step below the folder, read without following links: a link (to a folder or a
+    // file, dangling or not) could lead out.
+    let mut step = base.clone();
+    for part in p.components() {
+        let Component::Normal(name) = part else {
+            continue;
+        };
+        step.push(name);
+        match std::fs::symlink_metadata(&step) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                return Err(script_error(
+                    lua,
+                    format!(
+                        "cannot write '{relative}': it leads outside the folder scripts write \
+                         into through the symbolic link '{}'",
+                        step.display()
+                    ),
+                ));
+            }
+            Ok(_) => {}
+            Err(_) => break,
         }
     }
-    let inside = existing
-        .canonicalize()
-        .ok()
-        .zip(base.canonicalize().ok())
-        .is_some_and(|(e, b)| e.starts_with(b));
-    if !inside {
-        return Err(script_error(
-            lua,
-            format!("cannot write '{relative}': it leads outside the folder scripts write into"),
-        ));
-    }
+    Ok(base.join(p))
+}
+
+/// Writes `bytes` to `relative` in the folder scripts write into (checked by
+/// [`writable_path`]; missing folders are created): into a new temporary file beside the
+/// target, renamed over it. Nothing is half-written, and a link planted at the target is
+/// replaced by the file, never followed.
+pub fn write_inside(lua: &Lua, relative: &str, bytes: &[u8]) -> mlua::Result<PathBuf> {
+    use std::io::Write;
+    let target = writable_path(lua, relative)?;
+    let fail =
+        |e: &dyn std::fmt::Display| script_error(lua, format!("cannot write '{relative}': {e}"));
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).map_err(|e| fail(&e))?;
+    // The folders just made are checked again: a link may have been planted on the way.
+    writable_path(lua, relative)?;
+    let mut file = tempfile::Builder::new()
+        .prefix(".pge-write-")
+        .tempfile_in(&dir)
+        .map_err(|e| fail(&e))?;
+    file.write_all(bytes).map_err(|e| fail(&e))?;
+    file.persist(&target).map_err(|e| fail(&e.error))?;
     Ok(target)
 }
 

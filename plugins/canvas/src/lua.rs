@@ -9,7 +9,7 @@ use mlua::{Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
     Bounds, LuaMesh, LuaModel, Options, finite_number, resolve_path, script_error, to_model,
-    vec3_arg, writable_path,
+    vec3_arg, write_inside,
 };
 
 use crate::{Image, Lines};
@@ -231,16 +231,12 @@ impl UserData for LuaImage {
                     format!("save('{p}'): the file name must end in .png"),
                 ));
             }
-            let target = writable_path(lua, &p)?;
             let png =
                 me.0.borrow()
                     .png()
                     .map_err(|e| script_error(lua, format!("save: {e}")))?;
-            if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir)
-                    .map_err(|e| script_error(lua, format!("save '{p}': {e}")))?;
-            }
-            std::fs::write(&target, png).map_err(|e| script_error(lua, format!("save '{p}': {e}")))
+            write_inside(lua, &p, &png)?;
+            Ok(())
         });
         m.add_method("clone", |_, me, ()| {
             Ok(LuaImage(Rc::new(RefCell::new(me.0.borrow().clone()))))
