@@ -1,6 +1,9 @@
-"""A real local Ray cluster for the tests: a head and one extra worker node, on 127.0.0.1
-only, one CPU each, a small object store, no dashboard, session files in a temporary
-folder; stopped at the end of the session even when a test fails."""
+"""A real local Ray cluster for the cluster tests.
+
+A head and one extra worker node, on 127.0.0.1 only, one CPU each, a small object store,
+no dashboard, session files in a temporary folder; stopped at the end of the session even
+when a test fails. Only the tests that ask for the ``cluster`` fixture start it.
+"""
 
 import os
 import shutil
@@ -8,6 +11,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 
 import pytest
 
@@ -17,8 +21,10 @@ OBJECT_STORE = str(80 * 1024 * 1024)
 
 
 def free_ports(n):
-    """``n`` distinct TCP ports nothing listens on at the moment (all bound at once, so the
-    kernel cannot hand out one twice)."""
+    """Return ``n`` distinct TCP ports nothing listens on at the moment.
+
+    They are bound all at once, so the kernel cannot hand out one twice.
+    """
     sockets = [socket.socket() for _ in range(n)]
     try:
         for s in sockets:
@@ -30,12 +36,12 @@ def free_ports(n):
 
 
 def free_port():
-    """A TCP port nothing listens on at the moment."""
+    """Return a TCP port nothing listens on at the moment."""
     return free_ports(1)[0]
 
 
 def ray_bin():
-    """The `ray` program of this Python environment."""
+    """Return the `ray` program of this Python environment."""
     path = os.path.join(os.path.dirname(sys.executable), "ray")
     return path if os.path.exists(path) else shutil.which("ray")
 
@@ -51,23 +57,25 @@ NODE_PORTS = [
 
 
 def node_ports(ports):
-    """Every port a Ray node opens, from ``ports`` (distinct, free), so two nodes on one
-    machine never clash."""
+    """Return the flags of every port a Ray node opens, from ``ports`` (distinct, free).
+
+    So two nodes on one machine never clash.
+    """
     return [f"{flag}={port}" for flag, port in zip(NODE_PORTS, ports)]
 
 
+@dataclass(frozen=True)
 class Cluster:
-    """The running cluster: its address and the extra node's node-manager port."""
+    """The running cluster: its address, the extra node's node-manager port, the env."""
 
-    def __init__(self, address, worker_port, env):
-        self.address = address
-        self.worker_port = worker_port
-        self.env = env
+    address: str
+    worker_port: int
+    env: dict[str, str]
 
 
 @pytest.fixture(scope="session")
 def pge_bin():
-    """The pge program under test: $PGE_BIN, else `pge` on the PATH."""
+    """Return the pge program under test: $PGE_BIN, else `pge` on the PATH."""
     path = os.environ.get("PGE_BIN") or shutil.which("pge")
     if not path:
         pytest.fail("no pge on the PATH: build it (cargo build --release) and add target/release")
@@ -76,7 +84,7 @@ def pge_bin():
 
 @pytest.fixture(scope="session")
 def cluster(pge_bin):
-    """Starts the head and one worker node; `ray stop` at the end, whatever happened."""
+    """Start the head and one worker node; `ray stop` at the end, whatever happened."""
     temp = tempfile.mkdtemp(prefix="pgeray", dir="/tmp")
     env = dict(os.environ)
     env["PATH"] = os.path.dirname(pge_bin) + os.pathsep + env.get("PATH", "")
@@ -88,14 +96,26 @@ def cluster(pge_bin):
     head_ports = node_ports(ports[1 : 1 + len(NODE_PORTS)])
     worker_ports = node_ports(ports[1 + len(NODE_PORTS) :])
     head = [
-        ray, "start", "--head", "--node-ip-address=127.0.0.1", f"--port={port}",
-        "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}", "--include-dashboard=false",
+        ray,
+        "start",
+        "--head",
+        "--node-ip-address=127.0.0.1",
+        f"--port={port}",
+        "--num-cpus=1",
+        f"--object-store-memory={OBJECT_STORE}",
+        "--include-dashboard=false",
         "--disable-usage-stats",
-    ] + head_ports
+        *head_ports,
+    ]
     worker = [
-        ray, "start", f"--address=127.0.0.1:{port}", "--node-ip-address=127.0.0.1",
-        "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}",
-    ] + worker_ports
+        ray,
+        "start",
+        f"--address=127.0.0.1:{port}",
+        "--node-ip-address=127.0.0.1",
+        "--num-cpus=1",
+        f"--object-store-memory={OBJECT_STORE}",
+        *worker_ports,
+    ]
     try:
         subprocess.run(head, env=env, check=True, capture_output=True, timeout=180)
         subprocess.run(worker, env=env, check=True, capture_output=True, timeout=180)

@@ -1,10 +1,12 @@
-"""How pge-world cuts the tiles into batches (one task and one pge process each), without a
-cluster: every tile in exactly one batch, batches even, one per CPU slot but no more than
-MAX_TILES_PER_TASK tiles each, or --tiles-per-task tiles each."""
+"""How pge-world cuts the tiles into batches (one task and one pge process each).
+
+Without a cluster: every tile in exactly one batch, batches even, one per CPU slot but no more than
+MAX_TILES_PER_TASK tiles each, or --tiles-per-task tiles each.
+"""
 
 import pytest
 
-from pge_world.cli import MAX_TILES_PER_TASK, batches_of
+from pge_world.plan import MAX_TILES_PER_TASK, batches_of
 
 
 @pytest.mark.parametrize(
@@ -18,7 +20,9 @@ from pge_world.cli import MAX_TILES_PER_TASK, batches_of
         (5, 0, 0, 1),  # no CPU reported: one batch
     ],
 )
-def test_batches_hold_every_tile_once_and_are_even(tiles, slots, per_task, count):
+def test_batches_hold_every_tile_once_and_are_even(
+    tiles: int, slots: int, per_task: int, count: int
+) -> None:
     todo = [{"i": k // 7, "j": k % 7} for k in range(tiles)]
     batches = batches_of(todo, slots, per_task)
     assert len(batches) == count
