@@ -12,7 +12,9 @@ import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 
+import fakes
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -20,7 +22,7 @@ FOREST = os.path.join(HERE, "forest.lua")
 OBJECT_STORE = str(80 * 1024 * 1024)
 
 
-def free_ports(n):
+def free_ports(n: int) -> list[int]:
     """Return ``n`` distinct TCP ports nothing listens on at the moment.
 
     They are bound all at once, so the kernel cannot hand out one twice.
@@ -35,7 +37,7 @@ def free_ports(n):
             s.close()
 
 
-def free_port():
+def free_port() -> int:
     """Return a TCP port nothing listens on at the moment."""
     return free_ports(1)[0]
 
@@ -126,3 +128,33 @@ def cluster(pge_bin):
     finally:
         subprocess.run([ray, "stop", "--force"], env=env, capture_output=True, timeout=120)
         shutil.rmtree(temp, ignore_errors=True)
+
+
+@dataclass(frozen=True)
+class FakePge:
+    """The fake ``pge`` of the unit tests (fakes.py) and the log of its calls."""
+
+    path: str
+    log: Path
+
+    def calls(self) -> list[list[str]]:
+        """Return the argument lists it was called with, in order."""
+        return fakes.calls(self.log)
+
+
+@pytest.fixture
+def fake_pge(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch) -> FakePge:
+    """Write a fake ``pge`` (no Rust build, no cluster): its path and its calls."""
+    folder = tmp_path_factory.mktemp("fakepge")
+    log = folder / "calls.log"
+    log.touch()
+    monkeypatch.setenv("FAKE_PGE_LOG", str(log))
+    return FakePge(str(fakes.fake_pge(folder)), log)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Refuse a unit test that would start the cluster or need the real ``pge``."""
+    for item in items:
+        needs = {"cluster", "pge_bin"} & set(getattr(item, "fixturenames", ()))
+        if item.get_closest_marker("unit") and needs:
+            raise pytest.UsageError(f"{item.nodeid} is marked unit but uses {sorted(needs)}")

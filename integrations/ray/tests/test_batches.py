@@ -8,6 +8,8 @@ import pytest
 
 from pge_world.plan import MAX_TILES_PER_TASK, batches_of
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize(
     "tiles, slots, per_task, count",
@@ -31,3 +33,10 @@ def test_batches_hold_every_tile_once_and_are_even(
     sizes = [len(b) for b in batches]
     assert max(sizes) - min(sizes) <= 1
     assert max(sizes) <= (per_task or MAX_TILES_PER_TASK)
+
+
+def test_tiles_are_dealt_in_turn() -> None:
+    # Neighbouring tiles (similar work) land in different batches.
+    assert batches_of(list(range(10)), 3, 0) == [[0, 3, 6, 9], [1, 4, 7], [2, 5, 8]]
+    assert batches_of(list(range(5)), 0, 2) == [[0, 3], [1, 4], [2]]
+    assert batches_of([], 4, 0) == []
