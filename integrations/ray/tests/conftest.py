@@ -1,6 +1,9 @@
-"""A real local Ray cluster for the tests: a head and one extra worker node, on 127.0.0.1
-only, one CPU each, a small object store, no dashboard, session files in a temporary
-folder; stopped at the end of the session even when a test fails."""
+"""A real local Ray cluster for the cluster tests.
+
+A head and one extra worker node, on 127.0.0.1 only, one CPU each, a small object store,
+no dashboard, session files in a temporary folder; stopped at the end of the session even
+when a test fails. Only the tests that ask for the ``cluster`` fixture start it.
+"""
 
 import os
 import shutil
@@ -8,7 +11,10 @@ import socket
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
+from pathlib import Path
 
+import fakes
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -16,9 +22,11 @@ FOREST = os.path.join(HERE, "forest.lua")
 OBJECT_STORE = str(80 * 1024 * 1024)
 
 
-def free_ports(n):
-    """``n`` distinct TCP ports nothing listens on at the moment (all bound at once, so the
-    kernel cannot hand out one twice)."""
+def free_ports(n: int) -> list[int]:
+    """Return ``n`` distinct TCP ports nothing listens on at the moment.
+
+    They are bound all at once, so the kernel cannot hand out one twice.
+    """
     sockets = [socket.socket() for _ in range(n)]
     try:
         for s in sockets:
@@ -29,13 +37,13 @@ def free_ports(n):
             s.close()
 
 
-def free_port():
-    """A TCP port nothing listens on at the moment."""
+def free_port() -> int:
+    """Return a TCP port nothing listens on at the moment."""
     return free_ports(1)[0]
 
 
 def ray_bin():
-    """The `ray` program of this Python environment."""
+    """Return the `ray` program of this Python environment."""
     path = os.path.join(os.path.dirname(sys.executable), "ray")
     return path if os.path.exists(path) else shutil.which("ray")
 
@@ -51,23 +59,25 @@ NODE_PORTS = [
 
 
 def node_ports(ports):
-    """Every port a Ray node opens, from ``ports`` (distinct, free), so two nodes on one
-    machine never clash."""
+    """Return the flags of every port a Ray node opens, from ``ports`` (distinct, free).
+
+    So two nodes on one machine never clash.
+    """
     return [f"{flag}={port}" for flag, port in zip(NODE_PORTS, ports)]
 
 
+@dataclass(frozen=True)
 class Cluster:
-    """The running cluster: its address and the extra node's node-manager port."""
+    """The running cluster: its address, the extra node's node-manager port, the env."""
 
-    def __init__(self, address, worker_port, env):
-        self.address = address
-        self.worker_port = worker_port
-        self.env = env
+    address: str
+    worker_port: int
+    env: dict[str, str]
 
 
 @pytest.fixture(scope="session")
 def pge_bin():
-    """The pge program under test: $PGE_BIN, else `pge` on the PATH."""
+    """Return the pge program under test: $PGE_BIN, else `pge` on the PATH."""
     path = os.environ.get("PGE_BIN") or shutil.which("pge")
     if not path:
         pytest.fail("no pge on the PATH: build it (cargo build --release) and add target/release")
@@ -76,7 +86,7 @@ def pge_bin():
 
 @pytest.fixture(scope="session")
 def cluster(pge_bin):
-    """Starts the head and one worker node; `ray stop` at the end, whatever happened."""
+    """Start the head and one worker node; `ray stop` at the end, whatever happened."""
     temp = tempfile.mkdtemp(prefix="pgeray", dir="/tmp")
     env = dict(os.environ)
     env["PATH"] = os.path.dirname(pge_bin) + os.pathsep + env.get("PATH", "")
@@ -88,14 +98,26 @@ def cluster(pge_bin):
     head_ports = node_ports(ports[1 : 1 + len(NODE_PORTS)])
     worker_ports = node_ports(ports[1 + len(NODE_PORTS) :])
     head = [
-        ray, "start", "--head", "--node-ip-address=127.0.0.1", f"--port={port}",
-        "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}", "--include-dashboard=false",
+        ray,
+        "start",
+        "--head",
+        "--node-ip-address=127.0.0.1",
+        f"--port={port}",
+        "--num-cpus=1",
+        f"--object-store-memory={OBJECT_STORE}",
+        "--include-dashboard=false",
         "--disable-usage-stats",
-    ] + head_ports
+        *head_ports,
+    ]
     worker = [
-        ray, "start", f"--address=127.0.0.1:{port}", "--node-ip-address=127.0.0.1",
-        "--num-cpus=1", f"--object-store-memory={OBJECT_STORE}",
-    ] + worker_ports
+        ray,
+        "start",
+        f"--address=127.0.0.1:{port}",
+        "--node-ip-address=127.0.0.1",
+        "--num-cpus=1",
+        f"--object-store-memory={OBJECT_STORE}",
+        *worker_ports,
+    ]
     try:
         subprocess.run(head, env=env, check=True, capture_output=True, timeout=180)
         subprocess.run(worker, env=env, check=True, capture_output=True, timeout=180)
@@ -106,3 +128,33 @@ def cluster(pge_bin):
     finally:
         subprocess.run([ray, "stop", "--force"], env=env, capture_output=True, timeout=120)
         shutil.rmtree(temp, ignore_errors=True)
+
+
+@dataclass(frozen=True)
+class FakePge:
+    """The fake ``pge`` of the unit tests (fakes.py) and the log of its calls."""
+
+    path: str
+    log: Path
+
+    def calls(self) -> list[list[str]]:
+        """Return the argument lists it was called with, in order."""
+        return fakes.calls(self.log)
+
+
+@pytest.fixture
+def fake_pge(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch) -> FakePge:
+    """Write a fake ``pge`` (no Rust build, no cluster): its path and its calls."""
+    folder = tmp_path_factory.mktemp("fakepge")
+    log = folder / "calls.log"
+    log.touch()
+    monkeypatch.setenv("FAKE_PGE_LOG", str(log))
+    return FakePge(str(fakes.fake_pge(folder)), log)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Refuse a unit test that would start the cluster or need the real ``pge``."""
+    for item in items:
+        needs = {"cluster", "pge_bin"} & set(getattr(item, "fixturenames", ()))
+        if item.get_closest_marker("unit") and needs:
+            raise pytest.UsageError(f"{item.nodeid} is marked unit but uses {sorted(needs)}")

@@ -1,10 +1,14 @@
-"""How pge-world cuts the tiles into batches (one task and one pge process each), without a
-cluster: every tile in exactly one batch, batches even, one per CPU slot but no more than
-MAX_TILES_PER_TASK tiles each, or --tiles-per-task tiles each."""
+"""How pge-world cuts the tiles into batches (one task and one pge process each).
+
+Without a cluster: every tile in exactly one batch, batches even, one per CPU slot but no more than
+MAX_TILES_PER_TASK tiles each, or --tiles-per-task tiles each.
+"""
 
 import pytest
 
-from pge_world.cli import MAX_TILES_PER_TASK, batches_of
+from pge_world.plan import MAX_TILES_PER_TASK, batches_of
+
+pytestmark = pytest.mark.unit
 
 
 @pytest.mark.parametrize(
@@ -18,7 +22,9 @@ from pge_world.cli import MAX_TILES_PER_TASK, batches_of
         (5, 0, 0, 1),  # no CPU reported: one batch
     ],
 )
-def test_batches_hold_every_tile_once_and_are_even(tiles, slots, per_task, count):
+def test_batches_hold_every_tile_once_and_are_even(
+    tiles: int, slots: int, per_task: int, count: int
+) -> None:
     todo = [{"i": k // 7, "j": k % 7} for k in range(tiles)]
     batches = batches_of(todo, slots, per_task)
     assert len(batches) == count
@@ -27,3 +33,10 @@ def test_batches_hold_every_tile_once_and_are_even(tiles, slots, per_task, count
     sizes = [len(b) for b in batches]
     assert max(sizes) - min(sizes) <= 1
     assert max(sizes) <= (per_task or MAX_TILES_PER_TASK)
+
+
+def test_tiles_are_dealt_in_turn() -> None:
+    # Neighbouring tiles (similar work) land in different batches.
+    assert batches_of(list(range(10)), 3, 0) == [[0, 3, 6, 9], [1, 4, 7], [2, 5, 8]]
+    assert batches_of(list(range(5)), 0, 2) == [[0, 3], [1, 4], [2]]
+    assert batches_of([], 4, 0) == []

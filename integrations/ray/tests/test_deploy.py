@@ -1,9 +1,12 @@
-"""The Kubernetes and Slurm files (deploy/), without Kubernetes or Slurm: the Job manifests
+"""The Kubernetes and Slurm files (deploy/), without Kubernetes or Slurm.
+
+The Job manifests
 are valid YAML describing a Job that writes the shared variants to the volume and an Indexed
 Job over big.lua's tiles that refers to them, `tile-index.sh` maps every index to the tile
 `pge tiles` lists at that place, and the Slurm scripts, run as their jobs would run them,
 write the same variants and tile bytes as `pge run --variants-out` and `pge run --tile
---variants`."""
+--variants`.
+"""
 
 import json
 import os
@@ -61,11 +64,17 @@ def test_every_index_picks_its_tile_and_past_the_last_is_an_error(pge_bin):
     listed = tiles(pge_bin, FOREST)
     script = os.path.join(DEPLOY, "tile-index.sh")
     for k, t in enumerate(listed):
-        out = subprocess.run([script, FOREST, str(k)], env=path_env(pge_bin),
-                             capture_output=True, text=True, check=True)
+        out = subprocess.run(
+            [script, FOREST, str(k)],
+            env=path_env(pge_bin),
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         assert out.stdout.strip() == f"{t['i']},{t['j']}"
-    past = subprocess.run([script, FOREST, str(len(listed))], env=path_env(pge_bin),
-                          capture_output=True, text=True)
+    past = subprocess.run(
+        [script, FOREST, str(len(listed))], env=path_env(pge_bin), capture_output=True, text=True
+    )
     assert past.returncode == 1 and "no tile number" in past.stderr
 
 
@@ -73,19 +82,45 @@ def test_the_slurm_jobs_write_the_variants_and_a_tile_referring_to_them(pge_bin,
     env = path_env(pge_bin)
     env.update(SLURM_SUBMIT_DIR=ROOT, SLURM_CPUS_PER_TASK="1")
     out = tmp_path / "world"
-    subprocess.run(["bash", os.path.join(DEPLOY, "slurm", "variants.sbatch"), FOREST, str(out),
-                    "--seed", "4"], env=env, check=True, capture_output=True)
+    subprocess.run(
+        ["bash", os.path.join(DEPLOY, "slurm", "variants.sbatch"), FOREST, str(out), "--seed", "4"],
+        env=env,
+        check=True,
+        capture_output=True,
+    )
     env.update(SLURM_ARRAY_TASK_ID="6")
-    subprocess.run(["bash", os.path.join(DEPLOY, "slurm", "forest.sbatch"), FOREST, str(out),
-                    "--seed", "4"], env=env, check=True, capture_output=True)
+    subprocess.run(
+        ["bash", os.path.join(DEPLOY, "slurm", "forest.sbatch"), FOREST, str(out), "--seed", "4"],
+        env=env,
+        check=True,
+        capture_output=True,
+    )
     t = tiles(pge_bin, FOREST)[6]
     ref = tmp_path / "ref"
-    subprocess.run([pge_bin, "run", FOREST, "--variants-out", str(ref), "--seed", "4", "-q"],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [pge_bin, "run", FOREST, "--variants-out", str(ref), "--seed", "4", "-q"],
+        check=True,
+        capture_output=True,
+    )
     (ref / "tiles").mkdir()
-    subprocess.run([pge_bin, "run", FOREST, "--tile", f"{t['i']},{t['j']}", "--seed", "4",
-                    "--variants", str(ref), "-q", "-o", str(ref / "tiles" / "tile.glb")],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [
+            pge_bin,
+            "run",
+            FOREST,
+            "--tile",
+            f"{t['i']},{t['j']}",
+            "--seed",
+            "4",
+            "--variants",
+            str(ref),
+            "-q",
+            "-o",
+            str(ref / "tiles" / "tile.glb"),
+        ],
+        check=True,
+        capture_output=True,
+    )
     assert os.listdir(out / "tiles") == [f"{t['i']}_{t['j']}.glb"]
     assert (out / "tiles" / f"{t['i']}_{t['j']}.glb").read_bytes() == (
         ref / "tiles" / "tile.glb"

@@ -1,6 +1,9 @@
-"""pge-world on a real local Ray cluster (conftest.py): every tile's bytes equal a local
+"""pge-world on a real local Ray cluster (conftest.py).
+
+Every tile's bytes equal a local
 `pge run --tile`, the manifest is right, a killed worker changes nothing, a second run does
-no work, and bad input is one line and exit 1."""
+no work, and bad input is one line and exit 1.
+"""
 
 import hashlib
 import json
@@ -13,33 +16,31 @@ import time
 import pytest
 from conftest import FOREST
 
-from pge_world import manifest as mf
-
+from pge_world import glb
 
 # The console script the package installs, beside this Python.
 CLI = [os.path.join(os.path.dirname(sys.executable), "pge-world")]
 
 
 def pge_world(cluster, *args, **kw):
-    """Runs the console script against the cluster; returns the finished process."""
-    cmd = CLI + [FOREST, "--address", cluster.address]
+    """Run the console script against the cluster; returns the finished process."""
+    cmd = [*CLI, FOREST, "--address", cluster.address]
     return subprocess.run(
         cmd + list(args), env=cluster.env, capture_output=True, text=True, timeout=600, **kw
     )
 
 
 def local_tiles(pge_bin, folder, *sets):
-    """Every tile of the test forest run by `pge run --tile` on this machine: (i, j) ->
-    bytes."""
+    """Return every tile of the test forest run by `pge run --tile` here: (i, j) -> bytes."""
     extra = [a for s in sets for a in ("--set", s)]
     listed = subprocess.run(
-        [pge_bin, "tiles", FOREST] + extra, capture_output=True, text=True, check=True
+        [pge_bin, "tiles", FOREST, *extra], capture_output=True, text=True, check=True
     )
     out = {}
     for t in json.loads(listed.stdout):
         path = os.path.join(folder, f"{t['i']}_{t['j']}.glb")
         subprocess.run(
-            [pge_bin, "run", FOREST, "--tile", f"{t['i']},{t['j']}", "-o", path, "-q"] + extra,
+            [pge_bin, "run", FOREST, "--tile", f"{t['i']},{t['j']}", "-o", path, "-q", *extra],
             check=True,
             capture_output=True,
         )
@@ -49,25 +50,43 @@ def local_tiles(pge_bin, folder, *sets):
 
 
 def local_shared_tiles(pge_bin, folder, *sets):
-    """The variants and every tile of the test forest as local `pge run --variants-out` and
-    `pge run --tile --variants` write them into ``folder`` (laid out as a world directory):
-    ({file name: bytes} of the variants, {(i, j): tile bytes})."""
+    """Return the variants and every tile of the test forest as written on this machine.
+
+    That is, as `pge run --variants-out` and `pge run --tile --variants` write them into
+    ``folder`` (laid out as a world directory): ({file name: bytes} of the variants,
+    {(i, j): tile bytes}).
+    """
     extra = [a for s in sets for a in ("--set", s)]
     subprocess.run(
-        [pge_bin, "run", FOREST, "--variants-out", folder, "-q", "--threads", "1"] + extra,
-        check=True, capture_output=True,
+        [pge_bin, "run", FOREST, "--variants-out", folder, "-q", "--threads", "1", *extra],
+        check=True,
+        capture_output=True,
     )
     listed = subprocess.run(
-        [pge_bin, "tiles", FOREST] + extra, capture_output=True, text=True, check=True
+        [pge_bin, "tiles", FOREST, *extra], capture_output=True, text=True, check=True
     )
     os.makedirs(os.path.join(folder, "tiles"), exist_ok=True)
     out = {}
     for t in json.loads(listed.stdout):
         path = os.path.join(folder, "tiles", f"{t['i']}_{t['j']}.glb")
         subprocess.run(
-            [pge_bin, "run", FOREST, "--tile", f"{t['i']},{t['j']}", "--variants", folder,
-             "-o", path, "-q", "--threads", "1"] + extra,
-            check=True, capture_output=True,
+            [
+                pge_bin,
+                "run",
+                FOREST,
+                "--tile",
+                f"{t['i']},{t['j']}",
+                "--variants",
+                folder,
+                "-o",
+                path,
+                "-q",
+                "--threads",
+                "1",
+                *extra,
+            ],
+            check=True,
+            capture_output=True,
         )
         with open(path, "rb") as f:
             out[(t["i"], t["j"])] = f.read()
@@ -80,7 +99,7 @@ def local_shared_tiles(pge_bin, folder, *sets):
 
 @pytest.fixture(scope="module")
 def reference(pge_bin, tmp_path_factory):
-    """The local tiles of the forest as the tests run it (spin makes tiles slower)."""
+    """Return the local tiles of the forest as the tests run it (spin makes tiles slower)."""
     return local_tiles(pge_bin, str(tmp_path_factory.mktemp("local")), "spin=0")
 
 
@@ -100,8 +119,16 @@ def tile_bytes(folder, world):
 def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, reference, tmp_path):
     out = str(tmp_path / "world")
     variants = tmp_path / "variants"
-    p = pge_world(cluster, "--out", out, "--set", "spin=0", "--variant-cache", str(variants),
-                  "--standalone-tiles")
+    p = pge_world(
+        cluster,
+        "--out",
+        out,
+        "--set",
+        "spin=0",
+        "--variant-cache",
+        str(variants),
+        "--standalone-tiles",
+    )
     assert p.returncode == 0, p.stderr
     assert "tiles 16/16" in p.stderr, p.stderr
     # The tiles shared the variants of the script species (shrub.lua, two variants) through
@@ -117,8 +144,9 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
     got = tile_bytes(out, world)
     assert got == reference
     listed = json.loads(
-        subprocess.run(["pge", "tiles", FOREST], env=cluster.env, capture_output=True,
-                       text=True, check=True).stdout
+        subprocess.run(
+            ["pge", "tiles", FOREST], env=cluster.env, capture_output=True, text=True, check=True
+        ).stdout
     )
     bounds = {(t["i"], t["j"]): (t["min"], t["max"]) for t in listed}
     total = 0
@@ -127,7 +155,7 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
         assert t["sha256"] == hashlib.sha256(data).hexdigest()
         assert t["bytes"] == len(data)
         assert (t["min"], t["max"]) == bounds[(t["i"], t["j"])]
-        forest = mf.glb_root_extras(data)["forest"]
+        forest = glb.root_extras(data)["forest"]
         assert t["instances"] == forest["instances"]
         total += t["instances"]
     assert world["instances"] == total > 0
@@ -136,8 +164,10 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
     )
 
     # A second run on the same directory finds every tile and grows none.
-    stamps = {n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns
-              for n in os.listdir(os.path.join(out, "tiles"))}
+    stamps = {
+        n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns
+        for n in os.listdir(os.path.join(out, "tiles"))
+    }
     again = pge_world(cluster, "--out", out, "--set", "spin=0", "--standalone-tiles")
     assert again.returncode == 0, again.stderr
     assert "16 of 16 tiles already" in again.stderr and "nothing to do" in again.stderr
@@ -184,13 +214,15 @@ def test_tiles_that_share_their_variants_are_the_local_ones(cluster, pge_bin, tm
     assert got == reference
     for t in world["tiles"]:
         assert t["sha256"] == hashlib.sha256(got[(t["i"], t["j"])]).hexdigest()
-        assert t["instances"] == mf.glb_root_extras(got[(t["i"], t["j"])])["forest"]["instances"]
+        assert t["instances"] == glb.root_extras(got[(t["i"], t["j"])])["forest"]["instances"]
     # Every tile is small: the variants are not in it.
     assert max(len(b) for b in got.values()) * 4 < len(variants["variants.bin"])
 
     # A second run does no work; damaged variants are written again, the tiles kept.
-    stamps = {n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns
-              for n in os.listdir(os.path.join(out, "tiles"))}
+    stamps = {
+        n: os.stat(os.path.join(out, "tiles", n)).st_mtime_ns
+        for n in os.listdir(os.path.join(out, "tiles"))
+    }
     again = pge_world(cluster, "--out", out, "--set", "spin=0")
     assert again.returncode == 0, again.stderr
     assert "16 of 16 tiles already" in again.stderr and "nothing to do" in again.stderr
@@ -212,8 +244,11 @@ def test_tiles_that_share_their_variants_are_the_local_ones(cluster, pge_bin, tm
 
 
 def extra_node_workers(cluster):
-    """Pids of the tile tasks running on the extra node: workers whose parent is the raylet
-    with the extra node's node-manager port."""
+    """Return the pids of the tile tasks running on the extra node.
+
+    They are the workers whose parent is the raylet with the extra node's node-manager port.
+    """
+
     def cmdline(pid):
         try:
             with open(f"/proc/{pid}/cmdline", "rb") as f:
@@ -229,8 +264,11 @@ def extra_node_workers(cluster):
             return None
 
     pids = [int(p) for p in os.listdir("/proc") if p.isdigit()]
-    raylets = [p for p in pids if "raylet" in cmdline(p)
-               and f"--node_manager_port={cluster.worker_port}" in cmdline(p)]
+    raylets = [
+        p
+        for p in pids
+        if "raylet" in cmdline(p) and f"--node_manager_port={cluster.worker_port}" in cmdline(p)
+    ]
     return [p for p in pids if parent(p) in raylets and "grow_tile" in cmdline(p)]
 
 
@@ -239,11 +277,11 @@ def test_killing_a_worker_in_the_middle_changes_nothing(cluster, pge_bin, tmp_pa
     spin = "spin=12000000"
     _, reference = local_shared_tiles(pge_bin, str(tmp_path / "local"), spin)
     out = str(tmp_path / "world")
-    cmd = CLI + [FOREST, "--address", cluster.address,
-           "--out", out, "--set", spin]
-    run = subprocess.Popen(cmd, env=cluster.env, stdout=subprocess.PIPE,
-                           stderr=subprocess.PIPE, text=True)
-    killed = []
+    cmd = [*CLI, FOREST, "--address", cluster.address, "--out", out, "--set", spin]
+    run = subprocess.Popen(
+        cmd, env=cluster.env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    killed: list[int] = []
     try:
         deadline = time.monotonic() + 300
         while not killed and run.poll() is None and time.monotonic() < deadline:
@@ -283,9 +321,11 @@ def test_no_cluster_is_one_line(cluster, tmp_path):
 
     out = tmp_path / "world"
     p = subprocess.run(
-        CLI + [FOREST, "--out", str(out),
-         "--address", f"127.0.0.1:{free_port()}"],
-        env=cluster.env, capture_output=True, text=True, timeout=300,
+        [*CLI, FOREST, "--out", str(out), "--address", f"127.0.0.1:{free_port()}"],
+        env=cluster.env,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert p.returncode == 1
     assert p.stderr.count("\n") == 1 and "no Ray cluster at 127.0.0.1:" in p.stderr, p.stderr
@@ -307,15 +347,17 @@ def test_another_worlds_directory_is_refused(cluster, reference, tmp_path):
 def test_a_script_without_tile_is_one_line(cluster, tmp_path):
     script = tmp_path / "untiled.lua"
     script.write_text(
-        'local f = pge.Forest{ size = {40, 40} }\n'
+        "local f = pge.Forest{ size = {40, 40} }\n"
         f'f:scatter{{ species = "{os.path.dirname(FOREST)}/shrub.lua", minDistance = 5 }}\n'
         "return f\n"
     )
     out = tmp_path / "world"
     p = subprocess.run(
-        CLI + [str(script), "--out", str(out),
-         "--address", cluster.address],
-        env=cluster.env, capture_output=True, text=True, timeout=300,
+        [*CLI, str(script), "--out", str(out), "--address", cluster.address],
+        env=cluster.env,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert p.returncode == 1
     assert p.stderr.count("\n") == 1 and "tile" in p.stderr, p.stderr
@@ -331,9 +373,11 @@ def test_pge_missing_on_the_workers_is_one_line(cluster, pge_bin, tmp_path):
     env["PATH"] = str(local) + os.pathsep + env["PATH"]
     out = tmp_path / "world"
     p = subprocess.run(
-        CLI + [FOREST, "--out", str(out),
-         "--address", cluster.address, "--pge", "pge-only-here"],
-        env=env, capture_output=True, text=True, timeout=300,
+        [*CLI, FOREST, "--out", str(out), "--address", cluster.address, "--pge", "pge-only-here"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert p.returncode == 1
     assert "no `pge-only-here` program on the PATH of the worker" in p.stderr, p.stderr
