@@ -1,9 +1,9 @@
-//! The cost of a session of the batteries-included engine (issue 14, the whole oak: what
-//! `pge run` spends besides the phases): `Engine::session` (a Lua state, its libraries and
-//! every plugin's tables), and a session that runs the oak's script (the `script` phase), in
-//! CPU time of the process (`/proc/self/task/*/schedstat`: hardly inflated by other
-//! processes on a loaded machine; it advances in scheduler ticks, so each sample runs
-//! hundreds of sessions).
+//! The cost of a session of the batteries-included engine (for the whole-oak row of
+//! benches/README.md: what `pge run` spends besides the phases): `Engine::session` (a Lua
+//! state, its libraries and every plugin's tables), and a session that runs the oak's script
+//! (the `script` phase), in CPU time of the process (`/proc/self/task/*/schedstat`: hardly
+//! inflated by other processes on a loaded machine; it advances in scheduler ticks, so each
+//! sample runs hundreds of sessions).
 
 // The process's CPU time, the measurement the tree crate's benches use too: a session runs
 // on the calling thread alone, so this is that thread's time.
