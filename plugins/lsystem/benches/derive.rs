@@ -14,7 +14,9 @@
 //! - `context_signal`: signal propagation on 100 000 modules against a hand-written
 //!   bracket-aware loop (a straightforward one, not a tuned limit);
 //! - `lua_rules`: rule functions (a rule returning three modules, a rule returning one
-//!   module with a parameter); the target is 4 M modules/s.
+//!   module with a parameter, a rule that does not apply), with no peer and no speed
+//!   target: they run under the deterministic instruction limit, and classic notation is
+//!   the fast path.
 //!
 //! Criterion reports modules produced per second ("elements").
 
