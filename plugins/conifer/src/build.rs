@@ -205,7 +205,7 @@ impl Builder<'_> {
     }
 
     /// The shoots along an axis of `length` (its nodes from [`Builder::axis`]) from arc
-    /// length `bare` on: one or two per node but the tip, in the plane of the axis and the
+    /// length `bare` on: one or two per node but the first and the tip, in the plane of the axis and the
     /// horizontal, of order `order`; each carries shoots of its own while `order` is below
     /// the tree's `orders`.
     fn shoots(
@@ -224,7 +224,9 @@ impl Builder<'_> {
         let first_side = if d.unit() < 0.5 { 1.0 } else { -1.0 };
         let ds = nodes[0].1;
         for (i, &(node, s, tangent)) in nodes[..nodes.len() - 1].iter().enumerate() {
-            if s < bare {
+            // Not on an axis's first node either: a tip's leaves, hung on its last few
+            // segments, then stay off the axis's parent (the trunk, for a branch).
+            if s < bare || i == 0 {
                 continue;
             }
             let sides: &[f32] = match p.spray_pattern {
