@@ -223,9 +223,7 @@ mod tests {
             segment: 0.0,
             ..ConiferParams::default()
         };
-        let e = Conifer::new(params, Location::new("t.lua", 2))
-            .err()
-            .expect("bad");
+        let e = Conifer::new(params, Location::new("t.lua", 2)).expect_err("bad");
         assert_eq!(
             e.to_string(),
             "t.lua:2: segment must be a number > 0, got 0"
