@@ -252,3 +252,58 @@ fn the_draws_are_uniform_enough() {
         assert!(n > 150, "{k}: {n}");
     }
 }
+
+/// Any valid parameters, extremes included, build a skeleton or stop at the cap: no panic,
+/// no non-finite position, every radius finite and positive.
+#[test]
+fn any_valid_parameters_build_or_stop_at_the_cap() {
+    let mut d = Draws::new(9, 9);
+    let mut pick = |values: &[f32]| values[d.int(0, values.len() as u32 - 1) as usize];
+    for case in 0..150 {
+        let lo = pick(&[1.0, 3.0, 12.0]) as u32;
+        let p = ConiferParams {
+            years: pick(&[1.0, 2.0, 7.0, 30.0]) as u32,
+            height: pick(&[1e-4, 1.0, 12.0, 1e4]),
+            crown_radius: pick(&[1e-4, 3.0, 1e4]),
+            crown: match case % 4 {
+                0 => Crown::Conic,
+                1 => Crown::Ogive,
+                2 => Crown::Columnar,
+                _ => Crown::Profile(vec![0.0, pick(&[0.0, 1.0, 1e6]), 0.0]),
+            },
+            crown_base: pick(&[0.0, 0.5, 0.95]),
+            per_whorl: (lo, lo.max(pick(&[1.0, 6.0, 12.0]) as u32)),
+            twist: pick(&[-360.0, 0.0, 137.5]),
+            angle: (pick(&[0.0, 60.0, 180.0]), pick(&[0.0, 95.0, 180.0])),
+            droop: pick(&[0.0, 20.0, 90.0]),
+            jitter: pick(&[0.0, 0.15, 1.0]),
+            waviness: pick(&[0.0, 0.5]),
+            segment: pick(&[1e-6, 0.25, 1e3]),
+            orders: pick(&[1.0, 2.0, 3.0]) as u32,
+            spray_angle: pick(&[0.0, 55.0, 90.0]),
+            spray_length: pick(&[0.0, 0.5, 2.0]),
+            spray_droop: pick(&[0.0, 90.0]),
+            spray_pattern: if case % 3 == 0 {
+                SprayPattern::Paired
+            } else {
+                SprayPattern::Alternate
+            },
+            bare: pick(&[0.0, 0.5, 1.0]),
+            interwhorl: (0, pick(&[0.0, 8.0]) as u32),
+            joint_ratio: pick(&[1e-3, 0.45, 1.0]),
+            max_nodes: 20_000,
+            ..ConiferParams::default()
+        };
+        p.validate().expect("valid");
+        let whorls: Vec<Whorl> = (1..=p.years).map(|y| Whorl::draw(&p, 3, y)).collect();
+        match build(&p, &whorls, 3) {
+            Ok(b) => {
+                let s = &b.skeleton;
+                assert!(s.positions.iter().all(|v| v.is_finite()), "{p:?}");
+                assert!(s.radii.iter().all(|r| r.is_finite() && *r >= 0.0), "{p:?}");
+                pge_tree::check_skeleton(s).expect("a usable skeleton");
+            }
+            Err(e) => assert_eq!(e.cap, 20_000),
+        }
+    }
+}
