@@ -67,6 +67,7 @@ pub fn engine_with_forest(forest: pge_forest::ForestPlugin) -> pge_engine::Engin
         .plugin(pge_turtle::TurtlePlugin)
         .plugin(pge_spacecol::SpaceColonizationPlugin)
         .plugin(pge_growth::GrowthPlugin)
+        .plugin(pge_conifer::ConiferPlugin)
         .plugin(pge_tree::TreePlugin)
         .plugin(pge_extruder::ExtruderPlugin)
         .plugin(pge_metaballs::MetaballsPlugin)

@@ -71,7 +71,6 @@ fn species_and_mixed_scripts_grow() {
     let dir = tempfile::tempdir().expect("tempdir");
     for script in [
         "scripts/species/broadleaf.lua",
-        "scripts/species/spruce.lua",
         "scripts/species/bonsai.lua",
         "scripts/species/limbs_and_crown.lua",
         "scripts/species/young_then_colonized.lua",

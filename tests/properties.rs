@@ -9,6 +9,7 @@ const CONSTRUCTORS: &[&str] = &[
     "pge.turtle(OPTS)",
     "pge.SpaceColonization(OPTS)",
     "pge.Growth(OPTS)",
+    "pge.Conifer(OPTS)",
     "pge.Metaballs(OPTS)",
     "pge.MarchingCubes(pge.Metaballs{}, OPTS)",
     "pge.Extruder(OPTS)",
@@ -78,6 +79,11 @@ const KEYS: &[&str] = &[
     "tip",
     "steps",
     "lod",
+    "years",
+    "perWhorl",
+    "crown",
+    "orders",
+    "segment",
     "unknownOption",
 ];
 

@@ -166,6 +166,37 @@ function pge.SpaceColonization(o) end
 ---@return pge.AlgorithmHandle
 function pge.Growth(o) end
 
+---Options of pge.Conifer (an excurrent tree: leader, whorls, flat sprays); any other key is an error.
+---@class pge.ConiferOptions: pge.TreeOptions
+---@field years? integer years grown, one internode and one whorl a year, 1..1000 (20); --steps overrides
+---@field height? number height after `years` years, > 0 (12)
+---@field crownRadius? number length of the longest first-order branch after `years` years, > 0 (3)
+---@field crown? "conic"|"ogive"|"columnar"|number[] how branch lengths fall toward the apex; a list: relative lengths from the apex to the crown base ("conic")
+---@field crownBase? number fraction of the height below which branches are shed, 0..0.95 (0.1)
+---@field perWhorl? integer[]|integer first-order branches per whorl {min, max}, 1..12 ({4, 6})
+---@field interwhorl? integer[]|integer small branches between two whorls {min, max}, 0..8 ({0, 0})
+---@field twist? number degrees each whorl is turned from the one below, -360..360 (137.5)
+---@field angle? number[] {apex, base} degrees between a branch and the trunk above it, 0..180 ({60, 95})
+---@field droop? number degrees the tip of the longest branch bends down, 0..90 (20)
+---@field jitter? number random variation of azimuths, angles and lengths, 0..1 (0.15)
+---@field waviness? number sideways wander of whorl nodes, fraction of the internode, 0..0.5 (0.02)
+---@field segment? number segment length of branches and shoots (shoots grow at nodes), > 0 (0.25)
+---@field orders? integer 1: branches; 2: with shoots; 3: shoots of shoots (2)
+---@field sprayAngle? number degrees between a shoot and its parent, 0..90 (55)
+---@field sprayLength? number shoot length, fraction of the parent's length beyond it, 0..2 (0.5)
+---@field sprayDroop? number degrees the tip of a shoot bends down, 0..90 (10)
+---@field sprayPattern? "alternate"|"paired" one shoot per node or two ("alternate")
+---@field bare? number fraction of each branch, from the trunk, without shoots, 0..1 (0.1)
+---@field jointRatio? number largest branch radius / trunk radius at a joint, (0, 1] (0.45)
+---@field root? pge.Vector the base of the trunk ({0, 0, 0})
+---@field seed? integer mixed into the run's seed, >= 0 (0)
+---@field maxNodes? integer the node cap, 1..50000000 (2000000)
+
+---An excurrent tree (pine, spruce): one step of the returned algorithm is one year.
+---@param o pge.ConiferOptions
+---@return pge.AlgorithmHandle
+function pge.Conifer(o) end
+
 ---The branch graph every tree generator produces. Nodes are 1-based; a root's parent is 0.
 ---@class pge.Skeleton
 local Skeleton = {}

@@ -10,7 +10,7 @@ forest:terrain{ height = 40, scale = 400, octaves = 5 }
 forest:scatter{ species = "../species/oak.lua", minDistance = 9, altitude = {-100, 0},
                 variants = p.variants, params = { points = p.points } }
 forest:scatter{ species = "../species/conifer.lua", minDistance = 2.7, altitude = {-5, 100},
-                slope = {0, 35}, variants = p.variants, params = { points = p.points } }
+                slope = {0, 35}, variants = p.variants }
 forest:scatter{ species = "../species/bush.lua", minDistance = 2.2, density = 0.8,
                 variants = p.variants, scale = {0.5, 1.0}, params = { points = 400 } }
 return forest

@@ -18,6 +18,5 @@ forest:scatter{ species = "../species/poplar.lua", minDistance = 6, density = 0.
                 params = { points = p.points } }
 -- Conifers above 2 m on slopes up to 40 degrees.
 forest:scatter{ species = "../species/conifer.lua", minDistance = 5, altitude = {2, 100},
-                slope = {0, 40}, variants = p.variants, scale = {0.7, 1.3},
-                params = { points = p.points } }
+                slope = {0, 40}, variants = p.variants, scale = {0.7, 1.3} }
 return forest
