@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
 
-use mlua::{Lua, Table, Value, WeakLua};
+use mlua::{Function, Lua, Table, Value};
 use pge_engine::lua::{Bounds, Options, caller_location, resolve_path, to_engine_error};
 use pge_engine::{Error, Location};
 
@@ -294,7 +294,6 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
         }
         Value::String(s) => Density::Map(image(lua, &o, "density", &s.to_string_lossy())?),
         Value::Function(f) => {
-            let weak = lua.weak();
             let location = caller_location(lua);
             Density::Function(Rc::new(move |x: f64, z: f64| {
                 f.call::<Value>((x, z))
@@ -306,7 +305,7 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
                             other.type_name()
                         ))),
                     })
-                    .map_err(|e| lua_error(&weak, &location, e))
+                    .map_err(|e| lua_error(&f, &location, e))
             }))
         }
         other => return Err(o.wrong_type("density", density_need, &other)),
@@ -342,8 +341,9 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
     Ok(())
 }
 
-pub(super) fn lua_error(weak: &WeakLua, location: &Location, e: mlua::Error) -> Error {
-    match weak.try_upgrade() {
+/// The error of a call of the script's function `f`, with the script's file and line.
+fn lua_error(f: &Function, location: &Location, e: mlua::Error) -> Error {
+    match f.weak_lua().try_upgrade() {
         Some(lua) => to_engine_error(&lua, e),
         None => Error::script(location.clone(), e.to_string()),
     }
