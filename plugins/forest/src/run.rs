@@ -313,3 +313,150 @@ impl Algorithm for ForestRun {
         Some(self)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    use glam::Vec3;
+    use pge_engine::Location;
+    use pge_engine::geometry::Mesh;
+
+    use super::*;
+    use crate::{Layer, ScriptSpecies, Species, Variants};
+
+    fn stick() -> Model {
+        let tri = Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]);
+        Model::from_mesh(tri.expect("mesh"))
+    }
+
+    /// Two layers of two variants each, species `a.lua` and `b.lua`.
+    fn spec() -> ForestSpec {
+        let mut spec = ForestSpec::new([60.0, 60.0], 5, Some(30.0))
+            .expect("spec")
+            .described_at(Location::new("f.lua", 1));
+        for (k, name) in ["a", "b"].into_iter().enumerate() {
+            let mut layer = Layer::new(name, 6.0);
+            layer.variants = Variants::Count(2);
+            let species = Species::Script(ScriptSpecies::new(format!("{name}.lua"), &[]));
+            spec.add_layer_at(layer, species, Location::new("f.lua", 2 + k as u32))
+                .expect("layer");
+        }
+        spec
+    }
+
+    #[test]
+    fn a_failing_variant_keeps_its_engine_error_and_is_placed_at_its_layer() {
+        let limit = |species: &ScriptSpecies, _: u64, _: &RunContext| {
+            if species.path == "b.lua" {
+                return Err(Error::TimeLimit {
+                    location: Location::new("b.lua", 7),
+                });
+            }
+            Ok((stick(), Vec::new()))
+        };
+        let mut run = ForestRun::new(spec()).grower(Arc::new(limit));
+        let e = run.run(&RunContext::default()).expect_err("b fails");
+        assert!(
+            matches!(
+                &e,
+                ForestError::Species {
+                    layer: 1,
+                    error: Error::TimeLimit { .. },
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let typed = run.engine_error(e);
+        assert!(matches!(&typed, Error::TimeLimit { .. }), "{typed:?}");
+        assert_eq!(
+            typed.to_string(),
+            "b.lua:7: time limit exceeded (see --time-limit)"
+        );
+
+        let mistake = |species: &ScriptSpecies, _: u64, _: &RunContext| {
+            Err(Error::script(Location::new(&species.path, 3), "no sap"))
+        };
+        let mut run = ForestRun::new(spec()).grower(Arc::new(mistake));
+        let e = run.run(&RunContext::default()).expect_err("both fail");
+        assert!(matches!(&e, ForestError::Species { layer: 0, .. }), "{e:?}");
+        assert_eq!(
+            run.engine_error(e).to_string(),
+            "f.lua:2: forest:scatter: species 'a.lua' failed: a.lua:3: no sap"
+        );
+    }
+
+    #[test]
+    fn script_species_need_a_grower() {
+        let mut run = ForestRun::new(spec());
+        let e = run.run(&RunContext::default()).expect_err("no grower");
+        assert!(matches!(e, ForestError::NoGrower { layer: 0 }), "{e:?}");
+        assert_eq!(
+            run.engine_error(e).to_string(),
+            "f.lua:1: pge.Forest: species scripts need a session created by an engine"
+        );
+    }
+
+    #[test]
+    fn the_configuration_decides_what_is_grown_and_the_steps_are_three() {
+        let calls = Arc::new(AtomicUsize::new(0));
+        let counted = calls.clone();
+        let grower = Arc::new(move |_: &ScriptSpecies, _: u64, _: &RunContext| {
+            counted.fetch_add(1, Ordering::Relaxed);
+            Ok((stick(), Vec::new()))
+        });
+        let ctx = RunContext::default();
+        let mut whole = ForestRun::new(spec()).grower(grower.clone());
+        let mut steps = Vec::new();
+        loop {
+            let step = whole.step_forest(&ctx).expect("steps");
+            steps.push(step);
+            if step == Step::Done {
+                break;
+            }
+        }
+        assert_eq!(steps.len(), 3);
+        assert_eq!(
+            calls.load(Ordering::Relaxed),
+            4,
+            "two variants of two layers"
+        );
+        let model = whole.model().expect("model");
+        assert_eq!(model.groups.len(), 4);
+        assert!(
+            model
+                .stats
+                .phases
+                .iter()
+                .any(|(name, _)| name == "variants")
+        );
+
+        // Referring to shared variants grows none of them: the groups place trees only.
+        calls.store(0, Ordering::Relaxed);
+        let refer = ForestConfig {
+            cache: None,
+            sharing: Some(VariantSharing::Refer),
+        };
+        let mut tile = ForestRun::new(spec()).grower(grower.clone()).config(refer);
+        tile.select_tile(1, 1).expect("tile");
+        let model = tile.run(&ctx).expect("runs");
+        assert_eq!(calls.load(Ordering::Relaxed), 0);
+        assert!(model.groups.iter().all(|g| g.meshes.is_empty()));
+        assert!(model.groups.iter().any(|g| !g.transforms.is_empty()));
+
+        // Writing them grows them and places nothing.
+        let write = ForestConfig {
+            cache: None,
+            sharing: Some(VariantSharing::Write),
+        };
+        let model = ForestRun::new(spec())
+            .grower(grower)
+            .config(write)
+            .run(&ctx)
+            .expect("runs");
+        assert_eq!(calls.load(Ordering::Relaxed), 4);
+        assert_eq!(model.groups.len(), 4);
+        assert!(model.groups.iter().all(|g| g.transforms.is_empty()));
+    }
+}
