@@ -8,9 +8,8 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pge_engine::export::Instancing;
-use pge_engine::mlua::{ObjectLike, Value};
 use pge_engine::{Generated, Session};
-use pge_forest::{ForestPlugin, VariantCache, VariantSharing};
+use pge_forest::{ForestPlugin, ForestRun, VariantCache, VariantSharing};
 
 use crate::common::ScriptArgs;
 use crate::output::{export_meta, write_model};
@@ -120,26 +119,20 @@ fn generate_forest(
 ) -> anyhow::Result<Generated> {
     let t0 = Instant::now();
     let value = session.run_script(path)?;
-    let is_forest = match &value {
-        Value::UserData(ud) => matches!(ud.get::<Value>("selectTile"), Ok(Value::Function(_))),
-        _ => false,
-    };
-    if !is_forest {
+    let mut algorithm = session.algorithm_from(value)?;
+    let Some(forest) = ForestRun::of(&mut *algorithm) else {
         let tiled = if tile.is_some() { " with tile = T" } else { "" };
         anyhow::bail!(
             "{}: {option} needs a script that returns a forest (pge.Forest{tiled})",
             path.display()
         );
-    }
+    };
     check(&session.declared_params())?;
-    if let Some((i, j)) = tile {
-        let selected = match &value {
-            Value::UserData(ud) => ud.call_method::<Value>("selectTile", (i, j)),
-            _ => Ok(Value::Nil),
-        };
-        selected.map_err(|e| pge_engine::lua::to_engine_error(session.lua(), e))?;
+    if let Some((i, j)) = tile
+        && let Err(e) = forest.select_tile(i, j)
+    {
+        return Err(forest.engine_error(e).into());
     }
-    let mut algorithm = session.algorithm_from(value)?;
     let ctx = session.context();
     let planned = ctx.steps.or(algorithm.planned_steps());
     let mut model =

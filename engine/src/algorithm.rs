@@ -116,6 +116,14 @@ pub trait Algorithm {
     fn snapshot(&self) -> Option<Box<dyn Algorithm>> {
         None
     }
+
+    /// The algorithm as [`Any`](std::any::Any), for a host that asks what a script returned
+    /// (a forest, for its tiles) and calls the concrete type's own methods:
+    /// `algorithm.as_any_mut()?.downcast_mut::<T>()`. `None`, the default, for algorithms
+    /// that offer nothing beyond this trait.
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        None
+    }
 }
 
 /// An algorithm that is already done: it returns a fixed model.

@@ -2,6 +2,8 @@
 
 use mlua::{Lua, Table};
 
+use crate::Engine;
+
 /// A set of constructors and functions added to the `pge` Lua table.
 ///
 /// # Lifecycle
@@ -12,7 +14,10 @@ use mlua::{Lua, Table};
 /// added before it. An error from `register` aborts the creation of the session.
 ///
 /// Plugins are shared by every thread that creates sessions, hence `Send + Sync`; per-session
-/// state belongs in the Lua state (userdata, app data), not in the plugin.
+/// state belongs in the Lua state (userdata, app data), not in the plugin. A plugin that runs
+/// other scripts in sessions of their own (a forest growing each species variant) is handed
+/// the engine that creates the session by [`Plugin::register_in`], so the sandbox and the
+/// limits hold there too.
 ///
 /// # Example
 /// ```
@@ -38,6 +43,15 @@ pub trait Plugin: Send + Sync + 'static {
 
     /// Adds this plugin's functions and constructors to the `pge` table of a new session.
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()>;
+
+    /// What the engine calls: [`register`](Plugin::register) for a session that `engine`
+    /// creates. A plugin that opens sessions of its own overrides it and keeps `engine`
+    /// (same plugins, limits and library) in the functions it registers; `register` is
+    /// then what a Lua state the engine did not create gets. The default calls `register`.
+    fn register_in(&self, engine: &Engine, lua: &Lua, pge: &Table) -> mlua::Result<()> {
+        let _ = engine;
+        self.register(lua, pge)
+    }
 
     /// The names [`register`](Plugin::register) sets in the `pge` table, for a plugin whose
     /// registration does nothing else a script could see before it touches one of them (no

@@ -116,12 +116,14 @@ impl Session {
                 lazy.push(plugin.clone());
                 continue;
             }
-            plugin.register(&lua, &pge).map_err(|e| Error::Plugin {
-                plugin: plugin.name().to_string(),
-                message: e.to_string(),
-            })?;
+            plugin
+                .register_in(engine, &lua, &pge)
+                .map_err(|e| Error::Plugin {
+                    plugin: plugin.name().to_string(),
+                    message: e.to_string(),
+                })?;
         }
-        crate::lua::register_lazily(&lua, &pge, lazy).map_err(|e| Error::Plugin {
+        crate::lua::register_lazily(&lua, &pge, engine, lazy).map_err(|e| Error::Plugin {
             plugin: "pge".into(),
             message: e.to_string(),
         })?;

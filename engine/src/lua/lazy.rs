@@ -8,14 +8,19 @@ use std::sync::Arc;
 
 use mlua::{Function, Lua, Table, Value};
 
-use crate::{Error, Plugin};
+use crate::{Engine, Error, Plugin};
 
-/// The plugins not registered yet.
-type Waiting = Rc<RefCell<Vec<Arc<dyn Plugin>>>>;
+/// The plugins not registered yet, and the engine they are registered for.
+struct Lazy {
+    engine: Engine,
+    plugins: RefCell<Vec<Arc<dyn Plugin>>>,
+}
 
-/// Registers `plugin` into `pge`, its errors naming it.
-fn register(lua: &Lua, pge: &Table, plugin: &Arc<dyn Plugin>) -> mlua::Result<()> {
-    plugin.register(lua, pge).map_err(|e| {
+type Waiting = Rc<Lazy>;
+
+/// Registers `plugin` into `pge` for `engine`, its errors naming it.
+fn register(lua: &Lua, pge: &Table, engine: &Engine, plugin: &Arc<dyn Plugin>) -> mlua::Result<()> {
+    plugin.register_in(engine, lua, pge).map_err(|e| {
         mlua::Error::external(Error::Plugin {
             plugin: plugin.name().to_string(),
             message: e.to_string(),
@@ -25,7 +30,7 @@ fn register(lua: &Lua, pge: &Table, plugin: &Arc<dyn Plugin>) -> mlua::Result<()
 
 /// Removes the metatable once no plugin waits (`pge` is then as an eager session's).
 fn done_if_empty(pge: &Table, waiting: &Waiting) -> mlua::Result<()> {
-    if waiting.borrow().is_empty() {
+    if waiting.plugins.borrow().is_empty() {
         pge.set_metatable(None)?;
     }
     Ok(())
@@ -37,7 +42,7 @@ fn register_owner(lua: &Lua, pge: &Table, waiting: &Waiting, key: &Value) -> mlu
         return Ok(());
     };
     let owner = {
-        let mut w = waiting.borrow_mut();
+        let mut w = waiting.plugins.borrow_mut();
         let key = key.as_bytes();
         let i = w
             .iter()
@@ -45,22 +50,27 @@ fn register_owner(lua: &Lua, pge: &Table, waiting: &Waiting, key: &Value) -> mlu
         i.map(|i| w.remove(i))
     };
     if let Some(plugin) = owner {
-        register(lua, pge, &plugin)?;
+        register(lua, pge, &waiting.engine, &plugin)?;
         done_if_empty(pge, waiting)?;
     }
     Ok(())
 }
 
-/// Gives `pge` the metatable that registers the plugins of `lazy` on first use.
+/// Gives `pge` the metatable that registers the plugins of `lazy` on first use, for the
+/// session `engine` creates.
 pub(crate) fn register_lazily(
     lua: &Lua,
     pge: &Table,
+    engine: &Engine,
     lazy: Vec<Arc<dyn Plugin>>,
 ) -> mlua::Result<()> {
     if lazy.is_empty() {
         return Ok(());
     }
-    let waiting: Waiting = Rc::new(RefCell::new(lazy));
+    let waiting: Waiting = Rc::new(Lazy {
+        engine: engine.clone(),
+        plugins: RefCell::new(lazy),
+    });
     let meta = lua.create_table()?;
     let w = waiting.clone();
     meta.raw_set(
@@ -84,9 +94,9 @@ pub(crate) fn register_lazily(
     meta.raw_set(
         "__pairs",
         lua.create_function(move |lua, pge: Table| {
-            let all: Vec<_> = waiting.borrow_mut().drain(..).collect();
+            let all: Vec<_> = waiting.plugins.borrow_mut().drain(..).collect();
             for plugin in &all {
-                register(lua, &pge, plugin)?;
+                register(lua, &pge, &waiting.engine, plugin)?;
             }
             done_if_empty(&pge, &waiting)?;
             Ok((next.clone(), pge, Value::Nil))

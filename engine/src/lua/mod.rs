@@ -55,17 +55,6 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
         .unwrap_or_default()
 }
 
-/// The engine whose session this Lua state is: same plugins, limits and library. A plugin
-/// that must run another script in a session of its own (a forest growing each species
-/// variant in parallel, one session per worker thread) creates it with
-/// [`Engine::session`](crate::Engine::session) on this engine, so the sandbox and the limits
-/// hold there too. `None` for a Lua state the engine did not create.
-#[must_use]
-pub fn engine(lua: &mlua::Lua) -> Option<crate::Engine> {
-    lua.app_data_ref::<state::EngineHandle>()
-        .map(|e| e.0.clone())
-}
-
 /// The memory limit of the session's Lua state in bytes (what `--memory-limit` set), so that
 /// plugins can refuse a Rust-side allocation that would exceed it.
 #[must_use]

@@ -52,8 +52,8 @@ impl SessionState {
     }
 }
 
-/// The engine that created the session, so that plugins can open sessions of their own
-/// (a forest grows each species variant in a fresh session); read with [`super::engine`].
+/// The engine that created the session, for the sandbox (its library folder). Plugins are
+/// handed the engine by [`Plugin::register_in`](crate::Plugin::register_in), not from here.
 pub(crate) struct EngineHandle(pub crate::Engine);
 
 /// The engine's library folder (canonical), if any: found the first time a session of the

@@ -7,9 +7,15 @@
 //! a [`Model`](pge_engine::geometry::Model) with one instance group per variant. Variants
 //! with foliage levels of detail keep their LOD tables ([`variant_extras`]; [`with_lod`]
 //! gives them levels), and [`instance_leaves`] budgets each instance's leaves for a
-//! [`Camera`] ([`assemble_budgeted`] writes them per placement). The Lua side,
-//! `pge.Forest{...}`, lives in [`lua`] and grows the variants of a species script in
-//! parallel, one session per variant.
+//! [`Camera`] ([`assemble_budgeted`] writes them per placement).
+//!
+//! A whole run is a [`ForestRun`] of a [`ForestSpec`] (the forest, each layer's
+//! [`Species`], the levels of detail, the tile): the layout, then the variants (script
+//! species grown in parallel by the host's [`SpeciesGrower`], through a [`VariantCache`]
+//! when its [`ForestConfig`] has one), then the assembly; its errors are [`ForestError`]s
+//! that keep the engine's typed errors inside. The Lua side, `pge.Forest{...}`, lives in
+//! [`lua`]: it reads option tables into a spec and grows species scripts in sessions of
+//! their own ([`lua::SessionGrower`]).
 //!
 //! ```
 //! use pge_forest::{Forest, Layer, Terrain, FbmOptions};
@@ -25,6 +31,7 @@
 mod assemble;
 mod cache;
 mod codec;
+mod grow;
 mod jittered;
 mod layer;
 mod layout;
@@ -33,12 +40,15 @@ mod lod;
 pub mod lua;
 mod poisson;
 mod rng;
+mod run;
 mod shared;
+mod spec;
 mod terrain;
 mod trunks;
 
 pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
 pub use cache::{GrownVariant, VariantCache, VariantKey};
+pub use grow::{ForestConfig, SpeciesGrower};
 pub use layer::{Density, Layer, Method, Variants};
 pub use layout::{Forest, Instance, Layout, MAX_INSTANCES, Tile, unique_seed, variant_seed};
 pub use lod::{
@@ -49,7 +59,9 @@ pub use lod::{
 pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
 pub use rng::{Rng, hash};
+pub use run::{ForestRun, levels};
 pub use shared::{VariantSharing, shared_layer, variants_model};
+pub use spec::{ForestSpec, ScriptSpecies, Species, VariantFn};
 pub use terrain::{FbmOptions, Grid, Raster, Terrain};
 
 /// Why a forest cannot be laid out.
@@ -96,7 +108,56 @@ pub enum ForestError {
         /// Tiles along z.
         nz: usize,
     },
-    /// A script callback (a density function) failed.
+    /// A callback of the host failed (a density function, a species function): the engine's
+    /// error as it was, with its file and line.
     #[error("{0}")]
     Script(pge_engine::Error),
+    /// A variant of a script species could not be grown: `error` is the error of its
+    /// session as it was (a [`pge_engine::Error::TimeLimit`] when the script ran out of
+    /// time), and the first of the run's failures in (layer, variant) order.
+    #[error("species '{species}' failed: {error}")]
+    Species {
+        /// The layer (0-based).
+        layer: usize,
+        /// The species script, as its session was given it.
+        species: String,
+        /// What went wrong, with the species script's file and line.
+        error: pge_engine::Error,
+    },
+    /// A grown variant cannot be given the forest's levels of detail.
+    #[error("lod: variant {variant} of layer {} ({name}): {error}", .layer + 1)]
+    Lod {
+        /// The layer (0-based).
+        layer: usize,
+        /// Its species' name.
+        name: String,
+        /// The variant (0-based).
+        variant: usize,
+        /// Why.
+        error: pge_tree::lod::LodError,
+    },
+    /// A layer's species is a script and the run has no [`SpeciesGrower`] to grow it.
+    #[error("species scripts need a session created by an engine")]
+    NoGrower {
+        /// The first such layer (0-based).
+        layer: usize,
+    },
+    /// A camera's leaf budget was asked of a tile that refers to shared variants.
+    #[error(
+        "lod.camera needs the variants' leaves, which a tile referring to shared variants \
+         (--variants) does not grow: write standalone tiles"
+    )]
+    CameraWithSharedVariants,
+}
+
+impl ForestError {
+    /// The engine's error inside, if any: a callback's, or a species session's (which a host
+    /// matches to tell a limit, [`pge_engine::Error::is_limit`], from a mistake).
+    #[must_use]
+    pub fn engine_error(&self) -> Option<&pge_engine::Error> {
+        match self {
+            ForestError::Script(e) | ForestError::Species { error: e, .. } => Some(e),
+            _ => None,
+        }
+    }
 }

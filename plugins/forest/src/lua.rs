@@ -1,28 +1,34 @@
 //! The Lua side: `pge.Forest{...}` with `:terrain`, `:scatter`, `:height`, `:normal`,
 //! `:instances`, `:tiles` and `:selectTile`. A thin adapter: it reads and checks options
-//! (errors at the calling line name the option and what it needs), hands plain values to
-//! [`Forest`], and grows the variants of a species script in parallel, each in a session of
-//! its own created by the same engine (same sandbox and limits).
+//! (errors at the calling line name the option and what it needs) into a [`ForestSpec`],
+//! and returns a [`ForestRun`] whose script species are grown by a [`SessionGrower`]: each
+//! variant in a session of its own, created by the engine that created the forest's session
+//! (same sandbox and limits), handed over when the plugin registers.
 
-mod algorithm;
+mod grower;
 mod options;
 
 use std::cell::RefCell;
 use std::rc::Rc;
+use std::sync::Arc;
 
-use mlua::{Function, Lua, Table, UserData, UserDataMethods, Value};
-use pge_engine::lua::{AlgorithmHandle, LuaVec3, finite_number, script_error};
-use pge_engine::{Location, Plugin};
+use mlua::{Lua, Table, UserData, UserDataMethods, Value};
+use pge_engine::lua::{AlgorithmHandle, LuaVec3, finite_number, run_context, script_error};
+use pge_engine::{Engine, Error, Plugin};
 
-use crate::{Forest, ForestError, ForestLod, VariantCache, VariantSharing, check_budget};
-use algorithm::{ForestAlgorithm, budgeted_leaves, levels};
+use crate::{
+    ForestConfig, ForestError, ForestRun, ForestSpec, SpeciesGrower, VariantCache, VariantSharing,
+    check_budget, levels,
+};
+pub use grower::SessionGrower;
 use options::{new_forest, scatter, terrain};
 
-/// Adds `pge.Forest` to every session.
+/// Adds `pge.Forest` to every session. Its configuration (a variant cache, the sharing of
+/// variants between tiles) is given here, when the engine is built, and reaches every forest
+/// run of every session.
 #[derive(Clone, Debug, Default)]
 pub struct ForestPlugin {
-    variant_cache: Option<VariantCache>,
-    sharing: Option<VariantSharing>,
+    config: ForestConfig,
 }
 
 impl ForestPlugin {
@@ -31,8 +37,10 @@ impl ForestPlugin {
     #[must_use]
     pub fn with_variant_cache(cache: VariantCache) -> ForestPlugin {
         ForestPlugin {
-            variant_cache: Some(cache),
-            sharing: None,
+            config: ForestConfig {
+                cache: Some(cache),
+                sharing: None,
+            },
         }
     }
 
@@ -40,8 +48,25 @@ impl ForestPlugin {
     /// (`pge run --variants-out DIR`, `--variants DIR`; see [`VariantSharing`]).
     #[must_use]
     pub fn sharing(mut self, sharing: VariantSharing) -> ForestPlugin {
-        self.sharing = Some(sharing);
+        self.config.sharing = Some(sharing);
         self
+    }
+
+    /// Sets `pge.Forest`, whose runs grow species scripts with `grower`.
+    fn install(
+        &self,
+        lua: &Lua,
+        pge: &Table,
+        grower: Option<Arc<dyn SpeciesGrower>>,
+    ) -> mlua::Result<()> {
+        let setup = Rc::new(Setup {
+            config: self.config.clone(),
+            grower,
+        });
+        pge.set(
+            "Forest",
+            lua.create_function(move |lua, v: Value| new_forest(lua, v, setup.clone()))?,
+        )
     }
 }
 
@@ -54,62 +79,65 @@ impl Plugin for ForestPlugin {
         &["Forest"]
     }
 
+    /// For a Lua state no engine created: forests whose species are scripts cannot grow.
     fn register(&self, lua: &Lua, pge: &Table) -> mlua::Result<()> {
-        if let Some(cache) = &self.variant_cache {
-            lua.set_app_data(cache.clone());
-        }
-        if let Some(sharing) = self.sharing {
-            lua.set_app_data(sharing);
-        }
-        pge.set("Forest", lua.create_function(new_forest)?)
+        self.install(lua, pge, None)
+    }
+
+    fn register_in(&self, engine: &Engine, lua: &Lua, pge: &Table) -> mlua::Result<()> {
+        let grower = SessionGrower::new(engine.clone());
+        self.install(lua, pge, Some(Arc::new(grower)))
     }
 }
 
-/// Where a layer's trees come from.
-#[derive(Clone)]
-enum Species {
-    /// A script run once per variant, each in its own session.
-    Path {
-        /// The path shown in errors and given to the session.
-        shown: String,
-        /// `params` overrides as `--set` strings.
-        params: Vec<(String, String)>,
-    },
-    /// A function `(params, seed)` called in the forest's session.
-    Function { f: Function, params: Table },
+/// What every forest of a session runs with: the plugin's configuration and the grower of
+/// species scripts.
+struct Setup {
+    config: ForestConfig,
+    grower: Option<Arc<dyn SpeciesGrower>>,
 }
 
-struct Spec {
-    forest: Forest,
-    species: Vec<(Species, Location)>,
-    location: Location,
-    selected: Option<(usize, usize)>,
-    /// The forest's `lod` option.
-    lod: ForestLod,
+impl Setup {
+    /// The run of `spec` with this setup.
+    fn run(&self, spec: ForestSpec) -> ForestRun {
+        let run = ForestRun::new(spec).config(self.config.clone());
+        match &self.grower {
+            Some(grower) => run.grower(grower.clone()),
+            None => run,
+        }
+    }
+}
+
+/// An error of the forest `spec` describes, at the line of its `pge.Forest{...}`, typed.
+fn at_forest(spec: &ForestSpec, e: &ForestError) -> mlua::Error {
+    mlua::Error::external(Error::script(spec.origin(), e.to_string()))
 }
 
 /// A forest being described by a script (`pge.Forest{...}`); returning it runs it.
 #[derive(Clone)]
-pub struct LuaForest(Rc<RefCell<Spec>>);
+pub struct LuaForest {
+    spec: Rc<RefCell<ForestSpec>>,
+    setup: Rc<Setup>,
+}
 impl UserData for LuaForest {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("terrain", |lua, me, v: Value| {
-            terrain(lua, &mut me.0.borrow_mut(), v)?;
+            terrain(lua, &mut me.spec.borrow_mut(), v)?;
             Ok(me.clone())
         });
         m.add_method("scatter", |lua, me, v: Value| {
-            scatter(lua, &mut me.0.borrow_mut(), v)?;
+            scatter(lua, &mut me.spec.borrow_mut(), v)?;
             Ok(me.clone())
         });
         m.add_method("height", |lua, me, (x, z): (Value, Value)| {
             let x = finite_number(lua, &x, "forest:height: x")?;
             let z = finite_number(lua, &z, "forest:height: z")?;
-            Ok(me.0.borrow().forest.terrain.height(x, z))
+            Ok(me.spec.borrow().forest().terrain.height(x, z))
         });
         m.add_method("normal", |lua, me, (x, z): (Value, Value)| {
             let x = finite_number(lua, &x, "forest:normal: x")?;
             let z = finite_number(lua, &z, "forest:normal: z")?;
-            Ok(LuaVec3(me.0.borrow().forest.terrain.normal(x, z)))
+            Ok(LuaVec3(me.spec.borrow().forest().terrain.normal(x, z)))
         });
         m.add_method("selectTile", |lua, me, (i, j): (Value, Value)| {
             let i = finite_number(lua, &i, "forest:selectTile: i")?;
@@ -120,23 +148,15 @@ impl UserData for LuaForest {
                     format!("forest:selectTile: i and j must be integers >= 0, got {i}, {j}"),
                 ));
             }
-            let mut spec = me.0.borrow_mut();
-            let (i, j) = (i as usize, j as usize);
-            spec.forest
-                .tile_rect(i, j)
-                .map_err(|e| mlua::Error::RuntimeError(format!("{}: {e}", spec.location)))?;
-            spec.selected = Some((i, j));
+            let mut spec = me.spec.borrow_mut();
+            if let Err(e) = spec.select_tile(i as usize, j as usize) {
+                return Err(at_forest(&spec, &e));
+            }
             Ok(me.clone())
         });
         m.add_method("tiles", |lua, me, ()| {
-            let spec = me.0.borrow();
-            let Some(tiles) = spec.forest.tiles() else {
-                return Err(mlua::Error::RuntimeError(format!(
-                    "{}: {}",
-                    spec.location,
-                    ForestError::NotTiled
-                )));
-            };
+            let spec = me.spec.borrow();
+            let tiles = spec.tiles().map_err(|e| at_forest(&spec, &e))?;
             let out = lua.create_table()?;
             for t in tiles {
                 let e = lua.create_table()?;
@@ -149,21 +169,19 @@ impl UserData for LuaForest {
             Ok(out)
         });
         m.add_method("instances", |lua, me, ()| {
-            let spec = me.0.borrow();
-            let layout = spec.forest.layout(spec.selected).map_err(|e| match e {
-                ForestError::Script(e) => mlua::Error::RuntimeError(e.to_string()),
+            let spec = me.spec.borrow();
+            let layout = spec.forest().layout(spec.tile()).map_err(|e| match e {
+                ForestError::Script(e) => mlua::Error::external(e),
                 other => script_error(lua, format!("forest:instances: {other}")),
             })?;
             // With a camera, each instance's leaves: the variants are grown to know theirs.
             let (leaves, lods) = if let Some(camera) = &spec.lod.camera {
-                check_budget(&spec.forest, camera)
+                check_budget(spec.forest(), camera)
                     .map_err(|e| script_error(lua, format!("forest:instances: {e}")))?;
-                let grower = ForestAlgorithm::new(me.0.clone(), lua.weak());
-                let grown = grower
-                    .grow(&layout, &pge_engine::lua::run_context(lua))
-                    .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
-                let leaves = budgeted_leaves(&spec, &layout, &grown)
-                    .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
+                let run = me.setup.run(spec.clone());
+                let typed = |e: ForestError| mlua::Error::external(run.engine_error(e));
+                let grown = run.grow(&layout, &run_context(lua)).map_err(typed)?;
+                let leaves = run.budgeted_leaves(&layout, &grown).map_err(typed)?;
                 (leaves.unwrap_or_default(), levels(&grown))
             } else {
                 (Vec::new(), Vec::new())
@@ -187,7 +205,7 @@ impl UserData for LuaForest {
                 }
                 e.set(
                     "species",
-                    spec.forest.layers[i.layer as usize].name.as_str(),
+                    spec.forest().layers[i.layer as usize].name.as_str(),
                 )?;
                 e.set("variant", i.variant)?;
                 e.set("position", LuaVec3(glam::Vec3::from_array(i.position)))?;
@@ -197,11 +215,9 @@ impl UserData for LuaForest {
             }
             Ok(out)
         });
-        m.add_method("algorithm", |lua, me, ()| {
-            Ok(AlgorithmHandle::new(Box::new(ForestAlgorithm::new(
-                me.0.clone(),
-                lua.weak(),
-            ))))
+        m.add_method("algorithm", |_, me, ()| {
+            let run = me.setup.run(me.spec.borrow().clone());
+            Ok(AlgorithmHandle::new(Box::new(run)))
         });
     }
 }

@@ -7,15 +7,17 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
 
-use mlua::{Lua, Table, Value, WeakLua};
+use mlua::{Function, Lua, Table, Value};
 use pge_engine::lua::{Bounds, Options, caller_location, resolve_path, to_engine_error};
 use pge_engine::{Error, Location};
 
 use pge_tree::lod::{Budget, LodOptions, MAX_SECTORS};
 
-use super::{LuaForest, Spec, Species};
+use super::grower::grow_with_function;
+use super::{LuaForest, Setup};
 use crate::{
-    Camera, Density, FbmOptions, Forest, ForestLod, Layer, Method, Raster, Terrain, Variants,
+    Camera, Density, FbmOptions, ForestLod, ForestSpec, Layer, Method, Raster, ScriptSpecies,
+    Species, Terrain, Variants,
 };
 
 fn describe(v: &Value) -> String {
@@ -27,7 +29,7 @@ fn describe(v: &Value) -> String {
     }
 }
 
-pub(super) fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
+pub(super) fn new_forest(lua: &Lua, v: Value, setup: Rc<Setup>) -> mlua::Result<LuaForest> {
     let o = Options::new(lua, v, "pge.Forest")?;
     let size_need = "a number > 0 or {x, z} of numbers > 0 (metres)";
     let size = match o.value("size")? {
@@ -53,14 +55,14 @@ pub(super) fn new_forest(lua: &Lua, v: Value) -> mlua::Result<LuaForest> {
     let tile = o.number("tile", Bounds::Above(0.0))?;
     let lod = forest_lod(&o)?;
     o.finish()?;
-    let forest = Forest::new(size, seed, tile).map_err(|e| o.error(e))?;
-    Ok(LuaForest(Rc::new(RefCell::new(Spec {
-        forest,
-        species: Vec::new(),
-        location: caller_location(lua),
-        selected: None,
-        lod,
-    }))))
+    let mut spec = ForestSpec::new(size, seed, tile)
+        .map_err(|e| o.error(e))?
+        .described_at(caller_location(lua));
+    spec.lod = lod;
+    Ok(LuaForest {
+        spec: Rc::new(RefCell::new(spec)),
+        setup,
+    })
 }
 
 /// Reads `pge.Forest{ lod = ... }`: absent or `false` for none, `true` for levels of detail
@@ -166,9 +168,9 @@ fn image(lua: &Lua, o: &Options, key: &str, relative: &str) -> mlua::Result<Arc<
         .map_err(|e| o.problem(key, format!("cannot be read: {e}")))
 }
 
-pub(super) fn terrain(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
+pub(super) fn terrain(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Result<()> {
     let o = Options::table_required(lua, v, "forest:terrain")?;
-    let size = spec.forest.size;
+    let size = spec.forest().size;
     let resolution = o.number("resolution", Bounds::Above(0.0))?.unwrap_or(4.0);
     let height = o.number("height", Bounds::Finite)?;
     let mut fbm = FbmOptions::default();
@@ -205,13 +207,13 @@ pub(super) fn terrain(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> 
         ));
     }
     let terrain = match path {
-        None => Terrain::fbm(size, fbm, spec.forest.seed),
+        None => Terrain::fbm(size, fbm, spec.forest().seed),
         Some(path) => {
             let raster = image(lua, &o, "image", &path)?;
             Terrain::image(size, raster, height.unwrap_or(40.0))
         }
     };
-    spec.forest.terrain = terrain.with_resolution(resolution);
+    spec.set_terrain(terrain.with_resolution(resolution));
     Ok(())
 }
 
@@ -242,9 +244,9 @@ fn species_params(o: &Options, params: &Table) -> mlua::Result<Vec<(String, Stri
     Ok(overrides)
 }
 
-pub(super) fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> {
+pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Result<()> {
     let o = Options::table_required(lua, v, "forest:scatter")?;
-    let n = spec.forest.layers.len() + 1;
+    let n = spec.forest().layers.len() + 1;
     let params = match o.value("params")? {
         Value::Nil => lua.create_table()?,
         Value::Table(p) => p,
@@ -258,10 +260,16 @@ pub(super) fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> 
                 .file_stem()
                 .map_or_else(|| format!("layer{n}"), |s| s.to_string_lossy().to_string());
             let params = species_params(&o, &params)?;
-            let shown = shown_path(&canonical);
-            (Species::Path { shown, params }, name)
+            let path = shown_path(&canonical);
+            (Species::Script(ScriptSpecies { path, params }), name)
         }
-        Value::Function(f) => (Species::Function { f, params }, format!("layer{n}")),
+        Value::Function(f) => {
+            let location = caller_location(lua);
+            let grow = move |_seed: u64, ctx: &pge_engine::RunContext| {
+                grow_with_function(&f, &params, ctx, &location)
+            };
+            (Species::Function(Rc::new(grow)), format!("layer{n}"))
+        }
         Value::Nil => return Err(o.missing("species", species_need)),
         other => return Err(o.wrong_type("species", species_need, &other)),
     };
@@ -286,7 +294,6 @@ pub(super) fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> 
         }
         Value::String(s) => Density::Map(image(lua, &o, "density", &s.to_string_lossy())?),
         Value::Function(f) => {
-            let weak = lua.weak();
             let location = caller_location(lua);
             Density::Function(Rc::new(move |x: f64, z: f64| {
                 f.call::<Value>((x, z))
@@ -298,7 +305,7 @@ pub(super) fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> 
                             other.type_name()
                         ))),
                     })
-                    .map_err(|e| lua_error(&weak, &location, e))
+                    .map_err(|e| lua_error(&f, &location, e))
             }))
         }
         other => return Err(o.wrong_type("density", density_need, &other)),
@@ -329,14 +336,14 @@ pub(super) fn scatter(lua: &Lua, spec: &mut Spec, v: Value) -> mlua::Result<()> 
         },
     };
     o.finish()?;
-    layer.check().map_err(|e| o.error(e))?;
-    spec.forest.layers.push(layer);
-    spec.species.push((species, caller_location(lua)));
+    spec.add_layer_at(layer, species, caller_location(lua))
+        .map_err(|e| o.error(e))?;
     Ok(())
 }
 
-pub(super) fn lua_error(weak: &WeakLua, location: &Location, e: mlua::Error) -> Error {
-    match weak.try_upgrade() {
+/// The error of a call of the script's function `f`, with the script's file and line.
+fn lua_error(f: &Function, location: &Location, e: mlua::Error) -> Error {
+    match f.weak_lua().try_upgrade() {
         Some(lua) => to_engine_error(&lua, e),
         None => Error::script(location.clone(), e.to_string()),
     }
