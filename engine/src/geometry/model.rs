@@ -2,7 +2,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::{GeometryError, Mesh, Skeleton, Texture};
+use super::{ForestStats, GeometryError, Mesh, Skeleton, Texture, VariantCounts};
 use crate::export::SkeletonText;
 
 /// One placement of a mesh in the model (a glTF node).
@@ -128,6 +128,12 @@ pub struct Model {
     pub instances: Vec<Instance>,
     /// Instanced objects (forests): many placements of the same meshes, stored compactly.
     pub groups: Vec<InstanceGroup>,
+    /// The forest the model is (a forest's generator records it), written as the root
+    /// `extras.pge.forest`.
+    pub forest: Option<ForestStats>,
+    /// What one instance of each group stands for, aligned with [`Model::groups`], in a
+    /// forest's shared variants (`pge run --variants-out`); empty otherwise.
+    pub variant_counts: Vec<VariantCounts>,
     /// Application data written under the root `extras.pge` next to the generator's own.
     pub extras: serde_json::Map<String, serde_json::Value>,
     /// Counts and timings.
@@ -173,8 +179,8 @@ impl Model {
     }
 
     /// Adds every instance of `other`, placed by `transform`, sharing meshes by `Arc`.
-    /// Stats are merged; extras of `other` are copied where this model has no such key; the
-    /// environment of `other` is taken when this model has none.
+    /// Stats are merged; extras of `other` are copied where this model has no such key; its
+    /// forest, variant counts and environment are taken when this model has none.
     pub fn add_model(&mut self, other: &Model, transform: Mat4) {
         let map: Vec<usize> = other
             .meshes
@@ -220,6 +226,12 @@ impl Model {
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+        if self.forest.is_none() {
+            self.forest.clone_from(&other.forest);
+        }
+        if self.variant_counts.is_empty() {
+            self.variant_counts.clone_from(&other.variant_counts);
         }
         if self.environment.is_none() {
             self.environment.clone_from(&other.environment);

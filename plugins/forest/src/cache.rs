@@ -22,7 +22,7 @@ use crate::codec::{Reader, Writer, read_model, write_model};
 use crate::rng::splitmix;
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x04";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x05";
 
 /// A folder of grown variants shared by runs (and by processes: entries appear atomically).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -249,8 +249,9 @@ mod tests {
 
     use glam::{Mat4, Vec2, Vec3, Vec4};
     use pge_engine::geometry::{
-        AlphaMode, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, PlacementLeaves,
-        Primitive, Skeleton, Texture,
+        AlphaMode, ForestPart, ForestStats, GroupLod, InstanceGroup, InstanceTransform, LeafPoint,
+        LodLevel, LodSector, LodTable, Material, Mesh, MeshLod, PlacementLeaves, Primitive,
+        PrimitiveLod, Skeleton, SpeciesCount, Texture, VariantCounts,
     };
 
     fn sample() -> Model {
@@ -281,13 +282,25 @@ mod tests {
         mesh.material = material.clone();
         mesh.skeleton = Some(Arc::new(skeleton));
         mesh.extras.insert(
-            "lod".into(),
+            "mine".into(),
             serde_json::json!([1, -2, 0.1, "x", null, {"a": true}]),
         );
+        let level = |a, b, c| LodLevel { a, b, c };
+        let sector = |offset| {
+            let rows = vec![level(0, 4, 1), level(1, 3, 1), level(3, 5, 0)];
+            LodSector::new(offset, 3, 1, rows).expect("sector")
+        };
+        let table = LodTable::new(vec![sector(0), sector(5)]).expect("table");
+        mesh.lod = Some(Arc::new(MeshLod::Leaves(table.clone())));
         let mesh = Arc::new(mesh);
         let mut lines = (*mesh).clone();
         lines.primitive = Primitive::Lines;
         lines.skeleton = None;
+        let group = GroupLod::new(vec![PrimitiveLod {
+            primitive: 1,
+            table,
+        }]);
+        lines.lod = Some(Arc::new(MeshLod::Group(group.expect("group"))));
         let mut model = Model::from_mesh(mesh.clone());
         model.add_mesh(lines, Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)));
         model.groups.push(InstanceGroup {
@@ -306,6 +319,22 @@ mod tests {
         model
             .extras
             .insert("seed".into(), serde_json::json!(u64::MAX));
+        model.forest = Some(ForestStats {
+            size: [60.0, 0.1],
+            seed: u64::MAX,
+            tile: Some(f64::MIN_POSITIVE),
+            part: ForestPart::Merged(vec![[0, 1], [2, 3]]),
+            instances: 4,
+            species: vec![SpeciesCount {
+                name: "oak".into(),
+                variants: 2,
+                count: 4,
+            }],
+        });
+        model.variant_counts = vec![VariantCounts {
+            nodes: 2,
+            leaves: 1,
+        }];
         model.stats.nodes = 2;
         model.stats.leaves = 1;
         model.stats.warnings.push("oak.lua:3: warning: thin".into());
@@ -317,6 +346,8 @@ mod tests {
         assert_eq!(a.meshes, b.meshes);
         assert_eq!(a.instances, b.instances);
         assert_eq!(a.groups, b.groups);
+        assert_eq!(a.forest, b.forest);
+        assert_eq!(a.variant_counts, b.variant_counts);
         assert_eq!(a.extras, b.extras);
         assert_eq!(a.stats, b.stats);
         assert_eq!(a.environment, b.environment);

@@ -6,8 +6,10 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use pge_engine::geometry::{
-    AlphaMode, DiffuseTransmission, Instance, InstanceGroup, InstanceTransform, LeafPoint,
-    Material, Mesh, Model, PlacementLeaves, Primitive, Skeleton, Stats, Texture,
+    AlphaMode, DiffuseTransmission, ForestPart, ForestStats, GroupLod, Instance, InstanceGroup,
+    InstanceTransform, LeafPoint, LodLevel, LodSector, LodTable, Material, Mesh, MeshLod, Model,
+    PlacementLeaves, Primitive, PrimitiveLod, Skeleton, SpeciesCount, Stats, Texture,
+    VariantCounts,
 };
 use serde_json::{Map, Number, Value};
 
@@ -195,6 +197,8 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
         meshes,
         instances,
         groups,
+        forest,
+        variant_counts,
         extras,
         stats,
         environment,
@@ -327,6 +331,7 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
             indices,
             material,
             skeleton,
+            lod,
             extras,
         } = &**m;
         w.str(name);
@@ -362,6 +367,7 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
             }
             None => w.u8(0),
         }
+        write_lod(w, lod.as_deref());
         w.map(extras);
     }
     w.len(instances.len());
@@ -400,6 +406,12 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
             }
         }
     }
+    write_forest(w, forest.as_ref());
+    w.len(variant_counts.len());
+    for c in variant_counts {
+        w.u64(c.nodes);
+        w.u64(c.leaves);
+    }
     w.map(extras);
     // Phases are timings of this run, not part of the variant.
     let Stats {
@@ -417,6 +429,159 @@ pub(crate) fn write_model(w: &mut Writer, model: &Model) {
         w.str(s);
     }
     write_texture_ref(w, &mut textures, environment.as_ref());
+}
+
+fn write_table(w: &mut Writer, table: &LodTable) {
+    w.len(table.sectors().len());
+    for s in table.sectors() {
+        w.u32(s.offset());
+        w.u32(s.leaves());
+        w.u32(s.roots());
+        w.len(s.levels().len());
+        for l in s.levels() {
+            w.u32(l.a);
+            w.u32(l.b);
+            w.u32(l.c);
+        }
+    }
+}
+
+fn write_lod(w: &mut Writer, lod: Option<&MeshLod>) {
+    match lod {
+        None => w.u8(0),
+        Some(MeshLod::Leaves(table)) => {
+            w.u8(1);
+            write_table(w, table);
+        }
+        Some(MeshLod::Group(group)) => {
+            w.u8(2);
+            w.len(group.primitives().len());
+            for p in group.primitives() {
+                w.u32(p.primitive);
+                write_table(w, &p.table);
+            }
+        }
+    }
+}
+
+fn write_forest(w: &mut Writer, forest: Option<&ForestStats>) {
+    let Some(f) = forest else {
+        w.u8(0);
+        return;
+    };
+    w.u8(1);
+    w.u64(f.size[0].to_bits());
+    w.u64(f.size[1].to_bits());
+    w.u64(f.seed);
+    match f.tile {
+        None => w.u8(0),
+        Some(t) => {
+            w.u8(1);
+            w.u64(t.to_bits());
+        }
+    }
+    match &f.part {
+        ForestPart::Tile(None) => w.u8(0),
+        ForestPart::Tile(Some([i, j])) => {
+            w.u8(1);
+            w.u64(*i);
+            w.u64(*j);
+        }
+        ForestPart::Merged(tiles) => {
+            w.u8(2);
+            w.len(tiles.len());
+            for [i, j] in tiles {
+                w.u64(*i);
+                w.u64(*j);
+            }
+        }
+    }
+    w.u64(f.instances);
+    w.len(f.species.len());
+    for s in &f.species {
+        w.str(&s.name);
+        w.u64(s.variants);
+        w.u64(s.count);
+    }
+}
+
+fn read_table(r: &mut Reader) -> Option<LodTable> {
+    let sectors = (0..r.len(20)?)
+        .map(|_| {
+            let (offset, leaves, roots) = (r.u32()?, r.u32()?, r.u32()?);
+            let levels = (0..r.len(12)?)
+                .map(|_| {
+                    Some(LodLevel {
+                        a: r.u32()?,
+                        b: r.u32()?,
+                        c: r.u32()?,
+                    })
+                })
+                .collect::<Option<_>>()?;
+            LodSector::new(offset, leaves, roots, levels).ok()
+        })
+        .collect::<Option<_>>()?;
+    LodTable::new(sectors).ok()
+}
+
+fn read_lod(r: &mut Reader) -> Option<Option<MeshLod>> {
+    Some(match r.u8()? {
+        0 => None,
+        1 => Some(MeshLod::Leaves(read_table(r)?)),
+        2 => {
+            let primitives = (0..r.len(12)?)
+                .map(|_| {
+                    Some(PrimitiveLod {
+                        primitive: r.u32()?,
+                        table: read_table(r)?,
+                    })
+                })
+                .collect::<Option<_>>()?;
+            Some(MeshLod::Group(GroupLod::new(primitives).ok()?))
+        }
+        _ => return None,
+    })
+}
+
+fn read_forest(r: &mut Reader) -> Option<Option<ForestStats>> {
+    if r.u8()? == 0 {
+        return Some(None);
+    }
+    let size = [f64::from_bits(r.u64()?), f64::from_bits(r.u64()?)];
+    let seed = r.u64()?;
+    let tile = match r.u8()? {
+        0 => None,
+        1 => Some(f64::from_bits(r.u64()?)),
+        _ => return None,
+    };
+    let part = match r.u8()? {
+        0 => ForestPart::Tile(None),
+        1 => ForestPart::Tile(Some([r.u64()?, r.u64()?])),
+        2 => ForestPart::Merged(
+            (0..r.len(16)?)
+                .map(|_| Some([r.u64()?, r.u64()?]))
+                .collect::<Option<_>>()?,
+        ),
+        _ => return None,
+    };
+    let instances = r.u64()?;
+    let species = (0..r.len(24)?)
+        .map(|_| {
+            Some(SpeciesCount {
+                name: r.str()?,
+                variants: r.u64()?,
+                count: r.u64()?,
+            })
+        })
+        .collect::<Option<_>>()?;
+    Some(Some(ForestStats {
+        size,
+        seed,
+        tile,
+        part,
+        instances,
+        species,
+    }))
 }
 
 fn write_texture_ref(w: &mut Writer, textures: &mut Vec<Arc<Texture>>, t: Option<&Arc<Texture>>) {
@@ -523,6 +688,7 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
                 1 => Some(skeletons[r.index(skeletons.len())?].clone()),
                 _ => return None,
             };
+            let lod = read_lod(r)?.map(Arc::new);
             Some(Arc::new(Mesh {
                 name,
                 primitive,
@@ -533,6 +699,7 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
                 indices,
                 material,
                 skeleton,
+                lod,
                 extras: r.map(0)?,
             }))
         })
@@ -581,6 +748,15 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
             })
         })
         .collect::<Option<_>>()?;
+    let forest = read_forest(r)?;
+    let variant_counts = (0..r.len(16)?)
+        .map(|_| {
+            Some(VariantCounts {
+                nodes: r.u64()?,
+                leaves: r.u64()?,
+            })
+        })
+        .collect::<Option<_>>()?;
     let extras = r.map(0)?;
     let stats = Stats {
         nodes: r.u64()?,
@@ -594,6 +770,8 @@ pub(crate) fn read_model(r: &mut Reader) -> Option<Model> {
         meshes,
         instances,
         groups,
+        forest,
+        variant_counts,
         extras,
         stats,
         environment,
