@@ -5,7 +5,7 @@
 /// The forest a model is (a whole forest, one tile of it, or tiles merged), written by the
 /// glTF writer as `extras.pge.forest = {size, seed, tile, tileIndex, instances, species}`
 /// (merged tiles: `{size, seed, tile, species, instances, tiles}`).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ForestStats {
     /// The forest's extent in metres along x and z.
     pub size: [f64; 2],
@@ -22,7 +22,7 @@ pub struct ForestStats {
 }
 
 /// Which part of a forest a model holds.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ForestPart {
     /// The whole forest (`None`) or the tile `(i, j)` of it (`tileIndex`).
     Tile(Option<[u64; 2]>),
@@ -37,7 +37,7 @@ impl Default for ForestPart {
 }
 
 /// The trees of one species of a forest.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SpeciesCount {
     /// The species' name (its script's file stem, or `layerN`).
     pub name: String,
@@ -49,7 +49,7 @@ pub struct SpeciesCount {
 
 /// What one instance of a shared variant stands for: the skeleton nodes and leaves of the
 /// tree it draws.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct VariantCounts {
     /// Skeleton nodes.
     pub nodes: u64,

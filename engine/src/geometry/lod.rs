@@ -68,13 +68,18 @@ pub enum LodError {
         /// Where the previous sector's V ends.
         want: u64,
     },
+    /// The leaves or roots given for a table are not the sums of its parts.
+    #[error("a LOD table's totals are not the sums of its parts")]
+    Totals,
     /// Counts summed over sectors or primitives do not fit in 32 bits.
     #[error("a LOD table's leaf counts overflow 32 bits")]
     Overflow,
 }
 
 /// One row of a LOD table: its level draws `V[0..a)` and `V[b..b+c)`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 pub struct LodLevel {
     /// Leaves drawn from the start of V (original leaves).
     pub a: u32,
@@ -86,7 +91,8 @@ pub struct LodLevel {
 
 /// The levels of one sector's V: row `i` draws level `i`, from the roots R (row 0) to the
 /// original leaves O (the last row).
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "RawSector")]
 pub struct LodSector {
     offset: u32,
     leaves: u32,
@@ -178,7 +184,8 @@ impl LodSector {
 
 /// The levels of detail of a leaf mesh written in the order of V: one sector, or several
 /// whose V follow one another from the mesh's first leaf.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "RawTable")]
 pub struct LodTable {
     sectors: Vec<LodSector>,
     leaves: u32,
@@ -233,7 +240,7 @@ impl LodTable {
 }
 
 /// The LOD table of one leaf primitive of a group's mesh.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct PrimitiveLod {
     /// The primitive's place among the mesh's primitives (from 0).
     pub primitive: u32,
@@ -243,7 +250,8 @@ pub struct PrimitiveLod {
 
 /// The levels of detail of a group's mesh (a forest variant drawn as one glTF mesh): the
 /// tables of its leaf primitives, with their leaves and roots summed.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "RawGroup")]
 pub struct GroupLod {
     primitives: Vec<PrimitiveLod>,
     leaves: u32,
@@ -278,7 +286,7 @@ impl GroupLod {
 }
 
 /// What a mesh carries of foliage levels of detail ([`Mesh::lod`](super::Mesh::lod)).
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum MeshLod {
     /// A leaf mesh written in the order of V.
     Leaves(LodTable),
@@ -312,6 +320,60 @@ impl MeshLod {
             MeshLod::Leaves(t) => Some(t),
             MeshLod::Group(_) => None,
         }
+    }
+}
+
+/// The fields of a [`LodSector`] as read, checked by [`LodSector::new`].
+#[derive(serde::Deserialize)]
+struct RawSector {
+    offset: u32,
+    leaves: u32,
+    roots: u32,
+    levels: Vec<LodLevel>,
+}
+
+impl TryFrom<RawSector> for LodSector {
+    type Error = LodError;
+    fn try_from(r: RawSector) -> Result<LodSector, LodError> {
+        LodSector::new(r.offset, r.leaves, r.roots, r.levels)
+    }
+}
+
+/// The fields of a [`LodTable`] as read, checked by [`LodTable::new`] (the sums too).
+#[derive(serde::Deserialize)]
+struct RawTable {
+    sectors: Vec<LodSector>,
+    leaves: u32,
+    roots: u32,
+}
+
+impl TryFrom<RawTable> for LodTable {
+    type Error = LodError;
+    fn try_from(r: RawTable) -> Result<LodTable, LodError> {
+        let table = LodTable::new(r.sectors)?;
+        if (table.leaves, table.roots) != (r.leaves, r.roots) {
+            return Err(LodError::Totals);
+        }
+        Ok(table)
+    }
+}
+
+/// The fields of a [`GroupLod`] as read, checked by [`GroupLod::new`] (the sums too).
+#[derive(serde::Deserialize)]
+struct RawGroup {
+    primitives: Vec<PrimitiveLod>,
+    leaves: u32,
+    roots: u32,
+}
+
+impl TryFrom<RawGroup> for GroupLod {
+    type Error = LodError;
+    fn try_from(r: RawGroup) -> Result<GroupLod, LodError> {
+        let group = GroupLod::new(r.primitives)?;
+        if (group.leaves, group.roots) != (r.leaves, r.roots) {
+            return Err(LodError::Totals);
+        }
+        Ok(group)
     }
 }
 

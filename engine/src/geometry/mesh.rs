@@ -64,7 +64,7 @@ pub enum GeometryError {
 }
 
 /// How the indices of a mesh are grouped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Primitive {
     /// Three indices per triangle, counter-clockwise front faces.
     #[default]
@@ -96,7 +96,7 @@ impl Primitive {
 /// `normals`, `uvs` and `colors` are either empty (absent) or have one entry per position.
 /// Builders fill the fields directly; [`Mesh::validate`] checks the invariants and the
 /// exporters refuse a mesh that fails it.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
     /// Name written to the glTF mesh.
     pub name: String,
@@ -113,13 +113,17 @@ pub struct Mesh {
     /// u32 indices into the vertex arrays.
     pub indices: Vec<u32>,
     /// The material, shared between meshes that use the same one.
+    #[serde(with = "super::binary::shared")]
     pub material: Arc<Material>,
     /// The branch graph this mesh was grown from, if any (written to its glTF extras).
+    #[serde(with = "super::binary::shared_option")]
     pub skeleton: Option<Arc<Skeleton>>,
     /// The foliage levels of detail of a leaf mesh written in the order of V, or of a
     /// group's leaf primitives (written to its glTF extras as `lod`).
+    #[serde(with = "super::binary::shared_option")]
     pub lod: Option<Arc<MeshLod>>,
     /// Application data written under the mesh's `extras.pge`.
+    #[serde(with = "super::binary::json_text")]
     pub extras: serde_json::Map<String, serde_json::Value>,
 }
 

@@ -4,8 +4,9 @@
 //! [`Material`], which may carry a PNG [`Texture`]. Trees also attach their branch
 //! [`Skeleton`] to the bark mesh so games can read the graph back from the glTF extras, and
 //! leaf meshes written for levels of detail their [`MeshLod`]; a forest's model records the
-//! forest ([`ForestStats`]).
+//! forest ([`ForestStats`]). [`binary`] is a model's exact binary form.
 
+pub mod binary;
 mod forest;
 mod lod;
 mod material;

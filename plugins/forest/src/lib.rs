@@ -24,7 +24,6 @@
 
 mod assemble;
 mod cache;
-mod codec;
 mod jittered;
 mod layer;
 mod layout;
