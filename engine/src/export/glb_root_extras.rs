@@ -169,7 +169,7 @@ struct Species<'a>(&'a [SpeciesCount]);
 
 impl Serialize for Species<'_> {
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        s.collect_seq(self.0.iter().map(|c| SpeciesEntry(c)))
+        s.collect_seq(self.0.iter().map(SpeciesEntry))
     }
 }
 

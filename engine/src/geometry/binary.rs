@@ -430,6 +430,15 @@ mod tests {
     }
 
     #[test]
+    fn the_empty_models_bytes_are_pinned() {
+        // Meshes, instances, groups, no forest, variant counts, extras "{}", stats (nodes,
+        // leaves, modules, warnings), no environment (fuzz/corpus/model_binary/empty).
+        let bytes = encode(&Model::new()).expect("encodes");
+        assert_eq!(bytes, b"\x00\x00\x00\x00\x00\x02{}\x00\x00\x00\x00\x00");
+        assert!(decode(&bytes).expect("decodes").meshes.is_empty());
+    }
+
+    #[test]
     fn truncated_damaged_and_trailing_bytes_are_errors_never_panics() {
         let bytes = encode(&sample()).expect("encodes");
         for n in 0..bytes.len() {
