@@ -390,8 +390,7 @@ fn run_one(
             "leaves": m.stats.leaves + sl,
             "modules": m.stats.modules,
             "meshes": m.meshes.len(),
-            "instances": m.extras.get("forest").and_then(|f| f.get("instances")).cloned()
-                .unwrap_or_else(|| m.instances.len().into()),
+            "instances": m.forest.as_ref().map_or(m.instances.len() as u64, |f| f.instances),
             "seconds": seconds,
             "phases": phases,
             "warnings": m.stats.warnings,

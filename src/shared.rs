@@ -39,18 +39,10 @@ pub fn identity(script: &Path, meta: &ExportMeta) -> anyhow::Result<Map<String, 
 /// the description last (each atomically), so a description is never without its file.
 pub fn write_variants(dir: &Path, model: &Model, info: Map<String, Value>) -> anyhow::Result<()> {
     let counts: Vec<[u64; 2]> = model
-        .extras
-        .get("sharedVariants")
-        .and_then(Value::as_array)
-        .map(|list| {
-            list.iter()
-                .map(|c| {
-                    let n = |k: &str| c.get(k).and_then(Value::as_u64).unwrap_or(0);
-                    [n("nodes"), n("leaves")]
-                })
-                .collect()
-        })
-        .unwrap_or_default();
+        .variant_counts
+        .iter()
+        .map(|c| [c.nodes, c.leaves])
+        .collect();
     let (text, bin) = variants_files(model, &counts, info, BIN)?;
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     write_atomically(&dir.join(BIN), &bin)?;
@@ -63,32 +55,24 @@ pub fn write_variants(dir: &Path, model: &Model, info: Map<String, Value>) -> an
 /// "levels"}` (its mesh's `extras.pge.lod`; `levels = leaves - roots + 1`, from the roots
 /// alone to every leaf).
 pub fn summary(model: &Model) -> Vec<Value> {
-    let counts = model.extras.get("sharedVariants").and_then(Value::as_array);
     model
         .groups
         .iter()
         .enumerate()
         .map(|(g, group)| {
             let meshes = || group.meshes.iter().map(|&m| &model.meshes[m]);
-            let count = |k: &str| {
-                counts
-                    .and_then(|c| c.get(g))
-                    .and_then(|c| c.get(k))
-                    .and_then(Value::as_u64)
-                    .unwrap_or(0)
-            };
+            let counts = model.variant_counts.get(g).copied().unwrap_or_default();
             let mut entry = Map::new();
             entry.insert("name".into(), group.name.clone().into());
             let vertices: usize = meshes().map(|m| m.vertex_count()).sum();
             let triangles: usize = meshes().map(|m| m.triangle_count()).sum();
             entry.insert("vertices".into(), vertices.into());
             entry.insert("triangles".into(), triangles.into());
-            entry.insert("nodes".into(), count("nodes").into());
-            entry.insert("leaves".into(), count("leaves").into());
+            entry.insert("nodes".into(), counts.nodes.into());
+            entry.insert("leaves".into(), counts.leaves.into());
             let lod = meshes().find_map(|m| {
-                let lod = m.extras.get("lod")?;
-                let n = |k: &str| lod.get(k).and_then(Value::as_u64);
-                Some((n("leaves")?, n("roots")?))
+                let lod = m.lod.as_deref()?;
+                Some((u64::from(lod.leaves()), u64::from(lod.roots())))
             });
             if let Some((leaves, roots)) = lod {
                 let levels = leaves.saturating_sub(roots) + 1;

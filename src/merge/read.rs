@@ -7,8 +7,9 @@ use std::sync::Arc;
 use anyhow::{Context, bail};
 use glam::{Vec2, Vec3, Vec4};
 use gltf::Gltf;
+use pge_engine::export::lod_from_json;
 use pge_engine::geometry::{
-    AlphaMode, DiffuseTransmission, InstanceTransform, Material, Mesh, Primitive, Texture,
+    AlphaMode, DiffuseTransmission, InstanceTransform, Material, Mesh, MeshLod, Primitive, Texture,
 };
 use serde_json::{Map, Value};
 
@@ -133,13 +134,13 @@ pub(super) fn read_mesh<'s>(
     json: &Value,
 ) -> anyhow::Result<(String, Vec<Mesh>)> {
     let name = mesh.name().unwrap_or_default().to_string();
-    let extras: Map<String, Value> = match mesh.extras() {
+    let (extras, lod) = split_lod(match mesh.extras() {
         Some(raw) => match serde_json::from_str::<Value>(raw.get())?.get("pge") {
             Some(Value::Object(m)) => m.clone(),
             _ => Map::new(),
         },
         None => Map::new(),
-    };
+    });
     let mut parts = Vec::new();
     for prim in mesh.primitives() {
         let reader = prim.reader(buffer);
@@ -178,10 +179,27 @@ pub(super) fn read_mesh<'s>(
         };
         if parts.is_empty() {
             m.extras = extras.clone();
+            m.lod = lod.clone();
         }
         parts.push(m);
     }
     Ok((name, parts))
+}
+
+/// A mesh's `extras.pge` without its `lod`, and the levels of detail read from it
+/// ([`lod_from_json`]). An `lod` that is not PGE's, or not last (where the writer puts it),
+/// stays among the extras and is written back as it was.
+pub(super) fn split_lod(
+    mut extras: Map<String, Value>,
+) -> (Map<String, Value>, Option<Arc<MeshLod>>) {
+    let last = extras.keys().next_back().is_some_and(|k| k == "lod");
+    let lod = last
+        .then(|| extras.get("lod").and_then(lod_from_json))
+        .flatten();
+    if lod.is_some() {
+        extras.remove("lod");
+    }
+    (extras, lod.map(Arc::new))
 }
 
 /// A glTF material as PGE's, its textures (base colour, normal, metallic-roughness) read

@@ -8,11 +8,14 @@ use std::sync::Arc;
 use anyhow::{Context, bail};
 use glam::Mat4;
 use gltf::Gltf;
-use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model, PlacementLeaves};
+use pge_engine::geometry::{
+    ForestPart, ForestStats, InstanceGroup, InstanceTransform, Mesh, MeshLod, Model,
+    PlacementLeaves, SpeciesCount,
+};
 use serde_json::{Map, Value};
 
 use super::read::{
-    check_bounds, leaf_counts, normal_path, read_instances, read_mesh, relative_file,
+    check_bounds, leaf_counts, normal_path, read_instances, read_mesh, relative_file, split_lod,
 };
 
 /// The model being merged.
@@ -21,8 +24,8 @@ pub(super) struct World {
     model: Model,
     /// Variants written so far: the group's name and its meshes, for sharing them.
     variants: Vec<(String, Vec<Mesh>)>,
-    /// Extras of the first tile, summed counts of every tile.
-    forest: Option<Map<String, Value>>,
+    /// The forest of the first tile that has one, with the counts of every tile summed.
+    forest: Option<ForestStats>,
     tiles: Vec<[u64; 2]>,
     /// External buffers read so far (shared variants), by their absolute path.
     pub(super) external: HashMap<PathBuf, Arc<Vec<u8>>>,
@@ -97,7 +100,7 @@ impl World {
                     let (name, mut parts) = read_mesh(&mesh, &buffer, &json)?;
                     let extras = self.shared_extras.get(&path).and_then(|e| e.get(k));
                     if let (Some(first), Some(extras)) = (parts.first_mut(), extras) {
-                        first.extras = extras.clone();
+                        (first.extras, first.lod) = split_lod(extras.clone());
                     }
                     (name, parts)
                 }
@@ -177,9 +180,8 @@ impl World {
                 }
                 let roots = parts
                     .first()
-                    .and_then(|p| p.extras.get("lod")?.get("roots")?.as_u64())
-                    .and_then(|r| u32::try_from(r).ok())
-                    .unwrap_or(0);
+                    .and_then(|p| p.lod.as_deref())
+                    .map_or(0, MeshLod::roots);
                 self.model.groups.push(InstanceGroup {
                     name: name.to_string(),
                     meshes: (first..first + parts.len()).collect(),
@@ -220,27 +222,14 @@ impl World {
         self.model.stats.leaves += count("/stats/leaves");
         self.model.stats.modules += count("/stats/modules");
         self.tiles.push([i, j]);
-        let Some(Value::Object(tile)) = pge.get("forest") else {
+        let Some(value) = pge.get("forest") else {
             return Ok(());
         };
-        let Some(forest) = &mut self.forest else {
-            self.forest = Some(tile.clone());
-            return Ok(());
-        };
-        let sum = |a: Option<&Value>, b: Option<&Value>| {
-            a.and_then(Value::as_u64).unwrap_or(0) + b.and_then(Value::as_u64).unwrap_or(0)
-        };
-        let total = sum(forest.get("instances"), tile.get("instances"));
-        forest.insert("instances".into(), total.into());
-        if let (Some(Value::Array(all)), Some(Value::Array(these))) =
-            (forest.get_mut("species"), tile.get("species"))
-        {
-            for (a, b) in all.iter_mut().zip(these) {
-                let n = sum(a.get("count"), b.get("count"));
-                if let Some(a) = a.as_object_mut() {
-                    a.insert("count".into(), n.into());
-                }
-            }
+        let tile = forest_stats(value)
+            .with_context(|| format!("tile {i},{j}: extras.pge.forest is not a forest's"))?;
+        match &mut self.forest {
+            Some(forest) => forest.add_tile(&tile),
+            None => self.forest = Some(tile),
         }
         Ok(())
     }
@@ -248,14 +237,55 @@ impl World {
     /// The merged model, its `extras.pge.forest` naming the tiles it holds.
     pub(super) fn finish(mut self) -> Model {
         if let Some(mut forest) = self.forest.take() {
-            forest.remove("tileIndex");
-            forest.insert("tiles".into(), serde_json::json!(self.tiles));
-            self.model
-                .extras
-                .insert("forest".into(), Value::Object(forest));
+            forest.part = ForestPart::Merged(self.tiles);
+            self.model.forest = Some(forest);
         }
         self.model
     }
+}
+
+/// A tile's `extras.pge.forest` as the glTF writer writes it (`{size, seed, tile,
+/// tileIndex, instances, species = [{name, variants, count}]}`), `None` when it is not one.
+fn forest_stats(value: &Value) -> Option<ForestStats> {
+    let number = |v: &Value, key: &str| v.get(key)?.as_u64();
+    let pair = |v: &Value| -> Option<[Value; 2]> {
+        match v.as_array()?.as_slice() {
+            [a, b] => Some([a.clone(), b.clone()]),
+            _ => None,
+        }
+    };
+    let [x, z] = pair(value.get("size")?)?;
+    let tile = match value.get("tile")? {
+        Value::Null => None,
+        t => Some(t.as_f64()?),
+    };
+    let index = match value.get("tileIndex") {
+        None | Some(Value::Null) => None,
+        Some(v) => {
+            let [i, j] = pair(v)?;
+            Some([i.as_u64()?, j.as_u64()?])
+        }
+    };
+    let species = value
+        .get("species")?
+        .as_array()?
+        .iter()
+        .map(|s| {
+            Some(SpeciesCount {
+                name: s.get("name")?.as_str()?.to_string(),
+                variants: number(s, "variants")?,
+                count: number(s, "count")?,
+            })
+        })
+        .collect::<Option<_>>()?;
+    Some(ForestStats {
+        size: [x.as_f64()?, z.as_f64()?],
+        seed: number(value, "seed")?,
+        tile,
+        part: ForestPart::Tile(index),
+        instances: number(value, "instances")?,
+        species,
+    })
 }
 
 #[cfg(test)]
@@ -282,6 +312,47 @@ mod tests {
         out.extend_from_slice(b"BIN\0");
         out.extend_from_slice(bin);
         out
+    }
+
+    #[test]
+    fn a_tiles_forest_reads_back_as_written_and_tiles_add_up() {
+        let mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let mut model = Model::from_mesh(mesh);
+        let stats = ForestStats {
+            size: [60.0, 0.1],
+            seed: 9,
+            tile: Some(30.0),
+            part: ForestPart::Tile(Some([1, 0])),
+            instances: 5,
+            species: vec![SpeciesCount {
+                name: "oak".into(),
+                variants: 2,
+                count: 5,
+            }],
+        };
+        model.forest = Some(stats.clone());
+        let bytes = pge_engine::export::glb_bytes(&model, &ExportMeta::default()).expect("glb");
+        let file = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+        let json: Value = serde_json::from_slice(&file.json).expect("json");
+        let written = json.pointer("/extras/pge/forest").expect("a forest");
+        assert_eq!(forest_stats(written), Some(stats));
+        let mut world = World::default();
+        let here = Path::new(".");
+        world.add_tile(&bytes, (1, 0), here).expect("reads");
+        world.add_tile(&bytes, (0, 0), here).expect("reads");
+        let merged = world.finish().forest.expect("a forest");
+        assert_eq!(merged.instances, 10);
+        assert_eq!(merged.species[0].count, 10);
+        assert_eq!(merged.part, ForestPart::Merged(vec![[1, 0], [0, 0]]));
+        // Not a forest's: an error naming the tile.
+        let mut bad = json.clone();
+        bad["extras"]["pge"]["forest"]["species"] = Value::Null;
+        let bin = file.bin.expect("bin").to_vec();
+        let err = World::default()
+            .add_tile(&glb(&bad, &bin), (2, 3), here)
+            .expect_err("refused");
+        assert!(format!("{err:#}").contains("tile 2,3"), "{err:#}");
     }
 
     #[test]

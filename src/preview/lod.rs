@@ -1,11 +1,11 @@
-//! Foliage levels of detail in the preview: a leaf mesh with `extras.pge.lod` (API.md §7)
+//! Foliage levels of detail in the preview: a leaf mesh with levels of detail ([`MeshLod`])
 //! is drawn at a chosen fraction of its leaves through the two ranges of V of each sector,
 //! from one index buffer of sequential quads over all of V uploaded once with the mesh.
 
 use std::ops::Range;
 
+use pge_engine::geometry::MeshLod;
 use pge_lod::{Row, first_levels};
-use serde_json::Value;
 
 use super::scene::VERTEX_FLOATS;
 
@@ -36,38 +36,23 @@ pub struct LeafLod {
 }
 
 impl LeafLod {
-    /// Reads `extras.pge.lod` (`{leaves, roots, table}` or `{leaves, roots, sectors}`) of a
-    /// mesh with `vertices` vertices; `None` when absent or inconsistent with the mesh.
+    /// The levels of a leaf mesh with `vertices` vertices ([`Mesh::lod`]); `None` when it
+    /// has none, has a group's, or when they do not fit the mesh.
+    ///
+    /// [`Mesh::lod`]: pge_engine::geometry::Mesh::lod
     #[must_use]
-    pub fn from_extras(extras: &serde_json::Map<String, Value>, vertices: usize) -> Option<Self> {
-        let lod = extras.get("lod")?;
-        let number =
-            |v: &Value, key: &str| v.get(key)?.as_u64().and_then(|n| u32::try_from(n).ok());
-        let sector = |v: &Value, offset: u32| -> Option<Sector> {
-            let rows = v
-                .get("table")?
-                .as_array()?
-                .iter()
-                .map(|r| {
-                    let r = r.as_array()?;
-                    let get = |k: usize| r.get(k)?.as_u64().and_then(|n| u32::try_from(n).ok());
-                    Some([get(0)?, get(1)?, get(2)?])
-                })
-                .collect::<Option<Vec<_>>>()?;
-            Some(Sector {
-                offset,
-                leaves: number(v, "leaves")?,
-                roots: number(v, "roots")?,
-                rows,
+    pub fn from_lod(lod: Option<&MeshLod>, vertices: usize) -> Option<Self> {
+        let sectors: Vec<Sector> = lod?
+            .table()?
+            .sectors()
+            .iter()
+            .map(|s| Sector {
+                offset: s.offset(),
+                leaves: s.leaves(),
+                roots: s.roots(),
+                rows: s.levels().iter().map(|l| [l.a, l.b, l.c]).collect(),
             })
-        };
-        let sectors = match lod.get("sectors").and_then(Value::as_array) {
-            Some(list) => list
-                .iter()
-                .map(|s| sector(s, number(s, "offset")?))
-                .collect::<Option<Vec<_>>>()?,
-            None => vec![sector(lod, 0)?],
-        };
+            .collect();
         let quads = u32::try_from(vertices / 4).ok()?;
         // Every range must lie in the mesh.
         let fits = sectors.iter().all(|s| {
@@ -228,12 +213,17 @@ mod tests {
     use super::*;
     use serde_json::json;
 
+    /// The levels of `{"lod": ...}` as the glTF importer reads them.
+    fn read(extras: &serde_json::Value) -> MeshLod {
+        pge_engine::export::lod_from_json(&extras["lod"]).expect("a table")
+    }
+
     #[test]
     fn levels_are_read_and_drawn_as_two_ranges_per_sector() {
         // Four original leaves and two collapses (six leaves in V), as pge-lod writes them.
         let extras = json!({"lod": {"leaves": 4, "roots": 2,
                               "table": [[0, 4, 2], [2, 5, 1], [4, 4, 0]]}});
-        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 24).expect("lod");
+        let lod = LeafLod::from_lod(Some(&read(&extras)), 24).expect("lod");
         assert_eq!(lod.quad_indices().len(), 36);
         assert_eq!(lod.index_ranges(100), vec![0..24]);
         assert_eq!(lod.drawn(100), 4);
@@ -254,15 +244,15 @@ mod tests {
         let extras = json!({"lod": {"leaves": 4, "roots": 2, "sectors": [
             {"offset": 0, "leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]},
             {"offset": 3, "leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]}]}});
-        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 24).expect("lod");
+        let lod = LeafLod::from_lod(Some(&read(&extras)), 24).expect("lod");
         assert_eq!(lod.index_ranges(1), vec![12..18, 30..36]);
         assert_eq!(lod.index_ranges(100), vec![0..12, 18..30]);
         // Out of the mesh: ignored.
-        assert!(LeafLod::from_extras(extras.as_object().expect("object"), 20).is_none());
-        assert!(LeafLod::from_extras(&serde_json::Map::new(), 24).is_none());
+        assert!(LeafLod::from_lod(Some(&read(&extras)), 20).is_none());
+        assert!(LeafLod::from_lod(None, 24).is_none());
         // Colour by level: the roots (level 0) blue, the original leaves yellow.
         let extras = json!({"lod": {"leaves": 2, "roots": 1, "table": [[0, 2, 1], [2, 2, 0]]}});
-        let lod = LeafLod::from_extras(extras.as_object().expect("object"), 12).expect("lod");
+        let lod = LeafLod::from_lod(Some(&read(&extras)), 12).expect("lod");
         let colored = lod.level_colors(&vec![0.5; 12 * VERTEX_FLOATS]);
         let near = |leaf: usize, want: [f32; 4]| {
             let got = &colored[4 * leaf * VERTEX_FLOATS + 8..][..4];

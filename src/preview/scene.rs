@@ -51,7 +51,7 @@ pub struct SceneMesh {
     /// indices), drawn while the camera moves. Compact, because a
     /// software renderer shades every vertex in the index range, used or not.
     pub coarse: Option<(Vec<f32>, Vec<u32>)>,
-    /// A leaf mesh's levels of detail (`extras.pge.lod`, or computed for a forest's leaves).
+    /// A leaf mesh's levels of detail (its own, or computed for a forest's leaves).
     pub lod: Option<super::lod::LeafLod>,
     /// Placed by a forest (an instance group) only: drawn within the forest's budget
     /// ([`super::forest`]).
@@ -170,7 +170,7 @@ impl Scene {
                     .clone()
             });
             let vertices = interleave(mesh);
-            let lod = super::lod::LeafLod::from_extras(&mesh.extras, mesh.positions.len());
+            let lod = super::lod::LeafLod::from_lod(mesh.lod.as_deref(), mesh.positions.len());
             let coarse = if mesh.primitive != Primitive::Triangles || (forest && lod.is_some()) {
                 None
             } else if is_leaf(mesh) {
@@ -237,7 +237,7 @@ fn forest_lods(model: &Model, forest: &[bool]) -> HashMap<usize, Mesh> {
             forest[m]
                 && is_leaf(mesh)
                 && mesh.primitive == Primitive::Triangles
-                && !mesh.extras.contains_key("lod")
+                && mesh.lod.is_none()
         })
         .collect();
     wanted

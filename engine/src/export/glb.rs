@@ -410,6 +410,13 @@ impl Builder {
                 None => pge.0.push((k, Extra::Value(v))),
             }
         }
+        // The levels of detail last (in the place of an own extra of that name).
+        if let Some(lod) = &mesh.lod {
+            match pge.0.iter_mut().find(|(key, _)| *key == "lod") {
+                Some(entry) => entry.1 = Extra::Lod(lod),
+                None => pge.0.push(("lod", Extra::Lod(lod))),
+            }
+        }
         let mode = match mesh.primitive {
             Primitive::Triangles => json::mesh::Mode::Triangles,
             Primitive::Lines => json::mesh::Mode::Lines,
@@ -677,6 +684,7 @@ impl Builder {
                 model.stats.modules,
             ],
             environment,
+            forest: model.forest.as_ref(),
             extras: &model.extras,
             stages: stages.as_ref(),
         }
@@ -715,13 +723,14 @@ impl Builder {
 #[path = "glb_extensions.rs"]
 mod extensions;
 #[path = "glb_lod_extras.rs"]
-mod lod_extras;
+pub(super) mod lod_extras;
 #[path = "glb_root_extras.rs"]
 mod root_extras;
 #[path = "glb_write.rs"]
 mod write;
 pub use extensions::DIFFUSE_TRANSMISSION;
 use extensions::with_extensions;
+pub use lod_extras::lod_from_json;
 use lod_extras::{group_leaves_extras, placement_leaves_extras};
 use root_extras::RootExtras;
 pub use write::write_glb_with;

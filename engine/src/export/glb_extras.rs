@@ -14,7 +14,8 @@ use serde_json::Value as JsonValue;
 use serde_json::ser::{CompactFormatter, Formatter};
 use serde_json::value::RawValue;
 
-use crate::geometry::{Mesh, Skeleton};
+use super::glb::lod_extras::LodJson;
+use crate::geometry::{Mesh, MeshLod, Skeleton};
 use crate::{Error, Result};
 
 /// Numbers of a skeleton's array a thread formats at a time (about 60 µs of floats).
@@ -25,12 +26,13 @@ const PIECE_NUMBERS: usize = 1 << 11;
 /// 0.3 ms on one thread, the file's JSON waits for them.
 const FORMAT_IN_PARALLEL: usize = 2 * PIECE_NUMBERS;
 
-/// One value of a mesh's `extras.pge`: the skeleton of a mesh, or one of the mesh's own
-/// extras.
+/// One value of a mesh's `extras.pge`: the skeleton of a mesh, one of the mesh's own
+/// extras, or its levels of detail.
 #[derive(Clone, Copy)]
 pub(super) enum Extra<'m> {
     Skeleton(&'m Arc<Mesh>),
     Value(&'m JsonValue),
+    Lod(&'m MeshLod),
 }
 
 /// A mesh's `extras.pge` in order, borrowed from the model.
@@ -77,6 +79,7 @@ impl Serialize for Marked<'_, '_> {
                     None => map.serialize_entry(key, &JsonValue::Null)?,
                 },
                 Extra::Value(value) => map.serialize_entry(key, value)?,
+                Extra::Lod(lod) => map.serialize_entry(key, &LodJson(lod))?,
             }
         }
         map.end()

@@ -1,15 +1,16 @@
 //! The root's (and every scene's) `extras.pge`, serialized in one pass from borrowed views of
 //! the run's meta and the model: no `Map` of the params (hashed and cloned), no `Value` tree.
 //! The text is the one the `Map` built entry by entry gave: generator, seed, params (a
-//! duplicate name where it first appears, with its last value), stats, the environment, then
-//! the model's own extras but for those the run's keys already hold, `stages` in the place
-//! of the model's own `stages` or last.
+//! duplicate name where it first appears, with its last value), stats, the environment, the
+//! forest, then the model's own extras but for those the run's keys already hold, `stages`
+//! in the place of the model's own `stages` or last.
 
 use serde::ser::{Serialize, SerializeMap, Serializer};
 use serde_json::{Map, Value as JsonValue};
 
 use super::{ExportMeta, GENERATOR};
 use crate::Result;
+use crate::geometry::{ForestPart, ForestStats, SpeciesCount};
 
 /// The root's `extras.pge`, borrowed.
 pub(super) struct RootExtras<'a> {
@@ -19,6 +20,8 @@ pub(super) struct RootExtras<'a> {
     pub(super) stats: [u64; 5],
     /// The environment's image, if the model has one.
     pub(super) environment: Option<usize>,
+    /// The forest the model is, if it is one.
+    pub(super) forest: Option<&'a ForestStats>,
     /// The model's own extras.
     pub(super) extras: &'a Map<String, JsonValue>,
     /// The stages' summary (`pge run --stages`).
@@ -38,6 +41,7 @@ impl RootExtras<'_> {
     fn holds(&self, key: &str) -> bool {
         matches!(key, "generator" | "seed" | "params" | "stats")
             || (key == "environment" && self.environment.is_some())
+            || (key == "forest" && self.forest.is_some())
     }
 }
 
@@ -75,6 +79,9 @@ impl Serialize for Inner<'_, '_> {
         )?;
         if let Some(image) = r.environment {
             map.serialize_entry("environment", &Environment(image))?;
+        }
+        if let Some(forest) = r.forest {
+            map.serialize_entry("forest", &Forest(forest))?;
         }
         let mut stages = r.stages;
         for (key, value) in r.extras {
@@ -126,6 +133,54 @@ impl Serialize for Environment {
         let mut map = s.serialize_map(Some(2))?;
         map.serialize_entry("image", &self.0)?;
         map.serialize_entry("mapping", "equirectangular")?;
+        map.end()
+    }
+}
+
+/// `{size, seed, tile, tileIndex, instances, species}` of a forest or a tile, `{size, seed,
+/// tile, species, instances, tiles}` of merged tiles (the order `pge merge` has written).
+struct Forest<'a>(&'a ForestStats);
+
+impl Serialize for Forest<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let f = self.0;
+        let mut map = s.serialize_map(Some(6))?;
+        map.serialize_entry("size", &f.size)?;
+        map.serialize_entry("seed", &f.seed)?;
+        map.serialize_entry("tile", &f.tile)?;
+        match &f.part {
+            ForestPart::Tile(index) => {
+                map.serialize_entry("tileIndex", index)?;
+                map.serialize_entry("instances", &f.instances)?;
+                map.serialize_entry("species", &Species(&f.species))?;
+            }
+            ForestPart::Merged(tiles) => {
+                map.serialize_entry("species", &Species(&f.species))?;
+                map.serialize_entry("instances", &f.instances)?;
+                map.serialize_entry("tiles", tiles)?;
+            }
+        }
+        map.end()
+    }
+}
+
+/// `[{name, variants, count}, ...]`.
+struct Species<'a>(&'a [SpeciesCount]);
+
+impl Serialize for Species<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.iter().map(SpeciesEntry))
+    }
+}
+
+struct SpeciesEntry<'a>(&'a SpeciesCount);
+
+impl Serialize for SpeciesEntry<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(3))?;
+        map.serialize_entry("name", &self.0.name)?;
+        map.serialize_entry("variants", &self.0.variants)?;
+        map.serialize_entry("count", &self.0.count)?;
         map.end()
     }
 }
@@ -221,6 +276,7 @@ mod tests {
                             meta: &meta,
                             stats: [3, 1, u64::MAX, 0, 12],
                             environment,
+                            forest: None,
                             extras,
                             stages: stages.as_ref(),
                         };
@@ -249,9 +305,75 @@ mod tests {
             meta: &meta,
             stats: [0; 5],
             environment: None,
+            forest: None,
             extras: &extras,
             stages: None,
         };
         assert!(text(&r.extras().expect("extras")).contains(r#""params":{"a":3,"b":2}"#));
+    }
+
+    #[test]
+    fn the_forest_is_written_as_its_map_was() {
+        let mut forest = ForestStats {
+            size: [60.0, 0.1],
+            seed: 7,
+            tile: Some(30.0),
+            part: ForestPart::Tile(Some([1, 0])),
+            instances: 12,
+            species: vec![
+                SpeciesCount {
+                    name: "oak".into(),
+                    variants: 2,
+                    count: 9,
+                },
+                SpeciesCount {
+                    name: "layer2".into(),
+                    variants: 3,
+                    count: 3,
+                },
+            ],
+        };
+        let species = json!([
+            {"name": "oak", "variants": 2, "count": 9},
+            {"name": "layer2", "variants": 3, "count": 3},
+        ]);
+        let mut map = json!({
+            "size": [60.0, 0.1], "seed": 7, "tile": 30.0, "tileIndex": [1, 0],
+            "instances": 12, "species": species,
+        });
+        let meta = ExportMeta::default();
+        let extras = Map::new();
+        let written = |forest: &ForestStats| {
+            let r = RootExtras {
+                meta: &meta,
+                stats: [0; 5],
+                environment: None,
+                forest: Some(forest),
+                extras: &extras,
+                stages: None,
+            };
+            text(&r.extras().expect("extras"))
+        };
+        let inner = |map: &JsonValue| format!(r#""forest":{}}}}}"#, map);
+        assert!(
+            written(&forest).ends_with(&inner(&map)),
+            "{}",
+            written(&forest)
+        );
+        // Merged tiles: what `pge merge` made of the map (the tile index removed, the last
+        // entry taking its place, the tiles appended).
+        let object = map.as_object_mut().expect("object");
+        object.remove("tileIndex");
+        object.insert("tiles".into(), json!([[0, 0], [1, 0]]));
+        forest.part = ForestPart::Merged(vec![[0, 0], [1, 0]]);
+        assert!(
+            written(&forest).ends_with(&inner(&map)),
+            "{}",
+            written(&forest)
+        );
+        // A whole forest, untiled.
+        forest.tile = None;
+        forest.part = ForestPart::Tile(None);
+        assert!(written(&forest).contains(r#""tile":null,"tileIndex":null,"instances":12"#));
     }
 }

@@ -3,7 +3,7 @@ use std::sync::Arc;
 use super::GeometryError;
 
 /// How the alpha channel of a material is used (glTF `alphaMode`).
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub enum AlphaMode {
     /// Alpha is ignored.
     #[default]
@@ -15,7 +15,7 @@ pub enum AlphaMode {
 }
 
 /// An image embedded in the model as PNG.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Texture {
     /// Name written to the glTF image.
     pub name: String,
@@ -24,6 +24,7 @@ pub struct Texture {
     /// Height in pixels.
     pub height: u32,
     /// The PNG file's bytes.
+    #[serde(with = "super::binary::bytes")]
     pub png: Vec<u8>,
 }
 
@@ -116,18 +117,21 @@ impl Texture {
 }
 
 /// A PBR metallic-roughness material as glTF describes it.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Material {
     /// Name written to the glTF material.
     pub name: String,
     /// Linear RGBA base colour factor.
     pub base_color: [f32; 4],
     /// Base colour texture, multiplied by `base_color`.
+    #[serde(with = "super::binary::shared_option")]
     pub texture: Option<Arc<Texture>>,
     /// Tangent-space normal map (glTF `normalTexture`: RGB = XYZ, +Y up in the image).
+    #[serde(with = "super::binary::shared_option")]
     pub normal_texture: Option<Arc<Texture>>,
     /// Metallic-roughness map (glTF `metallicRoughnessTexture`: roughness in G, metalness in
     /// B), multiplied by `roughness` and `metallic`.
+    #[serde(with = "super::binary::shared_option")]
     pub metallic_roughness_texture: Option<Arc<Texture>>,
     /// How alpha is used.
     pub alpha: AlphaMode,
@@ -145,7 +149,7 @@ pub struct Material {
 /// Diffuse light passing through a thin surface, as glTF `KHR_materials_diffuse_transmission`
 /// describes it: a leaf lit from behind glows in the colour of what passes through, and its
 /// back face is seen in that colour.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DiffuseTransmission {
     /// The share of diffuse light that passes through, in `[0, 1]`
     /// (`diffuseTransmissionFactor`).

@@ -3,7 +3,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::{Material, SearchMemory, Skeleton, triangles};
+use super::{Material, MeshLod, SearchMemory, Skeleton, triangles};
 
 /// Elements a thread checks at a time when a mesh is validated.
 const CHECK_CHUNK: usize = 1 << 15;
@@ -64,7 +64,7 @@ pub enum GeometryError {
 }
 
 /// How the indices of a mesh are grouped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Primitive {
     /// Three indices per triangle, counter-clockwise front faces.
     #[default]
@@ -96,7 +96,7 @@ impl Primitive {
 /// `normals`, `uvs` and `colors` are either empty (absent) or have one entry per position.
 /// Builders fill the fields directly; [`Mesh::validate`] checks the invariants and the
 /// exporters refuse a mesh that fails it.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
     /// Name written to the glTF mesh.
     pub name: String,
@@ -113,10 +113,17 @@ pub struct Mesh {
     /// u32 indices into the vertex arrays.
     pub indices: Vec<u32>,
     /// The material, shared between meshes that use the same one.
+    #[serde(with = "super::binary::shared")]
     pub material: Arc<Material>,
     /// The branch graph this mesh was grown from, if any (written to its glTF extras).
+    #[serde(with = "super::binary::shared_option")]
     pub skeleton: Option<Arc<Skeleton>>,
-    /// Application data written under the mesh's `extras.pge` (e.g. foliage LOD tables).
+    /// The foliage levels of detail of a leaf mesh written in the order of V, or of a
+    /// group's leaf primitives (written to its glTF extras as `lod`).
+    #[serde(with = "super::binary::shared_option")]
+    pub lod: Option<Arc<MeshLod>>,
+    /// Application data written under the mesh's `extras.pge`.
+    #[serde(with = "super::binary::json_text")]
     pub extras: serde_json::Map<String, serde_json::Value>,
 }
 
@@ -267,8 +274,9 @@ impl Mesh {
     /// place, or all three on a line: zero area, such as those closing a pointed tip) and
     /// repeats of an earlier triangle (the same three corner positions in the same turning
     /// order; a back face, the same corners turned the other way, is kept). Returns how many
-    /// were removed. Vertices are left as they are, and so are line meshes and meshes whose
-    /// `extras` describe their index buffer (foliage LOD tables count indices).
+    /// were removed. Vertices are left as they are, and so are line meshes, meshes with
+    /// levels of detail (their tables count indices) and meshes with `extras` (which may
+    /// describe their index buffer).
     pub fn remove_unusable_triangles(&mut self) -> usize {
         let dropped = self.unusable_triangles();
         self.remove_triangles(&dropped);
@@ -332,7 +340,7 @@ impl Mesh {
     }
 
     fn may_drop_triangles(&self) -> bool {
-        self.primitive == Primitive::Triangles && self.extras.is_empty()
+        self.primitive == Primitive::Triangles && self.lod.is_none() && self.extras.is_empty()
     }
 
     /// The axis-aligned bounds `(min, max)`, or `None` for an empty mesh.
@@ -469,13 +477,20 @@ mod tests {
         assert_eq!(m.indices, [0, 1, 2, 0, 2, 3, 0, 2, 1]);
         assert!(!m.has_unusable_triangles());
         assert_eq!(m.remove_unusable_triangles(), 0);
-        // A mesh whose extras count indices is left alone.
+        // A mesh whose levels of detail or extras count indices is left alone.
         let mut lod = quad();
         lod.indices.extend([0, 1, 2]);
-        lod.extras.insert("lod".into(), serde_json::json!({}));
+        let level = |a, b, c| crate::geometry::LodLevel { a, b, c };
+        let sector = crate::geometry::LodSector::new(0, 1, 1, vec![level(1, 1, 0)]);
+        let table = crate::geometry::LodTable::new(vec![sector.expect("sector")]);
+        lod.lod = Some(Arc::new(MeshLod::Leaves(table.expect("table"))));
         assert!(!lod.has_unusable_triangles());
         assert_eq!(lod.remove_unusable_triangles(), 0);
         assert_eq!(lod.indices.len(), 9);
+        let mut extras = quad();
+        extras.indices.extend([0, 1, 2]);
+        extras.extras.insert("mine".into(), serde_json::json!({}));
+        assert_eq!(extras.remove_unusable_triangles(), 0);
     }
 
     #[test]

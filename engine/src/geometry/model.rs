@@ -2,11 +2,11 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::{GeometryError, Mesh, Skeleton, Texture};
+use super::{ForestStats, GeometryError, Mesh, Skeleton, Texture, VariantCounts};
 use crate::export::SkeletonText;
 
 /// One placement of a mesh in the model (a glTF node).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Instance {
     /// Index into [`Model::meshes`].
     pub mesh: usize,
@@ -16,7 +16,7 @@ pub struct Instance {
 
 /// One placement in an [`InstanceGroup`]: translation, rotation (a unit quaternion x, y, z,
 /// w) and a uniform scale, 32 bytes, so a forest of millions of trees stays compact.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InstanceTransform {
     /// Where the instance stands.
     pub translation: [f32; 3],
@@ -41,7 +41,7 @@ impl InstanceTransform {
 /// Many placements of one object made of several meshes (a tree's bark and leaves): exported
 /// as one glTF mesh with a primitive per mesh and either one node with
 /// `EXT_mesh_gpu_instancing` or one node per placement.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InstanceGroup {
     /// Name of the glTF mesh (a forest writes `SPECIES/VARIANT`).
     pub name: String,
@@ -58,7 +58,7 @@ pub struct InstanceGroup {
 /// The leaves each placement of an [`InstanceGroup`] draws: counts aligned with
 /// [`InstanceGroup::transforms`], exported as the node's `extras.pge.lod = {leaves, level}`
 /// (arrays with `EXT_mesh_gpu_instancing`, one number per node otherwise).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PlacementLeaves {
     /// The coarsest level's leaf count |R| of the object (a drawn placement's level is its
     /// count minus this).
@@ -82,7 +82,7 @@ impl PlacementLeaves {
 /// Counts and timings of a generation, reported by `pge run --stats`.
 ///
 /// Vertex and triangle counts are not stored: they are derived from the model.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stats {
     /// Skeleton nodes.
     pub nodes: u64,
@@ -91,7 +91,8 @@ pub struct Stats {
     /// Length of the final L-system string.
     pub modules: u64,
     /// Seconds spent per phase, in the order the phases ran. Never exported to the glb
-    /// (timings would make the output differ from run to run).
+    /// (timings would make the output differ from run to run), nor to the binary form.
+    #[serde(skip)]
     pub phases: Vec<(String, f64)>,
     /// Warnings for the user (`FILE:LINE: warning: ...`): the result is usable but may not be
     /// what was meant. `pge run` prints them; the preview shows them.
@@ -120,30 +121,41 @@ impl Stats {
 }
 
 /// The result of a generation: shared meshes, the instances that place them, and extras.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Model {
     /// Meshes, each exported once however many instances use it.
+    #[serde(with = "super::binary::shared_vec")]
     pub meshes: Vec<Arc<Mesh>>,
     /// Placements of the meshes; every one becomes a glTF node.
     pub instances: Vec<Instance>,
     /// Instanced objects (forests): many placements of the same meshes, stored compactly.
     pub groups: Vec<InstanceGroup>,
+    /// The forest the model is (a forest's generator records it), written as the root
+    /// `extras.pge.forest`.
+    pub forest: Option<ForestStats>,
+    /// What one instance of each group stands for, aligned with [`Model::groups`], in a
+    /// forest's shared variants (`pge run --variants-out`); empty otherwise.
+    pub variant_counts: Vec<VariantCounts>,
     /// Application data written under the root `extras.pge` next to the generator's own.
+    #[serde(with = "super::binary::json_text")]
     pub extras: serde_json::Map<String, serde_json::Value>,
     /// Counts and timings.
     pub stats: Stats,
     /// An equirectangular sky image (row 0 straight up, the middle row the horizon), exported
     /// as an image referenced by the root `extras.pge.environment` and drawn by the preview
     /// as the background.
+    #[serde(with = "super::binary::shared_option")]
     pub environment: Option<Arc<Texture>>,
     /// Meshes of `meshes` known to have no unusable triangle (their generator showed it, e.g.
     /// with [`Mesh::usable_by_construction`]), which [`Model::remove_unusable_triangles`]
     /// does not search. Each is a second reference to its mesh, so a listed mesh cannot
     /// change: `Arc::make_mut` copies a shared mesh, and the copy is searched.
+    #[serde(skip)]
     pub clean: Vec<Arc<Mesh>>,
     /// Texts of the meshes' skeletons for the glb, formatted ahead of the export where a
     /// core had time to spare ([`Model::prepare_skeleton_text`]); the export uses each for
     /// the skeletons with its numbers and formats the others.
+    #[serde(skip)]
     pub skeleton_texts: Vec<Arc<SkeletonText>>,
 }
 
@@ -173,8 +185,8 @@ impl Model {
     }
 
     /// Adds every instance of `other`, placed by `transform`, sharing meshes by `Arc`.
-    /// Stats are merged; extras of `other` are copied where this model has no such key; the
-    /// environment of `other` is taken when this model has none.
+    /// Stats are merged; extras of `other` are copied where this model has no such key; its
+    /// forest, variant counts and environment are taken when this model has none.
     pub fn add_model(&mut self, other: &Model, transform: Mat4) {
         let map: Vec<usize> = other
             .meshes
@@ -220,6 +232,12 @@ impl Model {
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+        if self.forest.is_none() {
+            self.forest.clone_from(&other.forest);
+        }
+        if self.variant_counts.is_empty() {
+            self.variant_counts.clone_from(&other.variant_counts);
         }
         if self.environment.is_none() {
             self.environment.clone_from(&other.environment);

@@ -1,7 +1,7 @@
 use glam::Vec3;
 
 /// A point where a leaf (or another organ) hangs on the skeleton.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LeafPoint {
     /// The skeleton node the leaf hangs from.
     pub node: u32,
@@ -20,7 +20,7 @@ pub struct LeafPoint {
 /// Nodes are stored in topological order: a node's parent always has a smaller index, so a
 /// forward pass visits parents before children and a backward pass children before parents
 /// (the pipe model runs backwards). Several roots are allowed (a bush).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Skeleton {
     /// Node positions.
     pub positions: Vec<Vec3>,

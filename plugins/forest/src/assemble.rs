@@ -3,8 +3,10 @@
 use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Quat, Vec3};
-use pge_engine::geometry::{InstanceGroup, InstanceTransform, Mesh, Model, PlacementLeaves};
-use serde_json::json;
+use pge_engine::geometry::{
+    ForestPart, ForestStats, InstanceGroup, InstanceTransform, Mesh, Model, PlacementLeaves,
+    SpeciesCount,
+};
 
 use crate::layer::Variants;
 use crate::layout::{Forest, Layout};
@@ -31,7 +33,7 @@ pub fn transform(position: [f32; 3], yaw: f32, scale: f32) -> InstanceTransform 
 /// carries the variant's levels of detail (`extras.pge.lod` with `primitives`).
 pub(crate) fn push_variant_meshes(model: &mut Model, variant: &Model) -> Vec<usize> {
     let mut meshes = Vec::new();
-    let mut lod = crate::variant_extras(variant);
+    let mut lod = crate::variant_mesh_lod(variant).map(Arc::new);
     for inst in &variant.instances {
         let mesh = &variant.meshes[inst.mesh];
         let mut mesh = if inst.transform == Mat4::IDENTITY {
@@ -39,10 +41,10 @@ pub(crate) fn push_variant_meshes(model: &mut Model, variant: &Model) -> Vec<usi
         } else {
             Arc::new(baked(mesh, &inst.transform))
         };
-        if mesh.extras.contains_key("lod")
+        if mesh.lod.is_some()
             && let Some(lod) = lod.take()
         {
-            Arc::make_mut(&mut mesh).extras.insert("lod".into(), lod);
+            Arc::make_mut(&mut mesh).lod = Some(lod);
         }
         model.meshes.push(mesh);
         meshes.push(model.meshes.len() - 1);
@@ -66,7 +68,7 @@ pub(crate) fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
 /// The model of a forest (or of tile `tile`): the terrain patch, then one instance group per
 /// variant named `SPECIES/VARIANT`, and `extras.pge.forest`. A variant with levels of detail
 /// keeps its leaves in the order of V, and its group's mesh carries the
-/// [`variant_extras`](crate::variant_extras) as `extras.pge.lod`.
+/// [`variant_mesh_lod`](crate::variant_mesh_lod).
 #[must_use]
 pub fn assemble(
     forest: &Forest,
@@ -216,33 +218,31 @@ fn build(
         }
     }
     model.stats.warnings.extend(layout.warnings.iter().cloned());
-    let species: Vec<_> = forest
+    let species = forest
         .layers
         .iter()
         .enumerate()
         .map(|(l, layer)| {
+            let count = layout.counts.get(l).copied().unwrap_or(0) as u64;
             let variants = match layer.variants {
                 Variants::Count(n) => u64::from(n),
-                Variants::Unique => layout.counts.get(l).copied().unwrap_or(0) as u64,
+                Variants::Unique => count,
             };
-            json!({
-                "name": layer.name,
-                "variants": variants,
-                "count": layout.counts.get(l).copied().unwrap_or(0),
-            })
+            SpeciesCount {
+                name: layer.name.clone(),
+                variants,
+                count,
+            }
         })
         .collect();
-    model.extras.insert(
-        "forest".into(),
-        json!({
-            "size": forest.size,
-            "seed": forest.seed,
-            "tile": forest.tile,
-            "tileIndex": tile.map(|(i, j)| [i, j]),
-            "instances": layout.instances.len(),
-            "species": species,
-        }),
-    );
+    model.forest = Some(ForestStats {
+        size: forest.size,
+        seed: forest.seed,
+        tile: forest.tile,
+        part: ForestPart::Tile(tile.map(|(i, j)| [i as u64, j as u64])),
+        instances: layout.instances.len() as u64,
+        species,
+    });
     model
 }
 
@@ -288,9 +288,17 @@ pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::layer::Layer;
+    use pge_engine::geometry::{LodLevel, LodSector, LodTable, MeshLod};
+
+    /// The levels of one leaf: one level, drawing it.
+    pub(crate) fn one_leaf_lod() -> MeshLod {
+        let level = LodLevel { a: 1, b: 1, c: 0 };
+        let sector = LodSector::new(0, 1, 1, vec![level]).expect("sector");
+        MeshLod::Leaves(LodTable::new(vec![sector]).expect("table"))
+    }
 
     #[test]
     fn variants_with_levels_carry_their_table_and_their_instances_counts() {
@@ -302,10 +310,7 @@ mod tests {
         let tri =
             Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
         let mut leaves = tri.clone();
-        leaves.extras.insert(
-            "lod".into(),
-            json!({ "leaves": 1, "roots": 1, "table": [[1, 1, 0]] }),
-        );
+        leaves.lod = Some(Arc::new(one_leaf_lod()));
         let mut with_lod = Model::from_mesh(tri.clone());
         with_lod.add_mesh(leaves, Mat4::IDENTITY);
         let grown = vec![Grown {
@@ -325,13 +330,16 @@ mod tests {
         let want: Vec<u32> = counts.iter().flatten().copied().collect();
         assert_eq!(placed.counts, want);
         assert!(model.groups[1].leaves.is_none());
-        let lod = &model.meshes[model.groups[0].meshes[1]].extras["lod"];
-        assert_eq!(lod["primitives"][0]["primitive"], 1);
-        assert_eq!(lod["primitives"][0]["table"], json!([[1, 1, 0]]));
+        let lod = model.meshes[model.groups[0].meshes[1]].lod.as_deref();
+        let Some(MeshLod::Group(group)) = lod else {
+            panic!("a group's levels: {lod:?}");
+        };
+        assert_eq!(group.primitives()[0].primitive, 1);
+        assert_eq!(Some(&group.primitives()[0].table), one_leaf_lod().table());
         // Without counts the table is there, the placements have none.
         let plain = assemble(&f, &layout, &grown, None);
         assert!(plain.groups.iter().all(|g| g.leaves.is_none()));
-        assert_eq!(plain.meshes[plain.groups[0].meshes[1]].extras["lod"], *lod);
+        assert_eq!(plain.meshes[plain.groups[0].meshes[1]].lod.as_deref(), lod);
     }
 
     #[test]
@@ -362,7 +370,11 @@ mod tests {
             .expect("one");
         let t = model.groups[0].transforms[0];
         assert_eq!(t.translation, first.position);
-        assert_eq!(model.extras["forest"]["instances"], layout.instances.len());
+        let stats = model.forest.as_ref().expect("the forest");
+        assert_eq!(stats.instances, layout.instances.len() as u64);
+        assert_eq!(stats.species[0].name, "oak");
+        assert_eq!(stats.species[0].count, layout.instances.len() as u64);
+        assert_eq!(stats.part, ForestPart::Tile(None));
         model.validate().expect("valid");
         assert!(
             std::mem::size_of::<InstanceTransform>() + std::mem::size_of::<crate::Instance>() <= 64

@@ -6,8 +6,8 @@
 //! program's bytes, the species script's shown path and bytes, its `params` overrides, the
 //! variant seed and the module cap. It holds that key in full (compared byte for byte), the
 //! files the session read (modules, images: path, length and hash, checked again on every
-//! hit), the grown [`Model`] in a small exact binary form (floats as their bits, shared
-//! meshes, materials and textures kept shared) and a checksum. Entries are written to a
+//! hit), the grown [`Model`] in the engine's binary form ([`binary`]: exact, floats as their
+//! bits, shared meshes, materials and textures kept shared) and a checksum. Entries are written to a
 //! temporary file and renamed, so tiles running at once on one machine or one shared volume
 //! never see half an entry. A damaged or foreign entry is a warning and the variant is grown
 //! again; a write that fails is a warning too: the cache never changes the output.
@@ -16,13 +16,62 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use pge_engine::geometry::Model;
+use pge_engine::geometry::{Model, binary};
 
-use crate::codec::{Reader, Writer, read_model, write_model};
 use crate::rng::splitmix;
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x04";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x06";
+
+/// Appends the numbers and strings of a key or an entry's head.
+#[derive(Default)]
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn u64(&mut self, x: u64) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn len(&mut self, n: usize) {
+        self.u64(n as u64);
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        self.len(b.len());
+        self.0.extend_from_slice(b);
+    }
+    fn str(&mut self, s: &str) {
+        self.bytes(s.as_bytes());
+    }
+}
+
+/// Reads them back, `None` past the end.
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Option<&[u8]> {
+        let end = self.at.checked_add(n)?;
+        let s = self.b.get(self.at..end)?;
+        self.at = end;
+        Some(s)
+    }
+    fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+    /// A count of items of at least `size` bytes each, no more than the bytes left hold.
+    fn len(&mut self, size: usize) -> Option<usize> {
+        let n = usize::try_from(self.u64()?).ok()?;
+        (n.checked_mul(size.max(1))? <= self.b.len() - self.at).then_some(n)
+    }
+    fn bytes(&mut self) -> Option<Vec<u8>> {
+        let n = self.len(1)?;
+        Some(self.take(n)?.to_vec())
+    }
+    fn str(&mut self) -> Option<String> {
+        String::from_utf8(self.bytes()?).ok()
+    }
+}
 
 /// A folder of grown variants shared by runs (and by processes: entries appear atomically).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -97,7 +146,9 @@ impl VariantCache {
         }
         let (mut model, files) = grow()?;
         if let (Some(material), Some(file)) = (&material, &file)
-            && let Err(e) = self.write(file, &entry(material, &files, &model))
+            && let Err(e) = entry(material, &files, &model)
+                .map_err(std::io::Error::other)
+                .and_then(|bytes| self.write(file, &bytes))
         {
             warnings.push(format!(
                 "cannot write the variant cache entry {} ({e})",
@@ -181,7 +232,7 @@ fn key_bytes(key: &VariantKey, script: &[u8]) -> Vec<u8> {
 }
 
 /// An entry: magic, key, the files read, the model, checksum.
-fn entry(key: &[u8], files: &[PathBuf], model: &Model) -> Vec<u8> {
+fn entry(key: &[u8], files: &[PathBuf], model: &Model) -> Result<Vec<u8>, binary::BinaryError> {
     let mut w = Writer::default();
     w.0.extend_from_slice(MAGIC);
     w.bytes(key);
@@ -197,11 +248,11 @@ fn entry(key: &[u8], files: &[PathBuf], model: &Model) -> Vec<u8> {
         w.u64(a);
         w.u64(b);
     }
-    write_model(&mut w, model);
+    w.0.extend_from_slice(&binary::encode(model)?);
     let [a, b] = digest(&w.0);
     w.u64(a);
     w.u64(b);
-    w.0
+    Ok(w.0)
 }
 
 /// The model of an entry for `key`: `Ok(None)` when a file the variant read has changed,
@@ -235,10 +286,8 @@ fn read_entry(bytes: &[u8], key: &[u8]) -> Result<Option<Model>, &'static str> {
             _ => return Ok(None),
         }
     }
-    let model = read_model(&mut r).ok_or(damaged)?;
-    if r.at != body.len() {
-        return Err(damaged);
-    }
+    // The model is the rest of the body.
+    let model = binary::decode(&body[r.at..]).map_err(|_| damaged)?;
     Ok(Some(model))
 }
 
@@ -249,8 +298,9 @@ mod tests {
 
     use glam::{Mat4, Vec2, Vec3, Vec4};
     use pge_engine::geometry::{
-        AlphaMode, InstanceGroup, InstanceTransform, LeafPoint, Material, Mesh, PlacementLeaves,
-        Primitive, Skeleton, Texture,
+        AlphaMode, ForestPart, ForestStats, GroupLod, InstanceGroup, InstanceTransform, LeafPoint,
+        LodLevel, LodSector, LodTable, Material, Mesh, MeshLod, PlacementLeaves, Primitive,
+        PrimitiveLod, Skeleton, SpeciesCount, Texture, VariantCounts,
     };
 
     fn sample() -> Model {
@@ -281,13 +331,25 @@ mod tests {
         mesh.material = material.clone();
         mesh.skeleton = Some(Arc::new(skeleton));
         mesh.extras.insert(
-            "lod".into(),
+            "mine".into(),
             serde_json::json!([1, -2, 0.1, "x", null, {"a": true}]),
         );
+        let level = |a, b, c| LodLevel { a, b, c };
+        let sector = |offset| {
+            let rows = vec![level(0, 4, 1), level(1, 3, 1), level(3, 5, 0)];
+            LodSector::new(offset, 3, 1, rows).expect("sector")
+        };
+        let table = LodTable::new(vec![sector(0), sector(5)]).expect("table");
+        mesh.lod = Some(Arc::new(MeshLod::Leaves(table.clone())));
         let mesh = Arc::new(mesh);
         let mut lines = (*mesh).clone();
         lines.primitive = Primitive::Lines;
         lines.skeleton = None;
+        let group = GroupLod::new(vec![PrimitiveLod {
+            primitive: 1,
+            table,
+        }]);
+        lines.lod = Some(Arc::new(MeshLod::Group(group.expect("group"))));
         let mut model = Model::from_mesh(mesh.clone());
         model.add_mesh(lines, Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)));
         model.groups.push(InstanceGroup {
@@ -306,6 +368,22 @@ mod tests {
         model
             .extras
             .insert("seed".into(), serde_json::json!(u64::MAX));
+        model.forest = Some(ForestStats {
+            size: [60.0, 0.1],
+            seed: u64::MAX,
+            tile: Some(f64::MIN_POSITIVE),
+            part: ForestPart::Merged(vec![[0, 1], [2, 3]]),
+            instances: 4,
+            species: vec![SpeciesCount {
+                name: "oak".into(),
+                variants: 2,
+                count: 4,
+            }],
+        });
+        model.variant_counts = vec![VariantCounts {
+            nodes: 2,
+            leaves: 1,
+        }];
         model.stats.nodes = 2;
         model.stats.leaves = 1;
         model.stats.warnings.push("oak.lua:3: warning: thin".into());
@@ -317,6 +395,8 @@ mod tests {
         assert_eq!(a.meshes, b.meshes);
         assert_eq!(a.instances, b.instances);
         assert_eq!(a.groups, b.groups);
+        assert_eq!(a.forest, b.forest);
+        assert_eq!(a.variant_counts, b.variant_counts);
         assert_eq!(a.extras, b.extras);
         assert_eq!(a.stats, b.stats);
         assert_eq!(a.environment, b.environment);
@@ -325,7 +405,7 @@ mod tests {
     #[test]
     fn an_entry_gives_back_the_model_bit_for_bit_with_its_sharing() {
         let model = sample();
-        let bytes = entry(b"key", &[], &model);
+        let bytes = entry(b"key", &[], &model).expect("entry");
         let back = read_entry(&bytes, b"key").expect("reads").expect("hit");
         same(&model, &back);
         assert!(Arc::ptr_eq(
@@ -334,13 +414,13 @@ mod tests {
         ));
         assert_eq!(back.meshes[0].positions[2].z.to_bits(), (-0.0f32).to_bits());
         // The same model always makes the same entry.
-        assert_eq!(entry(b"key", &[], &back), bytes);
+        assert_eq!(entry(b"key", &[], &back).expect("entry"), bytes);
     }
 
     #[test]
     fn damaged_foreign_and_stale_entries_are_not_used() {
         let model = sample();
-        let bytes = entry(b"key", &[], &model);
+        let bytes = entry(b"key", &[], &model).expect("entry");
         assert!(read_entry(&bytes, b"other").is_err());
         for cut in [0, 7, 20, bytes.len() / 2, bytes.len() - 1] {
             assert!(read_entry(&bytes[..cut], b"key").is_err(), "cut at {cut}");
@@ -351,7 +431,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let module = dir.path().join("module.lua");
         std::fs::write(&module, "return 1").expect("write");
-        let bytes = entry(b"key", std::slice::from_ref(&module), &model);
+        let bytes = entry(b"key", std::slice::from_ref(&module), &model).expect("entry");
         assert!(read_entry(&bytes, b"key").expect("reads").is_some());
         std::fs::write(&module, "return 2").expect("write");
         assert!(read_entry(&bytes, b"key").expect("reads").is_none());

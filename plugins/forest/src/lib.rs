@@ -5,7 +5,7 @@
 //! [`Forest::layout`] places the trees of the whole world or of one tile (tiles agree with
 //! the whole, instance for instance); [`assemble()`] turns a layout and the grown variants into
 //! a [`Model`](pge_engine::geometry::Model) with one instance group per variant. Variants
-//! with foliage levels of detail keep their LOD tables ([`variant_extras`]; [`with_lod`]
+//! with foliage levels of detail keep their LOD tables ([`variant_mesh_lod`]; [`with_lod`]
 //! gives them levels), and [`instance_leaves`] budgets each instance's leaves for a
 //! [`Camera`] ([`assemble_budgeted`] writes them per placement).
 //!
@@ -30,7 +30,6 @@
 
 mod assemble;
 mod cache;
-mod codec;
 mod grow;
 mod jittered;
 mod layer;
@@ -52,7 +51,7 @@ pub use grow::{ForestConfig, SpeciesGrower};
 pub use layer::{Density, Layer, Method, Variants};
 pub use layout::{Forest, Instance, Layout, MAX_INSTANCES, Tile, unique_seed, variant_seed};
 pub use lod::{
-    Camera, ForestLod, VariantLod, check_budget, instance_leaves, variant_extras, variant_lod,
+    Camera, ForestLod, VariantLod, check_budget, instance_leaves, variant_lod, variant_mesh_lod,
     with_lod,
 };
 #[cfg(feature = "lua")]

@@ -7,9 +7,8 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::Vec3;
-use pge_engine::geometry::{Mesh, Model};
+use pge_engine::geometry::{GroupLod, LodTable, Mesh, MeshLod, Model, PrimitiveLod};
 use pge_tree::lod::{self as pge_lod, Axis, Budget, LodError, LodOptions};
-use serde_json::{Value, json};
 
 use crate::ForestError;
 use crate::layer::Variants;
@@ -45,20 +44,16 @@ pub struct VariantLod {
     pub roots: u32,
 }
 
-fn count(lod: &Value, key: &str) -> Option<u32> {
-    lod.get(key)?.as_u64().and_then(|n| u32::try_from(n).ok())
-}
-
-/// The leaf meshes of a variant with a LOD table, as `(primitive, extras.pge.lod)`: the
-/// primitive is the mesh's place among the variant's parts (its instances, in order, as
+/// The leaf meshes of a variant with a LOD table, as `(primitive, table)`: the primitive is
+/// the mesh's place among the variant's parts (its instances, in order, as
 /// [`assemble()`](crate::assemble()) writes them).
-fn lod_parts(model: &Model) -> Vec<(usize, &Value)> {
+fn lod_parts(model: &Model) -> Vec<(usize, &LodTable)> {
     model
         .instances
         .iter()
         .enumerate()
-        .filter_map(|(k, inst)| Some((k, model.meshes.get(inst.mesh)?.extras.get("lod")?)))
-        .filter(|(_, lod)| count(lod, "leaves").is_some_and(|n| n > 0))
+        .filter_map(|(k, inst)| Some((k, model.meshes.get(inst.mesh)?.lod.as_deref()?.table()?)))
+        .filter(|(_, table)| table.leaves() > 0)
         .collect()
 }
 
@@ -69,47 +64,39 @@ pub fn variant_lod(model: &Model) -> Option<VariantLod> {
     if parts.is_empty() {
         return None;
     }
-    let sum = |key| {
+    let sum = |count: fn(&LodTable) -> u32| {
         parts
             .iter()
-            .map(|(_, lod)| count(lod, key).unwrap_or(0))
+            .map(|(_, table)| count(table))
             .fold(0u32, u32::saturating_add)
     };
     Some(VariantLod {
-        leaves: sum("leaves"),
-        roots: sum("roots"),
+        leaves: sum(LodTable::leaves),
+        roots: sum(LodTable::roots),
     })
 }
 
-/// The `extras.pge.lod` of a variant's mesh in a forest: `{leaves = |O|, roots = |R|,
-/// primitives = [{primitive = p, leaves, roots, table | sectors}, ...]}`, each entry the
-/// tree's own `extras.pge.lod` of the leaf primitive `p` (0-based, among the mesh's
-/// primitives), the totals summed over them. `None` for a variant without levels.
+/// The levels of detail of a variant's mesh in a forest: the table of each leaf primitive
+/// `p` (0-based, among the mesh's primitives), written as `extras.pge.lod = {leaves = |O|,
+/// roots = |R|, primitives = [{primitive = p, leaves, roots, table | sectors}, ...]}`.
+/// `None` for a variant without levels.
 #[must_use]
-pub fn variant_extras(model: &Model) -> Option<Value> {
-    let totals = variant_lod(model)?;
-    let primitives: Vec<Value> = lod_parts(model)
+pub fn variant_mesh_lod(model: &Model) -> Option<MeshLod> {
+    let primitives: Vec<PrimitiveLod> = lod_parts(model)
         .into_iter()
-        .map(|(k, lod)| {
-            let mut entry = serde_json::Map::new();
-            entry.insert("primitive".into(), json!(k));
-            if let Value::Object(fields) = lod {
-                entry.extend(fields.iter().map(|(key, v)| (key.clone(), v.clone())));
-            }
-            Value::Object(entry)
+        .map(|(k, table)| PrimitiveLod {
+            primitive: u32::try_from(k).unwrap_or(u32::MAX),
+            table: table.clone(),
         })
         .collect();
-    Some(json!({
-        "leaves": totals.leaves,
-        "roots": totals.roots,
-        "primitives": primitives,
-    }))
+    // Empty, or leaves past 32 bits in all: no levels.
+    GroupLod::new(primitives).ok().map(MeshLod::Group)
 }
 
 /// Gives a grown variant the levels of detail of `options`, as its tree generator's `lod`
 /// option would have: every mesh named `leaves` without a LOD table is simplified
 /// ([`pge_lod::lod_mesh`]) around the vertical through the first skeleton root of the model
-/// (unless `options` names an axis) and written in the order of V with `extras.pge.lod`.
+/// (unless `options` names an axis) and written in the order of V with its table.
 /// Meshes that already have a table (the species asked for its own) are kept.
 pub fn with_lod(model: &Model, options: &LodOptions) -> Result<Model, LodError> {
     let root = model
@@ -133,7 +120,7 @@ pub fn with_lod(model: &Model, options: &LodOptions) -> Result<Model, LodError> 
 }
 
 fn is_bare_leaves(mesh: &Mesh) -> bool {
-    mesh.name == "leaves" && !mesh.extras.contains_key("lod") && !mesh.positions.is_empty()
+    mesh.name == "leaves" && mesh.lod.is_none() && !mesh.positions.is_empty()
 }
 
 /// How many leaves every instance of `layout` draws for `camera` (`None` for an instance
@@ -448,33 +435,42 @@ mod tests {
         .expect("kept");
         assert_eq!(kept.meshes, own.meshes);
         // The table of each primitive keeps the invariant a + c = |R| + i, inside V.
-        let extras = variant_extras(&given).expect("extras");
-        for p in extras["primitives"].as_array().expect("primitives") {
-            for s in p["sectors"].as_array().expect("sectors") {
-                let roots = s["roots"].as_u64().expect("roots");
-                let leaves = s["leaves"].as_u64().expect("leaves");
-                let size = 2 * leaves - roots;
-                for (i, row) in s["table"].as_array().expect("table").iter().enumerate() {
-                    let [a, b, c] = [0, 1, 2].map(|k| row[k].as_u64().expect("n"));
-                    assert_eq!(a + c, roots + i as u64);
-                    assert!(a <= b && b + c <= size);
+        let Some(MeshLod::Group(group)) = variant_mesh_lod(&given) else {
+            panic!("a group's levels");
+        };
+        for p in group.primitives() {
+            assert_eq!(p.table.sectors().len(), 2);
+            for s in p.table.sectors() {
+                let (roots, leaves) = (s.roots(), s.leaves());
+                for (i, row) in s.levels().iter().enumerate() {
+                    assert_eq!(row.a + row.c, roots + i as u32);
+                    assert!(row.a <= row.b && u64::from(row.b + row.c) <= s.len());
+                    assert!(row.a <= leaves);
                 }
             }
         }
     }
 
     #[test]
-    fn variant_extras_list_the_leaf_primitives() {
+    fn a_variants_levels_list_its_leaf_primitives() {
+        use pge_engine::geometry::{LodLevel, LodSector};
         let tri =
             Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
         let mut leaves = tri.clone();
-        leaves.extras.insert(
-            "lod".into(),
-            json!({ "leaves": 10, "roots": 3, "table": [[3, 3, 0]] }),
-        );
+        // Ten leaves, three roots: a table of eight levels.
+        let levels = (0..8)
+            .map(|i| LodLevel {
+                a: 3 + i,
+                b: 17,
+                c: 0,
+            })
+            .collect();
+        let sector = LodSector::new(0, 10, 3, levels).expect("sector");
+        let table = LodTable::new(vec![sector]).expect("table");
+        leaves.lod = Some(Arc::new(MeshLod::Leaves(table.clone())));
         let mut model = Model::from_mesh(tri);
         assert_eq!(variant_lod(&model), None);
-        assert_eq!(variant_extras(&model), None);
+        assert_eq!(variant_mesh_lod(&model), None);
         model.add_mesh(leaves, glam::Mat4::IDENTITY);
         assert_eq!(
             variant_lod(&model),
@@ -483,11 +479,11 @@ mod tests {
                 roots: 3
             })
         );
-        assert_eq!(
-            variant_extras(&model),
-            Some(json!({ "leaves": 10, "roots": 3, "primitives": [
-                { "primitive": 1, "leaves": 10, "roots": 3, "table": [[3, 3, 0]] }
-            ] }))
-        );
+        let group = GroupLod::new(vec![PrimitiveLod {
+            primitive: 1,
+            table,
+        }])
+        .expect("group");
+        assert_eq!(variant_mesh_lod(&model), Some(MeshLod::Group(group)));
     }
 }

@@ -4,8 +4,7 @@
 //! places its trees by the variants' names. Layers of `"unique"` trees are grown by each tile
 //! as before (their trees are its own).
 
-use pge_engine::geometry::{InstanceGroup, Model};
-use serde_json::json;
+use pge_engine::geometry::{InstanceGroup, Model, VariantCounts};
 
 use crate::Grown;
 use crate::assemble::push_variant_meshes;
@@ -35,12 +34,11 @@ pub fn shared_layer(forest: &Forest, l: usize) -> bool {
 
 /// The shared variants as a model: one instance group per variant of every layer of a few
 /// variants, named `SPECIES/VARIANT`, holding its meshes as a standalone tile holds them
-/// (parts moved by their own transforms) and no placements. `extras.sharedVariants` lists,
-/// per group, what one instance stands for: `{"nodes": n, "leaves": n}`.
+/// (parts moved by their own transforms) and no placements. [`Model::variant_counts`] lists,
+/// per group, what one instance stands for: its nodes and leaves.
 #[must_use]
 pub fn variants_model(forest: &Forest, grown: &[Grown]) -> Model {
     let mut model = Model::new();
-    let mut counts = Vec::new();
     for (l, g) in grown.iter().enumerate() {
         if !shared_layer(forest, l) {
             continue;
@@ -55,14 +53,16 @@ pub fn variants_model(forest: &Forest, grown: &[Grown]) -> Model {
                 transforms: Vec::new(),
                 leaves: None,
             });
-            counts.push(json!({"nodes": variant.stats.nodes, "leaves": variant.stats.leaves}));
+            model.variant_counts.push(VariantCounts {
+                nodes: variant.stats.nodes,
+                leaves: variant.stats.leaves,
+            });
             model
                 .stats
                 .warnings
                 .extend(variant.stats.warnings.iter().cloned());
         }
     }
-    model.extras.insert("sharedVariants".into(), counts.into());
     model
 }
 
@@ -90,10 +90,7 @@ mod tests {
         // A variant with foliage levels of detail: its leaf part carries the variant's.
         let mut leaves = tri.clone();
         leaves.name = "leaves".into();
-        leaves.extras.insert(
-            "lod".into(),
-            json!({"leaves": 1, "roots": 1, "table": [[1, 1, 0]]}),
-        );
+        leaves.lod = Some(std::sync::Arc::new(crate::assemble::tests::one_leaf_lod()));
         let mut leafy = Model::from_mesh(tri.clone());
         leafy.add_mesh(leaves, Mat4::IDENTITY);
         let grown = vec![
@@ -109,9 +106,13 @@ mod tests {
         assert_eq!(names, ["oak/0", "oak/1"]);
         assert!(shared.groups.iter().all(|g| g.transforms.is_empty()));
         assert!(shared_layer(&f, 0) && !shared_layer(&f, 1) && !shared_layer(&f, 2));
-        assert_eq!(shared.extras["sharedVariants"][1]["nodes"], 7);
-        let lod = &shared.meshes[shared.groups[0].meshes[1]].extras["lod"];
-        assert_eq!(lod["primitives"][0]["primitive"], 1, "{lod}");
+        assert_eq!(shared.variant_counts.len(), 2);
+        assert_eq!(shared.variant_counts[1].nodes, 7);
+        let lod = shared.meshes[shared.groups[0].meshes[1]].lod.as_deref();
+        let Some(pge_engine::geometry::MeshLod::Group(group)) = lod else {
+            panic!("a group's levels: {lod:?}");
+        };
+        assert_eq!(group.primitives()[0].primitive, 1);
 
         // The same meshes as the tile's own groups of those variants.
         let layout = f.layout(Some((0, 0))).expect("layout");

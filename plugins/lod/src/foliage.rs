@@ -1,11 +1,12 @@
 //! A leaf mesh with levels of detail: its quads simplified (per sector), laid out in the
-//! order of V, with the LOD table in the mesh's extras (API.md §7).
+//! order of V, with its LOD table ([`MeshLod`], written to the glTF extras).
 
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
-use pge_engine::geometry::{GeometryError, Material, Mesh, Primitive};
-use serde_json::{Value, json};
+use pge_engine::geometry::{
+    GeometryError, LodLevel, LodSector, Material, Mesh, MeshLod, Primitive,
+};
 
 use crate::atlas::Atlas;
 use crate::leaf::Leaf;
@@ -67,6 +68,10 @@ pub enum LodError {
     /// The atlas texture could not be made.
     #[error(transparent)]
     Geometry(#[from] GeometryError),
+    /// The LOD table breaks an invariant (a bug of the simplification, reported rather than
+    /// written).
+    #[error(transparent)]
+    Table(#[from] pge_engine::geometry::LodError),
 }
 
 /// One sector's part of V: its leaves are `offset..offset + table.order.len()` of the mesh,
@@ -142,9 +147,10 @@ pub fn simplify_sectors(leaves: &[Leaf], options: &LodOptions) -> Vec<(Chain, Ve
 /// carries the atlas, and the atlases of its normal and metallic-roughness maps where it had
 /// them, and original leaves map into its single-leaf cell).
 ///
-/// The mesh's `extras.pge.lod` is `{leaves = |O|, roots = |R|, table = [[a, b, c], ...]}`
-/// (one sector) or `{leaves, roots, sectors = [{offset, leaves, roots, table}, ...]}` with
-/// each sector's table relative to its offset (in leaves).
+/// The mesh's [`Mesh::lod`] holds every sector's table ([`mesh_lod`]), each relative to its
+/// offset (in leaves); the glTF writer writes it as `extras.pge.lod = {leaves = |O|, roots =
+/// |R|, table = [[a, b, c], ...]}` (one sector) or `{leaves, roots, sectors = [{offset,
+/// leaves, roots, table}, ...]}`.
 pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>), LodError> {
     if !(1..=MAX_SECTORS).contains(&options.sectors) {
         return Err(LodError::Sectors(options.sectors));
@@ -251,8 +257,7 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
         result.push(Sector { offset, table });
         offset += len;
     }
-    let lod = lod_extras(&result);
-    out.extras.insert("lod".into(), lod);
+    out.lod = Some(Arc::new(mesh_lod(&result)?));
     Ok((out, result))
 }
 
@@ -274,31 +279,28 @@ fn chain_colors(chain: &Chain, ids: &[u32], colors: &[Vec4]) -> Vec<Vec4> {
     out
 }
 
-fn table_json(table: &LodTable) -> Value {
-    Value::Array(table.rows.iter().map(|r| json!([r.a, r.b, r.c])).collect())
-}
-
-/// The `extras.pge.lod` object of API.md §7 (see [`lod_mesh`]).
-#[must_use]
-pub fn lod_extras(sectors: &[Sector]) -> Value {
-    let leaves: u32 = sectors.iter().map(|s| s.table.originals).sum();
-    let roots: u32 = sectors.iter().map(|s| s.table.roots).sum();
-    if let [one] = sectors {
-        json!({ "leaves": leaves, "roots": roots, "table": table_json(&one.table) })
-    } else {
-        let list: Vec<Value> = sectors
-            .iter()
-            .map(|s| {
-                json!({
-                    "offset": s.offset,
-                    "leaves": s.table.originals,
-                    "roots": s.table.roots,
-                    "table": table_json(&s.table),
+/// The levels of detail of a leaf mesh whose V is `sectors`, one after the other (see
+/// [`lod_mesh`]): written by the glTF writer as the mesh's `extras.pge.lod`.
+pub fn mesh_lod(sectors: &[Sector]) -> Result<MeshLod, LodError> {
+    let sectors = sectors
+        .iter()
+        .map(|s| {
+            let levels = s
+                .table
+                .rows
+                .iter()
+                .map(|r| LodLevel {
+                    a: r.a,
+                    b: r.b,
+                    c: r.c,
                 })
-            })
-            .collect();
-        json!({ "leaves": leaves, "roots": roots, "sectors": list })
-    }
+                .collect();
+            LodSector::new(s.offset, s.table.originals, s.table.roots, levels)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(MeshLod::Leaves(pge_engine::geometry::LodTable::new(
+        sectors,
+    )?))
 }
 
 #[cfg(test)]
@@ -363,12 +365,13 @@ mod tests {
         originals.sort_unstable();
         expected.sort_unstable();
         assert_eq!(originals, expected);
-        let lod = &out.extras["lod"];
-        assert_eq!(lod["leaves"], 120);
-        assert_eq!(lod["roots"], table.roots);
+        let lod = out.lod.as_deref().and_then(MeshLod::table).expect("table");
+        assert_eq!(lod.leaves(), 120);
+        assert_eq!(lod.roots(), table.roots);
+        let first = lod.sectors()[0].levels()[0];
         assert_eq!(
-            lod["table"][0],
-            json!([table.rows[0].a, table.rows[0].b, table.rows[0].c])
+            [first.a, first.b, first.c],
+            [table.rows[0].a, table.rows[0].b, table.rows[0].c]
         );
         // The index buffer is the finest level: the first 120 leaves of V, in order.
         assert_eq!(out.indices.len(), 6 * 120);
@@ -405,11 +408,9 @@ mod tests {
             offset,
             2 * 96 - sectors.iter().map(|s| s.table.roots).sum::<u32>()
         );
-        assert_eq!(
-            out.extras["lod"]["sectors"].as_array().map(Vec::len),
-            Some(4)
-        );
-        assert_eq!(out.extras["lod"]["leaves"], 96);
+        let lod = out.lod.as_deref().and_then(MeshLod::table).expect("table");
+        assert_eq!(lod.sectors().len(), 4);
+        assert_eq!(lod.leaves(), 96);
         // The index buffer draws each sector's original leaves, sector after sector.
         let finest: Vec<u32> = sectors
             .iter()

@@ -9,7 +9,7 @@
 //!   ([`Weights`], [`Bounds`]) and its new leaf ([`Leaf::collapse`]);
 //! - [`LodTable`]: V and the table by V_init and V_fill ([`v_init`], [`v_fill`]), drawn by
 //!   [`LodTable::ranges`] (V_render);
-//! - [`lod_mesh`]: a leaf mesh rewritten in V's order with `extras.pge.lod`, optionally per
+//! - [`lod_mesh`]: a leaf mesh rewritten in V's order with its [`MeshLod`](pge_engine::geometry::MeshLod), optionally per
 //!   angular sector and with an [`Atlas`] of leaf clusters;
 //! - [`assign`]: the leaf budget of a forest (the thesis' Scaling).
 //!
@@ -48,7 +48,7 @@ mod vector;
 pub use atlas::{ATLAS_SIZE, Atlas, CLUSTER_COUNTS, CLUSTER_DENSITIES, Cell};
 pub use budget::{Budget, BudgetError, assign, assign_into};
 pub use foliage::{
-    LodError, LodOptions, MAX_SECTORS, Sector, leaves_of, lod_extras, lod_mesh, simplify_sectors,
+    LodError, LodOptions, MAX_SECTORS, Sector, leaves_of, lod_mesh, mesh_lod, simplify_sectors,
 };
 pub use leaf::Leaf;
 #[cfg(feature = "lua")]

@@ -634,9 +634,12 @@ mod tests {
         let without = build_tree(&y_tree(), &plain, 3).expect("builds");
         assert_eq!(m.stats.leaves, without.stats.leaves);
         let leaves = &m.meshes[1];
-        let lod = &leaves.extras["lod"];
-        let originals = lod["leaves"].as_u64().expect("leaves");
-        let roots = lod["roots"].as_u64().expect("roots");
+        let lod = leaves
+            .lod
+            .as_deref()
+            .and_then(pge_engine::geometry::MeshLod::table)
+            .expect("a table");
+        let (originals, roots) = (u64::from(lod.leaves()), u64::from(lod.roots()));
         assert_eq!(originals, m.stats.leaves);
         assert!(roots < originals, "{roots} roots of {originals}");
         // |M| = |O| + collapses = 2|O| - |R| quads; the indices draw the finest level only,
@@ -644,9 +647,9 @@ mod tests {
         assert_eq!(leaves.positions.len() as u64, 4 * (2 * originals - roots));
         assert_eq!(leaves.indices.len() as u64, 6 * originals);
         assert_eq!(leaves.indices.len(), without.meshes[1].indices.len());
-        let rows = lod["table"].as_array().expect("table");
+        let rows = lod.sectors()[0].levels();
         assert_eq!(rows.len() as u64, originals - roots + 1);
-        assert_eq!(rows.last().expect("finest")[0], originals);
+        assert_eq!(u64::from(rows.last().expect("finest").a), originals);
         // Deterministic, bytes included.
         let again = build_tree(&y_tree(), &options, 3).expect("builds");
         assert_eq!(again.meshes[1].positions, leaves.positions);

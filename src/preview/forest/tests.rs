@@ -10,8 +10,9 @@ fn lod(leaves: u32, roots: u32) -> LeafLod {
         .map(|i| [i, v - roots, roots])
         .collect();
     rows[(leaves - roots) as usize] = [leaves, 0, 0];
-    let extras = json!({"lod": {"leaves": leaves, "roots": roots, "table": rows}});
-    LeafLod::from_extras(extras.as_object().expect("object"), 4 * v as usize).expect("lod")
+    let lod = json!({"leaves": leaves, "roots": roots, "table": rows});
+    let lod = pge_engine::export::lod_from_json(&lod).expect("a table");
+    LeafLod::from_lod(Some(&lod), 4 * v as usize).expect("lod")
 }
 
 /// A row of `n` instances along -Z from the origin, one metre apart, scaled by one.

@@ -237,7 +237,7 @@ fn a_forests_leaves_get_levels_and_its_meshes_are_marked() {
         transforms: vec![at(0.0), at(10.0), at(-30.0)],
         leaves: None,
     });
-    assert!(!model.meshes[1].extras.contains_key("lod"));
+    assert!(model.meshes[1].lod.is_none());
     let scene = Scene::new(&model);
     assert!(
         scene
@@ -272,7 +272,7 @@ fn a_forests_leaves_get_levels_and_its_meshes_are_marked() {
     let plain = Scene::new(&Model::from_mesh(model.meshes[1].clone()));
     assert!(!plain.meshes[0].forest && plain.meshes[0].lod.is_none());
     // Leaves that carry their table (the species' or the forest's `lod`, as the glb's
-    // `extras.pge.lod`) are read as they are, not simplified again: four sectors here,
+    // `Mesh::lod`) are read as they are, not simplified again: four sectors here,
     // where the preview's own levels would have one.
     let options = pge_lod::LodOptions {
         sectors: 4,
@@ -280,7 +280,7 @@ fn a_forests_leaves_get_levels_and_its_meshes_are_marked() {
     };
     let (with_table, _) = pge_lod::lod_mesh(&model.meshes[1], &options).expect("lod");
     let table =
-        super::super::lod::LeafLod::from_extras(&with_table.extras, with_table.positions.len())
+        super::super::lod::LeafLod::from_lod(with_table.lod.as_deref(), with_table.positions.len())
             .expect("the table");
     let mut model = model;
     model.meshes[1] = Arc::new(with_table);
