@@ -20,6 +20,7 @@
 //! ```
 
 pub mod algorithm;
+pub mod approx;
 #[cfg(feature = "lua")]
 mod engine;
 mod error;
@@ -36,9 +37,9 @@ mod session;
 pub use algorithm::{Algorithm, RunContext, Step};
 #[cfg(feature = "lua")]
 pub use engine::{Engine, EngineBuilder, Limits};
-pub use error::{Error, Location, Result};
+pub use error::{Error, Location, OptionError, Result};
 #[cfg(feature = "lua")]
-pub use lua::params::{ParamInfo, ParamValue};
+pub use lua::params::{OverrideError, ParamInfo, ParamValue};
 #[cfg(feature = "lua")]
 pub use plugin::Plugin;
 #[cfg(feature = "lua")]

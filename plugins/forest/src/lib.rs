@@ -32,7 +32,6 @@ mod lod;
 #[cfg(feature = "lua")]
 pub mod lua;
 mod poisson;
-mod rng;
 mod shared;
 mod terrain;
 mod trunks;
@@ -48,7 +47,6 @@ pub use lod::{
 #[cfg(feature = "lua")]
 pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
-pub use rng::{Rng, hash};
 pub use shared::{VariantSharing, shared_layer, variants_model};
 pub use terrain::{FbmOptions, Grid, Raster, Terrain};
 
