@@ -26,6 +26,7 @@ mod engine;
 mod error;
 pub mod export;
 pub mod geometry;
+pub mod import;
 #[cfg(feature = "lua")]
 pub mod lua;
 #[cfg(feature = "lua")]
