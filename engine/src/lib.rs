@@ -44,7 +44,7 @@ pub use lua::params::{OverrideError, ParamInfo, ParamValue};
 #[cfg(feature = "lua")]
 pub use plugin::Plugin;
 #[cfg(feature = "lua")]
-pub use session::{Generated, Session, SessionOptions};
+pub use session::{Generated, GrowOptions, Session, SessionOptions, Started};
 
 /// The `mlua` crate the engine is built with, for plugins and host applications.
 #[cfg(feature = "lua")]

@@ -124,10 +124,7 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| args.dir.join("world.glb"));
-    let instancing = match args.instancing {
-        InstancingArg::Gpu => Instancing::Gpu,
-        InstancingArg::Nodes => Instancing::Nodes,
-    };
+    let instancing: Instancing = args.instancing.into();
     let meta = ExportMeta { seed, params };
     let bytes = pge_engine::export::glb_bytes_with(&model, &meta, instancing)?;
     write_atomically(&output, &bytes)
