@@ -306,7 +306,7 @@ fn run_one(
         // The run ends with its file written: what follows only reports on it.
         let seconds = t0.elapsed().as_secs_f64();
         let shared = match product {
-            Product::Referring { shared, .. } => Some(shared),
+            Product::Referring { shared, .. } => Some(&**shared),
             _ => None,
         };
         let report = Report {

@@ -38,8 +38,8 @@ pub(crate) enum Product {
     Referring {
         /// The folder.
         dir: PathBuf,
-        /// Its description.
-        shared: SharedVariants,
+        /// Its description (boxed: it is large, the other products are a path at most).
+        shared: Box<SharedVariants>,
     },
 }
 
@@ -165,7 +165,11 @@ fn product(args: &RunArgs) -> anyhow::Result<Product> {
         (Some(dir), _) => Product::SharedVariants(dir.clone()),
         (None, Some(dir)) => Product::Referring {
             dir: dir.clone(),
-            shared: crate::shared::read_variants(dir, &args.script.script, args.script.seed)?,
+            shared: Box::new(crate::shared::read_variants(
+                dir,
+                &args.script.script,
+                args.script.seed,
+            )?),
         },
         (None, None) => Product::Model,
     })
