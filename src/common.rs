@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
-use pge_engine::{Engine, SessionOptions};
+use pge_engine::{Engine, EngineBuilder, SessionOptions};
 
 /// Options of every command that runs a script.
 #[derive(Args, Debug, Clone)]
@@ -57,11 +57,15 @@ impl ScriptArgs {
 
     /// The engine with these limits and `forest` as its forest plugin.
     pub fn engine_with_forest(&self, forest: pge_forest::ForestPlugin) -> anyhow::Result<Engine> {
+        Ok(self.limits(pge::engine_with_forest(forest)).build()?)
+    }
+
+    /// `builder` with these limits (`--time-limit`, `--memory-limit`).
+    pub fn limits(&self, builder: EngineBuilder) -> EngineBuilder {
         // `--time-limit` is checked positive and finite when the arguments are parsed.
-        Ok(pge::engine_with_forest(forest)
+        builder
             .time_limit(Some(Duration::from_secs_f64(self.time_limit)))
             .memory_limit_mib(self.memory_limit)
-            .build()?)
     }
 
     /// Session options for these arguments.

@@ -8,11 +8,17 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pge_engine::export::Instancing;
-use pge_engine::{Generated, Session};
+use pge_engine::{Algorithm, Generated, GrowOptions, Session};
 use pge_forest::{ForestPlugin, ForestRun, VariantCache, VariantSharing};
 
 use crate::common::ScriptArgs;
 use crate::output::{export_meta, write_model};
+
+mod plan;
+mod report;
+
+use plan::{Plan, Product, Target, Targets};
+use report::Report;
 
 /// Arguments of `pge run`.
 #[derive(Args, Debug)]
@@ -77,6 +83,15 @@ pub enum InstancingArg {
     Nodes,
 }
 
+impl From<InstancingArg> for Instancing {
+    fn from(arg: InstancingArg) -> Instancing {
+        match arg {
+            InstancingArg::Gpu => Instancing::Gpu,
+            InstancingArg::Nodes => Instancing::Nodes,
+        }
+    }
+}
+
 fn parse_tile(s: &str) -> Result<(usize, usize), String> {
     let bad = || format!("'{s}' is not I,J (two integers >= 0)");
     let (i, j) = s.split_once(',').ok_or_else(bad)?;
@@ -106,46 +121,45 @@ pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Like [`Session::generate`], for the forest the script returns (an error naming `option`
-/// when it returns something else), or its tile `(i, j)`; `check` sees the declared
-/// parameters before anything grows.
-fn generate_forest(
+/// Runs the script and grows what it returns: for a run that needs a forest (`flag`), the
+/// forest (an error naming the flag when it returns something else) or its tile `(i, j)`,
+/// the shared variants' parameters checked before anything grows.
+fn grow(
     session: &Session,
     path: &Path,
+    product: &Product,
     tile: Option<(usize, usize)>,
-    option: &str,
-    check: &dyn Fn(&[pge_engine::ParamInfo]) -> anyhow::Result<()>,
     progress: &mut dyn FnMut(u32, Option<u32>),
 ) -> anyhow::Result<Generated> {
-    let t0 = Instant::now();
-    let value = session.run_script(path)?;
-    let mut algorithm = session.algorithm_from(value)?;
-    let Some(forest) = ForestRun::of(&mut *algorithm) else {
-        let tiled = if tile.is_some() { " with tile = T" } else { "" };
-        anyhow::bail!(
-            "{}: {option} needs a script that returns a forest (pge.Forest{tiled})",
-            path.display()
-        );
+    let started = session.start(path)?;
+    let Some(option) = product.forest_flag(tile) else {
+        return Ok(started.grow(GrowOptions::default(), progress)?);
     };
-    check(&session.declared_params())?;
-    if let Some((i, j)) = tile
-        && let Err(e) = forest.select_tile(i, j)
-    {
-        return Err(forest.engine_error(e).into());
-    }
-    let ctx = session.context();
-    let planned = ctx.steps.or(algorithm.planned_steps());
-    let mut model =
-        pge_engine::algorithm::run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
     // The shared variants place nothing: they are not an empty model.
-    if option != "--variants-out" {
-        model.warn_if_empty(path);
-    }
-    Ok(Generated {
-        model,
-        params: session.declared_params(),
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    let options = match product {
+        Product::SharedVariants(_) => GrowOptions::default().empty_expected(),
+        _ => GrowOptions::default(),
+    };
+    // The forest is reached through its typed handle, before anything grows.
+    let prepare = |algorithm: &mut dyn Algorithm| -> anyhow::Result<()> {
+        let Some(forest) = ForestRun::of(algorithm) else {
+            let tiled = if tile.is_some() { " with tile = T" } else { "" };
+            anyhow::bail!(
+                "{}: {option} needs a script that returns a forest (pge.Forest{tiled})",
+                path.display()
+            );
+        };
+        if let Product::Referring { dir, shared } = product {
+            crate::shared::check_params(shared, dir, path, &session.declared_params())?;
+        }
+        if let Some((i, j)) = tile
+            && let Err(e) = forest.select_tile(i, j)
+        {
+            return Err(forest.engine_error(e).into());
+        }
+        Ok(())
+    };
+    started.grow_with(options, prepare, progress)
 }
 
 /// The progress bar of a run, drawn on stderr; none with `--quiet`, or when stderr is not a
@@ -167,108 +181,60 @@ pub(crate) fn progress_bar(quiet: bool) -> Option<ProgressBar> {
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     set_threads(args.threads)?;
-    if let Some(dir) = &args.out_dir {
-        return run_tiles(args, dir);
-    }
-    if args.tile.len() > 1 {
-        crate::common::usage!(
-            "{} tiles need --out-dir DIR (each is written to DIR/I_J.glb)",
-            args.tile.len()
-        );
-    }
-    let output = match &args.output {
-        Some(o) => o.clone(),
-        None => {
-            PathBuf::from(args.script.script.file_stem().unwrap_or_default()).with_extension("glb")
+    match Plan::decide(args)? {
+        Plan::Stages { stages, output } => crate::stages::run_stages(args, &stages, &output),
+        Plan::Runs { product, targets } => {
+            let engine = engine(args, &product)?;
+            match targets {
+                Targets::One(target) => run_one(args, &engine, &product, &target, t0),
+                // The tiles one after the other in this process, each in a session of its
+                // own (so each file is the one `--tile I,J -o DIR/I_J.glb` writes), the
+                // engine and the shared variants' description made and read once. A tile
+                // that fails stops the run with `tile I,J: ` before its error; the tiles
+                // written before it stay (each file is whole).
+                Targets::Tiles { dir, tiles } => {
+                    std::fs::create_dir_all(&dir)
+                        .with_context(|| format!("cannot create {}", dir.display()))?;
+                    for (i, j) in tiles {
+                        let target = Target {
+                            tile: Some((i, j)),
+                            output: dir.join(format!("{i}_{j}.glb")),
+                        };
+                        run_one(args, &engine, &product, &target, Instant::now())
+                            .with_context(|| format!("tile {i},{j}"))?;
+                    }
+                    Ok(())
+                }
+            }
         }
-    };
-    let ext = output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("glb" | "obj")) {
-        crate::common::usage!("{}: the output must end in .glb or .obj", output.display());
     }
-    if let Some(stages) = &args.stages {
-        if ext.as_deref() != Some("glb") {
-            crate::common::usage!(
-                "{}: --stages writes one scene per stage, which needs a .glb output",
-                output.display()
-            );
-        }
-        return crate::stages::run_stages(args, stages, &output);
-    }
-    if args.variants.is_some() && ext.as_deref() != Some("glb") {
-        crate::common::usage!(
-            "{}: --variants writes a glb that refers to the shared variants, which needs a .glb \
-             output",
-            output.display()
-        );
-    }
-    let prepared = prepare(args)?;
-    run_one(args, &prepared, args.tile.first().copied(), &output, t0)
 }
 
-/// `pge run SCRIPT --tile I,J [--tile I,J]... --out-dir DIR`: the tiles one after the other
-/// in this process, each in a session of its own (so each file is the one `--tile I,J -o
-/// DIR/I_J.glb` writes), the engine and the shared variants' description made and read
-/// once. A tile that fails stops the run with `tile I,J: ` before its error; the tiles
-/// written before it stay (each file is whole).
-fn run_tiles(args: &RunArgs, dir: &Path) -> anyhow::Result<()> {
-    let prepared = prepare(args)?;
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    for &(i, j) in &args.tile {
-        let output = dir.join(format!("{i}_{j}.glb"));
-        run_one(args, &prepared, Some((i, j)), &output, Instant::now())
-            .with_context(|| format!("tile {i},{j}"))?;
-    }
-    Ok(())
-}
-
-/// What every tile of a run shares: the engine (with its forest plugin) and the shared
-/// variants' description (`--variants DIR`), checked before anything runs.
-struct Prepared {
-    engine: pge_engine::Engine,
-    shared: Option<pge_engine::export::SharedVariants>,
-}
-
-fn prepare(args: &RunArgs) -> anyhow::Result<Prepared> {
+/// The engine of every run of a plan, its forest plugin keeping variants in `--variant-cache`
+/// and writing or referring to shared variants as `product` asks.
+fn engine(args: &RunArgs, product: &Product) -> anyhow::Result<pge_engine::Engine> {
     let mut forest = match &args.variant_cache {
         Some(dir) => ForestPlugin::with_variant_cache(VariantCache::new(dir)),
         None => ForestPlugin::default(),
     };
-    if args.variants_out.is_some() {
-        forest = forest.sharing(VariantSharing::Write);
+    match product {
+        Product::Model => {}
+        Product::SharedVariants(_) => forest = forest.sharing(VariantSharing::Write),
+        Product::Referring { .. } => forest = forest.sharing(VariantSharing::Refer),
     }
-    let shared = match &args.variants {
-        Some(dir) => {
-            forest = forest.sharing(VariantSharing::Refer);
-            Some(crate::shared::read_variants(
-                dir,
-                &args.script.script,
-                args.script.seed,
-            )?)
-        }
-        None => None,
-    };
-    Ok(Prepared {
-        engine: args.script.engine_with_forest(forest)?,
-        shared,
-    })
+    args.script.engine_with_forest(forest)
 }
 
-/// Runs the script once (tile `tile` of its forest, when given) and writes `output`.
+/// Runs the script once (the tile of `target`, when given) and writes `target.output`.
 fn run_one(
     args: &RunArgs,
-    prepared: &Prepared,
-    tile: Option<(usize, usize)>,
-    output: &Path,
+    engine: &pge_engine::Engine,
+    product: &Product,
+    target: &Target,
     t0: Instant,
 ) -> anyhow::Result<()> {
-    let shared = &prepared.shared;
-    let session = prepared
-        .engine
-        .session(args.script.session_options(args.steps))?;
+    let Target { tile, output } = target;
+    let session = engine.session(args.script.session_options(args.steps))?;
     // Files a script writes (`img:save`) go beside the output.
     session.set_output_folder(output.parent().unwrap_or(std::path::Path::new("")))?;
     let bar = progress_bar(args.quiet);
@@ -284,39 +250,7 @@ fn run_one(
         }
     };
     let script = &args.script.script;
-    let check_params = |params: &[pge_engine::ParamInfo]| match (&shared, &args.variants) {
-        (Some(shared), Some(dir)) => crate::shared::check_params(shared, dir, script, params),
-        _ => Ok(()),
-    };
-    let generated = match (tile, &args.variants_out, &args.variants) {
-        (None, None, None) => session
-            .generate(script, &mut progress)
-            .map_err(anyhow::Error::from),
-        (tile, None, None) => generate_forest(
-            &session,
-            script,
-            tile,
-            "--tile",
-            &check_params,
-            &mut progress,
-        ),
-        (tile, Some(_), _) => generate_forest(
-            &session,
-            script,
-            tile,
-            "--variants-out",
-            &check_params,
-            &mut progress,
-        ),
-        (tile, None, Some(_)) => generate_forest(
-            &session,
-            script,
-            tile,
-            "--variants",
-            &check_params,
-            &mut progress,
-        ),
-    };
+    let generated = grow(&session, script, product, *tile, &mut progress);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
@@ -326,19 +260,16 @@ fn run_one(
     }
     let te = Instant::now();
     let meta = export_meta(args.script.seed, &generated.params);
-    let instancing = match args.instancing {
-        InstancingArg::Gpu => Instancing::Gpu,
-        InstancingArg::Nodes => Instancing::Nodes,
-    };
+    let instancing = args.instancing.into();
     let mut summary = None;
-    let output = match (&args.variants_out, shared, &args.variants) {
-        (Some(dir), _, _) => {
+    let written = match product {
+        Product::SharedVariants(dir) => {
             let info = crate::shared::identity(script, &meta)?;
             crate::shared::write_variants(dir, &generated.model, info)?;
             summary = Some(crate::shared::summary(&generated.model));
             dir.join(crate::shared::DESCRIPTION)
         }
-        (None, Some(shared), Some(dir)) => {
+        Product::Referring { dir, shared } => {
             let uri = crate::shared::relative_uri(dir, output)?;
             let bytes = pge_engine::export::glb_bytes_shared(
                 &generated.model,
@@ -348,11 +279,11 @@ fn run_one(
                 &uri,
             )?;
             crate::output::write_atomically(output, &bytes)?;
-            output.to_path_buf()
+            output.clone()
         }
-        _ => {
+        Product::Model => {
             write_model(&generated.model, &meta, output, instancing)?;
-            output.to_path_buf()
+            output.clone()
         }
     };
     generated
@@ -370,42 +301,19 @@ fn run_one(
     if args.stats {
         // The run ends with its file written: what follows only reports on it.
         let seconds = t0.elapsed().as_secs_f64();
-        let m = &generated.model;
-        let phases: serde_json::Map<String, serde_json::Value> = m
-            .stats
-            .phases
-            .iter()
-            .map(|(k, v)| (k.clone(), (*v).into()))
-            .collect();
-        // A tile that refers to shared variants counts what their instances draw and stand
-        // for, as its glb's extras.pge.stats do, and names them.
-        let (referred, [sv, st, sn, sl]) = match shared {
-            Some(shared) => crate::shared::referred(m, shared),
-            None => (Vec::new(), [0; 4]),
+        let shared = match product {
+            Product::Referring { shared, .. } => Some(&**shared),
+            _ => None,
         };
-        let mut stats = serde_json::json!({
-            "vertices": m.vertex_count() as u64 + sv,
-            "triangles": m.triangle_count() as u64 + st,
-            "nodes": m.stats.nodes + sn,
-            "leaves": m.stats.leaves + sl,
-            "modules": m.stats.modules,
-            "meshes": m.meshes.len(),
-            "instances": m.forest.as_ref().map_or(m.instances.len() as u64, |f| f.instances),
-            "seconds": seconds,
-            "phases": phases,
-            "warnings": m.stats.warnings,
-            "output": output.display().to_string(),
-        });
-        if let Some((i, j)) = tile {
-            stats["tile"] = serde_json::json!([i, j]);
-        }
-        if shared.is_some() {
-            stats["variants"] = referred.into();
-        }
-        if let Some(summary) = summary {
-            stats["variants"] = summary.into();
-        }
-        println!("{stats}");
+        let report = Report {
+            model: &generated.model,
+            seconds,
+            output: &written,
+            tile: *tile,
+            shared,
+            summary,
+        };
+        println!("{}", report.json());
     }
     Ok(())
 }

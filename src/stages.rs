@@ -60,8 +60,7 @@ fn generate_stages(args: &RunArgs, stages: &[u32], bar: &ProgressBar) -> anyhow:
     let last = stages[stages.len() - 1];
     let engine = args.script.engine()?;
     let session = engine.session(args.script.session_options(Some(last)))?;
-    let value = session.run_script(script)?;
-    let mut algorithm = session.algorithm_from(value)?;
+    let mut algorithm = session.start(script)?.algorithm()?;
     if algorithm.planned_steps() == Some(0) {
         return Err(Error::script(
             return_location(script),

@@ -127,6 +127,60 @@ pub enum Error {
     },
 }
 
+/// An option of an algorithm outside what it accepts, found by the algorithm's checks
+/// before it runs (a script sees it as a script error at the constructor's call).
+///
+/// ```
+/// use pge_engine::OptionError;
+///
+/// let e = OptionError::out_of_range("scale", "a number > 0", -1.0);
+/// assert_eq!(e.to_string(), "scale must be a number > 0, got -1");
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum OptionError {
+    /// A value outside the option's range.
+    #[error("{option} must be {expected}, got {got}")]
+    OutOfRange {
+        /// The option, as scripts spell it.
+        option: &'static str,
+        /// What it needs ("a number > 0").
+        expected: &'static str,
+        /// The value given, as it prints.
+        got: String,
+    },
+    /// A value that is not what the option takes (a vector that is not finite, an empty list).
+    #[error("{option} must be {expected}")]
+    Invalid {
+        /// The option, as scripts spell it.
+        option: &'static str,
+        /// What it needs.
+        expected: &'static str,
+    },
+}
+
+impl OptionError {
+    /// `option` must be `expected`, and `got` is not.
+    #[must_use]
+    pub fn out_of_range(
+        option: &'static str,
+        expected: &'static str,
+        got: impl fmt::Display,
+    ) -> OptionError {
+        OptionError::OutOfRange {
+            option,
+            expected,
+            got: got.to_string(),
+        }
+    }
+
+    /// `option` must be `expected`.
+    #[must_use]
+    pub fn invalid(option: &'static str, expected: &'static str) -> OptionError {
+        OptionError::Invalid { option, expected }
+    }
+}
+
 impl Error {
     /// A script error at `location`.
     pub fn script(location: Location, message: impl Into<String>) -> Error {

@@ -20,11 +20,13 @@
 //! ```
 
 pub mod algorithm;
+pub mod approx;
 #[cfg(feature = "lua")]
 mod engine;
 mod error;
 pub mod export;
 pub mod geometry;
+pub mod import;
 #[cfg(feature = "lua")]
 pub mod lua;
 #[cfg(feature = "lua")]
@@ -36,13 +38,13 @@ mod session;
 pub use algorithm::{Algorithm, RunContext, Step};
 #[cfg(feature = "lua")]
 pub use engine::{Engine, EngineBuilder, Limits};
-pub use error::{Error, Location, Result};
+pub use error::{Error, Location, OptionError, Result};
 #[cfg(feature = "lua")]
-pub use lua::params::{ParamInfo, ParamValue};
+pub use lua::params::{OverrideError, ParamInfo, ParamValue};
 #[cfg(feature = "lua")]
 pub use plugin::Plugin;
 #[cfg(feature = "lua")]
-pub use session::{Generated, Session, SessionOptions};
+pub use session::{Generated, GrowOptions, Session, SessionOptions, Started};
 
 /// The `mlua` crate the engine is built with, for plugins and host applications.
 #[cfg(feature = "lua")]

@@ -53,6 +53,86 @@ pub struct Generated {
     pub seconds: f64,
 }
 
+/// How [`Started::grow`] grows a script's value.
+#[derive(Clone, Copy, Debug, Default)]
+#[non_exhaustive]
+pub struct GrowOptions {
+    /// An empty model is expected (a forest that writes only its shared variants places
+    /// nothing): no warning for it.
+    pub empty_expected: bool,
+}
+
+impl GrowOptions {
+    /// No warning for an empty model.
+    #[must_use]
+    pub fn empty_expected(mut self) -> Self {
+        self.empty_expected = true;
+        self
+    }
+}
+
+/// A main script that has run, its value not grown yet ([`Session::start`]).
+pub struct Started<'s> {
+    session: &'s Session,
+    path: PathBuf,
+    value: Value,
+    t0: Instant,
+    script_seconds: f64,
+}
+
+impl Started<'_> {
+    /// The value the script returned.
+    #[must_use]
+    pub fn value(&self) -> &Value {
+        &self.value
+    }
+
+    /// The algorithm of the value, to step by hand (growth stages).
+    pub fn algorithm(self) -> Result<Box<dyn Algorithm>> {
+        self.session.algorithm_from(self.value)
+    }
+
+    /// Runs the value's algorithm to the end (or `--steps`) and returns the model, the
+    /// script's time as its first phase. `progress` receives (steps taken, steps planned if
+    /// known).
+    pub fn grow(
+        self,
+        options: GrowOptions,
+        progress: &mut dyn FnMut(u32, Option<u32>),
+    ) -> Result<Generated> {
+        self.grow_with(options, |_| Ok::<(), Error>(()), progress)
+    }
+
+    /// As [`Started::grow`], with `prepare` seeing the algorithm before it runs: a host
+    /// reaches the concrete type through [`Algorithm::as_any_mut`] (a forest whose tile it
+    /// picks) or refuses the value with an error of its own.
+    pub fn grow_with<E: From<Error>>(
+        self,
+        options: GrowOptions,
+        prepare: impl FnOnce(&mut dyn Algorithm) -> std::result::Result<(), E>,
+        progress: &mut dyn FnMut(u32, Option<u32>),
+    ) -> std::result::Result<Generated, E> {
+        let session = self.session;
+        let mut algorithm = session.algorithm_from(self.value)?;
+        prepare(&mut *algorithm)?;
+        let ctx = session.context();
+        let planned = ctx.steps.or(algorithm.planned_steps());
+        let mut model = run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
+        model
+            .stats
+            .phases
+            .insert(0, ("script".into(), self.script_seconds));
+        if !options.empty_expected {
+            model.warn_if_empty(&self.path);
+        }
+        Ok(Generated {
+            model,
+            params: session.declared_params(),
+            seconds: self.t0.elapsed().as_secs_f64(),
+        })
+    }
+}
+
 /// One sandboxed Lua 5.4 state with the support library and the engine's plugins.
 ///
 /// The standard library has no `io`, `os`, `debug` or `package`; `require` and `pge.load`
@@ -241,28 +321,27 @@ impl Session {
     }
 
     /// Runs the script, then its algorithm to the end (or `--steps`), and returns the model.
-    /// `progress` receives (steps taken, steps planned if known).
+    /// `progress` receives (steps taken, steps planned if known). The same as
+    /// [`Session::start`] then [`Started::grow`].
     pub fn generate(
         &self,
         path: &Path,
         progress: &mut dyn FnMut(u32, Option<u32>),
     ) -> Result<Generated> {
+        self.start(path)?.grow(GrowOptions::default(), progress)
+    }
+
+    /// Runs the main script ([`Session::run_script`]) and holds its value, not grown yet: the
+    /// host looks at it or configures it ([`Started::value`]) before it grows.
+    pub fn start(&self, path: &Path) -> Result<Started<'_>> {
         let t0 = Instant::now();
         let value = self.run_script(path)?;
-        let script_seconds = t0.elapsed().as_secs_f64();
-        let mut algorithm = self.algorithm_from(value)?;
-        let ctx = self.context();
-        let planned = ctx.steps.or(algorithm.planned_steps());
-        let mut model = run(&mut *algorithm, &ctx, &mut |s| progress(s, planned))?;
-        model
-            .stats
-            .phases
-            .insert(0, ("script".into(), script_seconds));
-        model.warn_if_empty(path);
-        Ok(Generated {
-            model,
-            params: self.declared_params(),
-            seconds: t0.elapsed().as_secs_f64(),
+        Ok(Started {
+            session: self,
+            path: path.to_path_buf(),
+            value,
+            t0,
+            script_seconds: t0.elapsed().as_secs_f64(),
         })
     }
 

@@ -1,11 +1,12 @@
-//! The glTF/glb reader of `pge.shape.mesh`, then the mesh it builds.
+//! The engine's glTF/glb reader of `pge.shape.mesh` (`import::scene_triangles`), then the
+//! mesh it builds.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use pge_spacecol::TriMesh;
 
 fuzz_target!(|bytes: &[u8]| {
-    let Ok((positions, triangles)) = TriMesh::parse_gltf(bytes) else {
+    let Ok((positions, triangles)) = pge_engine::import::scene_triangles(bytes) else {
         return;
     };
     let Ok(mesh) = TriMesh::new("fuzz.glb", &positions, &triangles) else {

@@ -4,7 +4,6 @@
 //! once, however many tiles place them.
 
 mod manifest;
-mod read;
 mod world;
 
 use std::path::{Path, PathBuf};
@@ -19,7 +18,6 @@ use crate::output::write_atomically;
 use crate::run::InstancingArg;
 pub(crate) use manifest::sha256_hex;
 use manifest::{Manifest, TileEntry, read_manifest};
-use read::normal_path;
 use world::World;
 
 /// Arguments of `pge merge`.
@@ -126,13 +124,27 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| args.dir.join("world.glb"));
-    let instancing = match args.instancing {
-        InstancingArg::Gpu => Instancing::Gpu,
-        InstancingArg::Nodes => Instancing::Nodes,
-    };
+    let instancing: Instancing = args.instancing.into();
     let meta = ExportMeta { seed, params };
     let bytes = pge_engine::export::glb_bytes_with(&model, &meta, instancing)?;
     write_atomically(&output, &bytes)
+}
+
+/// `path` made absolute, `.` and `..` folded (lexically), so one file has one key.
+fn normal_path(path: &Path) -> anyhow::Result<PathBuf> {
+    let absolute =
+        std::path::absolute(path).with_context(|| format!("cannot resolve {}", path.display()))?;
+    let mut out = PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -7,16 +7,16 @@ use std::sync::Arc;
 
 use anyhow::{Context, bail};
 use glam::Mat4;
-use gltf::Gltf;
 use pge_engine::geometry::{
     ForestPart, ForestStats, InstanceGroup, InstanceTransform, Mesh, MeshLod, Model,
     PlacementLeaves, SpeciesCount,
 };
+use pge_engine::import::{
+    check_bounds, leaf_counts, open, read_instances, read_mesh, relative_file, split_lod,
+};
 use serde_json::{Map, Value};
 
-use super::read::{
-    check_bounds, leaf_counts, normal_path, read_instances, read_mesh, relative_file, split_lod,
-};
+use super::normal_path;
 
 /// The model being merged.
 #[derive(Default)]
@@ -45,7 +45,7 @@ impl World {
         index: (u64, u64),
         folder: &Path,
     ) -> anyhow::Result<()> {
-        let gltf = Gltf::from_slice(bytes).context("not a readable .glb")?;
+        let gltf = open(bytes).context("not a readable .glb")?;
         let blob = gltf.blob.as_deref();
         // Buffer 0 is the binary chunk; the others are files beside the tile.
         let mut files: Vec<Option<(PathBuf, Arc<Vec<u8>>)>> = vec![None];

@@ -55,10 +55,12 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
         .unwrap_or_default()
 }
 
-/// The memory limit of the session's Lua state in bytes (what `--memory-limit` set), so that
-/// plugins can refuse a Rust-side allocation that would exceed it.
+/// The session's memory budget in bytes: the memory limit of its Lua state (what
+/// `--memory-limit` set), and what one object's Rust-side buffers may take at most, so that
+/// plugins refuse an allocation that would exceed it (an image, a mesh being extruded, a
+/// marching-cubes grid).
 #[must_use]
-pub fn memory_limit(lua: &mlua::Lua) -> usize {
+pub fn memory_budget(lua: &mlua::Lua) -> usize {
     lua.app_data_ref::<state::SessionState>()
         .map_or(crate::Limits::default().memory, |s| s.memory_limit)
 }

@@ -42,24 +42,25 @@ impl ParamValue {
     }
 
     /// Reads `text` as a value of the same kind as `self` (how `--set` values are typed).
-    pub fn parse_like(&self, text: &str) -> Result<ParamValue, String> {
+    pub fn parse_like(&self, text: &str) -> Result<ParamValue, OverrideError> {
         let t = text.trim();
+        let not_a_number = || OverrideError::NotANumber(text.to_string());
         match self {
             ParamValue::Integer(_) => match t.parse::<i64>() {
                 Ok(i) => Ok(ParamValue::Integer(i)),
                 Err(_) => match t.parse::<f64>() {
                     Ok(n) if n.is_finite() => Ok(ParamValue::Number(n)),
-                    _ => Err(format!("'{text}' is not a number")),
+                    _ => Err(not_a_number()),
                 },
             },
             ParamValue::Number(_) => match t.parse::<f64>() {
                 Ok(n) if n.is_finite() => Ok(ParamValue::Number(n)),
-                _ => Err(format!("'{text}' is not a number")),
+                _ => Err(not_a_number()),
             },
             ParamValue::Bool(_) => match t {
                 "true" | "1" | "yes" | "on" => Ok(ParamValue::Bool(true)),
                 "false" | "0" | "no" | "off" => Ok(ParamValue::Bool(false)),
-                _ => Err(format!("'{text}' is not a boolean (true or false)")),
+                _ => Err(OverrideError::NotABoolean(text.to_string())),
             },
             ParamValue::Text(_) => Ok(ParamValue::Text(text.to_string())),
         }
@@ -181,7 +182,7 @@ pub(crate) fn end_main(lua: &Lua) -> Result<(), (Location, String)> {
             file: scope.script.clone(),
             line: None,
         });
-        (loc, m)
+        (loc, m.to_string())
     })
 }
 
@@ -222,7 +223,7 @@ pub(crate) fn push_scope(lua: &Lua, script: &str, overrides: Option<Table>) -> m
 }
 
 /// Pops a `pge.load` scope; an override it did not declare is reported.
-pub(crate) fn pop_scope(lua: &Lua) -> Result<(), String> {
+pub(crate) fn pop_scope(lua: &Lua) -> Result<(), OverrideError> {
     let scope = lua
         .app_data_mut::<ParamState>()
         .and_then(|mut st| st.scopes.pop());
@@ -232,27 +233,58 @@ pub(crate) fn pop_scope(lua: &Lua) -> Result<(), String> {
     }
 }
 
-fn unused_overrides(scope: &Scope, source: &str) -> Result<(), String> {
-    let unknown: Vec<&str> = scope
+fn unused_overrides(scope: &Scope, source: &'static str) -> Result<(), OverrideError> {
+    let unknown: Vec<String> = scope
         .overrides
         .iter()
-        .map(|(k, _)| k.as_str())
-        .filter(|k| !scope.declared.iter().any(|d| d.name == *k))
+        .map(|(k, _)| k)
+        .filter(|k| !scope.declared.iter().any(|d| d.name == **k))
+        .cloned()
         .collect();
     if unknown.is_empty() {
         return Ok(());
     }
-    let names: Vec<&str> = scope.declared.iter().map(|d| d.name.as_str()).collect();
-    let declared = if names.is_empty() {
+    Err(OverrideError::Unknown {
+        names: unknown,
+        given_with: source,
+        declared: scope.declared.iter().map(|d| d.name.clone()).collect(),
+    })
+}
+
+/// Why a parameter override (`--set NAME=VALUE`, `pge.load(path, {NAME = value})`) was
+/// refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum OverrideError {
+    /// The text given for a numeric parameter is not a finite number.
+    #[error("'{0}' is not a number")]
+    NotANumber(String),
+    /// The text given for a boolean parameter is not one of true/false, 1/0, yes/no, on/off.
+    #[error("'{0}' is not a boolean (true or false)")]
+    NotABoolean(String),
+    /// Overrides name parameters the script does not declare.
+    #[error(
+        "unknown parameter{} {} given with {given_with}; {}",
+        if names.len() > 1 { "s" } else { "" },
+        names.join(", "),
+        declared_list(declared)
+    )]
+    Unknown {
+        /// The undeclared names, in the order given.
+        names: Vec<String>,
+        /// How they were given: `--set` or `pge.load`.
+        given_with: &'static str,
+        /// The parameters the script declares.
+        declared: Vec<String>,
+    },
+}
+
+fn declared_list(declared: &[String]) -> String {
+    if declared.is_empty() {
         "the script declares no parameters (pge.params)".to_string()
     } else {
-        format!("declared parameters: {}", names.join(", "))
-    };
-    let plural = if unknown.len() > 1 { "s" } else { "" };
-    Err(format!(
-        "unknown parameter{plural} {} given with {source}; {declared}",
-        unknown.join(", ")
-    ))
+        format!("declared parameters: {}", declared.join(", "))
+    }
 }
 
 pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
@@ -412,7 +444,8 @@ mod tests {
         assert_eq!(
             ParamValue::Number(1.0)
                 .parse_like("x")
-                .expect_err("not a number"),
+                .expect_err("not a number")
+                .to_string(),
             "'x' is not a number"
         );
         assert_eq!(

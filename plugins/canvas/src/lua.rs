@@ -8,8 +8,8 @@ use glam::Vec4;
 use mlua::{Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
-    Bounds, LuaMesh, LuaModel, Options, finite_number, resolve_path, script_error, to_model,
-    vec3_arg, write_inside,
+    Bounds, LuaMesh, LuaModel, Options, finite_number, memory_budget, resolve_path, script_error,
+    to_model, vec3_arg, write_inside,
 };
 
 use crate::{Image, Lines};
@@ -297,11 +297,6 @@ fn size(lua: &Lua, v: &Value, what: &str) -> mlua::Result<u32> {
         ));
     }
     Ok(x as u32)
-}
-
-/// The session's memory limit: what one object's Rust-side buffers may take at most.
-fn memory_budget(lua: &Lua) -> usize {
-    pge_engine::lua::memory_limit(lua)
 }
 
 /// An image (and its PNG when exported) must fit in the memory limit.

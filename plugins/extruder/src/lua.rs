@@ -9,7 +9,7 @@ use mlua::{FromLua, Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Material, Model};
 use pge_engine::lua::{
     LuaMat4, LuaMesh, LuaModel, LuaVec3, Options, conversion_message, finite_f32,
-    material_from_table, script_error,
+    material_from_table, memory_budget, script_error,
 };
 
 use crate::{Extruder, ExtruderOptions, MatrixManipulator};
@@ -317,11 +317,6 @@ fn options(o: &Options) -> mlua::Result<ExtruderOptions> {
     o.finish()?;
     options.material = Arc::new(material);
     Ok(options)
-}
-
-/// The session's memory limit: what one object's Rust-side buffers may take at most.
-fn memory_budget(lua: &Lua) -> usize {
-    pge_engine::lua::memory_limit(lua)
 }
 
 /// Adds `pge.Extruder` and `pge.MatrixManipulator`.

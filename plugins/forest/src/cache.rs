@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use pge_engine::geometry::{Model, binary};
 
-use crate::rng::splitmix;
+use pge_engine::random::{GOLDEN_GAMMA, splitmix64};
 
 /// The first bytes of every entry; the last byte is the format's version.
 const MAGIC: &[u8; 8] = b"PGEVAR\x00\x06";
@@ -191,15 +191,15 @@ fn digest(bytes: &[u8]) -> [u64; 2] {
         let mut w = [0u8; 8];
         w.copy_from_slice(c);
         let w = u64::from_le_bytes(w);
-        a = (a ^ w).wrapping_mul(0x9e37_79b9_7f4a_7c15).rotate_left(29);
+        a = (a ^ w).wrapping_mul(GOLDEN_GAMMA).rotate_left(29);
         b = (b.rotate_left(17) ^ w).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     }
     let mut tail = [0u8; 8];
     tail[..chunks.remainder().len()].copy_from_slice(chunks.remainder());
     let w = u64::from_le_bytes(tail) ^ (bytes.len() as u64).rotate_left(56);
-    let a = splitmix(a ^ w);
-    let b = splitmix(b ^ splitmix(w ^ a));
-    [splitmix(a ^ b.rotate_left(32)), b]
+    let a = splitmix64(a ^ w);
+    let b = splitmix64(b ^ splitmix64(w ^ a));
+    [splitmix64(a ^ b.rotate_left(32)), b]
 }
 
 /// The digest of this program (a rebuilt `pge` never reads another build's variants).

@@ -1,7 +1,7 @@
 //! Seed 000's jittered grid: one sample per cell, moved by up to `jitter` of the cell.
 
 use crate::poisson::{Rect, Sample};
-use crate::rng::{Rng, hash};
+use pge_engine::random::{SplitMix64, hash_words};
 
 /// Seed 000's jittered grid over the cells of `world` that meet `region`.
 pub(crate) fn jittered(
@@ -26,7 +26,7 @@ pub(crate) fn jittered(
     let mut out = Vec::new();
     for cz in z0..z1 {
         for cx in x0..x1 {
-            let mut rng = Rng::new(hash(&[seed, 0x9a1d, cx as u64, cz as u64]));
+            let mut rng = SplitMix64::new(hash_words(&[seed, 0x9a1d, cx as u64, cz as u64]));
             let x = world.min[0] + cell * (cx as f64 + 0.5 + jitter * (2.0 * rng.uniform() - 1.0));
             let z = world.min[1] + cell * (cz as f64 + 0.5 + jitter * (2.0 * rng.uniform() - 1.0));
             if world.contains(x, z) && !blocked(x, z) {

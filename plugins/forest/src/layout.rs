@@ -7,9 +7,9 @@ use crate::ForestError;
 use crate::jittered::jittered;
 use crate::layer::{Density, Layer, Method, Variants};
 use crate::poisson::{Rect, Sample, block_size, poisson};
-use crate::rng::{Rng, hash};
 use crate::terrain::Terrain;
 use crate::trunks::Trunks;
+use pge_engine::random::{SplitMix64, hash_words};
 
 /// The most instances a layout may hold.
 pub const MAX_INSTANCES: usize = 10_000_000;
@@ -176,7 +176,7 @@ impl Forest {
             let r = layer.min_distance;
             let index = trunks.index(r);
             let blocked = |x: f64, z: f64| index.any_within(x, z, r);
-            let seed = hash(&[self.seed, 0x1a7e, l as u64]);
+            let seed = hash_words(&[self.seed, 0x1a7e, l as u64]);
             let samples = match layer.method {
                 Method::Poisson => poisson(world, region, r, seed, &blocked, MAX_INSTANCES)
                     .map_err(|_| ForestError::TooMany {
@@ -283,7 +283,7 @@ impl Site<'_> {
     /// The instance sample `s` grows into and the draw its density must exceed, or `None`
     /// when the altitude or slope limits exclude it.
     fn candidate(&self, s: &Sample) -> Option<(Instance, f64)> {
-        let mut rng = Rng::new(hash(&[
+        let mut rng = SplitMix64::new(hash_words(&[
             self.seed,
             0x1257,
             self.layer as u64,
@@ -332,14 +332,14 @@ fn unique_id(s: &Sample, across: u64) -> Result<u32, ForestError> {
 /// The seed of variant `v` of layer `l`.
 #[must_use]
 pub fn variant_seed(forest_seed: u64, layer: usize, v: u32) -> u64 {
-    hash(&[forest_seed, 0x5eed, layer as u64, u64::from(v)]) >> 12
+    hash_words(&[forest_seed, 0x5eed, layer as u64, u64::from(v)]) >> 12
 }
 
 /// The seed of a `"unique"` instance's own tree: from its position, which tiles and the
 /// whole forest compute alike.
 #[must_use]
 pub fn unique_seed(forest_seed: u64, inst: &Instance) -> u64 {
-    hash(&[
+    hash_words(&[
         forest_seed,
         0x0417,
         u64::from(inst.layer),

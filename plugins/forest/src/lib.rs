@@ -38,7 +38,6 @@ mod lod;
 #[cfg(feature = "lua")]
 pub mod lua;
 mod poisson;
-mod rng;
 mod run;
 mod shared;
 mod spec;
@@ -57,7 +56,6 @@ pub use lod::{
 #[cfg(feature = "lua")]
 pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
-pub use rng::{Rng, hash};
 pub use run::{ForestRun, levels};
 pub use shared::{VariantSharing, shared_layer, variants_model};
 pub use spec::{ForestSpec, ScriptSpecies, Species, VariantFn};

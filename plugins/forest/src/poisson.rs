@@ -19,7 +19,7 @@
 
 use rayon::prelude::*;
 
-use crate::rng::{Rng, hash};
+use pge_engine::random::{SplitMix64, hash_words};
 
 /// A rectangle of the ground, `[min, max)` in x and z.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -317,7 +317,7 @@ impl Grid {
                 }
             }
         }
-        let mut rng = Rng::new(hash(&[seed, 0xb10c, bx as u64, bz as u64]));
+        let mut rng = SplitMix64::new(hash_words(&[seed, 0xb10c, bx as u64, bz as u64]));
         let cell = [bx as u32, bz as u32];
         let mut samples: Vec<Sample> = Vec::new();
         let mut active: Vec<(f64, f64)> = Vec::new();

@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use glam::{DVec3, Mat4, Vec3};
 use pge_engine::geometry::{Model, Skeleton};
-use pge_engine::{Algorithm, Error, Location, Result, RunContext, Step};
+use pge_engine::random::mix_seed;
+use pge_engine::{Algorithm, Error, Location, OptionError, Result, RunContext, Step};
 use pge_tree::{RadiiMode, TreeOptions};
 
 use crate::transport::{NONE, TransportParams, TransportTree};
@@ -74,37 +75,52 @@ impl Default for GrowthParams {
 
 impl GrowthParams {
     /// Checks every range: the error names the option and the range it needs.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), GrowthError> {
         self.transport.validate()?;
         if self.steps > MAX_STEPS {
-            return Err(format!(
-                "steps must be an integer between 0 and {MAX_STEPS}, got {}",
-                self.steps
-            ));
+            return Err(GrowthError::Steps(self.steps));
         }
         if !self.root.is_finite() {
-            return Err("root must be a finite vector".into());
+            return Err(OptionError::invalid("root", "a finite vector").into());
         }
         if !self.direction.is_finite() || self.direction.length_squared() == 0.0 {
-            return Err("direction must be a finite, non-zero vector".into());
+            return Err(OptionError::invalid("direction", "a finite, non-zero vector").into());
         }
         if !(self.scale.is_finite() && self.scale > 0.0) {
-            return Err(format!("scale must be a number > 0, got {}", self.scale));
+            return Err(OptionError::out_of_range("scale", "a number > 0", self.scale).into());
         }
         if !(self.girth.is_finite() && self.girth > 0.0) {
-            return Err(format!("girth must be a number > 0, got {}", self.girth));
+            return Err(OptionError::out_of_range("girth", "a number > 0", self.girth).into());
         }
         if self.max_branches < 1 {
-            return Err("maxBranches must be an integer >= 1".into());
+            return Err(OptionError::invalid("maxBranches", "an integer >= 1").into());
         }
         if let Some(s) = &self.start {
-            pge_tree::check_skeleton(s).map_err(|e| format!("start: {e}"))?;
+            pge_tree::check_skeleton(s).map_err(GrowthError::Start)?;
             if s.is_empty() {
-                return Err("start: the skeleton has no node to grow from".into());
+                return Err(GrowthError::EmptyStart);
             }
         }
         Ok(())
     }
+}
+
+/// Why growth parameters are refused.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GrowthError {
+    /// An option is outside its range.
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    /// More steps than the growth takes.
+    #[error("steps must be an integer between 0 and {MAX_STEPS}, got {0}")]
+    Steps(u32),
+    /// The skeleton to grow from is invalid.
+    #[error("start: {0}")]
+    Start(pge_tree::TreeError),
+    /// The skeleton to grow from has no node.
+    #[error("start: the skeleton has no node to grow from")]
+    EmptyStart,
 }
 
 /// Growth by nutrient transport as an [`Algorithm`].
@@ -117,24 +133,12 @@ pub struct Growth {
     seconds: f64,
 }
 
-/// The run's seed combined with a script's own `seed` (splitmix64 of the latter), the
-/// identity for `seed = 0`.
-fn mix(run: u64, own: u64) -> u64 {
-    if own == 0 {
-        return run;
-    }
-    let mut z = own.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    run ^ z ^ (z >> 31)
-}
-
 impl Growth {
     /// A growth with checked parameters; `location` is where script errors point.
     pub fn new(params: GrowthParams, location: Location) -> Result<Growth> {
         params
             .validate()
-            .map_err(|m| Error::script(location.clone(), m))?;
+            .map_err(|e| Error::script(location.clone(), e.to_string()))?;
         Ok(Growth {
             params,
             location,
@@ -258,7 +262,7 @@ impl Algorithm for Growth {
     }
 
     fn init(&mut self, ctx: &RunContext) -> Result<()> {
-        let seed = mix(ctx.seed, self.params.seed);
+        let seed = mix_seed(ctx.seed, self.params.seed);
         // MT19937 takes a 32-bit seed: fold the 64 bits.
         let seed32 = (seed ^ (seed >> 32)) as u32;
         self.tree = Some(TransportTree::new(
@@ -314,7 +318,7 @@ impl Algorithm for Growth {
         let tree = pge_tree::build_tree(
             &skeleton,
             &self.params.tree,
-            mix(ctx.seed, self.params.seed),
+            mix_seed(ctx.seed, self.params.seed),
         )
         .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
         let mut model = Model::new();

@@ -23,7 +23,7 @@ mod growth;
 mod lua;
 mod transport;
 
-pub use growth::{DEFAULT_MAX_BRANCHES, Growth, GrowthParams, MAX_STEPS};
+pub use growth::{DEFAULT_MAX_BRANCHES, Growth, GrowthError, GrowthParams, MAX_STEPS};
 #[cfg(feature = "lua")]
 pub use lua::GrowthPlugin;
 pub use transport::{

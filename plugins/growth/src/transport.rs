@@ -39,6 +39,7 @@
 //! ([`Feeding`] reports both).
 
 use glam::DVec3;
+use pge_engine::OptionError;
 use rand_mt::Mt;
 
 /// "No branch".
@@ -89,51 +90,44 @@ impl Default for TransportParams {
 
 impl TransportParams {
     /// Checks every range; the error names the option and the range it needs.
-    pub fn validate(&self) -> Result<(), String> {
-        let finite = |name: &str, v: f64| {
-            if v.is_finite() {
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let check = |option: &'static str, expected: &'static str, v: f64, ok: bool| {
+            if !v.is_finite() {
+                Err(OptionError::out_of_range(option, "a finite number", v))
+            } else if ok {
                 Ok(())
             } else {
-                Err(format!("{name} must be a finite number, got {v}"))
+                Err(OptionError::out_of_range(option, expected, v))
             }
         };
-        finite("ratio", self.ratio)?;
-        if !(self.ratio > 0.0 && self.ratio < 1.0) {
-            return Err(format!(
-                "ratio must be a number between 0 and 1 (exclusive), got {}",
-                self.ratio
-            ));
-        }
-        finite("spread", self.spread)?;
-        if self.spread < 0.0 {
-            return Err(format!("spread must be a number >= 0, got {}", self.spread));
-        }
-        finite("splitsize", self.splitsize)?;
-        if self.splitsize <= 0.0 {
-            return Err(format!(
-                "splitsize must be a number > 0, got {}",
-                self.splitsize
-            ));
-        }
-        finite("splitdecay", self.splitdecay)?;
-        if self.splitdecay < 0.0 {
-            return Err(format!(
-                "splitdecay must be a number >= 0, got {}",
-                self.splitdecay
-            ));
-        }
-        finite("directedness", self.directedness)?;
-        if !(0.0..=1.0).contains(&self.directedness) {
-            return Err(format!(
-                "directedness must be a number between 0 and 1, got {}",
-                self.directedness
-            ));
-        }
-        finite("feed", self.feed)?;
-        if self.feed <= 0.0 {
-            return Err(format!("feed must be a number > 0, got {}", self.feed));
-        }
-        Ok(())
+        let r = self.ratio;
+        check(
+            "ratio",
+            "a number between 0 and 1 (exclusive)",
+            r,
+            r > 0.0 && r < 1.0,
+        )?;
+        check("spread", "a number >= 0", self.spread, self.spread >= 0.0)?;
+        check(
+            "splitsize",
+            "a number > 0",
+            self.splitsize,
+            self.splitsize > 0.0,
+        )?;
+        check(
+            "splitdecay",
+            "a number >= 0",
+            self.splitdecay,
+            self.splitdecay >= 0.0,
+        )?;
+        let d = self.directedness;
+        check(
+            "directedness",
+            "a number between 0 and 1",
+            d,
+            (0.0..=1.0).contains(&d),
+        )?;
+        check("feed", "a number > 0", self.feed, self.feed > 0.0)
     }
 }
 
@@ -692,7 +686,7 @@ mod tests {
         let bad = |f: fn(&mut TransportParams)| {
             let mut p = TransportParams::default();
             f(&mut p);
-            p.validate().expect_err("invalid")
+            p.validate().expect_err("invalid").to_string()
         };
         assert_eq!(
             bad(|p| p.ratio = 1.0),

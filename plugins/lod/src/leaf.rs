@@ -263,6 +263,7 @@ impl Leaf {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::assert_approx_eq;
 
     fn square(center: Vec3, normal: Vec3, axis: Vec3, half: f32) -> Leaf {
         Leaf {
@@ -278,17 +279,13 @@ mod tests {
         }
     }
 
-    fn close(a: f32, b: f32) -> bool {
-        (a - b).abs() <= 1e-5 * (1.0 + a.abs().max(b.abs()))
-    }
-
     #[test]
     fn a_quad_round_trips_through_its_corners() {
         let leaf = square(Vec3::new(1.0, 2.0, 3.0), Vec3::Z, Vec3::Y, 0.5);
         let back = Leaf::from_quad(leaf.corners(), Some(Vec3::Z)).expect("quad");
         assert!(back.center.abs_diff_eq(leaf.center, 1e-6));
         assert!(back.axis.abs_diff_eq(Vec3::Y, 1e-6));
-        assert!(close(back.area(), 1.0));
+        assert_approx_eq!(back.area(), 1.0, rel 1e-5);
         // Winding: counter-clockwise around the normal, and the normal found from corners.
         let guessed = Leaf::from_quad(leaf.corners(), None).expect("quad");
         assert!(guessed.normal.abs_diff_eq(Vec3::Z, 1e-6));
@@ -308,9 +305,9 @@ mod tests {
         // Main axis through the two centres.
         assert!(c.axis.abs_diff_eq(Vec3::X, 1e-6) || c.axis.abs_diff_eq(-Vec3::X, 1e-6));
         // They tile a 2 x 1 rectangle exactly: summed area = bounding area = 2.
-        assert!(close(c.area(), 2.0), "{}", c.area());
+        assert_approx_eq!(c.area(), 2.0, rel 1e-5);
         assert_eq!(c.count, 2);
-        assert!(close(c.leaf_area, 2.0));
+        assert_approx_eq!(c.leaf_area, 2.0, rel 1e-5);
     }
 
     #[test]
@@ -318,10 +315,10 @@ mod tests {
         // Far apart: the bounding quad (3 x 1) is larger than the sum (2).
         let a = square(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.5);
         let b = square(Vec3::new(2.0, 0.0, 0.0), Vec3::Z, Vec3::Y, 0.5);
-        assert!(close(Leaf::collapse(&a, &b).area(), 0.5 * (2.0 + 3.0)));
+        assert_approx_eq!(Leaf::collapse(&a, &b).area(), 0.5 * (2.0 + 3.0), rel 1e-5);
         // Overlapping exactly: bounding area 1, summed 2: the bounding area.
         let c = Leaf::collapse(&a, &a);
-        assert!(close(c.area(), 1.0), "{}", c.area());
+        assert_approx_eq!(c.area(), 1.0, rel 1e-5);
     }
 
     #[test]
@@ -404,16 +401,8 @@ mod tests {
                 c.center
             );
             assert!(c.axis.abs_diff_eq(axis, 1e-6));
-            assert!(
-                close(c.half_length, half_length),
-                "{} {half_length}",
-                c.half_length
-            );
-            assert!(
-                close(c.half_width, half_width),
-                "{} {half_width}",
-                c.half_width
-            );
+            assert_approx_eq!(c.half_length, half_length, rel 1e-5);
+            assert_approx_eq!(c.half_width, half_width, rel 1e-5);
         }
     }
 

@@ -1,6 +1,6 @@
 //! Parsing of the classic notation (ABOP, cpfg, L-Py): module strings and productions.
 
-use crate::expr::{self, Ast};
+use crate::expr::{self, Ast, ExprError};
 
 /// A module as written: a name and its argument expressions.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,6 +42,71 @@ pub struct ProductionAst {
     pub successor: Vec<ModuleAst>,
 }
 
+/// Why a text in classic notation does not parse.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SyntaxError {
+    /// A parenthesis or comma where a module name belongs.
+    #[error("unexpected '{found}' in '{text}'")]
+    Unexpected {
+        /// The character.
+        found: char,
+        /// The whole text.
+        text: String,
+    },
+    /// A module's arguments are not closed.
+    #[error("missing ')' after '{name}(' in '{text}'")]
+    UnclosedArguments {
+        /// The module.
+        name: String,
+        /// The whole text.
+        text: String,
+    },
+    /// A module has an empty argument (`A(1,)`).
+    #[error("empty argument of '{name}' in '{text}'")]
+    EmptyArgument {
+        /// The module.
+        name: String,
+        /// The whole text.
+        text: String,
+    },
+    /// An argument expression does not parse.
+    #[error("{0}")]
+    Argument(ExprError),
+    /// A rule's condition does not parse.
+    #[error("condition: {0}")]
+    Condition(ExprError),
+    /// A parameter on a left side is not a name.
+    #[error("a parameter of '{name}' on a left side must be a name, not '{found}'")]
+    FormalNotAName {
+        /// The module.
+        name: String,
+        /// What stands where the name belongs.
+        found: String,
+    },
+    /// The left side has no symbol to rewrite.
+    #[error("the left side names no symbol to rewrite")]
+    NoPredecessor,
+    /// The strict predecessor holds several symbols (the text given).
+    #[error("the strict predecessor must be one symbol, found '{0}'")]
+    SeveralPredecessors(String),
+    /// A left context holds a bracket.
+    #[error("a left context cannot hold '[' or ']'")]
+    BracketInLeftContext,
+    /// Nothing before `<`.
+    #[error("empty left context before '<'")]
+    EmptyLeftContext,
+    /// Nothing after `>`.
+    #[error("empty right context after '>'")]
+    EmptyRightContext,
+    /// The predecessor is a bracket.
+    #[error("brackets cannot be rewritten")]
+    BracketPredecessor,
+    /// No `->` between the left side and the successor.
+    #[error("missing '->'")]
+    MissingArrow,
+}
+
 /// A module's name and, when it has parentheses, its argument texts.
 type RawModule<'a> = (&'a str, Option<Vec<&'a str>>);
 
@@ -50,14 +115,17 @@ type RawModule<'a> = (&'a str, Option<Vec<&'a str>>);
 pub(crate) fn split_modules<'a>(
     text: &'a str,
     declared: &[String],
-) -> Result<Vec<RawModule<'a>>, String> {
+) -> Result<Vec<RawModule<'a>>, SyntaxError> {
     let mut out = Vec::new();
     let mut rest = text;
     loop {
         rest = rest.trim_start();
         let Some(c) = rest.chars().next() else { break };
         if c == '(' || c == ')' || c == ',' {
-            return Err(format!("unexpected '{c}' in '{}'", text.trim()));
+            return Err(SyntaxError::Unexpected {
+                found: c,
+                text: text.trim().to_string(),
+            });
         }
         let len = declared
             .iter()
@@ -88,7 +156,10 @@ pub(crate) fn split_modules<'a>(
                 }
             }
             let Some(end) = end else {
-                return Err(format!("missing ')' after '{name}(' in '{}'", text.trim()));
+                return Err(SyntaxError::UnclosedArguments {
+                    name: name.to_string(),
+                    text: text.trim().to_string(),
+                });
             };
             if args.len() == 1 && args[0].trim().is_empty() {
                 args.clear();
@@ -103,15 +174,18 @@ pub(crate) fn split_modules<'a>(
 }
 
 /// Parses a string of modules with argument expressions (a successor or an axiom).
-pub fn parse_modules(text: &str, declared: &[String]) -> Result<Vec<ModuleAst>, String> {
+pub fn parse_modules(text: &str, declared: &[String]) -> Result<Vec<ModuleAst>, SyntaxError> {
     let mut out = Vec::new();
     for (name, args) in split_modules(text, declared)? {
         let mut parsed = Vec::new();
         for a in args.unwrap_or_default() {
             if a.trim().is_empty() {
-                return Err(format!("empty argument of '{name}' in '{}'", text.trim()));
+                return Err(SyntaxError::EmptyArgument {
+                    name: name.to_string(),
+                    text: text.trim().to_string(),
+                });
             }
-            parsed.push(expr::parse(a).map_err(|e| e.0)?);
+            parsed.push(expr::parse(a).map_err(SyntaxError::Argument)?);
         }
         out.push(ModuleAst {
             name: name.to_string(),
@@ -130,7 +204,7 @@ fn is_identifier(s: &str) -> bool {
 }
 
 /// Parses a string of pattern modules (a context or a predecessor) in classic notation.
-pub fn parse_patterns(text: &str, declared: &[String]) -> Result<Vec<PatternAst>, String> {
+pub fn parse_patterns(text: &str, declared: &[String]) -> Result<Vec<PatternAst>, SyntaxError> {
     let mut out = Vec::new();
     for (name, args) in split_modules(text, declared)? {
         let formals = match args {
@@ -140,9 +214,10 @@ pub fn parse_patterns(text: &str, declared: &[String]) -> Result<Vec<PatternAst>
                 for a in args {
                     let a = a.trim();
                     if !is_identifier(a) {
-                        return Err(format!(
-                            "a parameter of '{name}' on a left side must be a name, not '{a}'"
-                        ));
+                        return Err(SyntaxError::FormalNotAName {
+                            name: name.to_string(),
+                            found: a.to_string(),
+                        });
                     }
                     names.push(a.to_string());
                 }
@@ -186,15 +261,15 @@ fn find_top(text: &str, c: char) -> Option<usize> {
 /// Splits `left < pred > right` and builds a left side with `parse` for each part.
 pub fn parse_lhs(
     text: &str,
-    parse: &dyn Fn(&str) -> Result<Vec<PatternAst>, String>,
-) -> Result<LhsAst, String> {
+    parse: &dyn Fn(&str) -> Result<Vec<PatternAst>, SyntaxError>,
+) -> Result<LhsAst, SyntaxError> {
     let (head, condition) = match find_top(text, ':') {
         Some(at) => {
             let cond = text[at + 1..].trim();
             let condition = if cond.is_empty() || cond == "*" {
                 None
             } else {
-                Some(expr::parse(cond).map_err(|e| format!("condition: {}", e.0))?)
+                Some(expr::parse(cond).map_err(SyntaxError::Condition)?)
             };
             (&text[..at], condition)
         }
@@ -211,12 +286,9 @@ pub fn parse_lhs(
     let mut pred = parse(pred_text)?;
     if pred.len() != 1 {
         return Err(if pred.is_empty() {
-            "the left side names no symbol to rewrite".to_string()
+            SyntaxError::NoPredecessor
         } else {
-            format!(
-                "the strict predecessor must be one symbol, found '{}'",
-                pred_text.trim()
-            )
+            SyntaxError::SeveralPredecessors(pred_text.trim().to_string())
         });
     }
     let left = match left_text {
@@ -224,21 +296,21 @@ pub fn parse_lhs(
         _ => Vec::new(),
     };
     if left.iter().any(|p| p.name == "[" || p.name == "]") {
-        return Err("a left context cannot hold '[' or ']'".into());
+        return Err(SyntaxError::BracketInLeftContext);
     }
     if left_text.is_some_and(|t| t.trim().is_empty()) {
-        return Err("empty left context before '<'".into());
+        return Err(SyntaxError::EmptyLeftContext);
     }
     let right = match right_text {
         Some(t) if t.trim() != "*" => parse(t)?,
         _ => Vec::new(),
     };
     if right_text.is_some_and(|t| t.trim().is_empty()) {
-        return Err("empty right context after '>'".into());
+        return Err(SyntaxError::EmptyRightContext);
     }
     let pred = pred.remove(0);
     if pred.name == "[" || pred.name == "]" {
-        return Err("brackets cannot be rewritten".into());
+        return Err(SyntaxError::BracketPredecessor);
     }
     Ok(LhsAst {
         left,
@@ -249,12 +321,12 @@ pub fn parse_lhs(
 }
 
 /// Parses `lhs -> successor` (also `-->`).
-pub fn parse_production(text: &str, declared: &[String]) -> Result<ProductionAst, String> {
+pub fn parse_production(text: &str, declared: &[String]) -> Result<ProductionAst, SyntaxError> {
     let (at, len) = match text.find("-->") {
         Some(at) => (at, 3),
         None => match text.find("->") {
             Some(at) => (at, 2),
-            None => return Err("missing '->'".into()),
+            None => return Err(SyntaxError::MissingArrow),
         },
     };
     let lhs = parse_lhs(&text[..at], &|t| parse_patterns(t, declared))?;
@@ -309,31 +381,36 @@ mod tests {
     fn bad_productions_are_explained() {
         assert_eq!(
             parse_production("F FF", &[]).expect_err("no arrow"),
-            "missing '->'"
+            SyntaxError::MissingArrow
         );
         assert!(
             parse_production("AB -> C", &[])
                 .expect_err("two")
+                .to_string()
                 .contains("one symbol")
         );
         assert!(
             parse_production("A(1) -> C", &[])
                 .expect_err("formal")
+                .to_string()
                 .contains("must be a name")
         );
         assert!(
             parse_production("A -> B(1", &[])
                 .expect_err("paren")
+                .to_string()
                 .contains("missing ')'")
         );
         assert!(
             parse_production("[ < A -> B", &[])
                 .expect_err("bracket")
+                .to_string()
                 .contains("left context")
         );
         assert!(
             parse_production("A : x > -> B", &[])
                 .expect_err("cond")
+                .to_string()
                 .contains("condition")
         );
     }

@@ -134,7 +134,7 @@ impl System {
                 "the weight must be a positive number, not {w}"
             )));
         }
-        let p = classic::parse_production(text, &self.declared).map_err(err)?;
+        let p = classic::parse_production(text, &self.declared).map_err(|e| err(e.to_string()))?;
         for m in &p.successor {
             symbols.intern(&m.name);
         }
@@ -176,8 +176,8 @@ impl System {
                 "a rule function's left side has no ':' condition".into()
             ));
         }
-        let parsed =
-            classic::parse_lhs(lhs, &|t| Ok(classic::parse_lua_patterns(t))).map_err(err)?;
+        let parsed = classic::parse_lhs(lhs, &|t| Ok(classic::parse_lua_patterns(t)))
+            .map_err(|e| err(e.to_string()))?;
         self.push_def(
             lhs,
             origin,
@@ -247,7 +247,8 @@ impl System {
             text: text.trim().into(),
             message,
         };
-        let modules = classic::split_modules(text, &self.declared).map_err(err)?;
+        let modules =
+            classic::split_modules(text, &self.declared).map_err(|e| err(e.to_string()))?;
         let mut out = ModuleString::new();
         out.reserve(modules.len());
         let mut params = Vec::new();

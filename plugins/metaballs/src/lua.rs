@@ -8,8 +8,8 @@ use mlua::{AnyUserData, Lua, MultiValue, Table, UserData, UserDataMethods, Value
 use pge_engine::RunContext;
 use pge_engine::geometry::{Material, Mesh, Model};
 use pge_engine::lua::{
-    Bounds, LuaMesh, LuaModel, LuaVec3, Options, finite_f32, material_from_table, run_context,
-    script_error, vec3_arg,
+    Bounds, LuaMesh, LuaModel, LuaVec3, Options, finite_f32, material_from_table, memory_budget,
+    run_context, script_error, vec3_arg,
 };
 
 use crate::{MarchError, MarchOptions, MarchingCubes, Metaballs};
@@ -141,11 +141,6 @@ pub(crate) fn model_of(
         Ok(mc) => mc.model(lua, ctx).map(Some),
         Err(_) => Ok(None),
     }
-}
-
-/// The session's memory limit: what one object's Rust-side buffers may take at most.
-fn memory_budget(lua: &Lua) -> usize {
-    pge_engine::lua::memory_limit(lua)
 }
 
 impl UserData for LuaMarchingCubes {

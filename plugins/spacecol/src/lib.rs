@@ -27,10 +27,10 @@ mod points;
 mod shape;
 mod trimesh;
 
-pub use colonize::{Params, SpaceColonization};
+pub use colonize::{Params, ParamsError, SpaceColonization};
 pub use grid::PointGrid;
 #[cfg(feature = "lua")]
 pub use lua::{LuaShape, SpaceColonizationPlugin};
 pub use points::{DEFAULT_POINTS, Mode, generate};
-pub use shape::{PredicateFn, Shape};
+pub use shape::{PredicateFn, Shape, ShapeSizeError};
 pub use trimesh::{MeshError, TriMesh};

@@ -103,6 +103,20 @@ impl fmt::Debug for Shape {
     }
 }
 
+/// Why a combined shape is refused ([`Shape::check_size`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ShapeSizeError {
+    /// Unions and differences nest deeper than [`MAX_NESTING`].
+    #[error("unions and differences nest deeper than the limit of {MAX_NESTING} levels")]
+    TooDeep,
+    /// The shape visits more than [`MAX_PARTS`] parts.
+    #[error(
+        "the shape holds more than the limit of {MAX_PARTS} parts (a shared part counts once per use)"
+    )]
+    TooManyParts,
+}
+
 impl Shape {
     /// The shape's kind as the Lua constructor names it (`sphere`, `mesh`, ...).
     #[must_use]
@@ -125,21 +139,17 @@ impl Shape {
     /// Checks a combined shape against `MAX_NESTING` and `MAX_PARTS`, visiting at most
     /// that many parts; the error names the limit. The Lua constructors check every union
     /// and difference they build, so the queries' recursion stays bounded.
-    pub fn check_size(&self) -> Result<(), String> {
+    pub fn check_size(&self) -> Result<(), ShapeSizeError> {
         let mut budget = MAX_PARTS;
         self.visit_parts(0, &mut budget)
     }
 
-    fn visit_parts(&self, depth: usize, budget: &mut usize) -> Result<(), String> {
+    fn visit_parts(&self, depth: usize, budget: &mut usize) -> Result<(), ShapeSizeError> {
         if depth > MAX_NESTING {
-            return Err(format!(
-                "unions and differences nest deeper than the limit of {MAX_NESTING} levels"
-            ));
+            return Err(ShapeSizeError::TooDeep);
         }
         if *budget == 0 {
-            return Err(format!(
-                "the shape holds more than the limit of {MAX_PARTS} parts (a shared part counts once per use)"
-            ));
+            return Err(ShapeSizeError::TooManyParts);
         }
         *budget -= 1;
         match self {
@@ -458,14 +468,14 @@ mod tests {
         }
         assert_eq!(nested.check_size(), Ok(()));
         let deeper = Shape::Union(vec![nested].into());
-        let e = deeper.check_size().expect_err("too deep");
+        let e = deeper.check_size().expect_err("too deep").to_string();
         assert!(e.contains("the limit of 64 levels"), "{e}");
         // A shared part counts once per use: 2^20 visits.
         let mut shared = sphere;
         for _ in 0..20 {
             shared = Shape::Union(vec![shared.clone(), shared].into());
         }
-        let e = shared.check_size().expect_err("too many parts");
+        let e = shared.check_size().expect_err("too many parts").to_string();
         assert!(e.contains("the limit of 100000 parts"), "{e}");
     }
 

@@ -1,11 +1,11 @@
-//! Closed triangle meshes as envelopes: reading `.obj` and `.glb`, welding, the closedness
-//! check, and the inside test by ray parity (seed 000) and distance queries through a BVH
-//! (`obvhs`) built once per mesh.
+//! Closed triangle meshes as envelopes: reading `.obj` (a `.glb` is read by the engine's
+//! `import::scene_triangles`), welding, the closedness check, and the inside test by ray
+//! parity (seed 000) and distance queries through a BVH (`obvhs`) built once per mesh.
 
 use std::collections::HashMap;
 use std::time::Duration;
 
-use glam::{Mat4, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
@@ -25,9 +25,6 @@ pub enum MeshError {
         /// What is wrong.
         message: String,
     },
-    /// A `.glb`/`.gltf` file could not be read.
-    #[error("{0}")]
-    Gltf(String),
     /// There are no triangles.
     #[error("has no triangles")]
     Empty,
@@ -318,66 +315,6 @@ impl TriMesh {
         Ok((positions, triangles))
     }
 
-    /// Reads the triangles of every mesh node of a `.glb` (or `.gltf` with embedded data)
-    /// in its default scene, placed by the node transforms.
-    pub fn parse_gltf(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), MeshError> {
-        check_accessor_indices(bytes)?;
-        // Buffers only: a shape needs no images (and the gltf crate's image import panics on
-        // an image view without a MIME type, found by the mesh_gltf fuzz target).
-        let gltf::Gltf {
-            document: doc,
-            blob,
-        } = gltf::Gltf::from_slice(bytes).map_err(|e| MeshError::Gltf(e.to_string()))?;
-        let buffers =
-            gltf::import_buffers(&doc, None, blob).map_err(|e| MeshError::Gltf(e.to_string()))?;
-        let mut positions = Vec::new();
-        let mut triangles = Vec::new();
-        let scene = doc.default_scene().or_else(|| doc.scenes().next());
-        let mut stack: Vec<(gltf::Node, Mat4, usize)> = match &scene {
-            Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect(),
-            None => Vec::new(),
-        };
-        // A valid node graph is a forest: no path is longer than the node count, and no node
-        // is visited twice. Invalid files (cycles, shared children) must not loop or explode.
-        let nodes = doc.nodes().len();
-        let mut visits = 0usize;
-        while let Some((node, parent, depth)) = stack.pop() {
-            visits += 1;
-            if depth > nodes || visits > nodes {
-                return Err(MeshError::Gltf(
-                    "the node hierarchy is not a tree (a cycle or a shared child)".into(),
-                ));
-            }
-            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-            if let Some(mesh) = node.mesh() {
-                for prim in mesh.primitives() {
-                    if prim.mode() != gltf::mesh::Mode::Triangles {
-                        continue;
-                    }
-                    check_primitive_types(&prim)?;
-                    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                    let Some(ps) = reader.read_positions() else {
-                        continue;
-                    };
-                    let base = positions.len() as u32;
-                    positions.extend(ps.map(|p| world.transform_point3(Vec3::from_array(p))));
-                    let count = positions.len() as u32 - base;
-                    let idx: Vec<u32> = match reader.read_indices() {
-                        Some(i) => i.into_u32().collect(),
-                        None => (0..count).collect(),
-                    };
-                    for t in idx.chunks_exact(3) {
-                        if t.iter().all(|i| *i < count) {
-                            triangles.push([base + t[0], base + t[1], base + t[2]]);
-                        }
-                    }
-                }
-            }
-            stack.extend(node.children().map(|c| (c, world, depth + 1)));
-        }
-        Ok((positions, triangles))
-    }
-
     /// The triangles of a model (every instance placed by its transform).
     #[must_use]
     pub fn model_triangles(model: &Model) -> (Vec<Vec3>, Vec<[u32; 3]>) {
@@ -403,52 +340,6 @@ impl TriMesh {
 }
 
 /// Every undirected edge must border an even number of triangles.
-/// Refuses a primitive attribute naming an accessor that does not exist: the gltf crate's
-/// validation indexes the POSITION accessor before checking it (a panic, found by fuzzing).
-/// POSITION must be float VEC3 and indices unsigned integer SCALAR, as glTF requires: the
-/// gltf crate's readers assume it (other types reach an `unreachable!`).
-fn check_primitive_types(prim: &gltf::Primitive) -> Result<(), MeshError> {
-    use gltf::accessor::{DataType, Dimensions};
-    if let Some(a) = prim.get(&gltf::Semantic::Positions)
-        && (a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3)
-    {
-        return Err(MeshError::Gltf(format!(
-            "accessor {} (POSITION) must be FLOAT VEC3",
-            a.index()
-        )));
-    }
-    if let Some(a) = prim.indices() {
-        let integer = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
-        if !integer || a.dimensions() != Dimensions::Scalar {
-            return Err(MeshError::Gltf(format!(
-                "accessor {} (indices) must be an unsigned integer SCALAR",
-                a.index()
-            )));
-        }
-    }
-    Ok(())
-}
-
-fn check_accessor_indices(bytes: &[u8]) -> Result<(), MeshError> {
-    let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| MeshError::Gltf(e.to_string()))?;
-    let root = unchecked.document.as_json();
-    let count = root.accessors.len();
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            for index in primitive.attributes.values() {
-                if index.value() >= count {
-                    return Err(MeshError::Gltf(format!(
-                        "meshes[{m}].primitives[{p}] names accessor {} of {count}",
-                        index.value()
-                    )));
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
 fn check_closed(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Result<(), MeshError> {
     let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 3);
     for t in triangles {
@@ -510,111 +401,6 @@ fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_gltf_naming_a_missing_accessor_is_an_error_not_a_panic() {
-        // Found by the mesh_gltf fuzz target: the gltf crate's validation indexed it.
-        let text = br#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}],
-            "nodes": [{"mesh": 0}],
-            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}"#;
-        let e = TriMesh::parse_gltf(text).expect_err("no accessor 0");
-        assert!(e.to_string().contains("names accessor 0 of 0"), "{e}");
-    }
-
-    /// A .gltf with one triangle whose data is embedded; `indices` and `position` are the
-    /// componentType and type of the two accessors, `children` the first node's children.
-    fn triangle_gltf(indices: (u32, &str), position: (u32, &str), children: &str) -> String {
-        // Three float VEC3 positions (36 bytes) then three u32 indices (12 bytes), base64.
-        let mut bytes = Vec::new();
-        for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
-            bytes.extend(v.to_le_bytes());
-        }
-        for i in [0u32, 1, 2] {
-            bytes.extend(i.to_le_bytes());
-        }
-        const B64: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        let data: String = bytes
-            .chunks(3)
-            .flat_map(|c| {
-                let n = (u32::from(c[0]) << 16)
-                    | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-                    | u32::from(*c.get(2).unwrap_or(&0));
-                let k = c.len() + 1;
-                (0..4).map(move |j| {
-                    if j < k {
-                        B64[(n >> (18 - 6 * j)) as usize & 63] as char
-                    } else {
-                        '='
-                    }
-                })
-            })
-            .collect();
-        format!(
-            r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0]}}],
-            "nodes": [{{"mesh": 0, "children": {children}}}, {{"children": [0]}}],
-            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
-            "buffers": [{{"byteLength": 48, "uri": "data:application/octet-stream;base64,{data}"}}],
-            "bufferViews": [{{"buffer": 0, "byteLength": 36}},
-                            {{"buffer": 0, "byteOffset": 36, "byteLength": 12}}],
-            "accessors": [{{"bufferView": 0, "componentType": {}, "count": 3, "type": "{}",
-                            "min": [0, 0, 0], "max": [1, 1, 0]}},
-                          {{"bufferView": 1, "componentType": {}, "count": 3, "type": "{}"}}]}}"#,
-            position.0, position.1, indices.0, indices.1
-        )
-    }
-
-    #[test]
-    fn a_well_typed_embedded_gltf_reads_back_its_triangle() {
-        let text = triangle_gltf((5125, "SCALAR"), (5126, "VEC3"), "[]");
-        let (positions, triangles) = TriMesh::parse_gltf(text.as_bytes()).expect("valid");
-        assert_eq!((positions.len(), triangles), (3, vec![[0, 1, 2]]));
-    }
-
-    #[test]
-    fn float_indices_are_an_error_not_a_panic() {
-        // Found by the mesh_gltf fuzz target: the gltf crate's index reader reached
-        // `unreachable!()` for an indices accessor of floats.
-        let text = triangle_gltf((5126, "SCALAR"), (5126, "VEC3"), "[]");
-        let e = TriMesh::parse_gltf(text.as_bytes()).expect_err("float indices");
-        assert!(
-            e.to_string()
-                .contains("(indices) must be an unsigned integer"),
-            "{e}"
-        );
-        let text = triangle_gltf((5125, "VEC2"), (5126, "VEC3"), "[]");
-        assert!(TriMesh::parse_gltf(text.as_bytes()).is_err());
-    }
-
-    #[test]
-    fn integer_positions_are_an_error_not_a_panic() {
-        let text = triangle_gltf((5125, "SCALAR"), (5125, "VEC3"), "[]");
-        let e = TriMesh::parse_gltf(text.as_bytes()).expect_err("integer positions");
-        assert!(
-            e.to_string().contains("(POSITION) must be FLOAT VEC3"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn an_image_view_without_a_mime_type_is_ignored_not_a_panic() {
-        // Found by the mesh_gltf fuzz target: the gltf crate's image import unwrapped the
-        // missing MIME type. The mesh reader reads no image.
-        let text = triangle_gltf((5125, "SCALAR"), (5126, "VEC3"), "[]");
-        let text = text.replacen(
-            r#""accessors""#,
-            r#""images": [{"bufferView": 0}], "accessors""#,
-            1,
-        );
-        let (positions, _) = TriMesh::parse_gltf(text.as_bytes()).expect("the mesh reads");
-        assert_eq!(positions.len(), 3);
-    }
-
-    #[test]
-    fn a_node_cycle_is_an_error_not_a_hang() {
-        let text = triangle_gltf((5125, "SCALAR"), (5126, "VEC3"), "[1]");
-        let e = TriMesh::parse_gltf(text.as_bytes()).expect_err("a cycle");
-        assert!(e.to_string().contains("not a tree"), "{e}");
-    }
 
     /// A unit cube from 0 to 1 as an .obj with quads (vertices repeated per face would weld).
     pub(crate) const CUBE_OBJ: &str = "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\

@@ -327,6 +327,7 @@ fn tube_points(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::assert_approx_eq;
 
     pub(super) fn mesh_of(s: &Skeleton, sides: u32, caps: bool) -> Mesh {
         bark_mesh(
@@ -337,10 +338,6 @@ mod tests {
                 ..MeshOptions::default()
             },
         )
-    }
-
-    fn approx(a: Vec3, b: Vec3) -> bool {
-        (a - b).length() < 1e-5
     }
 
     pub(super) fn column() -> Skeleton {
@@ -364,7 +361,7 @@ mod tests {
             if n.y.abs() < 0.5 && radial.length() > 0.0 {
                 let r = if p.y < 1.0 { 0.5 } else { 0.25 };
                 assert!((radial.length() - r).abs() < 1e-5);
-                assert!(approx(radial.normalize(), *n));
+                assert_approx_eq!(radial.normalize(), *n);
             }
         }
         // Every face points outward: the normal of each triangle agrees with its vertices'.
@@ -393,7 +390,7 @@ mod tests {
             .iter()
             .sum::<Vec3>()
             / 5.0;
-        assert!(approx(centre, Vec3::Y));
+        assert_approx_eq!(centre, Vec3::Y);
         assert!((m.positions[lateral_first].distance(Vec3::Y) - 0.1).abs() < 1e-5);
     }
 

@@ -5,6 +5,7 @@
 use mlua::{Lua, Table, Value};
 use pge_engine::Plugin;
 use pge_engine::lua::{LuaModel, Options, run_context, skeleton_from_value};
+use pge_engine::random::mix_seed_multiply;
 
 use crate::options::RadiiMode;
 use crate::{build_tree, lua::tree_options};
@@ -52,7 +53,7 @@ fn tree(lua: &Lua, v: Value) -> mlua::Result<LuaModel> {
     if !radii_given && !skeleton.is_empty() && skeleton.radii.iter().all(|r| *r > 0.0) {
         options.mesh.radii = RadiiMode::Keep;
     }
-    let seed = run_context(lua).seed ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    let seed = mix_seed_multiply(run_context(lua).seed, seed);
     build_tree(&skeleton, &options, seed)
         .map(LuaModel)
         .map_err(|e| o.error(e))

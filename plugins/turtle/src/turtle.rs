@@ -390,10 +390,7 @@ impl Turtle {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn close(a: Vec3, b: Vec3) {
-        assert!((a - b).length() < 1e-5, "{a} != {b}");
-    }
+    use pge_engine::assert_approx_eq;
 
     fn run(t: &mut Turtle, commands: &str) {
         for c in commands.chars() {
@@ -408,12 +405,12 @@ mod tests {
     fn square_closes_and_records_one_chain() {
         let mut t = Turtle::new(TurtleOptions::default());
         run(&mut t, "F+F+F+F");
-        close(t.state().position, Vec3::ZERO);
-        close(t.state().heading, Vec3::X);
+        assert_approx_eq!(t.state().position, Vec3::ZERO);
+        assert_approx_eq!(t.state().heading, Vec3::X);
         let s = &t.skeletons()[0].1;
         assert_eq!(s.len(), 5);
         assert_eq!(s.parents, vec![None, Some(0), Some(1), Some(2), Some(3)]);
-        close(s.positions[2], Vec3::new(-1.0, 1.0, 0.0));
+        assert_approx_eq!(s.positions[2], Vec3::new(-1.0, 1.0, 0.0));
         assert_eq!(s.radii[0], 0.05);
     }
 
@@ -424,7 +421,7 @@ mod tests {
         let s = &t.skeletons()[0].1;
         assert_eq!(s.parents, vec![None, Some(0), Some(1), Some(1)]);
         assert_eq!(s.orders, vec![0, 0, 1, 0]);
-        close(s.positions[3], Vec3::new(0.0, 2.0, 0.0));
+        assert_approx_eq!(s.positions[3], Vec3::new(0.0, 2.0, 0.0));
         assert_eq!(t.command("]", &[]), Err(TurtleError::PopWithoutPush));
     }
 
@@ -436,11 +433,11 @@ mod tests {
         });
         run(&mut t, "&&/+^\\|-&");
         let s = t.state();
-        close(s.heading.cross(s.left), s.up);
+        assert_approx_eq!(s.heading.cross(s.left), s.up);
         assert!((s.heading.length() - 1.0).abs() < 1e-5);
         let mut t = Turtle::new(TurtleOptions::default());
         t.pitch(Some(90.0)).expect("ok");
-        close(t.state().heading, Vec3::NEG_Z);
+        assert_approx_eq!(t.state().heading, Vec3::NEG_Z);
         t.roll(Some(90.0)).expect("ok");
         t.roll_to_horizontal();
         assert!(t.state().left.y.abs() < 1e-6);

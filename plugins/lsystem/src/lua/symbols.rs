@@ -11,32 +11,16 @@ use std::rc::Rc;
 
 use mlua::{Function, Lua, Table, Value};
 use pge_engine::lua::{engine_chunk, script_error};
+use rustc_hash::FxHashMap;
 
 use super::{session_symbols, with_shared};
 use crate::Sym;
 
-/// Hashes a pointer (already well spread) with one multiplication.
-#[derive(Default)]
-pub(crate) struct PointerHasher(u64);
-
-impl std::hash::Hasher for PointerHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.0 = (self.0 << 8 | u64::from(*b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        }
-    }
-    fn write_usize(&mut self, n: usize) {
-        self.0 = (n as u64 >> 3).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
-}
-
-/// The metatables that mark symbols, by address, and the constructors already made.
+/// The metatables that mark symbols, by address (hashed by rustc's fast hasher: the map is
+/// only probed, never iterated), and the constructors already made.
 #[derive(Default)]
 pub(crate) struct SymbolTags {
-    by_meta: HashMap<usize, Sym, std::hash::BuildHasherDefault<PointerHasher>>,
+    by_meta: FxHashMap<usize, Sym>,
     constructors: HashMap<Sym, (Table, Function)>,
 }
 

@@ -47,9 +47,10 @@ use std::time::Instant;
 
 use glam::Vec3;
 use pge_engine::geometry::{Model, Skeleton};
+use pge_engine::random::mix_seed;
 use pge_engine::{Algorithm, Error, Location, Result, RunContext, Step};
 
-pub use params::Params;
+pub use params::{Params, ParamsError};
 use state::{Pull, State};
 
 use crate::points;
@@ -77,7 +78,7 @@ impl SpaceColonization {
     pub fn new(params: Params, location: Location) -> Result<SpaceColonization> {
         params
             .validate()
-            .map_err(|m| Error::script(location.clone(), m))?;
+            .map_err(|e| Error::script(location.clone(), e.to_string()))?;
         Ok(SpaceColonization {
             params,
             location,
@@ -146,18 +147,6 @@ impl SpaceColonization {
     }
 }
 
-/// The run's seed combined with a script's own `seed` (splitmix64 of the latter), the
-/// identity for `seed = 0`.
-fn mix(run: u64, own: u64) -> u64 {
-    if own == 0 {
-        return run;
-    }
-    let mut z = own.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    run ^ z ^ (z >> 31)
-}
-
 /// `d` turned toward `heading` until the angle between them is at most the one whose cosine
 /// and sine are given (both unit vectors; a zero heading bounds nothing).
 fn clamp_turn(d: Vec3, heading: Vec3, cos: f32, sin: f32) -> Vec3 {
@@ -189,7 +178,7 @@ impl Algorithm for SpaceColonization {
             &p.envelope,
             p.mode,
             p.points,
-            mix(ctx.seed, self.params.seed) ^ 0x5ace_c010,
+            mix_seed(ctx.seed, self.params.seed) ^ 0x5ace_c010,
             ctx,
             &self.location,
         )?;
@@ -394,7 +383,7 @@ impl Algorithm for SpaceColonization {
         pge_tree::assign_orders(&mut skeleton);
         let mut options = self.params.tree.clone();
         options.mesh.radii = pge_tree::RadiiMode::Keep;
-        let seed = mix(ctx.seed, self.params.seed);
+        let seed = mix_seed(ctx.seed, self.params.seed);
         let tree = pge_tree::build_tree_in(&skeleton, &options, seed, &self.memory)
             .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
         let mut model = Model::new();

@@ -1,6 +1,7 @@
 //! The parameters of a colonization and their checks.
 
 use glam::Vec3;
+use pge_engine::OptionError;
 use pge_engine::geometry::Skeleton;
 use pge_tree::TreeOptions;
 
@@ -91,44 +92,42 @@ impl Params {
     }
 
     /// Checks the ranges: an error names the parameter and what it needs.
-    pub fn validate(&self) -> Result<(), String> {
-        let positive = |name: &str, v: f32| {
+    pub fn validate(&self) -> Result<(), ParamsError> {
+        let positive = |option: &'static str, v: f32| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(format!("{name} must be a number > 0, got {v}"))
+                Err(OptionError::out_of_range(option, "a number > 0", v))
             }
         };
         positive("step", self.step)?;
         positive("influence", self.influence)?;
         positive("kill", self.kill)?;
         if self.kill >= self.influence {
-            return Err(format!(
-                "kill ({}) must be smaller than influence ({}): points would be removed before they attract",
-                self.kill, self.influence
-            ));
+            return Err(ParamsError::KillNotBelowInfluence {
+                kill: self.kill,
+                influence: self.influence,
+            });
         }
         if !(self.persistence.is_finite() && self.persistence >= 0.0) {
-            return Err(format!(
-                "persistence must be a number >= 0, got {}",
-                self.persistence
-            ));
+            let p = self.persistence;
+            return Err(OptionError::out_of_range("persistence", "a number >= 0", p).into());
         }
-        for (name, v) in [("perception", self.perception), ("maxTurn", self.max_turn)] {
+        for (option, v) in [("perception", self.perception), ("maxTurn", self.max_turn)] {
             if !(v.is_finite() && v > 0.0 && v <= 180.0) {
-                return Err(format!(
-                    "{name} must be an angle in degrees > 0 and <= 180, got {v}"
-                ));
+                let expected = "an angle in degrees > 0 and <= 180";
+                return Err(OptionError::out_of_range(option, expected, v).into());
             }
         }
         if !(self.trunk.is_finite() && self.trunk >= 0.0) {
-            return Err(format!("trunk must be a number >= 0, got {}", self.trunk));
+            return Err(OptionError::out_of_range("trunk", "a number >= 0", self.trunk).into());
         }
         if !self.tropism.is_finite() {
-            return Err("tropism must be a finite vector".into());
+            return Err(OptionError::invalid("tropism", "a finite vector").into());
         }
         if self.roots.is_empty() || self.roots.iter().any(|r| !r.is_finite()) {
-            return Err("root must be a finite vector (roots: a non-empty list of them)".into());
+            let expected = "a finite vector (roots: a non-empty list of them)";
+            return Err(OptionError::invalid("root", expected).into());
         }
         if let Mode::Surround { thickness } = self.mode {
             positive("thickness", thickness)?;
@@ -136,19 +135,43 @@ impl Params {
         if self.mode != Mode::Vertices
             && let Some(why) = self.envelope.open_mesh()
         {
-            return Err(format!(
-                "envelope: {why}; the inside test needs a closed mesh (or use mode = \"vertices\")"
-            ));
+            return Err(ParamsError::OpenEnvelope(why));
         }
         if self.max_iterations == 0 {
-            return Err("maxIterations must be an integer >= 1, got 0".into());
+            return Err(OptionError::out_of_range("maxIterations", "an integer >= 1", 0).into());
         }
         if let Some(start) = &self.start {
-            pge_tree::check_skeleton(start).map_err(|e| format!("start: {e}"))?;
+            pge_tree::check_skeleton(start).map_err(ParamsError::Start)?;
             if start.is_empty() {
-                return Err("start must be a skeleton with nodes, got an empty one".into());
+                let expected = "a skeleton with nodes, got an empty one";
+                return Err(OptionError::invalid("start", expected).into());
             }
         }
         Ok(())
     }
+}
+
+/// Why colonization parameters are refused.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ParamsError {
+    /// An option is outside its range.
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    /// The kill distance is not below the influence radius.
+    #[error(
+        "kill ({kill}) must be smaller than influence ({influence}): points would be removed before they attract"
+    )]
+    KillNotBelowInfluence {
+        /// The kill distance.
+        kill: f32,
+        /// The influence radius.
+        influence: f32,
+    },
+    /// The envelope holds a mesh that is not closed, and the mode tests for the inside.
+    #[error("envelope: {0}; the inside test needs a closed mesh (or use mode = \"vertices\")")]
+    OpenEnvelope(String),
+    /// The skeleton to grow from is invalid.
+    #[error("start: {0}")]
+    Start(pge_tree::TreeError),
 }

@@ -1,12 +1,11 @@
 //! The growing state: attraction points with their nearest nodes, the nodes grown so far,
 //! and the updates a new node makes to the points around it.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 use pge_engine::geometry::Skeleton;
+use rustc_hash::{FxBuildHasher, FxHashMap};
 
 use super::Params;
 use crate::grid::PointGrid;
@@ -46,8 +45,9 @@ pub(super) struct State {
     /// Whether a node has grown a child.
     pub(super) has_child: Vec<bool>,
     /// Nodes by cell of side `step` (by [`cell_key`]), for the duplicate-growth guard: the
-    /// last node added in each cell...
-    node_cells: HashMap<u64, u32, BuildHasherDefault<CellHasher>>,
+    /// last node added in each cell (a map only probed, never iterated, so its order cannot
+    /// leak into the output)...
+    node_cells: FxHashMap<u64, u32>,
     /// ... and for each node, the node added before it in its cell ([`NONE`]: none), so
     /// that a cell's nodes are a chain without a list of their own.
     earlier_in_cell: Vec<u32>,
@@ -246,7 +246,7 @@ impl State {
             has_child: Vec::new(),
             // A sparse crown grows about one node for two points: its map is made once
             // (denser crowns, and their larger maps, grow theirs as they go).
-            node_cells: HashMap::with_capacity_and_hasher((n / 2).min(4096), Default::default()),
+            node_cells: FxHashMap::with_capacity_and_hasher((n / 2).min(4096), FxBuildHasher),
             earlier_in_cell: Vec::new(),
             refused: Vec::new(),
             trunk_tips: Vec::new(),
@@ -505,32 +505,6 @@ impl State {
             let part = self.part_of(i);
             part.grid.remove((i - part.first) as u32);
         }
-    }
-}
-
-/// A fast hasher for the cell keys (multiply-rotate, as rustc's FxHasher: one multiply a
-/// key); the cell map is only probed, never iterated, so its order cannot leak into the
-/// output.
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    /// The product's high bits, which every bit of the key reaches, rotated down: the map
-    /// picks its buckets with the low bits, which would otherwise hold only z's.
-    fn finish(&self) -> u64 {
-        self.0.rotate_left(26)
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
     }
 }
 

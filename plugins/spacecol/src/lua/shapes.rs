@@ -271,11 +271,11 @@ fn mesh(lua: &Lua, v: Value) -> mlua::Result<LuaShape> {
             let bytes = std::fs::read(&file)
                 .map_err(|e| script_error(lua, format!("{w}: cannot read '{path}': {e}")))?;
             let lower = path.to_ascii_lowercase();
-            let parsed = if lower.ends_with(".obj") {
+            let parsed: Result<_, Box<dyn std::error::Error>> = if lower.ends_with(".obj") {
                 let text = String::from_utf8_lossy(&bytes);
-                TriMesh::parse_obj(&text)
+                TriMesh::parse_obj(&text).map_err(Into::into)
             } else if lower.ends_with(".glb") || lower.ends_with(".gltf") {
-                TriMesh::parse_gltf(&bytes)
+                pge_engine::import::scene_triangles(&bytes).map_err(Into::into)
             } else {
                 return Err(script_error(
                     lua,

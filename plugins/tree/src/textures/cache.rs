@@ -7,7 +7,18 @@ use std::sync::{Arc, Mutex, OnceLock};
 use super::{BarkParams, LeafParams, TextureSet, bark_set, leaf_set};
 use crate::TreeError;
 
-type Cell = Arc<OnceLock<Result<Arc<TextureSet>, String>>>;
+type Cell = Arc<OnceLock<Result<Arc<TextureSet>, GenerateError>>>;
+
+/// Why a set could not be made, kept in its cell and handed to every asker (hence shared).
+#[derive(Clone, Debug, thiserror::Error)]
+enum GenerateError {
+    /// The texture threads could not start.
+    #[error("cannot start the texture threads: {0}")]
+    Threads(Arc<dyn std::error::Error + Send + Sync>),
+    /// Making the set failed.
+    #[error("{0}")]
+    Made(Arc<TreeError>),
+}
 
 /// Texture sets by parameter set, each generated once however many sessions ask for it at
 /// the same time: the first asker generates, the others wait for its result (one
@@ -54,7 +65,7 @@ impl TextureCache {
             generate(make).map(Arc::new)
         })
         .clone()
-        .map_err(TreeError::Generated)
+        .map_err(|e| TreeError::Generated(e.to_string()))
     }
 }
 
@@ -66,15 +77,15 @@ impl TextureCache {
 /// texture threads run nothing but the set's own work, and the caller only waits.
 fn generate(
     make: impl FnOnce() -> Result<TextureSet, TreeError> + Send,
-) -> Result<TextureSet, String> {
-    static POOL: OnceLock<Result<rayon::ThreadPool, String>> = OnceLock::new();
+) -> Result<TextureSet, GenerateError> {
+    static POOL: OnceLock<Result<rayon::ThreadPool, GenerateError>> = OnceLock::new();
     let pool = POOL
         .get_or_init(|| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(rayon::current_num_threads())
                 .thread_name(|i| format!("pge-textures-{i}"))
                 .build()
-                .map_err(|e| format!("cannot start the texture threads: {e}"))
+                .map_err(|e| GenerateError::Threads(Arc::new(e)))
         })
         .as_ref()
         .map_err(Clone::clone)?;
@@ -82,10 +93,10 @@ fn generate(
         let made = std::thread::Builder::new()
             .name("pge-textures".into())
             .spawn_scoped(scope, || pool.install(make))
-            .map_err(|e| format!("cannot start the texture threads: {e}"))?
+            .map_err(|e| GenerateError::Threads(Arc::new(e)))?
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        made.map_err(|e| e.to_string())
+        made.map_err(|e| GenerateError::Made(Arc::new(e)))
     })
 }
 

@@ -7,8 +7,7 @@ use eframe::egui::{self, RichText};
 use pge_engine::{ParamInfo, ParamValue};
 
 use super::{ERROR_COLOR, PreviewApp, gone_message};
-use crate::output::{export_meta, write_model};
-use crate::preview::reload::{Generation, Status};
+use crate::reload::{Generation, Status};
 
 impl PreviewApp {
     pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
@@ -291,12 +290,9 @@ impl PreviewApp {
     /// on the GPU.
     fn forest_ui(&mut self, ui: &mut egui::Ui) {
         ui.add(
-            egui::Slider::new(
-                &mut self.toggles.leaf_budget,
-                crate::preview::forest::LEAF_BUDGETS,
-            )
-            .logarithmic(true)
-            .text("leaf budget"),
+            egui::Slider::new(&mut self.toggles.leaf_budget, crate::forest::LEAF_BUDGETS)
+                .logarithmic(true)
+                .text("leaf budget"),
         )
         .on_hover_text(
             "forest: the most leaves drawn in a frame, nearer trees finer; \
@@ -358,18 +354,30 @@ impl PreviewApp {
     }
 
     fn export_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(write) = self.export else {
+            ui.label("no export in this window");
+            return;
+        };
         ui.text_edit_singleline(&mut self.export_path);
         ui.horizontal(|ui| {
             let stem = PathBuf::from(&self.export_path);
             if ui.button("Export .glb").clicked() {
                 let path = stem.with_extension("glb");
                 self.export_path = path.to_string_lossy().into_owned();
-                self.export_message = self.live.reloader().current().map(|g| export(g, &path));
+                self.export_message = self
+                    .live
+                    .reloader()
+                    .current()
+                    .map(|g| export(write, g, &path));
             }
             if ui.button("Export .obj").clicked() {
                 let path = stem.with_extension("obj");
                 self.export_path = path.to_string_lossy().into_owned();
-                self.export_message = self.live.reloader().current().map(|g| export(g, &path));
+                self.export_message = self
+                    .live
+                    .reloader()
+                    .current()
+                    .map(|g| export(write, g, &path));
             }
         });
         match &self.export_message {
@@ -393,12 +401,10 @@ fn new_seed(old: u64) -> u64 {
     if seed == old { seed + 1 } else { seed }
 }
 
-/// Writes the generation's model to `path` (`.glb`, or `.obj` with its `.mtl` and textures)
-/// exactly as `pge run` does.
-fn export(g: &Generation, path: &Path) -> Result<String, String> {
-    let meta = export_meta(g.settings.seed, &g.params);
-    write_model(&g.model, &meta, path, pge_engine::export::Instancing::Gpu)
-        .map_err(|e| format!("{e:#}"))?;
+/// Writes the generation's model to `path` with `write` (the host's writer: `pge preview`
+/// writes `.glb`, or `.obj` with its `.mtl` and textures, exactly as `pge run` does).
+fn export(write: crate::ExportFn, g: &Generation, path: &Path) -> Result<String, String> {
+    write(&g.model, g.settings.seed, &g.params, path).map_err(|e| format!("{e:#}"))?;
     Ok(format!("wrote {}", path.display()))
 }
 
@@ -410,8 +416,8 @@ mod tests {
     use pge_engine::geometry::{Mesh, Model};
 
     use super::*;
-    use crate::preview::reload::Settings;
-    use crate::preview::scene::Scene;
+    use crate::reload::Settings;
+    use crate::scene::Scene;
 
     fn generation() -> Generation {
         let mesh =
@@ -432,20 +438,30 @@ mod tests {
         }
     }
 
+    /// A writer of the glb alone, with the seed in its metadata.
+    fn glb_writer(model: &Model, seed: u64, _: &[ParamInfo], path: &Path) -> anyhow::Result<()> {
+        let meta = pge_engine::export::ExportMeta {
+            seed,
+            params: Vec::new(),
+        };
+        std::fs::write(path, pge_engine::export::glb_bytes(model, &meta)?)?;
+        Ok(())
+    }
+
     #[test]
-    fn exports_glb_and_obj_next_to_each_other() {
+    fn the_export_writes_with_the_hosts_writer_and_reports_its_errors() {
         let dir = tempfile::tempdir().expect("tempdir");
         let g = generation();
         let glb = dir.path().join("tree.glb");
-        assert!(export(&g, &glb).expect("glb").contains("tree.glb"));
+        assert!(
+            export(glb_writer, &g, &glb)
+                .expect("glb")
+                .contains("tree.glb")
+        );
         assert_eq!(&std::fs::read(&glb).expect("written")[0..4], b"glTF");
-        let obj = dir.path().join("tree.obj");
-        export(&g, &obj).expect("obj");
-        let text = std::fs::read_to_string(&obj).expect("written");
-        assert!(text.contains("mtllib tree.mtl"), "{text}");
-        assert!(dir.path().join("tree.mtl").is_file());
-        let err = export(&g, &dir.path().join("missing/tree.glb")).expect_err("no such folder");
-        assert!(err.contains("missing"), "{err}");
+        let missing = dir.path().join("missing/tree.glb");
+        let err = export(glb_writer, &g, &missing).expect_err("no such folder");
+        assert!(err.contains("No such file"), "{err}");
     }
 
     #[test]

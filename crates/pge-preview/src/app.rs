@@ -45,6 +45,8 @@ pub struct AppOptions {
     /// `--orbit-frames N`: turn once around the model in N moving frames, then rest,
     /// printing where each frame's time went.
     pub orbit_frames: Option<u32>,
+    /// The export button's writer; `None`: no export section.
+    pub export: Option<crate::ExportFn>,
 }
 
 enum Shot {
@@ -76,6 +78,8 @@ pub struct PreviewApp {
     total_steps: Option<u32>,
     /// The step scrubber advances by itself after each generation.
     playing: bool,
+    /// The export button's writer, if the host gave one.
+    export: Option<crate::ExportFn>,
     export_path: String,
     export_message: Option<Result<String, String>>,
     shown_error: Option<String>,
@@ -137,6 +141,7 @@ impl PreviewApp {
             text_edits: BTreeMap::new(),
             total_steps: None,
             playing: false,
+            export: options.export,
             export_path,
             export_message: None,
             shown_error: None,

@@ -1,4 +1,13 @@
-//! `pge preview`: a window that shows the model a script makes and regenerates it on save.
+//! PGE's preview: a window that shows the model a script makes and regenerates it on save
+//! (`pge preview`, or a host application's own window with its own plugins).
+//!
+//! ```no_run
+//! use pge_preview::{PreviewOptions, preview};
+//!
+//! let engine = pge_engine::Engine::builder().build()?;
+//! preview(engine, PreviewOptions::new("scripts/examples/spiral.lua"))?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 //!
 //! The script runs on a background thread ([`worker`]); a save of the script or of any file
 //! it loaded ([`watch`]) starts a new generation that supersedes the running one, following
@@ -31,62 +40,63 @@ mod texture;
 pub mod watch;
 pub mod worker;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
 
 use anyhow::{anyhow, bail};
 use eframe::egui;
-use pge_engine::EngineBuilder;
+use pge_engine::geometry::Model;
+use pge_engine::{Engine, ParamInfo};
 
 use self::app::{AppOptions, PreviewApp};
 use self::reload::Settings;
 
-/// Arguments of `pge preview`.
-#[derive(clap::Args, Clone, Debug)]
-pub struct PreviewArgs {
+/// Writes a model to a file as the host's command line does (`pge run`'s writer: `.glb`, or
+/// `.obj` with its `.mtl` and textures): the preview's export button. Receives the model,
+/// the seed and the declared parameters with their values, and the file.
+pub type ExportFn = fn(&Model, u64, &[ParamInfo], &Path) -> anyhow::Result<()>;
+
+/// What the preview window shows and how.
+#[derive(Clone, Debug)]
+pub struct PreviewOptions {
     /// The Lua script to show.
     pub script: PathBuf,
-    /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
-    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = lod::parse_fraction)]
-    pub lod_level: f64,
-    /// A forest's leaf budget: the most leaves its trees draw in a frame at rest, nearer
-    /// trees finer (as many triangles again go to bark and other meshes).
-    #[arg(long, value_name = "N", default_value_t = forest::DEFAULT_LEAF_BUDGET, value_parser = forest::parse_budget)]
-    pub leaf_budget: u64,
-    /// Seed of every random draw.
-    #[arg(long, default_value_t = 1)]
+    /// Seed of every random draw (default 1).
     pub seed: u64,
-    /// Overrides a parameter declared with pge.params (repeatable).
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
-    pub set: Vec<(String, String)>,
+    /// `NAME=VALUE` overrides of parameters declared with `pge.params`.
+    pub params: Vec<(String, String)>,
+    /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1
+    /// (default 1).
+    pub lod_level: f64,
+    /// A forest's leaf budget: the most leaves its trees draw in a frame at rest (default
+    /// [`forest::DEFAULT_LEAF_BUDGET`]).
+    pub leaf_budget: u64,
     /// Writes the first complete frame to this PNG file and exits.
-    #[arg(long, value_name = "PNG")]
     pub screenshot: Option<PathBuf>,
-    /// Places the camera instead of framing the model: `D` metres from the target
-    /// horizontally, the eye at height `H`, looking at `TX,TY,TZ` (default: the centre of the
-    /// model's bounds).
-    #[arg(long, value_name = "D,H[,TX,TY,TZ]", value_parser = parse_camera, allow_hyphen_values = true)]
+    /// Places the camera instead of framing the model.
     pub camera: Option<CameraSpec>,
-    /// Measures the viewport: once the first model is on screen, turns the camera once
-    /// around it in N frames drawn as while dragging, then rests; prints where each frame's
-    /// time went to stderr and closes (after `--screenshot`, if given, of the resting frame).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    /// Turns the camera once around the model in N frames drawn as while dragging, prints
+    /// where each frame's time went to stderr and closes.
     pub orbit_frames: Option<u32>,
-    /// Seconds one generation may take.
-    #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = crate::common::parse_seconds)]
-    pub time_limit: f64,
-    /// MiB of memory the Lua state may use.
-    #[arg(long, value_name = "MIB", default_value_t = 4096, value_parser = crate::common::parse_mib)]
-    pub memory_limit: usize,
+    /// The export button's writer; `None`: no export.
+    pub export: Option<ExportFn>,
 }
 
-fn parse_set(text: &str) -> Result<(String, String), String> {
-    match text.split_once('=') {
-        Some((name, value)) if !name.trim().is_empty() => {
-            Ok((name.trim().to_string(), value.to_string()))
+impl PreviewOptions {
+    /// The defaults for `script`.
+    #[must_use]
+    pub fn new(script: impl Into<PathBuf>) -> PreviewOptions {
+        PreviewOptions {
+            script: script.into(),
+            seed: 1,
+            params: Vec::new(),
+            lod_level: 1.0,
+            leaf_budget: forest::DEFAULT_LEAF_BUDGET,
+            screenshot: None,
+            camera: None,
+            orbit_frames: None,
+            export: None,
         }
-        _ => Err(format!("'{text}' is not NAME=VALUE")),
     }
 }
 
@@ -101,7 +111,8 @@ pub struct CameraSpec {
     pub target: Option<glam::Vec3>,
 }
 
-fn parse_camera(text: &str) -> Result<CameraSpec, String> {
+/// `--camera D,H[,TX,TY,TZ]`: numbers, `D > 0`.
+pub fn parse_camera(text: &str) -> Result<CameraSpec, String> {
     let bad = || format!("'{text}' is not D,H or D,H,TX,TY,TZ (numbers, D > 0)");
     let numbers = text
         .split(',')
@@ -123,37 +134,31 @@ fn parse_camera(text: &str) -> Result<CameraSpec, String> {
     })
 }
 
-/// Opens the preview window for `args.script` with every plugin of the `pge` command.
-pub fn preview(args: &PreviewArgs) -> anyhow::Result<()> {
-    preview_with(args, pge::default_engine())
-}
-
-/// Opens the preview window with the engine `builder` makes (plugins of a host application).
-pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Result<()> {
-    let engine = builder
-        .memory_limit_mib(args.memory_limit)
-        .time_limit(Some(Duration::from_secs_f64(args.time_limit)))
-        .build()?;
+/// Opens the preview window for `options.script`, generating with `engine` (its plugins and
+/// limits); returns when the window closes (with the screenshot's or the orbit's error,
+/// when one was asked for and failed).
+pub fn preview(engine: Engine, options: PreviewOptions) -> anyhow::Result<()> {
     let settings = Settings {
-        seed: args.seed,
-        params: args.set.clone(),
+        seed: options.seed,
+        params: options.params.clone(),
         steps: None,
     };
     let screenshot_result = Arc::new(Mutex::new(None));
     let log = std::env::var("PGE_PREVIEW_LOG").unwrap_or_default();
     let measuring = log == "1" || log == "full";
-    let options = AppOptions {
-        screenshot: args.screenshot.clone(),
-        lod_percent: (args.lod_level * 100.0).round().clamp(1.0, 100.0) as u8,
-        leaf_budget: args.leaf_budget,
+    let app_options = AppOptions {
+        screenshot: options.screenshot.clone(),
+        lod_percent: (options.lod_level * 100.0).round().clamp(1.0, 100.0) as u8,
+        leaf_budget: options.leaf_budget,
         screenshot_result: screenshot_result.clone(),
-        camera: args.camera,
+        camera: options.camera,
         log_fps: measuring,
         turntable: measuring,
         full_quality_motion: log == "full",
-        orbit_frames: args.orbit_frames,
+        orbit_frames: options.orbit_frames,
+        export: options.export,
     };
-    let title = format!("PGE preview: {}", args.script.display());
+    let title = format!("PGE preview: {}", options.script.display());
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title(title.clone())
@@ -161,14 +166,14 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
             .with_inner_size([1280.0, 800.0]),
         ..eframe::NativeOptions::default()
     };
-    let script = args.script.clone();
+    let script = options.script.clone();
     let failure: Arc<Mutex<Option<anyhow::Error>>> = Arc::new(Mutex::new(None));
     let failure_slot = failure.clone();
     eframe::run_native(
         &title,
         native,
         Box::new(move |cc| {
-            let app = PreviewApp::new(cc, engine, script, settings, options);
+            let app = PreviewApp::new(cc, engine, script, settings, app_options);
             match app {
                 Ok(app) => Ok(Box::new(app) as Box<dyn eframe::App>),
                 Err(e) => {
@@ -185,7 +190,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
         let inner = failure.lock().ok().and_then(|mut f| f.take());
         inner.unwrap_or_else(|| anyhow!("cannot open the preview window: {e}"))
     })?;
-    if args.screenshot.is_none() && args.orbit_frames.is_some() {
+    if options.screenshot.is_none() && options.orbit_frames.is_some() {
         // An orbit whose generation failed leaves its error here.
         let result = screenshot_result
             .lock()
@@ -195,7 +200,7 @@ pub fn preview_with(args: &PreviewArgs, builder: EngineBuilder) -> anyhow::Resul
             r?;
         }
     }
-    if let Some(path) = &args.screenshot {
+    if let Some(path) = &options.screenshot {
         let result = screenshot_result
             .lock()
             .map_err(|_| anyhow!("screenshot state poisoned"))?
@@ -232,21 +237,5 @@ mod tests {
         for bad in ["2", "2,1,0", "0,1", "-1,2", "a,b", "2,NaN"] {
             assert!(parse_camera(bad).is_err(), "{bad}");
         }
-    }
-
-    #[test]
-    fn set_and_seconds_are_parsed() {
-        assert_eq!(parse_set("height=3.5"), Ok(("height".into(), "3.5".into())));
-        assert_eq!(parse_set("name=a=b"), Ok(("name".into(), "a=b".into())));
-        assert!(parse_set("height").is_err());
-        assert!(parse_set("=3").is_err());
-        use crate::common::{parse_mib, parse_seconds};
-        assert_eq!(parse_seconds("2.5"), Ok(2.5));
-        assert!(parse_seconds("0").is_err());
-        assert!(parse_seconds("inf").is_err());
-        assert!(parse_seconds("x").is_err());
-        assert_eq!(parse_mib("64"), Ok(64));
-        assert!(parse_mib("0").is_err());
-        assert!(parse_mib("-1").is_err());
     }
 }

@@ -524,7 +524,10 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let script = dir.path().join("tree.lua");
         std::fs::write(&script, "return pge.Growth{ steps = 40 }\n").expect("write");
-        let engine = pge::default_engine().build().expect("engine");
+        let engine = Engine::builder()
+            .plugin(pge_growth::GrowthPlugin)
+            .build()
+            .expect("engine");
         let mut kept = Kept::default();
         // (steps asked, steps the scrubber takes for it): the first run takes all 40 and
         // keeps a state every 4 steps; then each move starts at the nearest kept state at
@@ -574,7 +577,10 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let script = dir.path().join("tree.lua");
         std::fs::write(&script, "return pge.Growth{ steps = 100 }\n").expect("write");
-        let engine = pge::default_engine().build().expect("engine");
+        let engine = Engine::builder()
+            .plugin(pge_growth::GrowthPlugin)
+            .build()
+            .expect("engine");
         let mut kept = Kept::default();
         scrub(&engine, &script, None, &mut kept);
         // Every 4 steps up to 64 makes 17 states: every other one goes, then every 8 steps.

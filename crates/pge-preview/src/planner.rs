@@ -340,7 +340,7 @@ mod tests {
     use glam::{Mat4, Vec3};
 
     use super::*;
-    use crate::preview::scene::{SceneMesh, SceneStats, VERTEX_FLOATS};
+    use crate::scene::{SceneMesh, SceneStats, VERTEX_FLOATS};
 
     /// A scene with one rigid forest mesh of `n` instances along -Z, `offset` metres apart.
     fn scene(n: usize, offset: f32) -> Arc<Scene> {

@@ -4,7 +4,7 @@
 use std::time::{Duration, Instant};
 
 use super::orbit::Orbit;
-use crate::preview::camera::OrbitCamera;
+use crate::camera::OrbitCamera;
 
 /// How long after the last camera motion the viewport is drawn at full quality.
 pub(super) const MOTION_SETTLE: Duration = Duration::from_millis(200);
@@ -80,7 +80,7 @@ impl Motion {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::preview::render::FrameTimes;
+    use crate::render::FrameTimes;
 
     #[test]
     fn once_an_orbit_has_rested_the_frames_after_it_rest_too() {

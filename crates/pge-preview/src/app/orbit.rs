@@ -2,7 +2,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::preview::render::FrameTimes;
+use crate::render::FrameTimes;
 
 /// `--orbit-frames N`: once the first model is on screen, the camera turns once around it in
 /// N frames drawn as moving ones, then rests until a frame at full quality is drawn with its

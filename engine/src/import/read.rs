@@ -1,23 +1,24 @@
-//! Reading a tile's glTF back: its buffers checked against their data, its instancing
-//! nodes, meshes, materials and textures, and the files its buffer URIs name.
+//! Reading PGE's glTF back: its buffers checked against their data, its instancing nodes,
+//! meshes, materials and textures, and the files its buffer URIs name.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
-use anyhow::{Context, bail};
 use glam::{Vec2, Vec3, Vec4};
 use gltf::Gltf;
-use pge_engine::export::lod_from_json;
-use pge_engine::geometry::{
+use serde_json::{Map, Value};
+
+use super::ImportError;
+use crate::export::lod_from_json;
+use crate::geometry::{
     AlphaMode, DiffuseTransmission, InstanceTransform, Material, Mesh, MeshLod, Primitive, Texture,
 };
-use serde_json::{Map, Value};
 
 /// Checks that every accessor lies inside its buffer view, every view inside its buffer and
 /// the buffer inside its data (the binary chunk, or the file it names), so that reading them
 /// cannot go out of bounds (the gltf crate's validation does not compare them with the bytes
-/// actually present).
-pub(super) fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> anyhow::Result<()> {
+/// actually present). A `byteStride` smaller than its accessor's element is refused too.
+pub fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> Result<(), ImportError> {
     for buffer in doc.buffers() {
         let present = data
             .get(buffer.index())
@@ -30,22 +31,32 @@ pub(super) fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> anyh
             } else {
                 "the file it names"
             };
-            bail!("buffer {} is not in {what}", buffer.index());
+            return Err(ImportError::BufferMissing {
+                buffer: buffer.index(),
+                what,
+            });
         }
     }
     for view in doc.views() {
         if view.offset().saturating_add(view.length()) > view.buffer().length() {
-            bail!("buffer view {} goes past its buffer", view.index());
+            return Err(ImportError::ViewPastBuffer(view.index()));
         }
     }
     for a in doc.accessors() {
         if a.sparse().is_some() {
-            bail!("accessor {} is sparse, which PGE never writes", a.index());
+            return Err(ImportError::Sparse(a.index()));
         }
         let Some(view) = a.view() else {
-            bail!("accessor {} has no buffer view", a.index());
+            return Err(ImportError::NoView(a.index()));
         };
         let stride = view.stride().unwrap_or(a.size());
+        if stride < a.size() {
+            return Err(ImportError::StrideTooSmall {
+                accessor: a.index(),
+                stride,
+                size: a.size(),
+            });
+        }
         let end = match a.count() {
             0 => a.offset(),
             n => (n - 1)
@@ -55,7 +66,7 @@ pub(super) fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> anyh
                 .unwrap_or(usize::MAX),
         };
         if end > view.length() {
-            bail!("accessor {} goes past its buffer view", a.index());
+            return Err(ImportError::AccessorPastView(a.index()));
         }
     }
     Ok(())
@@ -63,10 +74,10 @@ pub(super) fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> anyh
 
 /// A node's leaf counts (`extras.pge.lod.leaves`: an array for an instancing node, a number
 /// for a node per placement), checked against its `placements`.
-pub(super) fn leaf_counts(
+pub fn leaf_counts(
     leaves: Option<&Value>,
     placements: usize,
-) -> anyhow::Result<Option<Vec<u32>>> {
+) -> Result<Option<Vec<u32>>, ImportError> {
     let count = |v: &Value| v.as_u64().and_then(|n| u32::try_from(n).ok());
     let counts: Option<Vec<u32>> = match leaves {
         None => return Ok(None),
@@ -75,44 +86,48 @@ pub(super) fn leaf_counts(
     };
     match counts {
         Some(c) if c.len() == placements => Ok(Some(c)),
-        _ => bail!("a node's extras.pge.lod.leaves do not match its {placements} placements"),
+        _ => Err(ImportError::LeafCounts { placements }),
     }
 }
 
 /// The placements of an `EXT_mesh_gpu_instancing` node.
-pub(super) fn read_instances<'a>(
+pub fn read_instances<'a>(
     gltf: &'a Gltf,
     attributes: &Value,
     buffer: &dyn Fn(gltf::Buffer<'a>) -> Option<&'a [u8]>,
-) -> anyhow::Result<Vec<InstanceTransform>> {
-    let accessor = |name: &str| {
+) -> Result<Vec<InstanceTransform>, ImportError> {
+    let accessor = |name: &'static str| {
         attributes
             .get(name)
             .and_then(Value::as_u64)
             .and_then(|i| gltf.document.accessors().nth(i as usize))
             .filter(|a| a.data_type() == gltf::accessor::DataType::F32)
-            .with_context(|| format!("an instancing node without a float {name} accessor"))
+            .ok_or(ImportError::InstancingMissing(name))
     };
-    let vec3 = |name: &str| -> anyhow::Result<Vec<[f32; 3]>> {
+    let wrong_type = |attribute, expected| ImportError::InstancingType {
+        attribute,
+        expected,
+    };
+    let vec3 = |name: &'static str| -> Result<Vec<[f32; 3]>, ImportError> {
         let a = accessor(name)?;
         if a.dimensions() != gltf::accessor::Dimensions::Vec3 {
-            bail!("the instancing {name} accessor is not VEC3");
+            return Err(wrong_type(name, "VEC3"));
         }
         Ok(gltf::accessor::Iter::<[f32; 3]>::new(a, buffer)
-            .with_context(|| format!("the instancing {name} data is missing"))?
+            .ok_or(ImportError::InstancingData(name))?
             .collect())
     };
     let translation = vec3("TRANSLATION")?;
     let scale = vec3("SCALE")?;
     let a = accessor("ROTATION")?;
     if a.dimensions() != gltf::accessor::Dimensions::Vec4 {
-        bail!("the instancing ROTATION accessor is not VEC4");
+        return Err(wrong_type("ROTATION", "VEC4"));
     }
     let rotation: Vec<[f32; 4]> = gltf::accessor::Iter::<[f32; 4]>::new(a, buffer)
-        .context("the instancing ROTATION data is missing")?
+        .ok_or(ImportError::InstancingData("ROTATION"))?
         .collect();
     if translation.len() != rotation.len() || translation.len() != scale.len() {
-        bail!("the instancing accessors differ in length");
+        return Err(ImportError::InstancingLengths);
     }
     Ok(translation
         .into_iter()
@@ -128,11 +143,11 @@ pub(super) fn read_instances<'a>(
 
 /// A glTF mesh as its name and one [`Mesh`] per primitive; the mesh's `extras.pge` goes to
 /// the first (where the exporter, which lets the first member's keys win, puts it back).
-pub(super) fn read_mesh<'s>(
+pub fn read_mesh<'s>(
     mesh: &gltf::Mesh,
     buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
     json: &Value,
-) -> anyhow::Result<(String, Vec<Mesh>)> {
+) -> Result<(String, Vec<Mesh>), ImportError> {
     let name = mesh.name().unwrap_or_default().to_string();
     let (extras, lod) = split_lod(match mesh.extras() {
         Some(raw) => match serde_json::from_str::<Value>(raw.get())?.get("pge") {
@@ -147,14 +162,19 @@ pub(super) fn read_mesh<'s>(
         let primitive = match prim.mode() {
             gltf::mesh::Mode::Triangles => Primitive::Triangles,
             gltf::mesh::Mode::Lines => Primitive::Lines,
-            other => bail!("mesh {name}: {other:?} primitives are not PGE's"),
+            other => {
+                return Err(ImportError::Primitive {
+                    mesh: name,
+                    mode: format!("{other:?}"),
+                });
+            }
         };
         let mut m = Mesh {
             name: name.clone(),
             primitive,
             positions: reader
                 .read_positions()
-                .with_context(|| format!("mesh {name}: no positions"))?
+                .ok_or_else(|| ImportError::missing(&name, "positions"))?
                 .map(Vec3::from_array)
                 .collect(),
             normals: reader
@@ -171,7 +191,7 @@ pub(super) fn read_mesh<'s>(
                 .unwrap_or_default(),
             indices: reader
                 .read_indices()
-                .with_context(|| format!("mesh {name}: no indices"))?
+                .ok_or_else(|| ImportError::missing(&name, "indices"))?
                 .into_u32()
                 .collect(),
             material: Arc::new(read_material(&prim.material(), buffer, json)?),
@@ -189,7 +209,7 @@ pub(super) fn read_mesh<'s>(
 /// A mesh's `extras.pge` without its `lod`, and the levels of detail read from it
 /// ([`lod_from_json`]). An `lod` that is not PGE's, or not last (where the writer puts it),
 /// stays among the extras and is written back as it was.
-pub(super) fn split_lod(
+pub fn split_lod(
     mut extras: Map<String, Value>,
 ) -> (Map<String, Value>, Option<Arc<MeshLod>>) {
     let last = extras.keys().next_back().is_some_and(|k| k == "lod");
@@ -209,9 +229,9 @@ fn read_material<'s>(
     m: &gltf::Material,
     buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
     json: &Value,
-) -> anyhow::Result<Material> {
+) -> Result<Material, ImportError> {
     let pbr = m.pbr_metallic_roughness();
-    let read = |texture: Option<gltf::Texture>| -> anyhow::Result<Option<Arc<Texture>>> {
+    let read = |texture: Option<gltf::Texture>| -> Result<Option<Arc<Texture>>, ImportError> {
         texture.map(|t| read_texture(&t, buffer)).transpose()
     };
     Ok(Material {
@@ -251,15 +271,15 @@ fn read_transmission(json: &Value, index: usize) -> Option<DiffuseTransmission> 
 fn read_texture<'s>(
     texture: &gltf::Texture,
     buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
-) -> anyhow::Result<Arc<Texture>> {
+) -> Result<Arc<Texture>, ImportError> {
     let image = texture.source();
     let gltf::image::Source::View { view, .. } = image.source() else {
-        bail!("an image outside the .glb");
+        return Err(ImportError::ImageOutsideGlb);
     };
     let png = buffer(view.buffer())
-        .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
-        .context("an image outside its buffer")?;
-    let (width, height) = png_size(png).context("an image that is not a PNG")?;
+        .and_then(|b| b.get(view.offset()..view.offset().saturating_add(view.length())))
+        .ok_or(ImportError::ImageOutsideBuffer)?;
+    let (width, height) = png_size(png).ok_or(ImportError::NotPng)?;
     Ok(Arc::new(Texture {
         name: image.name().unwrap_or_default().to_string(),
         width,
@@ -270,8 +290,8 @@ fn read_texture<'s>(
 
 /// The file a buffer's URI names, relative to the tile: percent-decoded; absolute paths,
 /// schemes (`data:`, `http:`) and `..` past nothing are refused.
-pub(super) fn relative_file(uri: &str) -> anyhow::Result<PathBuf> {
-    let refuse = || anyhow::anyhow!("buffer URI '{uri}' is not a relative file");
+pub fn relative_file(uri: &str) -> Result<PathBuf, ImportError> {
+    let refuse = || ImportError::BufferUri(uri.to_string());
     if uri.starts_with('/') || uri.contains(':') || uri.contains('\\') || uri.is_empty() {
         return Err(refuse());
     }
@@ -290,23 +310,6 @@ pub(super) fn relative_file(uri: &str) -> anyhow::Result<PathBuf> {
     }
     let text = String::from_utf8(out).map_err(|_| refuse())?;
     Ok(PathBuf::from(text))
-}
-
-/// `path` made absolute, `.` and `..` folded (lexically), so one file has one key.
-pub(super) fn normal_path(path: &Path) -> anyhow::Result<PathBuf> {
-    let absolute =
-        std::path::absolute(path).with_context(|| format!("cannot resolve {}", path.display()))?;
-    let mut out = PathBuf::new();
-    for c in absolute.components() {
-        match c {
-            std::path::Component::CurDir => {}
-            std::path::Component::ParentDir => {
-                out.pop();
-            }
-            other => out.push(other),
-        }
-    }
-    Ok(out)
 }
 
 /// Width and height from a PNG's header.

@@ -91,6 +91,7 @@ impl OrbitCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::assert_approx_eq;
 
     #[test]
     fn place_puts_the_eye_at_the_distance_and_height() {
@@ -106,15 +107,11 @@ mod tests {
         assert!((c.eye().y).abs() < 1e-5);
     }
 
-    fn close(a: Vec3, b: Vec3) -> bool {
-        (a - b).length() < 1e-4
-    }
-
     #[test]
     fn framing_puts_the_bounds_in_view() {
         let mut cam = OrbitCamera::default();
         cam.frame((Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 10.0, 1.0)));
-        assert!(close(cam.target, Vec3::new(0.0, 5.0, 0.0)));
+        assert_approx_eq!(cam.target, Vec3::new(0.0, 5.0, 0.0), 1e-4);
         let vp = cam.view_projection(1.0);
         for corner in [
             Vec3::new(-1.0, 0.0, -1.0),
