@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
-use pge_engine::geometry::{GeometryError, Material, Mesh, Primitive};
+use pge_engine::geometry::{AlphaMode, GeometryError, Material, Mesh, Primitive};
 use serde_json::{Value, json};
 
 use crate::atlas::Atlas;
@@ -171,6 +171,11 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                 texture: Some(a.texture.clone()),
                 normal_texture: a.normal.clone(),
                 metallic_roughness_texture: a.roughness.clone(),
+                // A masked leaf is masked with the cutoff chosen for the atlas.
+                alpha: match mesh.material.alpha {
+                    AlphaMode::Mask(_) => AlphaMode::Mask(a.alpha_cutoff),
+                    other => other,
+                },
                 ..(*mesh.material).clone()
             }),
             None => mesh.material.clone(),
