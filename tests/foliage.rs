@@ -101,6 +101,8 @@ foliage! {
         "--set", "variants=1";
     forests_painted: "scripts/forests/painted.lua", "--set", "points=300";
     forests_plantation: "scripts/forests/plantation.lua", "--set", "points=300";
+    // The LOD atlas of leaf clusters (lod = {atlas = true}) chooses its own cutoff.
+    examples_lod_atlas: "scripts/examples/lod.lua", "--set", "points=600", "--set", "atlas=1";
 }
 
 #[test]

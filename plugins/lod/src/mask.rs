@@ -143,23 +143,27 @@ pub fn dilate_color(rgba: &mut [u8], width: usize, height: usize, drawn_from: u8
     if width == 0 || height == 0 || rgba.len() != width * height * 4 {
         return;
     }
-    // Level 0: the sum of the drawn texels' colour and their count, per texel.
-    let mut levels: Vec<(usize, usize, Vec<[f32; 4]>)> = vec![(
-        width,
-        height,
-        rgba.chunks_exact(4)
-            .map(|p| {
-                if p[3] >= drawn_from {
-                    [f32::from(p[0]), f32::from(p[1]), f32::from(p[2]), 1.0]
-                } else {
-                    [0.0; 4]
-                }
-            })
-            .collect(),
-    )];
-    // Pull: halve (rounding up) down to one texel, summing.
+    // Pull: the sum of the drawn texels' colour and their count under each texel of a chain
+    // of levels halved (rounding up) down to one texel, starting at half the map's size
+    // (the map's own texels are read where they are).
+    let (w1, h1) = (width.div_ceil(2), height.div_ceil(2));
+    let mut first = vec![[0.0f32; 4]; w1 * h1];
+    for y in 0..height {
+        let row = &rgba[y * width * 4..(y + 1) * width * 4];
+        let sums = &mut first[(y / 2) * w1..(y / 2 + 1) * w1];
+        for (x, p) in row.chunks_exact(4).enumerate() {
+            if p[3] >= drawn_from {
+                let d = &mut sums[x / 2];
+                d[0] += f32::from(p[0]);
+                d[1] += f32::from(p[1]);
+                d[2] += f32::from(p[2]);
+                d[3] += 1.0;
+            }
+        }
+    }
+    let mut levels: Vec<(usize, usize, Vec<[f32; 4]>)> = vec![(w1, h1, first)];
     loop {
-        let (w, h, last) = levels.last().expect("level 0");
+        let (w, h, last) = levels.last().expect("a first level");
         let (w, h) = (*w, *h);
         if w == 1 && h == 1 {
             break;
@@ -177,33 +181,38 @@ pub fn dilate_color(rgba: &mut [u8], width: usize, height: usize, drawn_from: u8
         }
         levels.push((nw, nh, next));
     }
-    if levels.last().map_or(true, |(_, _, l)| l[0][3] == 0.0) {
+    if levels.last().is_none_or(|(_, _, l)| l[0][3] == 0.0) {
         return;
     }
-    // Push: from the top down, a texel with no drawn texel below it takes its parent's
-    // colour; the others their own mean.
-    let mut above: Vec<[f32; 3]> = Vec::new();
-    let mut above_w = 1;
-    for (w, h, level) in levels.iter().rev() {
-        let (w, h) = (*w, *h);
-        let mut colors = vec![[0.0f32; 3]; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let s = level[y * w + x];
-                colors[y * w + x] = if s[3] > 0.0 {
-                    [s[0] / s[3], s[1] / s[3], s[2] / s[3]]
+    // Push: from the top down, every texel's colour in place (its drawn texels' mean, or its
+    // parent's when it has none).
+    for k in (0..levels.len()).rev() {
+        let (lower, upper) = levels.split_at_mut(k + 1);
+        let (w, h, level) = &mut lower[k];
+        let parent = upper.first().map(|(pw, _, p)| (*pw, p));
+        for y in 0..*h {
+            for x in 0..*w {
+                let s = &mut level[y * *w + x];
+                *s = if s[3] > 0.0 {
+                    [s[0] / s[3], s[1] / s[3], s[2] / s[3], 1.0]
                 } else {
-                    above[(y / 2) * above_w + x / 2]
+                    match parent {
+                        Some((pw, p)) => p[(y / 2) * pw + x / 2],
+                        None => *s,
+                    }
                 };
             }
         }
-        above = colors;
-        above_w = w;
     }
-    for (p, c) in rgba.chunks_exact_mut(4).zip(&above) {
-        if p[3] < drawn_from {
-            for k in 0..3 {
-                p[k] = (c[k] + 0.5) as u8;
+    let (w1, _, colors) = &levels[0];
+    for y in 0..height {
+        for x in 0..width {
+            let i = (y * width + x) * 4;
+            if rgba[i + 3] < drawn_from {
+                let c = colors[(y / 2) * w1 + x / 2];
+                for k in 0..3 {
+                    rgba[i + k] = (c[k] + 0.5) as u8;
+                }
             }
         }
     }
