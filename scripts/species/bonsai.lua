@@ -11,5 +11,5 @@ return pge.Growth{
   steps = p.steps,
   scale = 0.35, girth = 0.45,
   mesh = { sides = 7, color = "#5a4636" },
-  leaves = { perTip = {5, 9}, size = 0.22, maxDepth = 1, colors = {"#2f5e1f", "#5f8a2a"} },
+  leaves = { perTip = {5, 9}, size = 0.05, perCard = 12, maxDepth = 1, along = { spacing = 0.06 }, colors = {"#2f5e1f", "#5f8a2a"} },
 }

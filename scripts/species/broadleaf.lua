@@ -12,5 +12,5 @@ return pge.Growth{
   steps = p.steps,
   scale = 0.5, girth = 0.35,
   mesh = { sides = 7, color = "#6b5444" },
-  leaves = { perTip = {4, 7}, size = 0.35, maxDepth = 1, colors = {"#356b22", "#86a83a"} },
+  leaves = { perTip = {4, 7}, size = 0.09, perCard = 12, maxDepth = 1, along = { spacing = 0.12 }, colors = {"#356b22", "#86a83a"} },
 }

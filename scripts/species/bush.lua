@@ -18,5 +18,5 @@ return pge.SpaceColonization{
   tropism = {0, 0.1, 0},
   radius = { tip = 0.01, exponent = 2.3 },
   mesh = { sides = 5, mergeStraight = 5, color = "#7a7266", bark = "smooth" },
-  leaves = { perTip = {3, 5}, size = 0.16, maxDepth = 2, colors = {"#3d6b25", "#6e9a35"} },
+  leaves = { perTip = {3, 5}, size = 0.05, perCard = 12, maxDepth = 2, along = { spacing = 0.08 }, colors = {"#3d6b25", "#6e9a35"} },
 }

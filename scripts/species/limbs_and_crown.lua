@@ -24,6 +24,6 @@ return pge.tree{
   skeleton = crown:skeleton(),
   radius = { tip = 0.015, exponent = 2.4 },
   mesh = { sides = 7, color = "#8a8478", bark = "smooth" },
-  leaves = { perTip = {3, 5}, size = 0.24, maxDepth = 2, colors = {"#2f6b1f", "#7da83a"}, shape = "palmate",
+  leaves = { perTip = {3, 5}, size = 0.12, perCard = 12, maxDepth = 2, along = { spacing = 0.3 }, colors = {"#2f6b1f", "#7da83a"}, shape = "palmate",
              backColor = "#dcd26e", translucency = 0.4 },
 }

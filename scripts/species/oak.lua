@@ -16,7 +16,8 @@ return pge.SpaceColonization{
   smoothing = 0.5,
   mesh = { sides = 10, mergeStraight = 6, color = "#5a4636",
            bark = { style = "furrowed", depth = 1.3 }, flare = { roots = 5, spread = 0.9 } },
-  leaves = { perTip = {math.max(0, p.leaves - 3), p.leaves}, size = 0.38, maxDepth = 3,
+  leaves = { perTip = {math.max(0, p.leaves - 3), p.leaves}, size = 0.1, perCard = 12, maxDepth = 3,
+             along = { orders = 2, spacing = 0.15 },
              colors = {"#2c5418", "#4e7a26"}, shape = "lobed",
              backColor = "#b4c86e", translucency = 0.25 },
 }

@@ -13,6 +13,6 @@ return pge.SpaceColonization{
   tropism = {0, 0.6, 0},
   radius = { tip = 0.018, exponent = 2.5 },
   mesh = { sides = 7, mergeStraight = 4, color = "#7d7465" },
-  leaves = { perTip = {8, 12}, size = 0.24, maxDepth = 4, colors = {"#4f7d2a", "#8fae3e"},
+  leaves = { perTip = {4, 6}, size = 0.07, perCard = 12, maxDepth = 4, along = { spacing = 0.1 }, colors = {"#4f7d2a", "#8fae3e"},
              backColor = "#dce6c8", translucency = 0.3 },
 }

@@ -13,5 +13,5 @@ return pge.SpaceColonization{
   step = 0.2, influence = 1.5, kill = 0.4,
   radius = { tip = 0.018, exponent = 2.3 },
   mesh = { sides = 6, mergeStraight = 5, color = "#54463a" },
-  leaves = { perTip = {5, 7}, size = 0.25, maxDepth = 2, colors = {"#24551c", "#3f7a2a"} },
+  leaves = { perTip = {5, 7}, size = 0.04, perCard = 12, maxDepth = 2, along = { spacing = 0.06 }, colors = {"#24551c", "#3f7a2a"} },
 }

@@ -19,5 +19,5 @@ return pge.SpaceColonization{
   radius = { tip = 0.02, exponent = 2.3 },
   smoothing = 0.4,
   mesh = { sides = 7, mergeStraight = 5 },
-  leaves = { perTip = {4, 6}, size = 0.32, maxDepth = 2, colors = {"#35621f", "#6c8f2b"} },
+  leaves = { perTip = {4, 6}, size = 0.09, perCard = 12, maxDepth = 2, along = { spacing = 0.15 }, colors = {"#35621f", "#6c8f2b"} },
 }

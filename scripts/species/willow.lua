@@ -20,6 +20,6 @@ return pge.SpaceColonization{
   radius = { tip = 0.014, exponent = 2.1 },
   smoothing = 0.3,
   mesh = { sides = 8, mergeStraight = 4, color = "#6a5a48", bark = "fibrous", flare = { roots = 4, spread = 0.6 } },
-  leaves = { perTip = {6, 9}, size = 0.3, maxDepth = 4, colors = {"#7f9f3a", "#b5c95a"},
+  leaves = { perTip = {4, 6}, size = 0.1, perCard = 12, maxDepth = 4, along = { spacing = 0.25 }, colors = {"#7f9f3a", "#b5c95a"},
              shape = "lanceolate", backColor = "#d2dcbe", translucency = 0.35 },
 }

@@ -15,5 +15,5 @@ return pge.SpaceColonization{
   step = 0.2, influence = 1.6, kill = 0.4,
   radius = { tip = 0.015, exponent = 2.3 },
   mesh = { sides = 7, color = "#6b5444" },
-  leaves = { perTip = {3, 6}, size = 0.25, maxDepth = 2, colors = {"#356b22", "#86a83a"} },
+  leaves = { perTip = {3, 6}, size = 0.08, perCard = 12, maxDepth = 2, along = { spacing = 0.15 }, colors = {"#356b22", "#86a83a"} },
 }

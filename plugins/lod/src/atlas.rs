@@ -13,6 +13,8 @@ use glam::Vec2;
 use pge_engine::geometry::{GeometryError, Texture};
 use rand_mt::Mt64;
 
+use crate::mask;
+
 /// Side of the atlas in pixels.
 pub const ATLAS_SIZE: u32 = 512;
 /// Leaf counts the cluster cells show.
@@ -57,6 +59,10 @@ pub struct Atlas {
     /// The cells: the single leaf, then one per count of [`CLUSTER_COUNTS`] and density
     /// of [`CLUSTER_DENSITIES`], counts outermost.
     pub cells: Vec<Cell>,
+    /// The alpha cutoff the atlas is drawn with, chosen with its texture
+    /// ([`crate::mask::choose_cutoff`]): the atlas' mean alpha stays at least
+    /// [`crate::mask::MARGIN`] above it, so a client's own mipmaps keep the clusters.
+    pub alpha_cutoff: f32,
 }
 
 impl Atlas {
@@ -137,6 +143,19 @@ impl Atlas {
                 density,
             });
         }
+        let alpha = mask::alpha_of(&layers.rgba);
+        let alpha_cutoff = match mask::choose_cutoff(&alpha, n, n) {
+            Some(c) => c,
+            None => {
+                // Clusters too sparse for any cutoff (a leaf texture of a few texels):
+                // thickened until the lowest cutoff keeps them.
+                let lowest = mask::CUTOFFS[mask::CUTOFFS.len() - 1];
+                mask::widen_alpha(&mut layers.rgba, n, n, lowest + mask::MARGIN);
+                lowest
+            }
+        };
+        // Between the leaves, the colour of the nearest leaf: no halo in filtered levels.
+        mask::dilate_color(&mut layers.rgba, n, n, 128);
         let texture = Texture::from_rgba("leaf atlas", ATLAS_SIZE, ATLAS_SIZE, &layers.rgba)?;
         let rgb = |name: &str, pixels: Option<Vec<u8>>| {
             pixels
@@ -150,6 +169,7 @@ impl Atlas {
             normal: rgb("leaf atlas normal", layers.normal)?,
             roughness: rgb("leaf atlas roughness", layers.roughness)?,
             cells,
+            alpha_cutoff,
         })
     }
 
@@ -545,6 +565,14 @@ mod tests {
         assert_eq!((plain.normal, plain.roughness), (None, None));
         let again = Atlas::with_maps(&color, Some(&normal), Some(&roughness)).expect("again");
         assert_eq!(again, atlas);
+        // A client's own mipmaps keep the clusters: the mean alpha is over the cutoff, and
+        // between the leaves lies the leaves' colour, not black.
+        let alpha: Vec<u8> = c.pixels().map(|p| p[3]).collect();
+        assert!(crate::mask::mean_alpha(&alpha) >= atlas.alpha_cutoff + crate::mask::MARGIN);
+        assert!(
+            c.pixels().all(|p| p[0] >= 150),
+            "no dark texel under a clear one"
+        );
         // The single-leaf cell shows the leaf unturned: its normals are the leaf's.
         let cell = &atlas.cells[0];
         let centre = ((cell.map(Vec2::splat(0.5)) * ATLAS_SIZE as f32).as_uvec2()).to_array();

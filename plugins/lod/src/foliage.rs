@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 use pge_engine::geometry::{
-    GeometryError, LodLevel, LodSector, Material, Mesh, MeshLod, Primitive,
+    AlphaMode, GeometryError, LodLevel, LodSector, Material, Mesh, MeshLod, Primitive,
 };
 
 use crate::atlas::Atlas;
@@ -177,6 +177,11 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                 texture: Some(a.texture.clone()),
                 normal_texture: a.normal.clone(),
                 metallic_roughness_texture: a.roughness.clone(),
+                // A masked leaf is masked with the cutoff chosen for the atlas.
+                alpha: match mesh.material.alpha {
+                    AlphaMode::Mask(_) => AlphaMode::Mask(a.alpha_cutoff),
+                    other => other,
+                },
                 ..(*mesh.material).clone()
             }),
             None => mesh.material.clone(),

@@ -11,7 +11,9 @@
 //!   [`LodTable::ranges`] (V_render);
 //! - [`lod_mesh`]: a leaf mesh rewritten in V's order with its [`MeshLod`](pge_engine::geometry::MeshLod), optionally per
 //!   angular sector and with an [`Atlas`] of leaf clusters;
-//! - [`assign`]: the leaf budget of a forest (the thesis' Scaling).
+//! - [`assign`]: the leaf budget of a forest (the thesis' Scaling);
+//! - [`mask`]: alpha cutoffs chosen with their texture, so that alpha-masked leaves keep
+//!   their coverage in a client's own mipmaps, and colour dilated under transparent texels.
 //!
 //! All of it is plain Rust; the `lua` feature adds the Lua adapter ([`LodPlugin`]:
 //! `pge.lod.budget{...}`, and the reading of `lod = {...}` options).
@@ -42,6 +44,7 @@ mod foliage;
 mod leaf;
 #[cfg(feature = "lua")]
 pub mod lua;
+pub mod mask;
 mod simplify;
 mod vector;
 

@@ -32,6 +32,7 @@ fn bark(style: BarkStyle) -> BarkParams {
 const LEAF: LeafParams = LeafParams {
     shape: LeafShape::Lobed,
     size: 512,
+    per_card: 1,
 };
 
 fn bench_textures(c: &mut Criterion) {
@@ -61,9 +62,33 @@ fn texture_benches<M: Measurement>(group: &mut BenchmarkGroup<'_, M>) {
         });
     }
     for shape in [LeafShape::Lobed, LeafShape::Palmate, LeafShape::Needles] {
-        let leaf = LeafParams { shape, size: 512 };
+        let leaf = LeafParams {
+            shape,
+            size: 512,
+            per_card: 1,
+        };
         group.bench_function(format!("generate leaf {shape:?} 512"), |b| {
             b.iter(|| leaf_maps(black_box(&leaf)))
+        });
+    }
+    // Twig cards, as the library's species draw them: several leaves (or needle shoots)
+    // a card, generated and encoded (with the cutoff chosen and the colour dilated).
+    for (shape, per_card) in [
+        (LeafShape::Lobed, 7),
+        (LeafShape::Palmate, 6),
+        (LeafShape::Needles, 5),
+    ] {
+        let leaf = LeafParams {
+            shape,
+            size: 512,
+            per_card,
+        };
+        group.bench_function(
+            format!("generate leaf {shape:?} card of {per_card} 512"),
+            |b| b.iter(|| leaf_maps(black_box(&leaf))),
+        );
+        group.bench_function(format!("leaf set {shape:?} card of {per_card} 512"), |b| {
+            b.iter(|| leaf_set(black_box(&leaf)).expect("leaf"))
         });
     }
     let bark_px = bark_maps(&bark(BarkStyle::Furrowed));
@@ -104,7 +129,11 @@ fn texture_benches<M: Measurement>(group: &mut BenchmarkGroup<'_, M>) {
             LeafShape::Ovate,
         ),
     ] {
-        let leaf = LeafParams { shape, size: 512 };
+        let leaf = LeafParams {
+            shape,
+            size: 512,
+            per_card: 1,
+        };
         group.bench_function(format!("species {species} 512"), |b| {
             b.iter(|| {
                 let bark = bark_set(black_box(&bark(style))).expect("bark");

@@ -7,7 +7,7 @@ use pge_engine::geometry::{LeafPoint, Mesh, Skeleton};
 use rand_mt::Mt64;
 use rayon::prelude::*;
 
-use crate::options::LeafOptions;
+use crate::options::{Along, LeafOptions};
 
 /// A uniform draw in `[0, 1)` (53 random bits, rounded to `f32`).
 pub(crate) fn uniform(rng: &mut Mt64) -> f32 {
@@ -36,8 +36,9 @@ fn int_of(draw: u64, lo: u32, hi: u32) -> u32 {
 /// Leaves fewer than this are made and meshed on the calling thread.
 const PARALLEL_FROM: usize = 1 << 14;
 
-/// Leaf points near the tips: for every tip (in index order) a count drawn in
-/// `options.per_tip`; each leaf hangs on one of the tip's last `max_depth + 1` segments (the
+/// Leaf points (cards) near the tips, and along the branches when `options.along` is set
+/// (after every tip's, see [`along_branches`]): for every tip (in index order) a count drawn
+/// in `options.per_tip`; each leaf hangs on one of the tip's last `max_depth + 1` segments (the
 /// segment ending at the tip, its parent segment, ...), at a random place along it, pointing
 /// away from the branch at 35-75 degrees with a random azimuth and a random roll. A tip that
 /// is a root (no segment) bears no leaves.
@@ -53,6 +54,20 @@ pub fn tip_leaves(skeleton: &Skeleton, options: &LeafOptions, rng: &mut Mt64) ->
 
 /// [`tip_leaves`] pushed onto `out` (empty), whose room it uses.
 pub(crate) fn tip_leaves_into(
+    skeleton: &Skeleton,
+    options: &LeafOptions,
+    rng: &mut Mt64,
+    out: Vec<LeafPoint>,
+) -> Vec<LeafPoint> {
+    let mut out = at_tips(skeleton, options, rng, out);
+    if let Some(along) = &options.along {
+        along_branches(skeleton, options, along, rng, &mut out);
+    }
+    out
+}
+
+/// The tip leaves of [`tip_leaves`], without the cards along the branches.
+fn at_tips(
     skeleton: &Skeleton,
     options: &LeafOptions,
     rng: &mut Mt64,
@@ -104,7 +119,6 @@ pub(crate) fn tip_leaves_into(
 
 /// One leaf of `tip` from its draws (the depth, if `max_depth > 0`, then five uniforms).
 fn leaf(skeleton: &Skeleton, options: &LeafOptions, tip: u32, draws: &[u64]) -> LeafPoint {
-    let pos = &skeleton.positions;
     let (depth, mut u) = if options.max_depth > 0 {
         (int_of(draws[0], 0, options.max_depth), draws[1..].iter())
     } else {
@@ -119,10 +133,95 @@ fn leaf(skeleton: &Skeleton, options: &LeafOptions, tip: u32, draws: &[u64]) -> 
             _ => break,
         }
     }
-    // The tip has a parent, and the climb stays on nodes with one.
+    let along = 0.35 + 0.65 * uniform();
+    on_segment(skeleton, options, node, along, uniform)
+}
+
+/// Each node's Horton-Strahler order: 1 at a tip; a node whose children's highest order is
+/// `k` has `k + 1` when two or more children have `k`, else `k`. Orders count from the
+/// tips: a twig is 1, a branch bearing only twigs 2, and so on down to the trunk.
+#[must_use]
+pub fn strahler_orders(skeleton: &Skeleton) -> Vec<u32> {
+    let n = skeleton.len();
+    // The highest order among each node's children so far, and how many children have it.
+    let mut best = vec![(0u32, 0u32); n];
+    let mut orders = vec![0u32; n];
+    for i in (0..n).rev() {
+        let (k, count) = best[i];
+        orders[i] = match (k, count) {
+            (0, _) => 1,
+            (k, c) if c >= 2 => k + 1,
+            (k, _) => k,
+        };
+        if let Some(p) = skeleton.parents[i] {
+            let b = &mut best[p as usize];
+            if orders[i] > b.0 {
+                *b = (orders[i], 1);
+            } else if orders[i] == b.0 {
+                b.1 += 1;
+            }
+        }
+    }
+    orders
+}
+
+/// Appends the cards along the branches of the last `along.orders` orders
+/// ([`strahler_orders`]): every segment whose end node has such an order bears a card at
+/// each multiple of `along.spacing` of path length from the root that falls on it, moved by
+/// up to a third of the spacing either way, and turned, sized and tilted as tip leaves are.
+/// The draws are taken in node order on the calling thread: five a card.
+fn along_branches(
+    skeleton: &Skeleton,
+    options: &LeafOptions,
+    along: &Along,
+    rng: &mut Mt64,
+    out: &mut Vec<LeafPoint>,
+) {
+    let spacing = along.spacing;
+    if !(spacing > 0.0 && spacing.is_finite()) {
+        return;
+    }
+    let orders = strahler_orders(skeleton);
+    let pos = &skeleton.positions;
+    let mut distance = vec![0.0f64; skeleton.len()];
+    for i in 0..skeleton.len() {
+        let Some(p) = skeleton.parents[i] else {
+            continue;
+        };
+        let p = p as usize;
+        let length = f64::from(pos[i].distance(pos[p]));
+        distance[i] = distance[p] + length;
+        if orders[i] > along.orders || length <= 0.0 {
+            continue;
+        }
+        let step = f64::from(spacing);
+        // The multiples of the spacing in (distance[p], distance[i]].
+        let first = (distance[p] / step).floor() as u64 + 1;
+        let last = (distance[i] / step).floor() as u64;
+        for k in first..=last {
+            let mut draw = || uniform(rng);
+            let jitter = (draw() - 0.5) * 0.67 * spacing;
+            let at = ((k as f64 * step - distance[p]) / length) as f32;
+            let t = (at + jitter / length as f32).clamp(0.0, 1.0);
+            out.push(on_segment(skeleton, options, i as u32, t, draw));
+        }
+    }
+}
+
+/// A card on the segment ending at `node` (which has a parent), `along` of the way from the
+/// parent, pointing away from the branch at 35-75 degrees: its azimuth, tilt, roll and size
+/// from the next four uniforms.
+fn on_segment(
+    skeleton: &Skeleton,
+    options: &LeafOptions,
+    node: u32,
+    along: f32,
+    mut uniform: impl FnMut() -> f32,
+) -> LeafPoint {
+    let pos = &skeleton.positions;
+    // The node has a parent (a tip that is not a root, or the climb from one).
     let parent = skeleton.parents[node as usize].unwrap_or(node);
     let (a, b) = (pos[parent as usize], pos[node as usize]);
-    let along = 0.35 + 0.65 * uniform();
     let position = a.lerp(b, along);
     let branch = (b - a).try_normalize().unwrap_or(Vec3::Y);
     let (e1, e2) = branch.any_orthonormal_pair();
@@ -146,9 +245,10 @@ fn leaf(skeleton: &Skeleton, options: &LeafOptions, tip: u32, draws: &[u64]) -> 
     }
 }
 
-/// Appends one quad per leaf point to `mesh` (positions, normals, uvs, colors, indices):
-/// the middle of the quad's stalk edge at the point, the quad extending `size` along its
-/// direction and `size * options.width` wide along its side; `v` runs from 0 at the stalk to 1 at the tip.
+/// Appends one quad per leaf point (a card) to `mesh` (positions, normals, uvs, colors,
+/// indices): the middle of the quad's stalk edge at the point, the quad extending the card's
+/// length ([`LeafOptions::card_length`] of the leaf's `size`: `size` itself for one leaf a
+/// card) along its direction and that times `options.width` wide along its side; `v` runs from 0 at the stalk to 1 at the tip.
 /// Each leaf's colour is drawn between `options.colors`. A leaf of size 0 or less takes
 /// `options.size`.
 ///
@@ -244,11 +344,11 @@ struct Quad {
 /// The quad of a leaf whose colour lies `mix` of the way between the options' two.
 fn quad(leaf: &LeafPoint, options: &LeafOptions, mix: f32) -> Quad {
     let [c0, c1] = options.colors.map(Vec4::from_array);
-    let size = if leaf.size > 0.0 && leaf.size.is_finite() {
+    let size = options.card_length(if leaf.size > 0.0 && leaf.size.is_finite() {
         leaf.size
     } else {
         options.size
-    };
+    });
     let axis = leaf.direction.try_normalize().unwrap_or(Vec3::Y);
     let side = (leaf.side - axis * leaf.side.dot(axis))
         .try_normalize()
@@ -418,6 +518,88 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn strahler_orders_count_from_the_tips() {
+        // tree(): a trunk of 7 nodes and a side branch of 4 from node 3.
+        let s = tree();
+        let orders = strahler_orders(&s);
+        // Two twigs (order 1) meet at node 3: it and the trunk below it are order 2.
+        assert_eq!(orders, vec![2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1]);
+        let mut s = s;
+        // A third twig on the side branch makes no new order: 1 and 1 meet there, then 2
+        // and 1 at node 3 keep 2.
+        s.push(Vec3::new(2.0, 4.0, 1.0), Some(8), 0.05, 2);
+        let orders = strahler_orders(&s);
+        assert_eq!((orders[8], orders[3], orders[0]), (2, 2, 2));
+    }
+
+    #[test]
+    fn cards_along_the_branches_follow_the_spacing_on_the_last_orders() {
+        let s = tree();
+        let tips_only = LeafOptions {
+            per_tip: (0, 0),
+            ..LeafOptions::default()
+        };
+        assert!(tip_leaves(&s, &tips_only, &mut Mt64::new(1)).is_empty());
+        let along = |orders, spacing| LeafOptions {
+            along: Some(Along { orders, spacing }),
+            ..tips_only.clone()
+        };
+        // Order 1 only: the trunk above the fork (3 m) and the side branch (4 * sqrt 2 m),
+        // a card every 0.5 m of path.
+        let twigs = tip_leaves(&s, &along(1, 0.5), &mut Mt64::new(1));
+        let path = 3.0 + 4.0 * 2f32.sqrt();
+        assert!(
+            (twigs.len() as f32 - path / 0.5).abs() <= 2.0,
+            "{} cards on {path} m",
+            twigs.len()
+        );
+        let orders = strahler_orders(&s);
+        for l in &twigs {
+            assert_eq!(orders[l.node as usize], 1, "node {}", l.node);
+            assert!((l.direction.length() - 1.0).abs() < 1e-5);
+        }
+        // Two orders: the trunk below the fork too (3 m more).
+        let both = tip_leaves(&s, &along(2, 0.5), &mut Mt64::new(1));
+        assert!(
+            both.len() >= twigs.len() + 5,
+            "{} vs {}",
+            both.len(),
+            twigs.len()
+        );
+        // Halving the spacing doubles the cards; the same seed the same cards.
+        let dense = tip_leaves(&s, &along(2, 0.25), &mut Mt64::new(1));
+        assert!((dense.len() as i64 - 2 * both.len() as i64).abs() <= 2);
+        assert_eq!(dense, tip_leaves(&s, &along(2, 0.25), &mut Mt64::new(1)));
+        // Tip cards come first, then the cards along the branches.
+        let with_tips = LeafOptions {
+            per_tip: (2, 2),
+            ..along(2, 0.5)
+        };
+        let all = tip_leaves(&s, &with_tips, &mut Mt64::new(1));
+        assert_eq!(all.len(), 4 + both.len());
+    }
+
+    #[test]
+    fn twig_cards_are_longer_than_their_leaves() {
+        let leaf = LeafPoint {
+            node: 0,
+            position: Vec3::ZERO,
+            direction: Vec3::Y,
+            side: Vec3::X,
+            size: 0.1,
+        };
+        let opts = LeafOptions {
+            per_card: 9,
+            ..LeafOptions::default()
+        };
+        let mut mesh = Mesh::default();
+        append_leaf_quads(&[leaf], &opts, &mut Mt64::new(1), &mut mesh);
+        let length = mesh.positions[3].distance(mesh.positions[0]);
+        assert!((length - 0.1 / crate::options::card_share(9)).abs() < 1e-6);
+        assert!(length > 0.15 && length < 0.25, "{length}");
     }
 
     #[test]

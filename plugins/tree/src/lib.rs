@@ -53,11 +53,12 @@ use pge_engine::geometry::{
 use rand_mt::Mt64;
 
 pub use cylinders::{append_bark, bark_mesh};
-pub use leaves::{append_leaf_quads, tip_leaves};
+pub use leaves::{append_leaf_quads, strahler_orders, tip_leaves};
 pub use memory::{MeshMemory, MeshSizes};
 pub use merge::merge_straight;
 pub use options::{
-    BarkStyle, Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TextureSource, TreeOptions,
+    Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
+    TextureSource, TreeOptions, card_share,
 };
 /// The foliage levels of detail crate itself, for plugins that may depend on pge-tree but
 /// not on pge-lod (forests give their variants levels and budget their leaves with it).
@@ -205,10 +206,22 @@ pub fn bark_material(options: &MeshOptions) -> Result<Arc<Material>, TreeError> 
     Ok(Arc::new(material))
 }
 
-/// The leaf material: the procedural PBR set of the options' shape (alpha-masked colour,
-/// normal and roughness maps) or a file's image, alpha mask at 0.5, double-sided, letting
-/// light through to its back face ([`leaf_transmission`]).
+/// The leaf material: the procedural PBR set of the options' shape and card (alpha-masked
+/// colour, normal and roughness maps) or a file's image, double-sided, letting light
+/// through to its back face ([`leaf_transmission`]). The alpha cutoff is chosen with the
+/// colour map so that a client's own mipmaps keep the cards ([`pge_lod::mask`]): a
+/// procedural set's own, or an image's from its alpha (the image re-encoded with its colour
+/// dilated under its clear texels, and its silhouettes thickened when it is too sparse for
+/// any cutoff: see [`leaf_material_with_warning`]).
 pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> {
+    leaf_material_with_warning(options).map(|(material, _)| material)
+}
+
+/// [`leaf_material`] and, when an image's silhouettes had to be thickened, a warning that
+/// says so (`SOURCE: warning: leaves.texture: ...`).
+pub fn leaf_material_with_warning(
+    options: &LeafOptions,
+) -> Result<(Arc<Material>, Option<String>), TreeError> {
     let mut material = Material {
         name: "leaves".into(),
         base_color: [1.0; 4],
@@ -217,24 +230,46 @@ pub fn leaf_material(options: &LeafOptions) -> Result<Arc<Material>, TreeError> 
         roughness: 1.0,
         ..Material::default()
     };
-    match &options.texture {
+    let image = match &options.texture {
         TextureSource::Procedural => {
             let set = leaf_textures(&LeafParams {
                 shape: options.shape,
                 size: options.texture_size,
+                per_card: options.per_card,
             })?;
             material.texture = Some(set.color.clone());
             material.normal_texture = Some(set.normal.clone());
             material.metallic_roughness_texture = Some(set.roughness.clone());
+            material.alpha = AlphaMode::Mask(set.alpha_cutoff.unwrap_or(0.5));
+            None
         }
-        TextureSource::Image(t) => material.texture = Some(t.clone()),
-        TextureSource::File(path) => material.texture = Some(load_png(path, "leaf")?),
-    }
-    if material.metallic_roughness_texture.is_none() {
+        TextureSource::Image(t) => Some(t.clone()),
+        TextureSource::File(path) => Some(load_png(path, "leaf")?),
+    };
+    let mut warning = None;
+    if let Some(image) = image {
+        let masked = pge_lod::mask::mask_texture(&image)?;
+        if let Some(was) = masked.widened_from {
+            let at = if options.source.is_empty() {
+                String::new()
+            } else {
+                format!("{}: ", options.source)
+            };
+            warning = Some(format!(
+                "{at}warning: leaves.texture: '{}' has mean alpha {was:.3}, too little for any \
+                 alpha cutoff to keep it in a client's mipmaps (at least {:.2}); its \
+                 silhouettes were thickened to mean alpha {:.3}",
+                image.name,
+                pge_lod::mask::CUTOFFS[pge_lod::mask::CUTOFFS.len() - 1] + pge_lod::mask::MARGIN,
+                masked.mean_alpha
+            ));
+        }
+        material.alpha = AlphaMode::Mask(masked.cutoff);
+        material.texture = Some(Arc::new(masked.texture));
         material.roughness = 0.8;
     }
     material.transmission = leaf_transmission(options);
-    Ok(Arc::new(material))
+    Ok((Arc::new(material), warning))
 }
 
 /// The light a leaf lets through: `translucency` of it, in the leaves' back colour (glTF
@@ -366,7 +401,7 @@ pub fn build_tree_in(
         || {
             leaf_mesh
                 .is_some()
-                .then(|| leaf_material(style))
+                .then(|| leaf_material_with_warning(style))
                 .transpose()
         },
     );
@@ -378,7 +413,8 @@ pub fn build_tree_in(
     }
 
     let t = Instant::now();
-    if let (Some((mut mesh, clean)), Some(material)) = (leaf_mesh, leaf_material?) {
+    if let (Some((mut mesh, clean)), Some((material, warning))) = (leaf_mesh, leaf_material?) {
+        model.stats.warnings.extend(warning);
         mesh.material = material;
         if let Some(lod) = &options.lod {
             mesh = lod_leaves(&mesh, lod, &prepared)?;
@@ -514,7 +550,16 @@ mod tests {
         assert!(a.stats.leaves >= 6);
         assert!(bark.material.texture.is_some());
         let leaves = &a.meshes[1];
-        assert_eq!(leaves.material.alpha, AlphaMode::Mask(0.5));
+        // The default card's cutoff is chosen with its texture: its mean alpha above it.
+        let AlphaMode::Mask(cutoff) = leaves.material.alpha else {
+            panic!("masked leaves")
+        };
+        let texture = leaves.material.texture.as_ref().expect("leaf texture");
+        let rgba = image::load_from_memory(&texture.png)
+            .expect("png")
+            .to_rgba8();
+        let mean = pge_lod::mask::mean_alpha(&pge_lod::mask::alpha_of(rgba.as_raw()));
+        assert!(mean >= cutoff + pge_lod::mask::MARGIN, "{mean} vs {cutoff}");
         assert!(leaves.material.double_sided);
         let through = leaves.material.transmission.expect("translucent leaves");
         assert_eq!(through.factor, 0.3);

@@ -14,7 +14,8 @@
 //!            flare = { roots = 5, spread = 1, height = 1 } },   -- or flare = true
 //!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
 //!              texture = "leaf.png", shape = "lobed", textureSize = 512,
-//!              backColor = "#c8dc64", translucency = 0.3 },
+//!              backColor = "#c8dc64", translucency = 0.3, perCard = 1,
+//!              along = { orders = 2, spacing = 0.3 } },
 //!   lod = { sectors = 1, atlas = false },      -- foliage levels of detail (pge_lod)
 //! }
 //! ```
@@ -25,10 +26,13 @@
 use std::path::PathBuf;
 
 use mlua::{Lua, Value};
-use pge_engine::lua::{Bounds, Options, error_message, resolve_path, script_error};
+use pge_engine::lua::{
+    Bounds, Options, caller_location, error_message, resolve_path, script_error,
+};
 
 use crate::options::{
-    BarkStyle, Flare, LeafOptions, LeafShape, MeshOptions, RadiiMode, TextureSource, TreeOptions,
+    Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
+    TextureSource, TreeOptions,
 };
 use crate::textures::load_png;
 
@@ -187,7 +191,9 @@ pub fn read_mesh(o: &Options, mesh: &mut MeshOptions) -> mlua::Result<()> {
 /// {min, max}` (or one number), `size`, `width`, `colors = {"#rrggbb", "#rrggbb"}` (or one
 /// colour), `maxDepth`, `texture` (a PNG path, not loaded yet: see [`load_texture`]),
 /// `shape` (`"ovate"`, `"lobed"`, `"lanceolate"`, `"palmate"` or `"needles"`), `textureSize`,
-/// `backColor` (`"#rrggbb"`), `translucency` (0..=1).
+/// `backColor` (`"#rrggbb"`), `translucency` (0..=1), `perCard` (leaves a card draws,
+/// 1..=12) and `along` (`true` or `{orders = 1..=8, spacing = 0.02..=100}`: cards along the
+/// last branch orders). The options remember the calling line for warnings.
 pub fn leaf_options(o: &Options) -> mlua::Result<LeafOptions> {
     let mut leaves = LeafOptions::default();
     if let Some((min, max)) = o.integer_range("perTip", 0..=1000)? {
@@ -253,6 +259,29 @@ pub fn leaf_options(o: &Options) -> mlua::Result<LeafOptions> {
     if let Some(v) = o.number_f32("translucency", Bounds::Between(0.0, 1.0))? {
         leaves.translucency = v;
     }
+    if let Some(v) = o.integer("perCard", 1..=i64::from(MAX_PER_CARD))? {
+        leaves.per_card = v as u32;
+    }
+    match o.value("along")? {
+        Value::Nil | Value::Boolean(false) => {}
+        Value::Boolean(true) => leaves.along = Some(Along::default()),
+        Value::Table(t) => {
+            let a = o.child("along", t);
+            let mut along = Along::default();
+            if let Some(v) = a.integer("orders", 1..=8)? {
+                along.orders = v as u32;
+            }
+            if let Some(v) = a.number_f32("spacing", Bounds::Between(0.02, 100.0))? {
+                along.spacing = v;
+            }
+            a.finish()?;
+            leaves.along = Some(along);
+        }
+        other => {
+            return Err(o.wrong_type("along", "true or a table {orders, spacing}", &other));
+        }
+    }
+    leaves.source = caller_location(o.lua()).to_string();
     o.finish()?;
     Ok(leaves)
 }
@@ -431,6 +460,18 @@ mod tests {
                 "{ leaves = { translucency = 1.5 } }",
                 "leaves.translucency must be a number between 0 and 1, got 1.5",
             ),
+            (
+                "{ leaves = { perCard = 0 } }",
+                "leaves.perCard must be an integer between 1 and 12, got 0",
+            ),
+            (
+                "{ leaves = { along = { spacing = 0 } } }",
+                "leaves.along.spacing must be a number between 0.02 and 100, got 0",
+            ),
+            (
+                "{ leaves = { along = 3 } }",
+                "leaves.along must be true or a table {orders, spacing}, got integer",
+            ),
         ];
         for (src, want) in cases {
             assert_eq!(error(src), want, "{src}");
@@ -459,6 +500,7 @@ mod tests {
         );
         let l = o.leaves.expect("leaves");
         assert_eq!((l.shape, l.texture_size), (LeafShape::Palmate, 256));
+        assert_eq!((l.per_card, l.along), (1, None));
         assert_eq!((l.back_color, l.translucency), ([1.0; 4], 0.5));
         assert!(
             error("{ leaves = { backColor = 'green' } }").contains("leaves.backColor must be"),
@@ -472,6 +514,24 @@ mod tests {
             error("{ mesh = { light = {0, 0, 0} } }")
                 .contains("mesh.light must be a non-zero direction")
         );
+    }
+
+    #[test]
+    fn twig_cards_and_cards_along_the_branches() {
+        let o = parse("{ leaves = { perCard = 7, along = { orders = 3, spacing = 0.5 } } }")
+            .expect("ok");
+        let l = o.leaves.expect("leaves");
+        assert_eq!(l.per_card, 7);
+        assert_eq!(
+            l.along,
+            Some(Along {
+                orders: 3,
+                spacing: 0.5
+            })
+        );
+        assert_eq!(l.source, "eval:1");
+        let o = parse("{ leaves = { along = true } }").expect("ok");
+        assert_eq!(o.leaves.expect("leaves").along, Some(Along::default()));
     }
 
     #[test]

@@ -200,6 +200,13 @@ pub struct LeafOptions {
     /// A tip's leaves hang on its last `max_depth + 1` segments: 0 puts them on the tip
     /// segment only (0..=1000, default 2).
     pub max_depth: u32,
+    /// Leaves drawn on each card (1..=[`MAX_PER_CARD`], default 1): 1 draws one leaf, the card
+    /// `size` long; more draw a twig bearing that many leaves, each about `size` long, on a
+    /// card [`LeafOptions::card_length`] long (for `Needles`, shoots of needles). `per_tip`
+    /// and `along` count cards.
+    pub per_card: u32,
+    /// Cards along the branches as well as at the tips, or `None` (default: tips only).
+    pub along: Option<Along>,
     /// The leaf texture: procedural (a PBR set with the silhouette of `shape` in alpha), or
     /// a file (colour only).
     pub texture: TextureSource,
@@ -214,6 +221,9 @@ pub struct LeafOptions {
     /// The share of light passing through a leaf, 0..=1 (default 0.3); 0 writes no
     /// transmission and shades both faces alike.
     pub translucency: f32,
+    /// Where the options were given (`FILE:LINE`), for warnings; empty when not from a
+    /// script.
+    pub source: String,
 }
 
 impl Default for LeafOptions {
@@ -224,11 +234,58 @@ impl Default for LeafOptions {
             width: 1.0,
             colors: [hex(DEFAULT_LEAF_COLORS[0]), hex(DEFAULT_LEAF_COLORS[1])],
             max_depth: 2,
+            per_card: 1,
+            along: None,
             texture: TextureSource::Procedural,
             shape: LeafShape::Ovate,
             texture_size: 512,
             back_color: hex(DEFAULT_LEAF_BACK_COLOR),
             translucency: 0.3,
+            source: String::new(),
+        }
+    }
+}
+
+/// The most leaves a card draws.
+pub const MAX_PER_CARD: u32 = 12;
+
+impl LeafOptions {
+    /// The length of a card whose leaves are `leaf` long: `leaf` for one leaf a card, longer
+    /// for a twig of [`LeafOptions::per_card`] leaves (the twig's layout draws each leaf at
+    /// a fixed share of the card, [`card_share`]).
+    #[must_use]
+    pub fn card_length(&self, leaf: f32) -> f32 {
+        leaf / card_share(self.per_card)
+    }
+}
+
+/// The length of one leaf of a twig card of `per_card` leaves as a share of the card's
+/// length: 1 for a single leaf, then less as the twig bears more (so the leaves cover about
+/// the same share of every card).
+#[must_use]
+pub fn card_share(per_card: u32) -> f32 {
+    match per_card {
+        0 | 1 => 1.0,
+        n => (1.6 / ((n + 1) as f32).sqrt()).min(0.7),
+    }
+}
+
+/// Cards along the last branch orders (counted from the tips, Horton-Strahler: a tip's
+/// branch is order 1, a branch where two of order k meet is k + 1), one every `spacing`
+/// metres of path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Along {
+    /// How many orders from the tips bear cards (1..=8, default 2).
+    pub orders: u32,
+    /// Path length between two cards along a branch, metres (> 0, default 0.3).
+    pub spacing: f32,
+}
+
+impl Default for Along {
+    fn default() -> Self {
+        Along {
+            orders: 2,
+            spacing: 0.3,
         }
     }
 }

@@ -327,11 +327,17 @@ mod tests {
         let leaf = crate::LeafParams {
             shape: crate::LeafShape::Lobed,
             size: 48,
+            per_card: 1,
         };
         let (set, maps) = (
             crate::leaf_set(&leaf).expect("set"),
             crate::leaf_maps(&leaf),
         );
+        // The same maps; the alpha cutoff is the leaf set's own.
+        let set = crate::TextureSet {
+            alpha_cutoff: None,
+            ..set
+        };
         assert_eq!(set, encode_maps("leaf", maps).expect("encodes"));
     }
 

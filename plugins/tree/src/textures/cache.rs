@@ -131,6 +131,7 @@ mod tests {
         let leaf = LeafParams {
             shape: LeafShape::Lobed,
             size: 32,
+            per_card: 1,
         };
         // 24 variants, as a forest builds them: in parallel, asking for the same sets.
         let sets: Vec<Vec<Arc<TextureSet>>> = (0..24)

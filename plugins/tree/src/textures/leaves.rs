@@ -7,9 +7,11 @@ use rayon::prelude::*;
 use super::maps::{Maps, Srgb, Surface};
 use super::needles::Needles;
 use super::noise::{Fractal, floor, smoothstep};
+use super::twig::Twig;
 use super::{LeafParams, TextureSet};
 use crate::TreeError;
 use crate::options::LeafShape;
+use pge_lod::mask;
 
 /// What a leaf texture holds at one pixel: inside the silhouette or not, a height (veins
 /// sunk, the blade domed) and a shade (veins lighter).
@@ -45,19 +47,25 @@ pub(super) fn blade_half_width(shape: LeafShape, t: f32) -> f32 {
     }
 }
 
-/// The leaf pixel at `(x, v)`: `x` across the card in `[-0.5, 0.5]`, `v` from the stalk (0)
-/// to the far edge (1); `w` is the blade's half-width in this row (shapes with a midrib:
-/// [`blade_half_width`] at `(v - 0.12) / 0.86`), `needles` the spray's needles.
-fn leaf_pixel(shape: LeafShape, x: f32, v: f32, w: f32, needles: &Needles) -> LeafPixel {
-    let outside = LeafPixel {
+impl LeafPixel {
+    /// A pixel outside every silhouette.
+    pub(super) const CLEAR: LeafPixel = LeafPixel {
         inside: false,
         height: 0.0,
         shade: 1.0,
         roughness: 0.6,
     };
+}
+
+/// The pixel at `(x, v)` of one broad leaf filling its card: `x` across the card in
+/// `[-0.5, 0.5]`, `v` from the stalk (0) to the far edge (1); `w` is the blade's half-width
+/// in this row (shapes with a midrib: [`blade_half_width`] at `(v - 0.12) / 0.86`).
+/// `Needles` draws nothing here (see [`super::needles`]).
+pub(super) fn blade_pixel(shape: LeafShape, x: f32, v: f32, w: f32) -> LeafPixel {
+    let outside = LeafPixel::CLEAR;
     let stalk = v < 0.13 && x.abs() < 0.014;
     match shape {
-        LeafShape::Needles => needles.pixel(x, v),
+        LeafShape::Needles => outside,
         LeafShape::Palmate => {
             // Maple: five pointed lobes around the top of the stalk, main veins radiating
             // to their tips.
@@ -187,22 +195,50 @@ fn atan2(y: f32, x: f32) -> f32 {
     if y < 0.0 { -a } else { a }
 }
 
-/// The leaf set of `params`: its maps generated (as [`leaf_maps`]) and PNG-encoded.
+/// The leaf set of `params`: its maps generated (as [`leaf_maps`]) and PNG-encoded, with the
+/// alpha cutoff chosen for its colour map ([`TextureSet::alpha_cutoff`]).
 pub fn leaf_set(params: &LeafParams) -> Result<TextureSet, TreeError> {
-    leaf_surface(params).encode("leaf")
+    let (surface, cutoff) = leaf_surface(params);
+    let mut set = surface.encode("leaf")?;
+    set.alpha_cutoff = Some(cutoff);
+    Ok(set)
 }
 
-/// The leaf maps of `params`: a near-white silhouette (each leaf's vertex colour gives the
-/// hue) with lighter veins, alpha 255 inside and 0 outside for masking; the normal map of
-/// the domed blade and its sunken veins; roughness.
+/// The leaf maps of `params`: a near-white card (each leaf's vertex colour gives the hue)
+/// with lighter veins, alpha 255 inside the silhouettes and 0 outside for masking, the
+/// colour of the nearest leaf under the clear texels; the normal map of the domed blades and
+/// their sunken veins; roughness.
 pub fn leaf_maps(params: &LeafParams) -> Maps {
-    leaf_surface(params).maps()
+    leaf_surface(params).0.maps()
 }
 
-fn leaf_surface(params: &LeafParams) -> Surface {
+/// What a card draws: a twig of broad leaves or a spray of needle shoots.
+enum Card {
+    Twig(Twig),
+    Needles(Needles),
+}
+
+impl Card {
+    fn new(params: &LeafParams) -> Card {
+        match params.shape {
+            LeafShape::Needles => Card::Needles(Needles::new(params.per_card)),
+            shape => Card::Twig(Twig::new(shape, params.per_card)),
+        }
+    }
+
+    fn pixel(&self, x: f32, v: f32) -> LeafPixel {
+        match self {
+            Card::Twig(t) => t.pixel(x, v),
+            Card::Needles(n) => n.pixel(x, v),
+        }
+    }
+}
+
+/// The card's maps before the normal map, and the alpha cutoff chosen with its colour.
+fn leaf_surface(params: &LeafParams) -> (Surface, f32) {
     let n = params.size.clamp(16, 4096) as usize;
     let mottle = Fractal::new(8, 8, 2, 61).for_pixels(n);
-    let needles = Needles::new();
+    let card = Card::new(params);
     let mut heights = vec![0.0f32; n * n];
     let mut color = vec![0u8; n * n * 4];
     let mut rough = vec![0u8; n * n * 3];
@@ -214,11 +250,10 @@ fn leaf_surface(params: &LeafParams) -> Surface {
         .enumerate()
         .for_each(|(y, ((h, c), r))| {
             let v = (y as f32 + 0.5) / n as f32;
-            let w = blade_half_width(params.shape, (v - 0.12) / 0.86);
             let mottle = mottle.row(v).values();
             for xi in 0..n {
                 let u = (xi as f32 + 0.5) / n as f32;
-                let p = leaf_pixel(params.shape, u - 0.5, v, w, &needles);
+                let p = card.pixel(u - 0.5, v);
                 let mottle = 0.05 * (mottle[xi] - 0.5);
                 let g = srgb.byte(p.shade + mottle);
                 c[xi * 4..xi * 4 + 4].copy_from_slice(&[g, g, g, if p.inside { 255 } else { 0 }]);
@@ -226,7 +261,8 @@ fn leaf_surface(params: &LeafParams) -> Surface {
                 r[xi * 3 + 1] = (p.roughness.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
             }
         });
-    Surface {
+    let cutoff = mask_card(&mut color, n);
+    let surface = Surface {
         n,
         heights,
         strength: 3.0 * n as f32 / 512.0,
@@ -234,7 +270,25 @@ fn leaf_surface(params: &LeafParams) -> Surface {
         color,
         channels: 4,
         roughness: rough,
-    }
+    };
+    (surface, cutoff)
+}
+
+/// Chooses the alpha cutoff of an `n x n` RGBA card ([`mask::choose_cutoff`]; a card too
+/// sparse for any is thickened first, [`mask::widen_alpha`]) and dilates the colour of its
+/// leaves under its clear texels ([`mask::dilate_color`]). Returns the cutoff.
+pub(super) fn mask_card(rgba: &mut [u8], n: usize) -> f32 {
+    let cutoff = match mask::choose_cutoff(&mask::alpha_of(rgba), n, n) {
+        Some(c) => c,
+        None => {
+            let lowest = mask::CUTOFFS[mask::CUTOFFS.len() - 1];
+            // A hair over the margin, so that 8-bit rounding in a client keeps it.
+            mask::widen_alpha(rgba, n, n, lowest + mask::MARGIN + 0.01);
+            lowest
+        }
+    };
+    mask::dilate_color(rgba, n, n, 128);
+    cutoff
 }
 
 #[cfg(test)]
@@ -252,7 +306,12 @@ mod tests {
             LeafShape::Palmate,
             LeafShape::Needles,
         ] {
-            let set = leaf_set(&LeafParams { shape, size: 128 }).expect("leaf");
+            let set = leaf_set(&LeafParams {
+                shape,
+                size: 128,
+                per_card: 1,
+            })
+            .expect("leaf");
             let img = decode(&set.color);
             assert!(
                 img.pixels().all(|p| p[3] == 0 || p[3] == 255),
@@ -272,10 +331,15 @@ mod tests {
                 "{shape:?}: veins and dome in the normal map"
             );
         }
-        // Willow leaves are narrow, oak leaves lobed (less than the ovate blade), needles thin.
-        assert!(opaque[2] * 2 < opaque[0], "{opaque:?}");
+        // Willow leaves are narrow (one alone on a square card is too sparse for any
+        // cutoff, so its silhouette is thickened a little), oak leaves lobed (less than the
+        // ovate blade).
+        assert!(opaque[2] < opaque[0], "{opaque:?}");
+        assert!(
+            blade_half_width(LeafShape::Lanceolate, 0.5) * 2.5
+                < blade_half_width(LeafShape::Ovate, 0.5)
+        );
         assert!(opaque[1] < opaque[0], "{opaque:?}");
-        assert!(opaque[4] < opaque[0], "{opaque:?}");
         // The oak outline goes in and out: the half-width along the blade has several
         // local minima (the sinuses).
         let w: Vec<f32> = (1..100)
@@ -285,6 +349,41 @@ mod tests {
         assert!(sinuses >= 3, "{sinuses} sinuses");
         assert_eq!(blade_half_width(LeafShape::Ovate, -0.1), 0.0);
         assert!(blade_half_width(LeafShape::Ovate, 1.0) < 0.01);
+    }
+
+    #[test]
+    fn every_card_keeps_its_coverage_in_a_box_filtered_chain() {
+        for shape in [
+            LeafShape::Ovate,
+            LeafShape::Lobed,
+            LeafShape::Lanceolate,
+            LeafShape::Palmate,
+            LeafShape::Needles,
+        ] {
+            for per_card in [1, 3, 5, 7, 9, 12] {
+                let set = leaf_set(&LeafParams {
+                    shape,
+                    size: 128,
+                    per_card,
+                })
+                .expect("leaf");
+                let img = decode(&set.color);
+                let alpha = mask::alpha_of(img.as_raw());
+                let mean = mask::mean_alpha(&alpha);
+                let cutoff = set.alpha_cutoff.expect("a leaf set has a cutoff");
+                assert!(
+                    mean >= cutoff + mask::MARGIN,
+                    "{shape:?} {per_card}: {mean}"
+                );
+                // Colour dilated: no clear texel darker than the darkest drawn one.
+                let darkest = img.pixels().filter(|p| p[3] == 255).map(|p| p[0]).min();
+                let darkest = darkest.expect("drawn texels");
+                assert!(
+                    img.pixels().all(|p| p[3] == 255 || p[0] >= darkest),
+                    "{shape:?} {per_card}: a dark clear texel"
+                );
+            }
+        }
     }
 
     #[test]
@@ -317,6 +416,7 @@ mod tests {
         let set = leaf_set(&LeafParams {
             shape: LeafShape::Ovate,
             size: 256,
+            per_card: 1,
         })
         .expect("leaf");
         let img = decode(&set.color);

@@ -78,6 +78,7 @@ impl Surface {
             color: color?,
             normal: normal?,
             roughness: roughness?,
+            alpha_cutoff: None,
         })
     }
 }
@@ -140,6 +141,7 @@ pub fn encode_maps(what: &str, maps: Maps) -> Result<TextureSet, TreeError> {
         color: next()?,
         normal: next()?,
         roughness: next()?,
+        alpha_cutoff: None,
     })
 }
 

@@ -17,6 +17,7 @@ mod leaves;
 mod maps;
 mod needles;
 mod noise;
+mod twig;
 
 use std::sync::Arc;
 
@@ -51,6 +52,9 @@ pub struct LeafParams {
     pub shape: LeafShape,
     /// Side of every map in pixels.
     pub size: u32,
+    /// Leaves (or needle shoots) drawn on the card: 1 a single leaf, more a twig
+    /// ([`crate::LeafOptions::per_card`]).
+    pub per_card: u32,
 }
 
 /// One material's maps.
@@ -62,6 +66,10 @@ pub struct TextureSet {
     pub normal: Arc<Texture>,
     /// glTF metallic-roughness map: roughness in G, metalness (0) in B.
     pub roughness: Arc<Texture>,
+    /// The alpha cutoff chosen with an alpha-masked colour map (leaves: its mean alpha at
+    /// least [`pge_lod::mask::MARGIN`] above it, see [`pge_lod::mask`]); `None` for an
+    /// opaque set.
+    pub alpha_cutoff: Option<f32>,
 }
 
 /// Test helpers shared by the submodules' tests.
