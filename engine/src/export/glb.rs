@@ -208,7 +208,7 @@ impl Builder {
         )
     }
 
-    /// The embedded PNG image of `tex`, written once however many textures (and the
+    /// The embedded image of `tex` (PNG or JPEG), written once however many textures (and the
     /// environment) use it.
     fn image(&mut self, tex: &Arc<Texture>) -> json::Index<json::Image> {
         if let Some(i) = written(&self.images, tex) {
@@ -217,7 +217,7 @@ impl Builder {
         let view = self.view(Data::Png(tex.clone()), None);
         let index = self.root.push(json::Image {
             buffer_view: Some(view),
-            mime_type: Some(json::image::MimeType("image/png".into())),
+            mime_type: Some(json::image::MimeType(tex.mime_type().into())),
             name: Some(tex.name.clone()),
             uri: None,
             extensions: None,
