@@ -9,6 +9,7 @@ mod mesh;
 mod model;
 mod resident;
 mod skeleton;
+mod tangents;
 mod triangles;
 
 pub use material::{AlphaMode, DiffuseTransmission, Material, Texture};
