@@ -57,7 +57,7 @@ golden! {
     lsystems_hogeweg: "scripts/lsystems/hogeweg.lua" => 0x15be95244926e301,
     lsystems_ternary: "scripts/lsystems/ternary.lua" => 0x63ab626d9d8013d8,
     species_oak: "scripts/species/oak.lua" => 0x25575db6c673a018,
-    species_conifer: "scripts/species/conifer.lua" => 0xf1321f9fbbdb1f8c,
+    species_conifer: "scripts/species/conifer.lua" => 0x72db08a1a29f824e,
     species_willow: "scripts/species/willow.lua" => 0x8ffb05fed6a33241,
     species_topiary: "scripts/species/topiary.lua" => 0x84ceb01eec53b046,
     species_vase: "scripts/species/vase.lua" => 0xec9c2463e0849955,

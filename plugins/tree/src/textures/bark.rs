@@ -245,7 +245,7 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
 fn relief(style: BarkStyle) -> f32 {
     match style {
         BarkStyle::Furrowed => 16.0,
-        BarkStyle::Plated | BarkStyle::Scaly => 14.0,
+        BarkStyle::Plated | BarkStyle::Scaly => 15.5,
         BarkStyle::Smooth => 20.0,
         BarkStyle::Fibrous => 12.0,
     }
