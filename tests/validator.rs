@@ -1,5 +1,6 @@
 //! Every script in the library writes a glb that the Khronos glTF validator accepts with no
-//! errors. The validator (npm package `gltf-validator`) is installed into `target/` on
+//! errors and no warning about tangents (every normal-mapped mesh carries MikkTSpace
+//! tangents). The validator (npm package `gltf-validator`) is installed into `target/` on
 //! first use; this needs Node.js and npm.
 
 use std::path::{Path, PathBuf};
@@ -74,5 +75,20 @@ fn every_library_script_writes_a_valid_glb() {
         report.lines().filter(|l| l.contains(": 0 errors")).count(),
         scripts.len(),
         "{report}"
+    );
+    assert_tangents(&report);
+}
+
+/// Every normal-mapped mesh carries its tangents: the validator warns of none
+/// (`MESH_PRIMITIVE_GENERATED_TANGENT_SPACE`, the tangent space each client would make up)
+/// and of no tangent that is not a unit vector with a sign of ±1.
+fn assert_tangents(report: &str) {
+    let tangent_warnings: Vec<&str> = report
+        .lines()
+        .filter(|l| l.contains("TANGENT") || l.contains("ACCESSOR_INVALID_SIGN"))
+        .collect();
+    assert!(
+        tangent_warnings.is_empty(),
+        "tangent warnings: {tangent_warnings:#?}"
     );
 }

@@ -208,7 +208,7 @@ impl Builder {
         )
     }
 
-    /// The embedded PNG image of `tex`, written once however many textures (and the
+    /// The embedded image of `tex` (PNG or JPEG), written once however many textures (and the
     /// environment) use it.
     fn image(&mut self, tex: &Arc<Texture>) -> json::Index<json::Image> {
         if let Some(i) = written(&self.images, tex) {
@@ -217,7 +217,7 @@ impl Builder {
         let view = self.view(Data::Png(tex.clone()), None);
         let index = self.root.push(json::Image {
             buffer_view: Some(view),
-            mime_type: Some(json::image::MimeType("image/png".into())),
+            mime_type: Some(json::image::MimeType(tex.mime_type().into())),
             name: Some(tex.name.clone()),
             uri: None,
             extensions: None,
@@ -383,11 +383,20 @@ impl Builder {
             );
         }
         // Texture coordinates only where a texture reads them.
-        if !mesh.uvs.is_empty() && mesh.material.texture.is_some() {
+        let m = &mesh.material;
+        let textured = [&m.texture, &m.normal_texture, &m.metallic_roughness_texture];
+        if !mesh.uvs.is_empty() && textured.iter().any(|t| t.is_some()) {
             attributes.insert(Valid(Semantic::TexCoords(0)), self.vec2s(mesh));
         }
         if !mesh.colors.is_empty() {
             attributes.insert(Valid(Semantic::Colors(0)), self.colors(mesh));
+        }
+        // MikkTSpace tangents where a normal map reads them.
+        if let Some(t) = mesh.tangents() {
+            let data = Data::Floats(t.iter().flat_map(|t| t.to_array()).collect());
+            let vertex = Some(json::buffer::Target::ArrayBuffer);
+            let index = self.accessor(data, t.len(), ComponentType::F32, Type::Vec4, None, vertex);
+            attributes.insert(Valid(Semantic::Tangents), index);
         }
         let indices = self.accessor(
             Data::Mesh(mesh.clone(), Attribute::Indices),

@@ -41,7 +41,7 @@ pub(super) enum Data {
     Mesh(Arc<Mesh>, Attribute),
     /// Little-endian floats (per-instance data).
     Floats(Vec<f32>),
-    /// An embedded PNG image, as it is.
+    /// An embedded image (PNG or JPEG), as it is.
     Png(Arc<Texture>),
 }
 

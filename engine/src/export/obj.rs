@@ -122,7 +122,7 @@ pub fn obj_files(model: &Model, mtl_name: &str, stem: &str) -> Result<ObjFiles> 
         )
         .map_err(e)?;
         if let Some(t) = &m.texture {
-            let file = format!("{stem}_{i}.png");
+            let file = format!("{stem}_{i}.{}", t.extension());
             writeln!(out.mtl, "map_Kd {file}").map_err(e)?;
             if !matches!(m.alpha, crate::geometry::AlphaMode::Opaque) {
                 writeln!(out.mtl, "map_d {file}").map_err(e)?;

@@ -14,7 +14,7 @@ pub enum AlphaMode {
     Blend,
 }
 
-/// An image embedded in the model as PNG.
+/// An image embedded in the model: PNG, or JPEG for maps without alpha.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Texture {
     /// Name written to the glTF image.
@@ -23,12 +23,99 @@ pub struct Texture {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// The PNG file's bytes.
+    /// The image file's bytes: PNG, or JPEG (see [`Texture::mime_type`]).
     #[serde(with = "super::binary::bytes")]
     pub png: Vec<u8>,
 }
 
+/// The first bytes of every JPEG file (start of image, then a marker).
+const JPEG_MAGIC: [u8; 3] = [0xFF, 0xD8, 0xFF];
+
 impl Texture {
+    /// Whether the bytes are a JPEG file (else PNG).
+    #[must_use]
+    pub fn is_jpeg(&self) -> bool {
+        self.png.starts_with(&JPEG_MAGIC)
+    }
+
+    /// The image's media type as glTF names it: `image/jpeg` or `image/png`.
+    #[must_use]
+    pub fn mime_type(&self) -> &'static str {
+        if self.is_jpeg() {
+            "image/jpeg"
+        } else {
+            "image/png"
+        }
+    }
+
+    /// The usual file extension of the image: `jpg` or `png`.
+    #[must_use]
+    pub fn extension(&self) -> &'static str {
+        if self.is_jpeg() { "jpg" } else { "png" }
+    }
+
+    /// Encodes 8-bit pixels of `channels` (1: grey, 3: RGB) per pixel, row-major with the
+    /// top row first, as a baseline JPEG of `quality` (1..=100, clamped) with no chroma
+    /// subsampling: for opaque generated maps, where it costs a fraction of PNG's bytes.
+    /// Deterministic: the same pixels always give the same bytes.
+    pub fn from_pixels_jpeg(
+        name: impl Into<String>,
+        width: u32,
+        height: u32,
+        channels: u8,
+        pixels: &[u8],
+        quality: u8,
+    ) -> Result<Texture, GeometryError> {
+        let color = match channels {
+            1 => image::ExtendedColorType::L8,
+            3 => image::ExtendedColorType::Rgb8,
+            _ => {
+                return Err(GeometryError::Texture(format!(
+                    "{channels} channels: a JPEG takes only 1 (grey) or 3 (RGB)"
+                )));
+            }
+        };
+        let expected = width as usize * height as usize * channels as usize;
+        if pixels.len() != expected || width == 0 || height == 0 {
+            return Err(GeometryError::Texture(format!(
+                "{width}x{height} with {channels} channels needs {expected} bytes, got {}",
+                pixels.len()
+            )));
+        }
+        let mut jpeg = Vec::with_capacity(expected / 4);
+        let encoder =
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, quality.clamp(1, 100));
+        image::ImageEncoder::write_image(encoder, pixels, width, height, color)
+            .map_err(|e| GeometryError::Texture(e.to_string()))?;
+        Ok(Texture {
+            name: name.into(),
+            width,
+            height,
+            png: jpeg,
+        })
+    }
+
+    /// A texture of encoded PNG or JPEG bytes as they are (not decoded, not re-encoded): its
+    /// size read from the file's header. Anything else is an error.
+    pub fn from_encoded(name: impl Into<String>, bytes: Vec<u8>) -> Result<Texture, GeometryError> {
+        let format = if bytes.starts_with(&JPEG_MAGIC) {
+            image::ImageFormat::Jpeg
+        } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+            image::ImageFormat::Png
+        } else {
+            return Err(GeometryError::Texture("neither a PNG nor a JPEG".into()));
+        };
+        let (width, height) = image::ImageReader::with_format(std::io::Cursor::new(&bytes), format)
+            .into_dimensions()
+            .map_err(|e| GeometryError::Texture(e.to_string()))?;
+        Ok(Texture {
+            name: name.into(),
+            width,
+            height,
+            png: bytes,
+        })
+    }
+
     /// Encodes RGBA8 pixels (row-major, top row first) as a PNG texture.
     ///
     /// The encoding is deterministic: the same pixels always give the same bytes.
@@ -247,5 +334,43 @@ mod tests {
         assert_eq!(decoded.as_raw(), &rgb);
         assert!(Texture::from_pixels_fast("t", 4, 4, 4, &rgb).is_err());
         assert!(Texture::from_pixels_fast("t", 4, 4, 2, &rgb).is_err());
+        assert_eq!((fast.mime_type(), fast.extension()), ("image/png", "png"));
+    }
+
+    #[test]
+    fn jpeg_textures_are_deterministic_close_and_named_as_jpeg() {
+        // A smooth gradient, as generated maps are at the scale of a JPEG block.
+        let rgb: Vec<u8> = (0..32 * 32)
+            .flat_map(|i| [(i % 32 * 8) as u8, (i / 32 * 8) as u8, 128])
+            .collect();
+        let a = Texture::from_pixels_jpeg("t", 32, 32, 3, &rgb, 95).expect("encodes");
+        let b = Texture::from_pixels_jpeg("t", 32, 32, 3, &rgb, 95).expect("encodes");
+        assert_eq!(a.png, b.png);
+        assert!(a.is_jpeg());
+        assert_eq!((a.mime_type(), a.extension()), ("image/jpeg", "jpg"));
+        let decoded = image::load_from_memory(&a.png).expect("jpeg").to_rgb8();
+        let worst = decoded
+            .as_raw()
+            .iter()
+            .zip(&rgb)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max();
+        assert!(worst.is_some_and(|d| d <= 6), "{worst:?}");
+        let grey: Vec<u8> = (0..16 * 16).map(|i| i as u8).collect();
+        let g = Texture::from_pixels_jpeg("g", 16, 16, 1, &grey, 90).expect("encodes");
+        assert_eq!(
+            image::load_from_memory(&g.png).expect("jpeg").color(),
+            image::ColorType::L8
+        );
+        assert!(Texture::from_pixels_jpeg("t", 32, 32, 4, &rgb, 90).is_err());
+        assert!(Texture::from_pixels_jpeg("t", 32, 31, 3, &rgb, 90).is_err());
+        // Read back as it is, its size from its header; PNG too; nothing else.
+        let back = Texture::from_encoded("t", a.png.clone()).expect("a jpeg");
+        assert_eq!((back.width, back.height, &back.png), (32, 32, &a.png));
+        let png = Texture::from_rgba("p", 3, 2, &[0; 24]).expect("png");
+        let back = Texture::from_encoded("p", png.png.clone()).expect("a png");
+        assert_eq!((back.width, back.height), (3, 2));
+        assert!(Texture::from_encoded("x", b"glTF".to_vec()).is_err());
+        assert!(Texture::from_encoded("x", JPEG_MAGIC.to_vec()).is_err());
     }
 }

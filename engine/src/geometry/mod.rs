@@ -14,6 +14,7 @@ mod mesh;
 mod model;
 mod resident;
 mod skeleton;
+mod tangents;
 mod triangles;
 
 pub use forest::{ForestPart, ForestStats, SpeciesCount, VariantCounts};

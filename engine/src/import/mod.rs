@@ -137,8 +137,8 @@ pub enum ImportError {
     /// An image view outside its buffer.
     #[error("an image outside its buffer")]
     ImageOutsideBuffer,
-    /// An image that is not a PNG.
-    #[error("an image that is not a PNG")]
+    /// An image that is neither a PNG nor a JPEG.
+    #[error("an image that is neither a PNG nor a JPEG")]
     NotPng,
     /// A buffer URI that is not a relative file name.
     #[error("buffer URI '{0}' is not a relative file")]

@@ -267,7 +267,7 @@ fn read_transmission(json: &Value, index: usize) -> Option<DiffuseTransmission> 
     })
 }
 
-/// A texture's PNG image, read back from its buffer.
+/// A texture's image (PNG or JPEG), read back from its buffer as it is.
 fn read_texture<'s>(
     texture: &gltf::Texture,
     buffer: &dyn for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
@@ -276,16 +276,12 @@ fn read_texture<'s>(
     let gltf::image::Source::View { view, .. } = image.source() else {
         return Err(ImportError::ImageOutsideGlb);
     };
-    let png = buffer(view.buffer())
+    let bytes = buffer(view.buffer())
         .and_then(|b| b.get(view.offset()..view.offset().saturating_add(view.length())))
         .ok_or(ImportError::ImageOutsideBuffer)?;
-    let (width, height) = png_size(png).ok_or(ImportError::NotPng)?;
-    Ok(Arc::new(Texture {
-        name: image.name().unwrap_or_default().to_string(),
-        width,
-        height,
-        png: png.to_vec(),
-    }))
+    let name = image.name().unwrap_or_default().to_string();
+    let texture = Texture::from_encoded(name, bytes.to_vec()).map_err(|_| ImportError::NotPng)?;
+    Ok(Arc::new(texture))
 }
 
 /// The file a buffer's URI names, relative to the tile: percent-decoded; absolute paths,
@@ -310,25 +306,4 @@ pub fn relative_file(uri: &str) -> Result<PathBuf, ImportError> {
     }
     let text = String::from_utf8(out).map_err(|_| refuse())?;
     Ok(PathBuf::from(text))
-}
-
-/// Width and height from a PNG's header.
-fn png_size(png: &[u8]) -> Option<(u32, u32)> {
-    if png.get(..8)? != b"\x89PNG\r\n\x1a\n" || png.get(12..16)? != b"IHDR" {
-        return None;
-    }
-    let word = |at: usize| Some(u32::from_be_bytes(png.get(at..at + 4)?.try_into().ok()?));
-    Some((word(16)?, word(20)?))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_png_header_gives_its_size() {
-        let tex = Texture::from_rgba("t", 3, 2, &[0; 24]).expect("png");
-        assert_eq!(png_size(&tex.png), Some((3, 2)));
-        assert_eq!(png_size(b"glTF"), None);
-    }
 }

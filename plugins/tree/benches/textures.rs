@@ -1,5 +1,6 @@
 //! The texture budget: one species' full set at 512 px (bark colour, normal and roughness
-//! maps, leaf colour, normal and roughness maps) under 40 ms, generated and PNG-encoded.
+//! maps, leaf colour, normal and roughness maps) under 40 ms, generated and encoded (bark
+//! as JPEG, the default, leaves as PNG).
 //! Generation and encoding are timed apart, and together as the budget counts them.
 //!
 //! Every benchmark is timed twice: in wall time (group `textures`, the budget's measure) and
@@ -11,8 +12,8 @@
 use criterion::measurement::Measurement;
 use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use pge_tree::{
-    BarkParams, BarkStyle, LeafParams, LeafShape, bark_maps, bark_set, encode_maps, leaf_maps,
-    leaf_set,
+    BarkParams, BarkStyle, LeafParams, LeafShape, TextureFormat, bark_maps, bark_set, encode_maps,
+    encode_maps_as, leaf_maps, leaf_set,
 };
 use std::hint::black_box;
 
@@ -26,6 +27,7 @@ fn bark(style: BarkStyle) -> BarkParams {
         color: [0.2, 0.12, 0.07, 1.0],
         size: 512,
         depth: 1.0,
+        format: TextureFormat::Jpeg,
     }
 }
 
@@ -56,6 +58,7 @@ fn texture_benches<M: Measurement>(group: &mut BenchmarkGroup<'_, M>) {
         BarkStyle::Plated,
         BarkStyle::Smooth,
         BarkStyle::Fibrous,
+        BarkStyle::Scaly,
     ] {
         group.bench_function(format!("generate bark {style:?} 512"), |b| {
             b.iter(|| bark_maps(black_box(&bark(style))))
@@ -95,6 +98,12 @@ fn texture_benches<M: Measurement>(group: &mut BenchmarkGroup<'_, M>) {
     let leaf_px = leaf_maps(&LEAF);
     group.bench_function("encode bark 512", |b| {
         b.iter(|| encode_maps("bark", black_box(bark_px.clone())).expect("encodes"))
+    });
+    group.bench_function("encode bark 512 jpeg", |b| {
+        b.iter(|| {
+            encode_maps_as("bark", black_box(bark_px.clone()), TextureFormat::Jpeg)
+                .expect("encodes")
+        })
     });
     group.bench_function("encode leaf 512", |b| {
         b.iter(|| encode_maps("leaf", black_box(leaf_px.clone())).expect("encodes"))

@@ -6,14 +6,17 @@
 //! continuing children to a tip. Each branch is one tube: a ring of `sides` points (plus one
 //! duplicated seam vertex, where the texture's `u` restarts) at every node, each ring
 //! oriented between the incoming and the outgoing direction so joints stay continuous, and
-//! framed by parallel transport so tubes do not twist (the seam, though, is turned away from
-//! the light). Normals point from the ring centre to the vertex; UVs keep one texel density
-//! everywhere (`u` around the circumference and `v` along the branch both in texture tiles
-//! of `texture_scale` metres). A trunk flare widens the first metre of every root tube into
-//! buttresses. A lateral branch starts with a ring of its own radius at the
-//! fork node, inside its parent. Tips (and the base of each root) get a flat cap.
+//! framed by parallel transport so tubes do not twist. Normals point from the ring centre
+//! to the vertex. UVs wrap the bark texture a whole number of tiles around every branch
+//! (the same number on every branch, so the seam does not show and the texture's features
+//! scale with the radius), `v` along the branch at the same texel size, and a lateral
+//! carries on its parent's frame and `v` at the fork (see [`frames`]). A trunk flare widens
+//! the first metre of every root tube into buttresses. A lateral branch starts with a ring
+//! of its own radius at the fork node, inside its parent. Tips (and the base of each root)
+//! get a flat cap.
 
 mod flare;
+mod frames;
 mod rings;
 
 use std::f32::consts::TAU;
@@ -26,6 +29,7 @@ use crate::memory::BarkBuffers;
 use crate::options::{Flare, MeshOptions};
 use crate::radii::{Children, main_child};
 use flare::with_flare_rings;
+use frames::Wrap;
 use rings::{Appended, Checks, Scratch, Shape, Slices};
 
 /// Appends the bark tubes of `skeleton` to `mesh` (positions, normals, uvs, indices; the
@@ -33,10 +37,12 @@ use rings::{Appended, Checks, Scratch, Shape, Slices};
 /// Of the options, `sides` (clamped to `3..=1024`), `caps`, `texture_scale`, `light` and
 /// `flare` are used.
 ///
-/// UVs keep a constant texel density: `u` runs around each ring over its circumference
-/// divided by `texture_scale` (so `u` ends where the ring's bark ends, at the seam, not at
-/// 1), `v` grows by the length travelled divided by `texture_scale`. The seam (`u = 0`)
-/// faces away from `light` wherever the branch is not parallel to it. Every vertex is
+/// UVs: `u` runs around each ring from 0 at the seam to a whole number of tiles, the same
+/// for every branch: the thickest ring's circumference over `texture_scale`, rounded (at
+/// least 1); `v` grows along the branch by the length travelled over the ring's
+/// circumference divided by the tiles, so texels stay square and the texture's features
+/// scale with the radius. A root tube's seam (`u = 0`) starts on the side turned away from
+/// `light`; a lateral's frame and `v` carry on from its parent at the fork. Every vertex is
 /// finite when the skeleton is; a branch of zero length keeps the direction of the segment
 /// before it.
 pub fn append_bark(skeleton: &Skeleton, options: &MeshOptions, mesh: &mut Mesh) {
@@ -73,11 +79,12 @@ fn append_checked_bark(
     } else {
         MeshOptions::default().texture_scale
     };
+    let thickest = skeleton.radii.iter().fold(0.0f32, |a, &r| a.max(r));
+    let wrap = Wrap::new(thickest, scale);
     let shape = Shape {
         trig: &trig,
         sides,
-        scale,
-        away: -options.light.try_normalize().unwrap_or(Vec3::ZERO),
+        tiles: wrap.tiles,
     };
     let flare = options
         .flare
@@ -120,13 +127,18 @@ fn append_checked_bark(
     // written into slices of its own, in parallel when the mesh is large. A tube's numbers
     // depend only on the tube: the same mesh for any number of threads.
     let mut points = Vec::new();
+    let mut nodes = Vec::new();
     let mut ends = Vec::with_capacity(tubes.len());
     let mut walked = Vec::new();
     for t in &tubes {
-        tube_points(skeleton, &main, t, &mut walked, &mut points);
+        tube_points(skeleton, &main, t, &mut walked, &mut points, &mut nodes);
         ends.push(points.len());
     }
-    let rings = |k: usize| &points[if k == 0 { 0 } else { ends[k - 1] }..ends[k]];
+    let range = |k: usize| if k == 0 { 0 } else { ends[k - 1] }..ends[k];
+    let rings = |k: usize| &points[range(k)];
+    let away = -options.light.try_normalize().unwrap_or(Vec3::ZERO);
+    let frames = frames::frames(&tubes, &points, &nodes, range, skeleton.len(), wrap, away);
+    let frames_of = |k: usize| &frames[range(k)];
     let counts: Vec<(usize, usize)> = tubes
         .iter()
         .enumerate()
@@ -146,7 +158,15 @@ fn append_checked_bark(
         let mut out = Appended(mesh);
         let mut scratch = Scratch::default();
         for (k, t) in tubes.iter().enumerate() {
-            shape.emit(t, rings(k), &mut scratch, &mut out, checks.as_deref_mut());
+            let (pts, frames) = (rings(k), frames_of(k));
+            shape.emit(
+                t,
+                pts,
+                frames,
+                &mut scratch,
+                &mut out,
+                checks.as_deref_mut(),
+            );
         }
         return true;
     }
@@ -191,7 +211,7 @@ fn append_checked_bark(
         .zip(sinks)
         .with_min_len(16)
         .for_each_init(Scratch::default, |scratch, ((k, t), mut sink)| {
-            shape.emit(t, rings(k), scratch, &mut sink, None);
+            shape.emit(t, rings(k), frames_of(k), scratch, &mut sink, None);
         });
     false
 }
@@ -243,11 +263,21 @@ pub(crate) fn clean_bark_mesh(
     (mesh, clean)
 }
 
-/// Follows the continuing children from `start` to a tip, pushing positions and radii.
-fn walk(skeleton: &Skeleton, main: &[Option<u32>], start: usize, out: &mut Vec<(Vec3, f32)>) {
+/// Follows the continuing children from `start` to a tip, pushing positions, radii and
+/// node indices.
+fn walk(
+    skeleton: &Skeleton,
+    main: &[Option<u32>],
+    start: usize,
+    out: &mut Vec<(Vec3, f32, Option<u32>)>,
+) {
     let mut cur = start;
     loop {
-        out.push((skeleton.positions[cur], skeleton.radii[cur]));
+        out.push((
+            skeleton.positions[cur],
+            skeleton.radii[cur],
+            Some(cur as u32),
+        ));
         match main[cur] {
             Some(next) => cur = next as usize,
             None => break,
@@ -294,32 +324,36 @@ impl TubeSpec {
 
 /// Appends the rings of a tube to `out`: its points (from the fork for a lateral, then along
 /// the continuing children to a tip) with their radii and distances from the start, and the
-/// flare's extra rings; none when the tube has no segment. `walked` is scratch space.
+/// flare's extra rings; none when the tube has no segment. `nodes` gets each ring's node
+/// (`None` for a lateral's first ring, at its fork inside the parent, and for the flare's
+/// rings). `walked` is scratch space.
 fn tube_points(
     skeleton: &Skeleton,
     main: &[Option<u32>],
     t: &TubeSpec,
-    walked: &mut Vec<(Vec3, f32)>,
+    walked: &mut Vec<(Vec3, f32, Option<u32>)>,
     out: &mut Vec<(Vec3, f32, f32)>,
+    nodes: &mut Vec<Option<u32>>,
 ) {
     walked.clear();
     if let Some(fork) = t.fork {
-        walked.push((skeleton.positions[fork], skeleton.radii[t.start]));
+        walked.push((skeleton.positions[fork], skeleton.radii[t.start], None));
     }
     walk(skeleton, main, t.start, walked);
     if walked.len() < 2 {
         return;
     }
     match t.flare {
-        Some(f) => with_flare_rings(walked, f.height, out),
+        Some(f) => with_flare_rings(walked, f.height, out, nodes),
         None => {
             let mut travelled = 0.0;
             let mut prev = walked[0].0;
-            out.extend(walked.iter().map(|&(p, r)| {
+            out.extend(walked.iter().map(|&(p, r, _)| {
                 travelled += p.distance(prev);
                 prev = p;
                 (p, r, travelled)
             }));
+            nodes.extend(walked.iter().map(|w| w.2));
         }
     }
 }

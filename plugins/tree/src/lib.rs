@@ -68,8 +68,8 @@ pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{
-    BarkParams, LeafParams, Maps, TextureCache, TextureSet, bark_maps, bark_set, bark_textures,
-    encode_maps, leaf_maps, leaf_set, leaf_textures, load_png,
+    BarkParams, LeafParams, Maps, TextureCache, TextureFormat, TextureSet, bark_maps, bark_set,
+    bark_textures, encode_maps, encode_maps_as, leaf_maps, leaf_set, leaf_textures, load_png,
 };
 #[cfg(feature = "lua")]
 pub use tree_lua::TreePlugin;
@@ -192,6 +192,7 @@ pub fn bark_material(options: &MeshOptions) -> Result<Arc<Material>, TreeError> 
                 color: options.color,
                 size: options.texture_size,
                 depth: options.bark_depth,
+                format: options.texture_format,
             })?;
             material.texture = Some(set.color.clone());
             material.normal_texture = Some(set.normal.clone());

@@ -10,7 +10,8 @@
 //!   mesh = { sides = 8, caps = true, exponent = 2.3, tipRadius = 0.02, mergeStraight = 5,
 //!            smoothing = 0, radii = "pipe", color = "#6b5444", texture = "bark.png",
 //!            bark = "furrowed",            -- or { style = "plated", depth = 1.5 }
-//!            textureSize = 512, textureScale = 0.6, light = {0.45, 0.8, 0.35},
+//!            textureSize = 512, textureFormat = "jpeg", textureScale = 0.6,
+//!            light = {0.45, 0.8, 0.35},
 //!            flare = { roots = 5, spread = 1, height = 1 } },   -- or flare = true
 //!   leaves = { perTip = {3, 6}, size = 0.25, width = 1, colors = {"#2f6b1f", "#7da83a"}, maxDepth = 2,
 //!              texture = "leaf.png", shape = "lobed", textureSize = 512,
@@ -34,7 +35,7 @@ use crate::options::{
     Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
     TextureSource, TreeOptions,
 };
-use crate::textures::load_png;
+use crate::textures::{TextureFormat, load_png};
 
 pub use pge_lod::lua::lod_options;
 
@@ -96,7 +97,8 @@ pub fn tree_options(o: &Options) -> mlua::Result<TreeOptions> {
 /// `sides`, `caps`, `exponent`, `tipRadius`, `mergeStraight` (degrees, or a boolean: true is
 /// 5 degrees), `smoothing`, `radii` (`"pipe"` or `"keep"`), `color`, `texture` (a PNG path,
 /// not loaded yet: see [`load_texture`]), `bark` (a style name or `{style, depth}`),
-/// `textureSize`, `textureScale`, `light` and `flare` (`true` or `{roots, spread, height}`).
+/// `textureSize`, `textureFormat` (`"jpeg"` or `"png"`), `textureScale`, `light` and `flare`
+/// (`true` or `{roots, spread, height}`).
 /// Absent keys keep what `mesh` holds.
 pub fn read_mesh(o: &Options, mesh: &mut MeshOptions) -> mlua::Result<()> {
     if let Some(v) = o.integer("sides", 3..=64)? {
@@ -152,6 +154,9 @@ pub fn read_mesh(o: &Options, mesh: &mut MeshOptions) -> mlua::Result<()> {
     }
     if let Some(v) = o.integer("textureSize", 16..=2048)? {
         mesh.texture_size = v as u32;
+    }
+    if let Some(format) = o.choice("textureFormat", &TextureFormat::NAMES)? {
+        mesh.texture_format = TextureFormat::from_name(format).unwrap_or_default();
     }
     if let Some(v) = o.number_f32("textureScale", Bounds::Above(0.0))? {
         mesh.texture_scale = v;
@@ -438,11 +443,11 @@ mod tests {
             (
                 "{ mesh = { side = 3 } }",
                 "unknown option 'mesh.side': 'mesh.side' is not an option (known: sides, caps, exponent, tipRadius, \
-                 mergeStraight, smoothing, radii, color, texture, bark, textureSize, textureScale, light, flare)",
+                 mergeStraight, smoothing, radii, color, texture, bark, textureSize, textureFormat, textureScale, light, flare)",
             ),
             (
                 "{ mesh = { bark = 'rough' } }",
-                "mesh.bark must be \"furrowed\", \"plated\", \"smooth\" or \"fibrous\", got \"rough\"",
+                "mesh.bark must be \"furrowed\", \"plated\", \"smooth\", \"fibrous\" or \"scaly\", got \"rough\"",
             ),
             (
                 "{ mesh = { textureSize = 4096 } }",
@@ -482,7 +487,7 @@ mod tests {
     fn bark_leaf_shape_and_flare_options() {
         let o = parse(
             "{ mesh = { bark = { style = 'plated', depth = 2 }, textureSize = 1024, textureScale = 0.4, \
-               light = {0, 1, 0}, flare = { roots = 6 } }, leaves = { shape = 'palmate', textureSize = 256, \
+               textureFormat = 'png', light = {0, 1, 0}, flare = { roots = 6 } }, leaves = { shape = 'palmate', textureSize = 256, \
                backColor = '#ffffff', translucency = 0.5 } }",
         )
         .expect("ok");
@@ -490,6 +495,18 @@ mod tests {
         assert_eq!(o.mesh.bark_depth, 2.0);
         assert_eq!(o.mesh.texture_size, 1024);
         assert_eq!(o.mesh.texture_scale, 0.4);
+        assert_eq!(o.mesh.texture_format, TextureFormat::Png);
+        assert_eq!(
+            parse("{}").expect("ok").mesh.texture_format,
+            TextureFormat::Jpeg
+        );
+        assert_eq!(
+            parse("{ mesh = { bark = 'scaly' } }")
+                .expect("ok")
+                .mesh
+                .bark,
+            BarkStyle::Scaly
+        );
         assert_eq!(o.mesh.light, glam::Vec3::Y);
         assert_eq!(
             o.mesh.flare,

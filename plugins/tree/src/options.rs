@@ -10,6 +10,8 @@ use std::sync::Arc;
 
 use pge_engine::geometry::{Material, Texture};
 
+use crate::textures::TextureFormat;
+
 /// How branch radii are found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum RadiiMode {
@@ -33,11 +35,13 @@ pub enum BarkStyle {
     Smooth,
     /// Interlaced fibrous ridges (willow; Lua `"fibrous"`).
     Fibrous,
+    /// Small thin scales, the plated pattern finer and flatter (spruce; Lua `"scaly"`).
+    Scaly,
 }
 
 impl BarkStyle {
     /// The Lua names, in the order of the variants.
-    pub const NAMES: [&'static str; 4] = ["furrowed", "plated", "smooth", "fibrous"];
+    pub const NAMES: [&'static str; 5] = ["furrowed", "plated", "smooth", "fibrous", "scaly"];
 
     /// The style of a Lua name.
     #[must_use]
@@ -47,6 +51,7 @@ impl BarkStyle {
             "plated" => Some(BarkStyle::Plated),
             "smooth" => Some(BarkStyle::Smooth),
             "fibrous" => Some(BarkStyle::Fibrous),
+            "scaly" => Some(BarkStyle::Scaly),
             _ => None,
         }
     }
@@ -152,6 +157,8 @@ pub struct MeshOptions {
     pub bark_depth: f32,
     /// Side of the procedural bark maps in pixels (16..=2048, default 512).
     pub texture_size: u32,
+    /// How the procedural bark maps are stored: JPEG (default) or PNG.
+    pub texture_format: TextureFormat,
     /// Metres of bark one texture tile covers, around and along every branch (> 0, default
     /// 0.6): the texel density is `texture_size / texture_scale` pixels per metre
     /// everywhere.
@@ -178,6 +185,7 @@ impl Default for MeshOptions {
             bark: BarkStyle::Furrowed,
             bark_depth: 1.0,
             texture_size: 512,
+            texture_format: TextureFormat::Jpeg,
             texture_scale: 0.6,
             light: glam::Vec3::new(0.45, 0.8, 0.35),
             flare: None,

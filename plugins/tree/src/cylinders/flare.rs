@@ -9,27 +9,32 @@ use crate::options::Flare;
 /// Where a flared trunk gets rings of its own: fractions of the flare's height.
 const FLARE_RINGS: [f32; 9] = [0.0, 0.03, 0.08, 0.15, 0.25, 0.38, 0.55, 0.75, 1.0];
 
-/// Appends the points of a tube with extra points in its first `height` metres (at
-/// [`FLARE_RINGS`]), each with its distance from the start along the tube.
+/// Appends the points of a tube (position, radius, node) with extra points in its first
+/// `height` metres (at [`FLARE_RINGS`]), each with its distance from the start along the
+/// tube, and to `nodes` each point's node (`None` for the extra ones).
 pub(super) fn with_flare_rings(
-    points: &[(Vec3, f32)],
+    points: &[(Vec3, f32, Option<u32>)],
     height: f32,
     out: &mut Vec<(Vec3, f32, f32)>,
+    nodes: &mut Vec<Option<u32>>,
 ) {
     let mut travelled = 0.0;
     out.push((points[0].0, points[0].1, 0.0));
+    nodes.push(points[0].2);
     for w in points.windows(2) {
-        let ((a, ra), (b, rb)) = (w[0], w[1]);
+        let ((a, ra, _), (b, rb, node)) = (w[0], w[1]);
         let len = a.distance(b);
         for f in FLARE_RINGS {
             let s = f * height;
             if s > travelled + 1e-3 && s < travelled + len - 1e-3 {
                 let t = (s - travelled) / len;
                 out.push((a.lerp(b, t), ra + (rb - ra) * t, s));
+                nodes.push(None);
             }
         }
         travelled += len;
         out.push((b, rb, travelled));
+        nodes.push(node);
     }
 }
 /// A flared ring vertex at `travelled` metres up the trunk and `turn` turns around it: the

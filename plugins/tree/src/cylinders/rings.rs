@@ -1,14 +1,15 @@
 //! One tube's rings written into the mesh: each ring oriented between the incoming and the
-//! outgoing direction and framed by parallel transport, its seam turned away from the light,
-//! UVs at one texel density, and the flat caps.
+//! outgoing direction and framed as [`frames`](super::frames) found, its UVs a whole number
+//! of tiles around, and the flat caps.
 
 use std::f32::consts::TAU;
 
-use glam::{Quat, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 use pge_engine::geometry::{DegenerateTest, Mesh};
 
 use super::TubeSpec;
 use super::flare::flared;
+use super::frames::{Frame, segments};
 
 /// Where a tube is written: the next vertex's index in the mesh, its vertices and its
 /// triangles.
@@ -96,72 +97,40 @@ pub(super) struct Scratch {
     cap: Vec<Vec3>,
 }
 
-/// What every tube shares: the ring's cosines and sines, the UV scale and the seam's side.
+/// What every tube shares: the ring's cosines and sines and how the texture wraps.
 pub(super) struct Shape<'a> {
     pub(super) trig: &'a [(f32, f32)],
     pub(super) sides: usize,
-    /// Metres of bark per texture tile.
-    pub(super) scale: f32,
-    /// The unit direction the seams face (away from the light), or zero.
-    pub(super) away: Vec3,
+    /// Texture tiles around every ring.
+    pub(super) tiles: f32,
 }
 
 impl Shape<'_> {
-    /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)) into
-    /// `out`, checked by `checks` when given.
+    /// Emits one tube through its rings `pts` (see [`tube_points`](super::tube_points)),
+    /// framed by `frames` (one a ring, see [`frames`](super::frames::frames)), into `out`,
+    /// checked by `checks` when given.
     pub(super) fn emit(
         &self,
         tube: &TubeSpec,
         pts: &[(Vec3, f32, f32)],
+        frames: &[Frame],
         scratch: &mut Scratch,
         out: &mut impl Sink,
         mut checks: Option<&mut Checks>,
     ) {
-        if pts.len() < 2 {
+        if pts.len() < 2 || frames.len() != pts.len() {
             return;
         }
         let flare = tube.flare;
-        // Segment directions, each falling back to the previous one.
-        let first_dir = pts
-            .windows(2)
-            .find_map(|w| (w[1].0 - w[0].0).try_normalize())
-            .unwrap_or(tube.fallback);
         let Scratch {
             seg,
             below,
             above,
             cap: cap_ring,
         } = scratch;
-        seg.clear();
-        let mut last = first_dir;
-        for w in pts.windows(2) {
-            last = (w[1].0 - w[0].0).try_normalize().unwrap_or(last);
-            seg.push(last);
-        }
-        let ring_dir = |j: usize| -> Vec3 {
-            if j == 0 {
-                seg[0]
-            } else if j == seg.len() {
-                seg[j - 1]
-            } else {
-                (seg[j - 1] + seg[j]).try_normalize().unwrap_or(seg[j])
-            }
-        };
-        // The seam faces away from the light where the ring's plane allows it; where the
-        // branch runs along the light, the side is carried on from the ring before.
-        let away = self.away;
-        let seam_side = |dir: Vec3, carried: Vec3| -> Vec3 {
-            let target = away - dir * away.dot(dir);
-            if target.length_squared() > 0.0025 {
-                target.normalize()
-            } else {
-                carried
-            }
-        };
+        segments(pts, tube.fallback, seg);
         let stride = (self.sides + 1) as u32;
-        let mut dir = ring_dir(0);
-        let mut side = seam_side(dir, dir.any_orthonormal_vector());
-        let mut v = 0.0f32;
+        let first = frames[0];
         if tube.base_cap && pts[0].1 > 0.0 && flare.is_none() {
             // The first ring follows the cap.
             let ring = out.next_index() + 1 + self.sides as u32;
@@ -169,21 +138,16 @@ impl Shape<'_> {
             self.cap(
                 out,
                 cap,
-                (side, dir),
+                (first.side, first.dir),
                 -1.0,
-                v,
+                first.v,
                 cap_ring,
                 checks.as_deref_mut(),
             );
         }
         let first_index = out.next_index();
         for j in 0..pts.len() {
-            if j > 0 {
-                let next_dir = ring_dir(j);
-                side = seam_side(next_dir, transport(side, dir, next_dir));
-                dir = next_dir;
-                v += pts[j].0.distance(pts[j - 1].0) / self.scale;
-            }
+            let Frame { dir, side, v } = frames[j];
             let binormal = dir.cross(side);
             let (centre, radius, travelled) = pts[j];
             // At a bend the ring cuts the tube obliquely: stretch it along the bend by
@@ -195,7 +159,6 @@ impl Shape<'_> {
             } else {
                 (Vec3::ZERO, 0.0)
             };
-            let around = TAU * radius / self.scale;
             std::mem::swap(below, above);
             above.iter_mut().for_each(Vec::clear);
             for (k, &(c, s)) in self.trig.iter().enumerate() {
@@ -217,7 +180,7 @@ impl Shape<'_> {
                 out.vertex(
                     position,
                     normal,
-                    Vec2::new(around * k as f32 / self.sides as f32, v),
+                    Vec2::new(self.tiles * k as f32 / self.sides as f32, v),
                 );
                 if checks.is_some() {
                     for (axis, coordinates) in above.iter_mut().enumerate() {
@@ -247,7 +210,16 @@ impl Shape<'_> {
         if tube.tip_cap && radius > 0.0 {
             let ring = first_index + (pts.len() as u32 - 1) * stride;
             let cap = (centre, radius, ring);
-            self.cap(out, cap, (side, dir), 1.0, v, cap_ring, checks);
+            let last = frames[frames.len() - 1];
+            self.cap(
+                out,
+                cap,
+                (last.side, last.dir),
+                1.0,
+                last.v,
+                cap_ring,
+                checks,
+            );
         }
     }
 
@@ -269,7 +241,8 @@ impl Shape<'_> {
         let binormal = dir.cross(side);
         let normal = dir * sign;
         let base = out.next_index();
-        let r = radius / self.scale;
+        // The ring's texel size: its circumference over the tiles.
+        let r = self.tiles / TAU;
         out.vertex(centre, normal, Vec2::new(0.5, v));
         positions.clear();
         for &(c, s) in &self.trig[..self.sides] {
@@ -301,15 +274,6 @@ impl Shape<'_> {
         }
     }
 }
-/// Carries `side` from a ring facing `from` to a ring facing `to` (parallel transport),
-/// keeping it a unit vector perpendicular to `to`.
-fn transport(side: Vec3, from: Vec3, to: Vec3) -> Vec3 {
-    let rotated = Quat::from_rotation_arc(from, to) * side;
-    (rotated - to * rotated.dot(to))
-        .try_normalize()
-        .unwrap_or_else(|| to.any_orthonormal_vector())
-}
-
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
@@ -321,55 +285,45 @@ mod tests {
     use crate::options::MeshOptions;
 
     #[test]
-    fn the_seam_vertex_is_duplicated_and_u_spans_the_circumference() {
+    fn the_seam_vertex_is_duplicated_and_u_spans_whole_tiles() {
         let m = mesh_of(&column(), 6, false);
-        let scale = MeshOptions::default().texture_scale;
+        // The thickest ring, 0.5 m, is 3.14 m around: 5 tiles of about 0.6 m.
         assert_eq!(m.positions.len(), 2 * 7);
-        for (ring, radius) in [(0, 0.5), (1, 0.25)] {
+        for ring in 0..2 {
             let first = ring * 7;
             let last = first + 6;
             assert_eq!(m.positions[first], m.positions[last]);
             assert_eq!(m.uvs[first].x, 0.0);
-            assert!((m.uvs[last].x - TAU * radius / scale).abs() < 1e-5);
+            assert_eq!(m.uvs[last].x, 5.0, "the seam is a whole tile on");
             assert_eq!(m.uvs[first].y, m.uvs[last].y);
         }
-        // v grows with length: 2 metres in tiles of `scale` metres.
-        assert!((m.uvs[7].y - 2.0 / scale).abs() < 1e-5);
+        // v grows with length over the mean circumference's tiles: 2 m over 2 pi 0.375 / 5.
+        let want = 2.0 * 5.0 / (TAU * 0.375);
+        assert!((m.uvs[7].y - want).abs() < 1e-4, "{} vs {want}", m.uvs[7].y);
         assert_eq!(m.uvs[0].y, 0.0);
     }
 
-    /// The texel density of each quad of a tube: UV area over world area, square-rooted
-    /// (texture tiles per metre), with the quad's distance up the tube.
-    fn densities(m: &Mesh, sides: usize, rings: usize) -> Vec<(f32, f32)> {
+    /// Each quad of a tube's first `rings` rings: its texel sizes around and along (metres
+    /// per tile), and its two rings' mean radius.
+    fn texels(m: &Mesh, sides: usize, rings: usize, radii: &[f32]) -> Vec<(f32, f32, f32)> {
         let stride = sides + 1;
         let mut out = Vec::new();
         for j in 0..rings - 1 {
             for k in 0..sides {
-                let [a, b, c, d] = [
-                    j * stride + k,
-                    j * stride + k + 1,
-                    (j + 1) * stride + k + 1,
-                    (j + 1) * stride + k,
-                ];
-                let area3 = |p: [usize; 3]| {
-                    0.5 * (m.positions[p[1]] - m.positions[p[0]])
-                        .cross(m.positions[p[2]] - m.positions[p[0]])
-                        .length()
-                };
-                let area2 = |p: [usize; 3]| {
-                    let (e1, e2) = (m.uvs[p[1]] - m.uvs[p[0]], m.uvs[p[2]] - m.uvs[p[0]]);
-                    0.5 * (e1.x * e2.y - e1.y * e2.x).abs()
-                };
-                let world = area3([a, b, c]) + area3([a, c, d]);
-                let uv = area2([a, b, c]) + area2([a, c, d]);
-                out.push((m.positions[a].y, (uv / world).sqrt()));
+                let (a, b, d) = (j * stride + k, j * stride + k + 1, (j + 1) * stride + k);
+                // Around: the mean of the quad's two edges around.
+                let chords = m.positions[a].distance(m.positions[b])
+                    + m.positions[d].distance(m.positions[d + 1]);
+                let around = 0.5 * chords / (m.uvs[b].x - m.uvs[a].x);
+                let along = m.positions[a].distance(m.positions[d]) / (m.uvs[d].y - m.uvs[a].y);
+                out.push((around, along, 0.5 * (radii[j] + radii[j + 1])));
             }
         }
         out
     }
 
     #[test]
-    fn texel_density_is_constant_along_a_long_tapering_branch() {
+    fn texels_stay_square_and_scale_with_the_radius_along_a_tapering_branch() {
         // A 12 m branch tapering from 0.4 m to 1 cm, in 24 segments of varying length, bent.
         let mut s = Skeleton::new();
         let mut prev = s.push(Vec3::ZERO, None, 0.4, 0);
@@ -382,28 +336,25 @@ mod tests {
         }
         let sides = 12;
         let m = mesh_of(&s, sides, false);
-        let d = densities(&m, sides as usize, 25);
-        let (lo, hi) = d
-            .iter()
-            .fold((f32::MAX, 0f32), |(lo, hi), &(_, x)| (lo.min(x), hi.max(x)));
-        assert!(
-            hi / lo < 1.2,
-            "texel density from {lo} to {hi} tiles per metre"
-        );
-        // And it is the one the options ask for.
-        let want = 1.0 / MeshOptions::default().texture_scale;
-        assert!(
-            (lo / want - 1.0).abs() < 0.2 && (hi / want - 1.0).abs() < 0.2,
-            "{lo}..{hi} vs {want}"
-        );
+        let texels = texels(&m, sides as usize, 25, &s.radii);
+        for &(around, along, radius) in &texels {
+            // Square, within what a polygon's chords and a tapering segment allow.
+            assert!(
+                (along / around - 1.0).abs() < 0.25,
+                "{around} x {along} at {radius}"
+            );
+            // A tile is the ring's circumference over the 4 tiles (2 pi 0.4 / 0.6, rounded).
+            let tile = TAU * radius / 4.0;
+            assert!((around / tile - 1.0).abs() < 0.25, "{around} vs {tile}");
+        }
     }
 
     #[test]
-    fn the_seam_faces_away_from_the_light() {
+    fn a_root_seam_faces_away_from_the_light_and_rings_do_not_twist() {
         let mut s = Skeleton::new();
         let r = s.push(Vec3::ZERO, None, 0.3, 0);
         let a = s.push(Vec3::new(0.0, 2.0, 0.0), Some(r), 0.2, 0);
-        s.push(Vec3::new(0.5, 3.8, 0.3), Some(a), 0.1, 0);
+        s.push(Vec3::new(0.0, 3.8, 0.0), Some(a), 0.1, 0);
         for light in [
             Vec3::new(0.45, 0.8, 0.35),
             Vec3::new(-1.0, 0.2, 0.0),
@@ -416,20 +367,49 @@ mod tests {
                 ..MeshOptions::default()
             };
             let m = bark_mesh(&s, &options);
-            for ring in 0..3 {
+            let seam = |ring: usize| {
                 let first = ring * 9;
                 let centre: Vec3 = m.positions[first..first + 8].iter().sum::<Vec3>() / 8.0;
-                let seam = (m.positions[first] - centre).normalize();
-                // The seam is the ring's point most turned away from the light.
-                for k in 1..8 {
-                    let other = (m.positions[first + k] - centre).normalize();
-                    assert!(
-                        seam.dot(light) <= other.dot(light) + 1e-4,
-                        "ring {ring}, light {light}: vertex {k} is darker than the seam"
-                    );
-                }
+                (m.positions[first] - centre).normalize()
+            };
+            // The seam is the first ring's point most turned away from the light.
+            for k in 1..8 {
+                let other =
+                    (m.positions[k] - m.positions[..8].iter().sum::<Vec3>() / 8.0).normalize();
+                assert!(
+                    seam(0).dot(light) <= other.dot(light) + 1e-4,
+                    "light {light}: vertex {k} is darker than the seam"
+                );
+            }
+            // A straight branch: every ring's seam on the same side.
+            for ring in 1..3 {
+                assert!(seam(ring).distance(seam(0)) < 1e-4, "ring {ring} turned");
             }
         }
+    }
+
+    #[test]
+    fn a_lateral_carries_on_its_parents_frame_and_v_at_the_fork() {
+        let mut s = Skeleton::new();
+        let r = s.push(Vec3::ZERO, None, 0.3, 0);
+        let fork = s.push(Vec3::new(0.0, 2.0, 0.0), Some(r), 0.25, 0);
+        s.push(Vec3::new(0.0, 4.0, 0.0), Some(fork), 0.2, 0);
+        // Nearly as thick as the main branch, leaning 30 degrees off it.
+        s.push(Vec3::new(1.0, 3.732, 0.0), Some(fork), 0.18, 1);
+        let m = mesh_of(&s, 8, false);
+        // The main tube's ring at the fork is its second; the lateral's first ring follows
+        // the main tube's three.
+        let (main_fork, lateral) = (9, 27);
+        assert_eq!(m.uvs[lateral].y, m.uvs[main_fork].y, "v runs on");
+        let seam = |first: usize| {
+            let centre: Vec3 = m.positions[first..first + 8].iter().sum::<Vec3>() / 8.0;
+            (m.positions[first] - centre).normalize()
+        };
+        // The lateral's seam is the parent's, turned with the branch (within the 30 degrees
+        // between the rings' planes).
+        assert!(seam(lateral).dot(seam(main_fork)) > 0.85);
+        // The same tiles around, so the texture's features follow the radius.
+        assert_eq!(m.uvs[lateral + 8].x, m.uvs[main_fork + 8].x);
     }
 
     #[test]

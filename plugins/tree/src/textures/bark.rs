@@ -1,7 +1,5 @@
 //! Bark: the four styles' patterns as height, colour and roughness per pixel.
 
-use std::f32::consts::TAU;
-
 use rayon::prelude::*;
 
 use super::maps::{Maps, Srgb, Surface};
@@ -53,49 +51,73 @@ where
 }
 
 /// Each style's pattern over the `n x n` tile: heights, colour and roughness pixels. The
-/// noise tables are made once per call, the per-row terms once per row.
+/// noise tables are made once per call, the per-row terms once per row. Textures are mapped
+/// with `u` (pixel columns) around the branch and `v` (rows) along it, so "vertical" below
+/// is along the branch. Every style keeps its colour and roughness with its relief: low
+/// ground (furrows, cracks) darker and rougher than the surface.
 fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8>, Vec<u8>) {
     let c = [color[0], color[1], color[2]];
     let l = 0.3 * c[0] + 0.55 * c[1] + 0.15 * c[2];
     let grey = |k: f32| [l * k, l * k, l * k];
     match style {
         BarkStyle::Furrowed => {
-            // Oak: long ridges between deep vertical furrows. Cells 3.5 times taller than
-            // wide, their borders wandering with a low noise, are the ridges; the furrows are
-            // the borders (F2 - F1 small), with small cross-cracks on the ridges.
-            let (warp, ridges) = (Lattice::new(4, 3, 11).for_pixels(n), Cells::new(8, 2, 12));
-            let cracks = Cells::new(16, 6, 13);
-            let fibre = Fractal::new(64, 6, 2, 14).for_pixels(n);
-            let light = grey(1.5);
+            // Oak: rough, flat-topped ridges between deep V-shaped furrows that run along
+            // the branch, joining and parting (the borders of cells four times taller than
+            // wide, wandering around the branch with a low noise), each ridge its own width,
+            // its edges ragged; ridge tops broken into blocks by short horizontal cracks.
+            let warp = Fractal::new(3, 2, 2, 11).for_pixels(n);
+            let ridges = Cells::new(9, 2, 12);
+            let lumps = Fractal::new(12, 8, 3, 13).for_pixels(n);
+            let fibre = Fractal::new(48, 4, 2, 14).for_pixels(n);
+            let light = grey(1.7);
             fill_bark(n, |v| {
                 let (warp, fibre) = (warp.row(v).values(), fibre.row(v).values());
+                let lumps = lumps.row(v).values();
                 let ridges = ridges
                     .row(v)
-                    .many((0..n).map(|x| centre(x, n) + 0.05 * (warp[x] - 0.5)));
-                let cracks = cracks.row(v).many((0..n).map(|x| centre(x, n)));
+                    .many((0..n).map(|x| centre(x, n) + 0.1 * (warp[x] - 0.5)));
                 #[inline(always)]
                 move |x, _| {
                     let (f1, f2, id) = ridges.at(x);
-                    let ridge = smoothstep(0.02, 0.6, f2 - f1);
-                    let (g1, g2, _) = cracks.at(x);
-                    let crack = smoothstep(0.0, 0.1, g2 - g1);
-                    let height = (0.7 * ridge.sqrt() + 0.12 * unit(id) * ridge + 0.16 * fibre[x])
-                        * (0.94 + 0.06 * crack);
-                    let top = mix(c, light, 0.35 * smoothstep(0.6, 0.95, height));
+                    let (lump, fibre) = (lumps[x], fibre[x]);
+                    // The furrow's wall rises from its floor to the ridge's top over a width
+                    // of the ridge's own, its edge ragged.
+                    let width = 0.28 + 0.3 * unit(id);
+                    let wall = ((f2 - f1 - 0.03 + 0.12 * (lump - 0.5)) / width).clamp(0.0, 1.0);
+                    let wall = wall * (2.0 - wall);
+                    // A ridge's cross-cracks: short breaks across it, in some of its blocks.
+                    let phase = v * 6.0 + unit(id) + 0.3 * lump;
+                    let block = floor(phase);
+                    let cracked = unit(hash(id, block as u32, 15)) < 0.6;
+                    let across = 0.5 - (phase - block as f32 - 0.5).abs();
+                    let crack = if cracked {
+                        1.0 - smoothstep(0.0, 0.045, across)
+                    } else {
+                        0.0
+                    };
+                    let top = 0.72 + 0.08 * unit(id.rotate_left(9)) + 0.14 * lump + 0.06 * fibre;
+                    let height = wall * (top - 0.2 * crack);
+                    let lit = mix(c, light, 0.6 * smoothstep(0.5, 0.9, height) * lump);
                     Sample {
                         height,
-                        shade: mix([0.0; 3], top, 0.28 + 0.9 * height),
-                        roughness: 0.97 - 0.12 * height,
+                        shade: mix([0.0; 3], lit, 0.1 + 0.95 * wall * wall * top),
+                        roughness: 0.98 - 0.18 * height,
                     }
                 }
             })
         }
-        BarkStyle::Plated => {
-            // Pine: irregular flat plates split by narrow dark cracks, each plate its own
-            // tint and tilt, flaking into smaller scales.
+        BarkStyle::Plated | BarkStyle::Scaly => {
+            // Pine: irregular plates split by deep dark cracks, each plate its own tint and
+            // tilt, flaking into layers of smaller scales; spruce: the same, smaller and
+            // thinner.
+            let (plates_x, plates_y, crack_width, scales_x, scales_y) = match style {
+                BarkStyle::Plated => (5, 3, 0.28, 12, 9),
+                _ => (11, 9, 0.2, 24, 18),
+            };
             let warp_u = Lattice::new(5, 5, 21).for_pixels(n);
             let warp_v = Lattice::new(5, 5, 22).for_pixels(n);
-            let (plates, scales) = (Cells::new(5, 4, 23), Cells::new(12, 9, 24));
+            let plates = Cells::new(plates_x, plates_y, 23);
+            let scales = Cells::new(scales_x, scales_y, 24);
             let grain = Fractal::new(32, 32, 2, 25).for_pixels(n);
             let warm = [c[0] * 1.35, c[1] * 1.05, c[2] * 0.85];
             let light = grey(1.3);
@@ -113,18 +135,18 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
                 #[inline(always)]
                 move |x, _| {
                     let (f1, f2, id) = plates.at(x);
-                    let crack = smoothstep(0.0, 0.14, f2 - f1);
+                    let crack = ((f2 - f1) * (1.0 / crack_width)).min(1.0);
+                    let crack = crack * (2.0 - crack);
                     let (g1, g2, sub) = scales.at(x);
-                    let scale = smoothstep(0.0, 0.08, g2 - g1);
-                    let tilt = 0.15 * (1.0 - f1);
+                    let scale = smoothstep(0.0, 0.1, g2 - g1);
                     let grain = grain[x];
                     let height = crack
                         * (0.5
                             + 0.2 * unit(id)
-                            + tilt
-                            + 0.12 * scale
-                            + 0.06 * unit(sub)
-                            + 0.06 * grain);
+                            + 0.3 * (1.0 - f1)
+                            + 0.14 * scale
+                            + 0.08 * unit(sub)
+                            + 0.1 * grain);
                     let plate = mix(c, warm, unit(id.rotate_left(7)));
                     let plate = mix(plate, light, 0.25 * unit(sub));
                     Sample {
@@ -132,21 +154,25 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
                         shade: mix(
                             [0.0; 3],
                             plate,
-                            0.15 + 0.85 * crack * (0.8 + 0.2 * scale) + 0.1 * grain,
+                            0.1 + 0.9 * crack * (0.8 + 0.2 * scale) + 0.1 * grain,
                         ),
-                        roughness: 0.9 - 0.15 * crack,
+                        roughness: 0.95 - 0.2 * crack,
                     }
                 }
             })
         }
         BarkStyle::Smooth => {
-            // Beech, birch: smooth mottled bark with lenticels, short dark horizontal marks,
-            // one per cell at a random place and length.
+            // Beech, birch: smooth mottled skin with shallow horizontal wrinkles, a fine
+            // grain, and lenticels: short dark horizontal slits with raised lips, one per
+            // cell at a random place and length.
             let mottle = Fractal::new(6, 6, 3, 31).for_pixels(n);
+            let wrinkles = Fractal::new(2, 26, 2, 33).for_pixels(n);
+            let grain = Fractal::new(40, 64, 2, 34).for_pixels(n);
             let light = grey(1.25);
             let dark = [c[0] * 0.18, c[1] * 0.15, c[2] * 0.13];
             fill_bark(n, |v| {
                 let mottle = mottle.row(v).values();
+                let (wrinkles, grain) = (wrinkles.row(v).values(), grain.row(v).values());
                 let gy = v * 22.0;
                 let cy = floor(gy) as f32;
                 #[inline(always)]
@@ -158,47 +184,55 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
                     let (px, py) = (0.3 + 0.4 * unit(h), 0.3 + 0.4 * unit(h.rotate_left(11)));
                     let half = 0.15 + 0.3 * unit(h.rotate_left(22));
                     let dx = ((gx - cx) - px) / half;
-                    let dy = ((gy - cy) - py) / 0.09;
-                    let mark = if unit(h.rotate_left(5)) < 0.75 {
-                        1.0 - smoothstep(0.6, 1.0, dx * dx + dy * dy)
+                    let dy = ((gy - cy) - py) / 0.12;
+                    let d = dx * dx + dy * dy;
+                    let (slit, lip) = if unit(h.rotate_left(5)) < 0.75 {
+                        (
+                            1.0 - smoothstep(0.2, 0.6, d),
+                            smoothstep(0.2, 0.7, d) * (1.0 - smoothstep(0.8, 1.6, d)),
+                        )
                     } else {
-                        0.0
+                        (0.0, 0.0)
                     };
                     let skin = mix(c, light, 0.3 * mottle);
                     Sample {
-                        height: 0.55 + 0.25 * mottle - 0.35 * mark,
-                        shade: mix(skin, dark, mark),
-                        roughness: 0.55 + 0.3 * mark + 0.1 * mottle,
+                        height: 0.25 * mottle + 0.5 * wrinkles[x] + 0.26 * grain[x] + 0.3 * lip
+                            - 0.4 * slit,
+                        shade: mix(skin, dark, slit),
+                        roughness: 0.55 + 0.35 * slit + 0.1 * mottle,
                     }
                 }
             })
         }
         BarkStyle::Fibrous => {
-            // Willow: interlaced fibrous ridges, long diamond-shaped furrows and fine
-            // vertical fibres.
-            let (warp, ridges) = (Lattice::new(3, 2, 41).for_pixels(n), Cells::new(11, 2, 42));
-            let fibres = Fractal::new(96, 4, 3, 43);
+            // Willow: long narrow strips along the branch between deep narrow furrows,
+            // interlacing as they wander, each its own width, and fine fibres along them.
+            let warp = Fractal::new(4, 2, 2, 41).for_pixels(n);
+            let ridges = Cells::new(16, 1, 42);
+            let fibres = Fractal::new(96, 3, 2, 43).for_pixels(n);
             let light = grey(1.4);
             fill_bark(n, |v| {
-                let (warp, fibres) = (warp.row(v).values(), fibres.row(v));
-                let sway = 0.03 * (v * TAU * 2.0).sin();
-                let wave = 0.01 * (v * 40.0).sin();
+                let (warp, fibres) = (warp.row(v).values(), fibres.row(v).values());
                 let ridges = ridges
                     .row(v)
-                    .many((0..n).map(|x| centre(x, n) + 0.06 * (warp[x] - 0.5) + sway));
-                let wavy: Vec<f32> = (0..n).map(|x| centre(x, n) + wave).collect();
-                let fibres = fibres.values_at(&wavy);
+                    .many((0..n).map(|x| centre(x, n) + 0.12 * (warp[x] - 0.5)));
                 #[inline(always)]
                 move |x, _| {
                     let (f1, f2, id) = ridges.at(x);
-                    let ridge = smoothstep(0.0, 0.35, f2 - f1);
                     let fibres = fibres[x];
+                    let width = 0.2 + 0.25 * unit(id);
+                    let strip = ((f2 - f1 + 0.1 * (fibres - 0.5)) / width).clamp(0.0, 1.0);
+                    let strip = strip * (2.0 - strip);
                     let height =
-                        0.55 * ridge + 0.35 * fibres * (0.4 + 0.6 * ridge) + 0.1 * unit(id);
+                        strip * (0.7 + 0.1 * unit(id)) + 0.3 * fibres * (0.3 + 0.7 * strip);
                     Sample {
                         height,
-                        shade: mix([0.0; 3], mix(c, light, 0.25 * fibres), 0.3 + 0.8 * height),
-                        roughness: 0.93 - 0.1 * height,
+                        shade: mix(
+                            [0.0; 3],
+                            mix(c, light, 0.35 * fibres),
+                            0.15 + 0.9 * height * height.sqrt(),
+                        ),
+                        roughness: 0.95 - 0.15 * height,
                     }
                 }
             })
@@ -210,16 +244,17 @@ fn bark_pixels(style: BarkStyle, color: [f32; 4], n: usize) -> (Vec<f32>, Vec<u8
 /// 512 px map is multiplied by this (and scaled with the map size).
 fn relief(style: BarkStyle) -> f32 {
     match style {
-        BarkStyle::Furrowed => 7.0,
-        BarkStyle::Plated => 6.0,
-        BarkStyle::Smooth => 2.0,
-        BarkStyle::Fibrous => 5.0,
+        BarkStyle::Furrowed => 16.0,
+        BarkStyle::Plated | BarkStyle::Scaly => 15.5,
+        BarkStyle::Smooth => 20.0,
+        BarkStyle::Fibrous => 12.0,
     }
 }
 
-/// The bark set of `params`: its maps generated (as [`bark_maps`]) and PNG-encoded.
+/// The bark set of `params`: its maps generated (as [`bark_maps`]) and encoded in the
+/// params' format.
 pub fn bark_set(params: &BarkParams) -> Result<TextureSet, TreeError> {
-    bark_surface(params).encode("bark")
+    bark_surface(params).encode_as("bark", params.format)
 }
 
 /// The bark maps of `params`: every pixel's sample in parallel rows, the normal map from
@@ -251,12 +286,7 @@ mod tests {
     #[test]
     fn every_bark_style_has_relief_and_tiles() {
         let mut colors = Vec::new();
-        for style in [
-            BarkStyle::Furrowed,
-            BarkStyle::Plated,
-            BarkStyle::Smooth,
-            BarkStyle::Fibrous,
-        ] {
+        for style in STYLES {
             let set = bark_set(&bark(style, 64)).expect("bark");
             for t in [&set.color, &set.normal, &set.roughness] {
                 assert_eq!((t.width, t.height), (64, 64));
@@ -310,19 +340,24 @@ mod tests {
             colors.push(set.color.png.clone());
         }
         colors.dedup();
-        assert_eq!(colors.len(), 4, "four different patterns");
+        assert_eq!(colors.len(), STYLES.len(), "different patterns");
     }
 
     #[test]
     fn a_set_is_its_maps_encoded() {
         for style in [BarkStyle::Plated, BarkStyle::Smooth] {
-            let params = bark(style, 48);
-            let (set, maps) = (bark_set(&params).expect("set"), bark_maps(&params));
-            assert_eq!(
-                set,
-                encode_maps("bark", maps).expect("encodes"),
-                "{style:?}"
-            );
+            for format in [crate::TextureFormat::Png, crate::TextureFormat::Jpeg] {
+                let params = BarkParams {
+                    format,
+                    ..bark(style, 48)
+                };
+                let (set, maps) = (bark_set(&params).expect("set"), bark_maps(&params));
+                assert_eq!(
+                    set,
+                    crate::encode_maps_as("bark", maps, format).expect("encodes"),
+                    "{style:?}"
+                );
+            }
         }
         let leaf = crate::LeafParams {
             shape: crate::LeafShape::Lobed,
@@ -341,20 +376,171 @@ mod tests {
         assert_eq!(set, encode_maps("leaf", maps).expect("encodes"));
     }
 
+    const STYLES: [BarkStyle; 5] = [
+        BarkStyle::Furrowed,
+        BarkStyle::Plated,
+        BarkStyle::Smooth,
+        BarkStyle::Fibrous,
+        BarkStyle::Scaly,
+    ];
+
+    /// A normal map's relief as the bark shows it, from its RGB bytes (decoded as glTF does:
+    /// `2 * byte / 255 - 1`, then normalized): the mean tilt in degrees (the angle between
+    /// the normal and +Z, the flat surface's), and the gradient energy around the branch and
+    /// along it. The texture is mapped with `u` (columns, x) around the branch and `v` (rows,
+    /// y) along it, and a normal's x (y) is the height's slope along x (y): the energy around
+    /// is the sum over the pixels of the squared x components, the height's differences
+    /// between neighbours in a row; along, of the squared y components, between neighbours
+    /// in a column. Furrows that run along the branch change the height around it: the
+    /// energy around is the larger.
+    fn relief(normal: &[u8]) -> (f32, f64, f64) {
+        let (mut tilt, mut around, mut along) = (0.0f64, 0.0f64, 0.0f64);
+        let pixels = normal.len() / 3;
+        for p in normal.chunks_exact(3) {
+            let n = glam::Vec3::from_array([0, 1, 2].map(|i| f32::from(p[i]) / 255.0 * 2.0 - 1.0))
+                .normalize();
+            tilt += f64::from(n.z.clamp(-1.0, 1.0).acos().to_degrees());
+            around += f64::from(n.x * n.x);
+            along += f64::from(n.y * n.y);
+        }
+        ((tilt / pixels as f64) as f32, around, along)
+    }
+
+    /// The RGB bytes of a decoded map.
+    fn rgb(t: &pge_engine::geometry::Texture) -> Vec<u8> {
+        decode(t)
+            .pixels()
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect()
+    }
+
     #[test]
-    fn furrows_run_along_the_branch() {
-        // Oak furrows are vertical: heights change faster around the branch (x) than along
-        // it (y).
-        let set = bark_set(&bark(BarkStyle::Furrowed, 128)).expect("bark");
-        let img = decode(&set.color);
-        let (mut dx, mut dy) = (0i64, 0i64);
-        for y in 0..127 {
-            for x in 0..127 {
-                let g = |x, y| i64::from(img.get_pixel(x, y)[1]);
-                dx += (g(x + 1, y) - g(x, y)).abs();
-                dy += (g(x, y + 1) - g(x, y)).abs();
+    fn every_style_reads_in_relief_and_furrows_run_along_the_branch() {
+        for style in STYLES {
+            let maps = bark_maps(&bark(style, 512));
+            let (tilt, around, along) = relief(&maps.normal);
+            println!(
+                "{style:?}: tilt {tilt:.1} degrees, around / along {:.2}",
+                around / along
+            );
+            assert!(tilt >= 20.0, "{style:?}: mean tilt {tilt} degrees");
+            if matches!(style, BarkStyle::Furrowed | BarkStyle::Fibrous) {
+                assert!(
+                    around >= 2.0 * along,
+                    "{style:?}: gradient energy around {around}, along {along}"
+                );
+            }
+            // The same in the heights themselves: squared differences along rows (around)
+            // and along columns (along), wrapping.
+            if matches!(style, BarkStyle::Furrowed | BarkStyle::Fibrous) {
+                let (n, h) = (512, bark_surface(&bark(style, 512)).heights);
+                let (mut du, mut dv) = (0.0f64, 0.0f64);
+                for y in 0..n {
+                    for x in 0..n {
+                        let here = f64::from(h[y * n + x]);
+                        du += (f64::from(h[y * n + (x + 1) % n]) - here).powi(2);
+                        dv += (f64::from(h[(y + 1) % n * n + x]) - here).powi(2);
+                    }
+                }
+                assert!(du >= 2.0 * dv, "{style:?}: heights around {du}, along {dv}");
             }
         }
-        assert!(dx > dy * 3 / 2, "around {dx}, along {dy}");
+    }
+
+    #[test]
+    fn relief_keeps_its_tilt_at_every_map_size() {
+        // Features are a share of the tile, so a smaller map has steeper steps per texel and
+        // the strength follows the size: the tilt stays near the 512 px map's.
+        for style in [BarkStyle::Furrowed, BarkStyle::Plated] {
+            let (at512, ..) = relief(&bark_maps(&bark(style, 512)).normal);
+            let (at256, ..) = relief(&bark_maps(&bark(style, 256)).normal);
+            assert!((at256 - at512).abs() < 5.0, "{style:?}: {at256} vs {at512}");
+        }
+    }
+
+    #[test]
+    fn furrows_are_darker_and_rougher_than_ridges() {
+        for style in STYLES {
+            let surface = bark_surface(&bark(style, 128));
+            let mut order: Vec<usize> = (0..surface.heights.len()).collect();
+            order.sort_by(|&a, &b| surface.heights[a].total_cmp(&surface.heights[b]));
+            let quarter = order.len() / 4;
+            let (low, high) = (&order[..quarter], &order[order.len() - quarter..]);
+            let mean = |pixels: &[usize], f: &dyn Fn(usize) -> f32| {
+                pixels.iter().map(|&i| f(i)).sum::<f32>() / pixels.len() as f32
+            };
+            let light = |i: usize| {
+                let c = &surface.color[i * 3..i * 3 + 3];
+                f32::from(c[0]) + f32::from(c[1]) + f32::from(c[2])
+            };
+            let rough = |i: usize| f32::from(surface.roughness[i * 3 + 1]);
+            assert!(
+                mean(low, &light) < mean(high, &light),
+                "{style:?}: the lowest quarter is not darker"
+            );
+            assert!(
+                mean(low, &rough) > mean(high, &rough),
+                "{style:?}: the lowest quarter is not rougher"
+            );
+        }
+    }
+
+    #[test]
+    fn jpeg_maps_keep_their_relief_and_colour() {
+        for style in STYLES {
+            let params = bark(style, 256);
+            let maps = bark_maps(&params);
+            let set = bark_set(&BarkParams {
+                format: crate::TextureFormat::Jpeg,
+                ..params
+            })
+            .expect("bark");
+            for t in [&set.color, &set.normal, &set.roughness] {
+                assert!(t.is_jpeg(), "{style:?}: {}", t.name);
+            }
+            // The decoded normals' mean tilt within a degree of the exact map's, and every
+            // normal within a few degrees of its own.
+            let normal = rgb(&set.normal);
+            let ((exact, ..), (jpeg, ..)) = (relief(&maps.normal), relief(&normal));
+            assert!(
+                (jpeg - exact).abs() < 1.0,
+                "{style:?}: tilt {jpeg} vs {exact}"
+            );
+            let decode = |p: &[u8]| {
+                glam::Vec3::from_array([0, 1, 2].map(|i| f32::from(p[i]) / 127.5 - 1.0)).normalize()
+            };
+            let error: f32 = maps
+                .normal
+                .chunks_exact(3)
+                .zip(normal.chunks_exact(3))
+                .map(|(a, b)| {
+                    decode(a)
+                        .dot(decode(b))
+                        .clamp(-1.0, 1.0)
+                        .acos()
+                        .to_degrees()
+                })
+                .sum::<f32>()
+                / (256 * 256) as f32;
+            println!("{style:?}: tilt {exact:.2} exact, {jpeg:.2} as JPEG, each off {error:.2}");
+            assert!(
+                error < 3.0,
+                "{style:?}: normals off by {error} degrees on average"
+            );
+            // Colour and roughness within a few levels on average.
+            let off = |a: &[u8], b: &[u8]| {
+                a.iter()
+                    .zip(b)
+                    .map(|(a, b)| f32::from(a.abs_diff(*b)))
+                    .sum::<f32>()
+                    / a.len() as f32
+            };
+            assert!(off(&rgb(&set.color), &maps.color) < 4.0, "{style:?}");
+            let rough = rgb(&set.roughness);
+            let g = |px: &[u8]| px.chunks_exact(3).map(|p| p[1]).collect::<Vec<u8>>();
+            assert!(off(&g(&rough), &g(&maps.roughness)) < 3.0, "{style:?}");
+            // Grey: the metalness (B) is the roughness, cancelled by the metallic factor 0.
+            assert!(rough.chunks_exact(3).all(|p| p[0] == p[1] && p[1] == p[2]));
+        }
     }
 }

@@ -54,24 +54,34 @@ impl Surface {
         }
     }
 
-    /// The three maps PNG-encoded, named as [`encode_maps`] names them: the base colour and
-    /// roughness maps are encoded while the normal map is made (its rows shared by whichever
-    /// threads are free) and then encoded, so no core waits for the last encoder alone.
+    /// The three maps PNG-encoded, named as [`encode_maps`] names them (see
+    /// [`Surface::encode_as`]).
     pub(super) fn encode(self, what: &str) -> Result<TextureSet, TreeError> {
+        self.encode_as(what, TextureFormat::Png)
+    }
+
+    /// The three maps encoded in `format`, named as [`encode_maps`] names them: the base
+    /// colour and roughness maps are encoded while the normal map is made (its rows shared by
+    /// whichever threads are free) and then encoded, so no core waits for the last encoder
+    /// alone.
+    pub(super) fn encode_as(
+        self,
+        what: &str,
+        format: TextureFormat,
+    ) -> Result<TextureSet, TreeError> {
         let n = self.n as u32;
-        let encode = |map: &str, channels: u8, px: &[u8]| {
-            Texture::from_pixels_fast(format!("{what} {map}"), n, n, channels, px).map(Arc::new)
-        };
+        let encode =
+            |map: Map, channels: u8, px: &[u8]| encode_map(what, map, n, channels, px, format);
         let ((color, roughness), normal) = rayon::join(
             || {
                 rayon::join(
-                    || encode("color", self.channels, &self.color),
-                    || encode("roughness", 3, &self.roughness),
+                    || encode(Map::Color, self.channels, &self.color),
+                    || encode(Map::Roughness, 3, &self.roughness),
                 )
             },
             || {
                 let normal = normal_map(&self.heights, self.n, self.strength, self.wrap);
-                encode("normal", 3, &normal)
+                encode(Map::Normal, 3, &normal)
             },
         );
         Ok(TextureSet {
@@ -117,20 +127,106 @@ pub(super) fn normal_map(h: &[f32], n: usize, strength: f32, wrap: bool) -> Vec<
     out
 }
 
+/// How a texture set's maps are stored in the model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TextureFormat {
+    /// Opaque maps as JPEG (a fraction of PNG's bytes): base colour at quality
+    /// [`JPEG_COLOR_QUALITY`], the normal map at [`JPEG_NORMAL_QUALITY`], the roughness as a
+    /// grey JPEG (glTF reads roughness from G and metalness from B, which the material's
+    /// metallic factor 0 cancels); a map with alpha stays PNG (Lua `"jpeg"`).
+    #[default]
+    Jpeg,
+    /// Every map lossless PNG (Lua `"png"`).
+    Png,
+}
+
+impl TextureFormat {
+    /// The Lua names, in the order of the variants.
+    pub const NAMES: [&'static str; 2] = ["jpeg", "png"];
+
+    /// The format of a Lua name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<TextureFormat> {
+        match name {
+            "jpeg" => Some(TextureFormat::Jpeg),
+            "png" => Some(TextureFormat::Png),
+            _ => None,
+        }
+    }
+}
+
+/// JPEG quality of base colour maps.
+pub(super) const JPEG_COLOR_QUALITY: u8 = 90;
+
+/// JPEG quality of normal maps: high, so the decoded normals keep their tilt (their mean
+/// within a degree of the lossless map's, a test holds it).
+pub(super) const JPEG_NORMAL_QUALITY: u8 = 95;
+
+/// Which of a set's three maps a map is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Map {
+    Color,
+    Normal,
+    Roughness,
+}
+
+impl Map {
+    fn name(self) -> &'static str {
+        match self {
+            Map::Color => "color",
+            Map::Normal => "normal",
+            Map::Roughness => "roughness",
+        }
+    }
+}
+
+/// Map `map` of set `what`, `n x n` pixels of `channels` bytes, encoded in `format` and
+/// named `<what> <map>`: PNG (fast compression) for PNG and for any map with alpha, else
+/// JPEG, the metallic-roughness map as a grey JPEG of its G channel.
+fn encode_map(
+    what: &str,
+    map: Map,
+    n: u32,
+    channels: u8,
+    px: &[u8],
+    format: TextureFormat,
+) -> Result<Arc<Texture>, pge_engine::geometry::GeometryError> {
+    let name = format!("{what} {}", map.name());
+    if format == TextureFormat::Png || channels == 4 {
+        return Texture::from_pixels_fast(name, n, n, channels, px).map(Arc::new);
+    }
+    match map {
+        Map::Roughness => {
+            let grey: Vec<u8> = px.chunks_exact(3).map(|p| p[1]).collect();
+            Texture::from_pixels_jpeg(name, n, n, 1, &grey, JPEG_COLOR_QUALITY)
+        }
+        Map::Normal => Texture::from_pixels_jpeg(name, n, n, 3, px, JPEG_NORMAL_QUALITY),
+        Map::Color => Texture::from_pixels_jpeg(name, n, n, channels, px, JPEG_COLOR_QUALITY),
+    }
+    .map(Arc::new)
+}
+
 /// Encodes the three maps of a set in parallel as PNG, named `<what> color`, `<what> normal`
 /// and `<what> roughness`.
 pub fn encode_maps(what: &str, maps: Maps) -> Result<TextureSet, TreeError> {
+    encode_maps_as(what, maps, TextureFormat::Png)
+}
+
+/// [`encode_maps`] in `format`.
+pub fn encode_maps_as(
+    what: &str,
+    maps: Maps,
+    format: TextureFormat,
+) -> Result<TextureSet, TreeError> {
     let n = maps.size;
     let jobs = [
-        (format!("{what} color"), maps.channels, maps.color),
-        (format!("{what} normal"), 3, maps.normal),
-        (format!("{what} roughness"), 3, maps.roughness),
+        (Map::Color, maps.channels, maps.color),
+        (Map::Normal, 3, maps.normal),
+        (Map::Roughness, 3, maps.roughness),
     ];
     let mut maps = jobs
         .into_par_iter()
-        .map(|(name, channels, px)| {
-            Texture::from_pixels_fast(name, n, n, channels, &px).map(Arc::new)
-        })
+        .map(|(map, channels, px)| encode_map(what, map, n, channels, &px, format))
         .collect::<Result<Vec<_>, _>>()?
         .into_iter();
     let mut next = || {

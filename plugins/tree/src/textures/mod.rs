@@ -4,8 +4,9 @@
 //! Every map is a pure function of its parameters ([`BarkParams`], [`LeafParams`]): a height
 //! field from fast hashed noise (periodic value noise and stretched cellular noise), the
 //! normal map derived from that height field by central differences, colour and roughness
-//! from the same field. Rows are computed in parallel (rayon) and the three maps are
-//! PNG-encoded in parallel with fast compression; none of it depends on the thread count.
+//! from the same field. Rows are computed in parallel (rayon) and the three maps are encoded
+//! in parallel (bark: JPEG by default, or PNG with fast compression; leaves, which need
+//! alpha: PNG); none of it depends on the thread count.
 //!
 //! Sets are generated once per distinct parameter set and process ([`TextureCache`]): the
 //! variants of a forest, built in parallel sessions, share one set per species. Bark tiles
@@ -28,7 +29,7 @@ use crate::options::{BarkStyle, LeafShape};
 pub use bark::{bark_maps, bark_set};
 pub use cache::{TextureCache, bark_textures, leaf_textures};
 pub use leaves::{leaf_maps, leaf_set};
-pub use maps::{Maps, encode_maps, load_png};
+pub use maps::{Maps, TextureFormat, encode_maps, encode_maps_as, load_png};
 
 /// The parameters a bark texture set is made from: its cache key.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,6 +44,8 @@ pub struct BarkParams {
     /// Relief: how deep furrows and cracks look in the normal map (0 flat, 1 the style's
     /// own, up to 4).
     pub depth: f32,
+    /// How the maps are stored: JPEG (default) or PNG.
+    pub format: TextureFormat,
 }
 
 /// The parameters a leaf texture set is made from: its cache key.
@@ -77,7 +80,7 @@ pub struct TextureSet {
 mod test_support {
     use super::*;
 
-    /// A map's PNG decoded.
+    /// A map's image (PNG or JPEG) decoded.
     pub fn decode(t: &Texture) -> image::RgbaImage {
         image::load_from_memory(&t.png).expect("decodes").to_rgba8()
     }
@@ -89,6 +92,7 @@ mod test_support {
             color: [0.2, 0.12, 0.07, 1.0],
             size,
             depth: 1.0,
+            format: TextureFormat::Png,
         }
     }
 }

@@ -164,8 +164,8 @@ pub(super) struct LatticeRow<'a> {
 }
 
 impl LatticeRow<'_> {
-    /// The noise at `u`.
-    #[inline]
+    /// The noise at `u` (tests only): the definition the pixel columns are held to.
+    #[cfg(test)]
     pub(super) fn at(&self, u: f32) -> f32 {
         let (ix, jx, tx) = self.lattice.column(u);
         self.blend(ix, jx, tx)
@@ -206,7 +206,7 @@ impl LatticeRow<'_> {
         }
     }
 
-    #[inline]
+    #[cfg(test)]
     fn blend(&self, ix: usize, jx: usize, tx: f32) -> f32 {
         let top = self.top[ix] + (self.top[jx] - self.top[ix]) * tx;
         let bottom = self.bottom[ix] + (self.bottom[jx] - self.bottom[ix]) * tx;
@@ -279,8 +279,9 @@ impl FractalRow<'_> {
         sum * self.norm
     }
 
-    /// The noise at every `us[i]`, the same numbers as `FractalRow::at` (tests only), an octave at a
-    /// time (a tight loop per octave).
+    /// The noise at every `us[i]`, the same numbers as `FractalRow::at`, an octave at a time
+    /// (tests only).
+    #[cfg(test)]
     pub(super) fn values_at(&self, us: &[f32]) -> Vec<f32> {
         let (mut sum, mut amp) = (vec![0.0f32; us.len()], 1.0f32);
         for octave in &self.octaves {
