@@ -1,4 +1,4 @@
-//! `pge derive`: print the string an L-system derives (API.md §1).
+//! `pge derive`: print the string an L-system derives (docs/cli.md).
 
 use std::io::{BufWriter, Write};
 

@@ -1,4 +1,4 @@
-//! Conifers that read as conifers (issue 30): `conifer.lua` (a pine) and `spruce.lua` grown
+//! Conifers that read as conifers: `conifer.lua` (a pine) and `spruce.lua` grown
 //! by `pge.Conifer`, measured on the skeleton their glb carries (`extras.pge.skeleton`):
 //! a straight leader, first-order branches in whorls, thin joints. Also the generator's
 //! stages and its located errors.

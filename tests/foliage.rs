@@ -1,4 +1,4 @@
-//! Foliage that keeps its coverage at every distance (issue 30): a PNG carries no mipmaps,
+//! Foliage that keeps its coverage at every distance: a PNG carries no mipmaps,
 //! so every client box-filters its own chain, which ends at the texture's mean alpha. Every
 //! alpha-masked material of every script in `scripts/species/` and `scripts/forests/` must
 //! have a base-colour texture whose mean alpha (its 1x1 level) is at least its

@@ -1,4 +1,4 @@
-//! No script can take the host down (issue 15): one test per row of the issue's table, each
+//! No script can take the host down: one test per row of the issue's table, each
 //! running the `pge` command on a hostile script and checking that it fails cleanly (exit 1,
 //! one `FILE:LINE: message` line naming the limit or the option, no panic, no output file)
 //! or does the right thing.

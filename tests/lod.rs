@@ -1,4 +1,4 @@
-//! End-to-end tests of foliage levels of detail (API.md §6-7): a real tree with `lod` through
+//! End-to-end tests of foliage levels of detail (docs/lua-api.md, docs/glb.md): a real tree with `lod` through
 //! `pge run`, its leaf mesh and `extras.pge.lod` read back from the glb and checked against
 //! what the construction promises (the invariant of every row, ranges inside V, the finest
 //! level equal to the plain tree's leaves, every level a cut of the collapse forest, leaf

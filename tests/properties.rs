@@ -1,4 +1,4 @@
-//! Properties of the Lua API (issue 15): any option table given to any constructor either
+//! Properties of the Lua API: any option table given to any constructor either
 //! builds or fails with a located error (`FILE:LINE: message`), never a panic.
 
 use pge::pge_engine::{Engine, SessionOptions};

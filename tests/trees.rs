@@ -24,7 +24,7 @@ fn run_tree(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec
     (stats, std::fs::read(&out).expect("glb written"))
 }
 
-/// Checks what a tree's glb must carry (API.md §7) and returns (bark, leaf) triangle counts.
+/// Checks what a tree's glb must carry (docs/glb.md) and returns (bark, leaf) triangle counts.
 fn check_tree_glb(script: &str, glb: &[u8]) -> (usize, usize) {
     let (doc, buffers, images) =
         gltf::import_slice(glb).unwrap_or_else(|e| panic!("{script}: {e}"));
@@ -131,7 +131,7 @@ macro_rules! species {
 species!(oak, poplar, willow, bush, vase, topiary);
 
 /// Every script in `scripts/species/`, including those the tests above do not run: bark and
-/// leaves each carry base colour, normal and roughness maps of 512 px or more (issue 17).
+/// leaves each carry base colour, normal and roughness maps of 512 px or more.
 #[test]
 fn every_species_carries_normal_and_roughness_maps() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -249,8 +249,7 @@ fn conifer_turn_check(limit: f64, dir: &Path) -> (Option<i32>, String) {
     (o.status.code(), text(&o.stderr))
 }
 
-/// The conifer's side branches never loop back (issue 17, when it was colonized; issue 30
-/// grows it with pge.Conifer): no branch of its skeleton turns more than 120 degrees from
+/// The conifer's side branches never loop back (pge.Conifer grows it): no branch of its skeleton turns more than 120 degrees from
 /// its start. (The same walk at 10 degrees does fail: it sees the droop of the lower
 /// branches.)
 #[test]

@@ -100,7 +100,7 @@ impl<const N: usize, T: Serialize> Serialize for Entries<N, T> {
 }
 
 /// The glTF JSON text with the skeletons in place of their markers, formatted in pieces on
-/// the rayon pool. A skeleton is `{parents, positions, radii, orders}` (API.md §7): a root's
+/// the rayon pool. A skeleton is `{parents, positions, radii, orders}` (docs/glb.md): a root's
 /// parent is -1; floats are written as the `f64` they widen to (`null` when not finite), as
 /// serde_json writes them, so the text is the same as one serialized in one pass.
 pub(super) struct JsonText {

@@ -209,9 +209,7 @@ pub fn read_mesh<'s>(
 /// A mesh's `extras.pge` without its `lod`, and the levels of detail read from it
 /// ([`lod_from_json`]). An `lod` that is not PGE's, or not last (where the writer puts it),
 /// stays among the extras and is written back as it was.
-pub fn split_lod(
-    mut extras: Map<String, Value>,
-) -> (Map<String, Value>, Option<Arc<MeshLod>>) {
+pub fn split_lod(mut extras: Map<String, Value>) -> (Map<String, Value>, Option<Arc<MeshLod>>) {
     let last = extras.keys().next_back().is_some_and(|k| k == "lod");
     let lod = last
         .then(|| extras.get("lod").and_then(lod_from_json))

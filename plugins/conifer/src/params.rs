@@ -93,7 +93,7 @@ impl SprayPattern {
     pub const NAMES: [&'static str; 2] = ["alternate", "paired"];
 }
 
-/// The parameters of an excurrent tree (API.md §5, `pge.Conifer{...}`); see docs/lua-api.md
+/// The parameters of an excurrent tree (`pge.Conifer{...}`); see docs/lua-api.md
 /// for the meaning of each.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConiferParams {

@@ -18,7 +18,7 @@ pub const MAX_STEPS: u32 = 100_000;
 /// The default branch cap: a feeding that would grow the tree past it stops the run.
 pub const DEFAULT_MAX_BRANCHES: usize = 1_000_000;
 
-/// The parameters of a growth (API.md §5, `pge.Growth{...}`).
+/// The parameters of a growth (`pge.Growth{...}`).
 #[derive(Clone, Debug)]
 pub struct GrowthParams {
     /// The transport model's parameters (ratio, spread, splitsize, ...).

@@ -2,7 +2,7 @@
 //! its root, whose branches thicken, lengthen and split as the nutrient flows up.
 //!
 //! The model ([`TransportTree`]) and the step-wise algorithm ([`Growth`], one step is one
-//! feeding) are plain Rust; [`GrowthPlugin`] adds `pge.Growth{...}` to Lua (API.md §5). The
+//! feeding) are plain Rust; [`GrowthPlugin`] adds `pge.Growth{...}` to Lua (docs/lua-api.md). The
 //! grown branches become the engine's [`Skeleton`](pge_engine::geometry::Skeleton), meshed
 //! by [`pge_tree`] like every other tree.
 //!

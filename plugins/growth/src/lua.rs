@@ -1,4 +1,4 @@
-//! The Lua side: `pge.Growth{...}` (API.md §5). A thin adapter: it reads the options through
+//! The Lua side: `pge.Growth{...}` (docs/lua-api.md). A thin adapter: it reads the options through
 //! the engine's one reader and hands plain Rust values to [`Growth`].
 
 use std::sync::Arc;

@@ -1,4 +1,4 @@
-//! The Lua adapter: `pge.lod.budget{...}` (API.md §6) and the reading of the tree
+//! The Lua adapter: `pge.lod.budget{...}` (docs/lua-api.md) and the reading of the tree
 //! generators' `lod = {...}` option.
 
 use mlua::{Lua, Table, Value};

@@ -1,4 +1,4 @@
-//! Properties of the classic notation (issue 15): deriving random systems never panics, and
+//! Properties of the classic notation: deriving random systems never panics, and
 //! the text of a derived string (what `pge derive --format text` prints) parses back to the
 //! same string.
 

@@ -4,7 +4,7 @@
 //!
 //! The algorithm ([`SpaceColonization`]) and the envelopes ([`Shape`]) are plain Rust; the
 //! [`SpaceColonizationPlugin`] adds `pge.SpaceColonization{...}` and `pge.shape.*` to Lua
-//! (API.md §5). The grown skeleton becomes bark and leaves through [`pge_tree`].
+//! (docs/lua-api.md). The grown skeleton becomes bark and leaves through [`pge_tree`].
 //!
 //! ```
 //! use glam::Vec3;

@@ -2,7 +2,7 @@
 //!
 //! The same options serve every tree generator (space colonization, the turtle, growth), so
 //! a species reads the same whatever grew its skeleton. Scripts give them as a Lua table
-//! (API.md §5), read by [`crate::lua::tree_options`].
+//! (docs/lua-api.md), read by [`crate::lua::tree_options`].
 
 use std::fmt;
 use std::path::PathBuf;
@@ -306,7 +306,7 @@ pub struct TreeOptions {
     /// Tip leaves; `None` for none. Leaf points already in the skeleton (a turtle's `~`) are
     /// meshed either way, styled by these options or their defaults.
     pub leaves: Option<LeafOptions>,
-    /// Foliage levels of detail (API.md §6-7): the leaf mesh is simplified and written in
+    /// Foliage levels of detail (docs/lua-api.md): the leaf mesh is simplified and written in
     /// the order of the vector V with its LOD table in the extras; `None` for none.
     pub lod: Option<pge_lod::LodOptions>,
 }

@@ -8,7 +8,7 @@ use pge_tree::TreeOptions;
 use crate::points::Mode;
 use crate::shape::Shape;
 
-/// The parameters of a colonization (API.md §5).
+/// The parameters of a colonization (docs/lua-api.md).
 #[derive(Clone, Debug)]
 pub struct Params {
     /// Where the attraction points are.
