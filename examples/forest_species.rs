@@ -21,18 +21,18 @@ use pge_forest::{
     Variants,
 };
 
-/// The path of a species script of the library (this checkout's `scripts/species/`).
-fn species(name: &str, points: u32) -> Species {
+/// A species script of the library (this checkout's `scripts/species/`) with these
+/// parameter overrides.
+fn species(name: &str, params: &[(&str, &str)]) -> Species {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scripts/species")
         .join(name);
-    let points = points.to_string();
-    let script = ScriptSpecies::new(path.to_string_lossy(), &[("points", points.as_str())]);
-    Species::Script(script)
+    Species::Script(ScriptSpecies::new(path.to_string_lossy(), params))
 }
 
 /// The forest of the host: 160 m of rolling ground, oaks in the valleys and conifers on the
-/// slopes above them, two variants of each; `points` attraction points per tree.
+/// slopes above them, two variants of each; `points` attraction points per oak (the
+/// conifers, grown by `pge.Conifer`, take none).
 pub fn spec(points: u32) -> Result<ForestSpec, ForestError> {
     let mut spec = ForestSpec::new([160.0, 160.0], 11, Some(80.0))?;
     let relief = FbmOptions {
@@ -44,12 +44,13 @@ pub fn spec(points: u32) -> Result<ForestSpec, ForestError> {
     let mut oaks = Layer::new("oak", 12.0);
     oaks.altitude = [-100.0, 3.0];
     oaks.variants = Variants::Count(2);
-    spec.add_layer(oaks, species("oak.lua", points))?;
+    let points = points.to_string();
+    spec.add_layer(oaks, species("oak.lua", &[("points", points.as_str())]))?;
     let mut conifers = Layer::new("conifer", 6.0);
     conifers.altitude = [1.0, 100.0];
     conifers.slope = [0.0, 40.0];
     conifers.variants = Variants::Count(2);
-    spec.add_layer(conifers, species("conifer.lua", points))?;
+    spec.add_layer(conifers, species("conifer.lua", &[]))?;
     Ok(spec)
 }
 
