@@ -58,12 +58,9 @@ fn vs_mesh(v: MeshIn) -> MeshOut {
 @fragment
 fn fs_mesh(in: MeshOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let c = m.base_color * in.color * textureSample(base_tex, base_sampler, in.uv);
-    // Alpha-tested leaves fade out with distance as mipmaps average their alpha down: the
-    // alpha is scaled up by a quarter per mip level so far crowns keep their cover.
-    let texels = in.uv * vec2<f32>(textureDimensions(base_tex));
-    let footprint = max(dot(dpdx(texels), dpdx(texels)), dot(dpdy(texels), dpdy(texels)));
-    let level = max(0.5 * log2(max(footprint, 1e-8)), 0.0);
-    if m.params.x >= 0.0 && c.a * (1.0 + 0.25 * level) < m.params.x {
+    // The alpha test of glTF clients: the material's cutoff against the box-filtered mip
+    // chain, which a leaf texture's mean alpha keeps above the cutoff (docs/glb.md).
+    if m.params.x >= 0.0 && c.a < m.params.x {
         discard;
     }
     var n = normalize(in.normal);
