@@ -5,24 +5,10 @@
 
 mod common;
 
-use common::pge;
-use std::path::Path;
+use common::{pge, run_with_stats as run};
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).to_string()
-}
-
-/// Runs a script to a glb in `dir` with `--stats`; returns the stats and the glb bytes.
-fn run(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec<u8>) {
-    let out = dir.join("tree.glb");
-    let out_s = out.to_string_lossy().to_string();
-    let mut args = vec!["run", script, "-o", out_s.as_str(), "--stats", "-q"];
-    args.extend_from_slice(extra);
-    let o = pge(&args);
-    assert_eq!(o.status.code(), Some(0), "{script}: {}", text(&o.stderr));
-    let stats: serde_json::Value =
-        serde_json::from_str(text(&o.stdout).trim()).expect("stats are JSON");
-    (stats, std::fs::read(&out).expect("glb written"))
 }
 
 /// The skeleton of a tree's glb: parents (-1 for the root), positions and radii.

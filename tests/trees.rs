@@ -4,24 +4,11 @@
 
 mod common;
 
-use common::pge;
+use common::{pge, run_with_stats};
 use std::path::Path;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).to_string()
-}
-
-/// Runs a script to a glb in `dir` with `--stats`; returns the stats and the glb bytes.
-fn run_tree(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec<u8>) {
-    let out = dir.join("tree.glb");
-    let out_s = out.to_string_lossy().to_string();
-    let mut args = vec!["run", script, "-o", out_s.as_str(), "--stats", "-q"];
-    args.extend_from_slice(extra);
-    let o = pge(&args);
-    assert_eq!(o.status.code(), Some(0), "{script}: {}", text(&o.stderr));
-    let stats: serde_json::Value =
-        serde_json::from_str(text(&o.stdout).trim()).expect("stats are JSON");
-    (stats, std::fs::read(&out).expect("glb written"))
 }
 
 /// Checks what a tree's glb must carry (docs/glb.md) and returns (bark, leaf) triangle counts.
@@ -114,7 +101,7 @@ macro_rules! species {
         fn $name() {
             let script = format!("scripts/species/{}.lua", stringify!($name));
             let dir = tempfile::tempdir().expect("tempdir");
-            let (stats, glb) = run_tree(&script, dir.path(), &[]);
+            let (stats, glb) = run_with_stats(&script, dir.path(), &[]);
             let (bark, leaves) = check_tree_glb(&script, &glb);
             assert!(stats["nodes"].as_u64().expect("nodes") > 100, "{script}: {stats}");
             assert!(stats["leaves"].as_u64().expect("leaves") > 100, "{script}: {stats}");
@@ -145,7 +132,7 @@ fn every_species_carries_normal_and_roughness_maps() {
     scripts.sort();
     assert!(scripts.len() >= 7, "{scripts:?}");
     for script in &scripts {
-        let (_, glb) = run_tree(script, dir.path(), &[]);
+        let (_, glb) = run_with_stats(script, dir.path(), &[]);
         check_tree_glb(script, &glb);
     }
 }
@@ -156,7 +143,7 @@ fn every_species_carries_normal_and_roughness_maps() {
 #[test]
 fn the_exported_skeleton_is_one_tree_with_pipe_radii() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (_, glb) = run_tree("scripts/species/oak.lua", dir.path(), &[]);
+    let (_, glb) = run_with_stats("scripts/species/oak.lua", dir.path(), &[]);
     let doc = gltf::Gltf::from_slice(&glb).expect("glb");
     let mesh = doc.meshes().next().expect("bark");
     let extras: serde_json::Value =
@@ -268,7 +255,8 @@ fn mesh_envelope_modes() {
     let dir = tempfile::tempdir().expect("tempdir");
     for mode in ["fill", "surround", "vertices"] {
         let set = format!("mode={mode}");
-        let (stats, glb) = run_tree("scripts/species/topiary.lua", dir.path(), &["--set", &set]);
+        let (stats, glb) =
+            run_with_stats("scripts/species/topiary.lua", dir.path(), &["--set", &set]);
         check_tree_glb(&format!("topiary {mode}"), &glb);
         assert!(
             stats["nodes"].as_u64().expect("nodes") > 50,
@@ -280,9 +268,9 @@ fn mesh_envelope_modes() {
 #[test]
 fn same_seed_same_bytes_other_seed_other_tree() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (_, a) = run_tree("scripts/species/bush.lua", dir.path(), &["--seed", "7"]);
-    let (_, b) = run_tree("scripts/species/bush.lua", dir.path(), &["--seed", "7"]);
-    let (_, c) = run_tree("scripts/species/bush.lua", dir.path(), &["--seed", "8"]);
+    let (_, a) = run_with_stats("scripts/species/bush.lua", dir.path(), &["--seed", "7"]);
+    let (_, b) = run_with_stats("scripts/species/bush.lua", dir.path(), &["--seed", "7"]);
+    let (_, c) = run_with_stats("scripts/species/bush.lua", dir.path(), &["--seed", "8"]);
     assert_eq!(a, b);
     assert_ne!(a, c);
 }
@@ -290,13 +278,13 @@ fn same_seed_same_bytes_other_seed_other_tree() {
 #[test]
 fn parameters_and_steps_change_the_tree() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (full, _) = run_tree("scripts/species/bush.lua", dir.path(), &[]);
-    let (few, _) = run_tree(
+    let (full, _) = run_with_stats("scripts/species/bush.lua", dir.path(), &[]);
+    let (few, _) = run_with_stats(
         "scripts/species/bush.lua",
         dir.path(),
         &["--set", "points=300"],
     );
-    let (early, _) = run_tree("scripts/species/bush.lua", dir.path(), &["--steps", "5"]);
+    let (early, _) = run_with_stats("scripts/species/bush.lua", dir.path(), &["--steps", "5"]);
     assert!(few["nodes"].as_u64() < full["nodes"].as_u64());
     assert!(early["nodes"].as_u64() < few["nodes"].as_u64());
 }
@@ -393,7 +381,7 @@ fn an_unreachable_crown_stops_at_the_cap_with_a_warning() {
 #[test]
 fn oak_leaves_carry_the_species_diffuse_transmission() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (_, glb) = run_tree("scripts/species/oak.lua", dir.path(), &[]);
+    let (_, glb) = run_with_stats("scripts/species/oak.lua", dir.path(), &[]);
     let json: serde_json::Value =
         serde_json::from_slice(&gltf::binary::Glb::from_slice(&glb).expect("glb").json)
             .expect("json");

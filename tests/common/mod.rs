@@ -80,3 +80,22 @@ pub fn ray_forest() -> String {
         .to_string_lossy()
         .to_string()
 }
+
+/// Runs a script to `dir/tree.glb` with `--stats` (plus `extra`); returns the stats and the
+/// glb's bytes. Fails the test when the run fails.
+pub fn run_with_stats(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::Value, Vec<u8>) {
+    let out = dir.join("tree.glb");
+    let out_s = out.to_string_lossy().to_string();
+    let mut args = vec!["run", script, "-o", out_s.as_str(), "--stats", "-q"];
+    args.extend_from_slice(extra);
+    let o = pge(&args);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{script}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let stats: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).expect("stats are JSON");
+    (stats, std::fs::read(&out).expect("glb written"))
+}
