@@ -58,7 +58,7 @@ golden! {
     lsystems_ternary: "scripts/lsystems/ternary.lua" => 0x1b2160685439858f,
     species_oak: "scripts/species/oak.lua" => 0x25f0911594a9753c,
     species_conifer: "scripts/species/conifer.lua" => 0x0880543fe861d69f,
-    species_spruce: "scripts/species/spruce.lua" => 0x707fc8e2b6abb6a5,
+    species_spruce: "scripts/species/spruce.lua" => 0x3019ac7053047373,
     species_willow: "scripts/species/willow.lua" => 0x1fd245168223e5dd,
     species_topiary: "scripts/species/topiary.lua" => 0xdcd2a4dba356ef88,
     species_vase: "scripts/species/vase.lua" => 0x5a42d5dce9823953,

@@ -2,7 +2,7 @@
 -- internode and one whorl of 4 to 6 branches a year (now and then a small branch between
 -- whorls), a dense narrow cone down to the ground, lower branches long and drooping, their
 -- tips bent down, every branch a flat spray of shoots and shoots of shoots (three orders)
--- under short dark needles. Scaly (plated) bark.
+-- under short dark needles. Scaly bark (small thin plates).
 -- One step is one year: `--steps 8` is the sapling, `--stages 6,14,28` three ages.
 local p = pge.params{
   height = {14, min = 3, max = 50, doc = "tree height after `years` years (m)"},
@@ -17,7 +17,7 @@ return pge.Conifer{
   segment = 0.22, orders = 3, bare = 0.1,
   sprayAngle = 55, sprayLength = 0.4, sprayDroop = 20,
   radius = { tip = 0.005, exponent = 2.2 },
-  mesh = { sides = 6, color = "#4e3b30", bark = { style = "plated", depth = 1.4 } },
+  mesh = { sides = 6, color = "#4e3b30", bark = "scaly" },
   leaves = { perTip = {6, 9}, size = 0.2, width = 0.9, maxDepth = 2,
              colors = {"#122a1a", "#23402a"}, shape = "needles",
              backColor = "#58784e", translucency = 0.08 },
