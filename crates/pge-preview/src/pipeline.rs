@@ -48,7 +48,7 @@ pub fn material_uniform(
 }
 
 /// The bind group layouts: group 0 the globals, group 1 a material (uniform, base colour
-/// texture, sampler).
+/// texture, sampler, normal map).
 pub struct BindLayouts {
     /// Group 0: the `Globals` uniform.
     pub globals: wgpu::BindGroupLayout,
@@ -92,6 +92,16 @@ impl BindLayouts {
                     binding: 2,
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
                     count: None,
                 },
             ],
@@ -143,7 +153,7 @@ impl Pipelines {
         let front_face = probe_front_face(device, queue, &shader);
         let f32x = |n: u64| n * 4;
         let vertex_attributes = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 8 => Float32x4
         ];
         let instance_attributes = wgpu::vertex_attr_array![
             4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4

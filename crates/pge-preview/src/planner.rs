@@ -357,6 +357,7 @@ mod tests {
             instances,
             base_color: [1.0; 4],
             texture: None,
+            normal_texture: None,
             alpha_cutoff: None,
             double_sided: false,
             transmission: None,

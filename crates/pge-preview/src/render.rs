@@ -25,7 +25,7 @@ use super::forest::{MOVING_MARGIN, MOVING_SHARE, View};
 use super::pipeline::{BindLayouts, COLOR_FORMAT, DEPTH_FORMAT, Pipelines, material_uniform};
 use super::planner::{ForestSet, Planned, Planner, Request};
 use super::scene::{Environment, Scene, TextureData};
-use super::texture::{Samplers, upload_texture};
+use super::texture::{Samplers, upload_data_texture, upload_texture};
 
 /// Background without an environment, sRGB-encoded.
 const CLEAR: wgpu::Color = wgpu::Color {
@@ -85,6 +85,8 @@ pub struct Renderer {
     material_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     white: wgpu::TextureView,
+    /// A flat normal, for materials without a normal map.
+    flat_normal: wgpu::TextureView,
     mesh_culled: wgpu::RenderPipeline,
     mesh_double: wgpu::RenderPipeline,
     mesh_lines: wgpu::RenderPipeline,
@@ -186,6 +188,7 @@ impl Renderer {
             material_layout: layouts.material,
             sampler: samplers.material,
             white: samplers.white,
+            flat_normal: samplers.flat_normal,
             mesh_culled,
             mesh_double,
             mesh_lines,
@@ -247,6 +250,7 @@ impl Renderer {
             .map(|env| (self.sky_group(env), ambient_tint(env.average)));
         let device = &self.device;
         let mut textures: Vec<(*const TextureData, wgpu::TextureView)> = Vec::new();
+        let mut normals: Vec<(*const TextureData, wgpu::TextureView)> = Vec::new();
         self.meshes.clear();
         for (index, mesh) in scene.meshes.iter().enumerate() {
             let view = match &mesh.texture {
@@ -260,8 +264,25 @@ impl Renderer {
                 },
                 None => self.white.clone(),
             };
-            let material =
-                material_group(device, &self.material_layout, mesh, &view, &self.sampler);
+            let normal = match &mesh.normal_texture {
+                Some(t) => match normals.iter().find(|(p, _)| *p == Arc::as_ptr(t)) {
+                    Some((_, v)) => v.clone(),
+                    None => {
+                        let v = upload_data_texture(device, &self.queue, t);
+                        normals.push((Arc::as_ptr(t), v.clone()));
+                        v
+                    }
+                },
+                None => self.flat_normal.clone(),
+            };
+            let material = material_group(
+                device,
+                &self.material_layout,
+                mesh,
+                &view,
+                &self.sampler,
+                &normal,
+            );
             self.meshes
                 .push(GpuMesh::new(device, scene, index, material));
         }
@@ -518,6 +539,7 @@ impl Renderer {
             &material_uniform([1.0; 4], None, false, None),
             &view,
             &self.sky_sampler,
+            &self.flat_normal,
         )
     }
 

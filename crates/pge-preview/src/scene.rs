@@ -9,8 +9,10 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use pge_engine::geometry::{AlphaMode, DiffuseTransmission, Mesh, Model, Primitive, Texture};
 
-/// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4).
-pub const VERTEX_FLOATS: usize = 12;
+/// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4), tangent (4:
+/// the mesh's MikkTSpace tangent where its material has a normal map, as the glb's
+/// `TANGENT`; zero elsewhere).
+pub const VERTEX_FLOATS: usize = 16;
 
 /// An RGBA8 (sRGB) texture with its mip chain, largest first.
 #[derive(Debug)]
@@ -38,6 +40,8 @@ pub struct SceneMesh {
     pub base_color: [f32; 4],
     /// Base colour texture.
     pub texture: Option<Arc<TextureData>>,
+    /// Normal map (tangent space, linear data), read with the vertices' tangents.
+    pub normal_texture: Option<Arc<TextureData>>,
     /// Alpha cutoff for masked materials (leaves).
     pub alpha_cutoff: Option<f32>,
     /// Back faces drawn (lit from the side they face).
@@ -108,6 +112,7 @@ impl Scene {
     #[must_use]
     pub fn new(model: &Model) -> Scene {
         let mut textures: HashMap<*const Texture, Option<Arc<TextureData>>> = HashMap::new();
+        let mut normal_maps: HashMap<*const Texture, Option<Arc<TextureData>>> = HashMap::new();
         let mut per_mesh: Vec<Vec<[f32; 16]>> = vec![Vec::new(); model.meshes.len()];
         for inst in &model.instances {
             if let Some(list) = per_mesh.get_mut(inst.mesh) {
@@ -169,6 +174,12 @@ impl Scene {
                     .or_insert_with(|| decode(t).map(Arc::new))
                     .clone()
             });
+            let normal_texture = mesh.material.normal_texture.as_ref().and_then(|t| {
+                normal_maps
+                    .entry(Arc::as_ptr(t))
+                    .or_insert_with(|| decode_linear(t).map(Arc::new))
+                    .clone()
+            });
             let vertices = interleave(mesh);
             let lod = super::lod::LeafLod::from_lod(mesh.lod.as_deref(), mesh.positions.len());
             let coarse = if mesh.primitive != Primitive::Triangles || (forest && lod.is_some()) {
@@ -186,6 +197,7 @@ impl Scene {
                 instances,
                 base_color: mesh.material.base_color,
                 texture,
+                normal_texture,
                 alpha_cutoff: match mesh.material.alpha {
                     AlphaMode::Mask(c) => Some(c),
                     _ => None,
@@ -438,14 +450,18 @@ fn compact(vertices: &[f32], indices: &[u32]) -> (Vec<f32>, Vec<u32>) {
 
 fn interleave(mesh: &Mesh) -> Vec<f32> {
     let n = mesh.positions.len();
+    // The tangents the glb carries (the same function writes them), where a normal map
+    // reads them.
+    let tangents = mesh.tangents().unwrap_or_default();
     let mut out = Vec::with_capacity(n * VERTEX_FLOATS);
     for i in 0..n {
         let p = mesh.positions[i];
         let nr = mesh.normals.get(i).copied().unwrap_or(Vec3::Y);
         let uv = mesh.uvs.get(i).copied().unwrap_or_default();
         let c = mesh.colors.get(i).copied().unwrap_or(glam::Vec4::ONE);
+        let t = tangents.get(i).copied().unwrap_or(glam::Vec4::ZERO);
         out.extend_from_slice(&[
-            p.x, p.y, p.z, nr.x, nr.y, nr.z, uv.x, uv.y, c.x, c.y, c.z, c.w,
+            p.x, p.y, p.z, nr.x, nr.y, nr.z, uv.x, uv.y, c.x, c.y, c.z, c.w, t.x, t.y, t.z, t.w,
         ]);
     }
     out
@@ -461,6 +477,39 @@ fn decode(texture: &Texture) -> Option<TextureData> {
         let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
         let prev = levels.last().map(Vec::as_slice).unwrap_or_default();
         levels.push(downsample(prev, w, h, nw, nh));
+        (w, h) = (nw, nh);
+    }
+    Some(TextureData {
+        width,
+        height,
+        levels,
+    })
+}
+
+/// Decodes a texture holding data, not colour (a normal map) and builds its mip chain by a
+/// plain 2x2 box filter of the stored values.
+fn decode_linear(texture: &Texture) -> Option<TextureData> {
+    let img = image::load_from_memory(&texture.png).ok()?.to_rgba8();
+    let (width, height) = img.dimensions();
+    let mut levels = vec![img.into_raw()];
+    let (mut w, mut h) = (width, height);
+    while w > 1 || h > 1 {
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        let prev = levels.last().map(Vec::as_slice).unwrap_or_default();
+        let mut next = vec![0u8; (nw * nh * 4) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                for k in 0..4 {
+                    let mut sum = 0u32;
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                        sum += u32::from(prev[((sy * w + sx) * 4 + k) as usize]);
+                    }
+                    next[((y * nw + x) * 4 + k) as usize] = ((sum + 2) / 4) as u8;
+                }
+            }
+        }
+        levels.push(next);
         (w, h) = (nw, nh);
     }
     Some(TextureData {

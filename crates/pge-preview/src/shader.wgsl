@@ -25,6 +25,8 @@ struct Material {
 @group(1) @binding(0) var<uniform> m: Material;
 @group(1) @binding(1) var base_tex: texture_2d<f32>;
 @group(1) @binding(2) var base_sampler: sampler;
+// Tangent-space normal map (+Z out of the surface); a flat texel without one.
+@group(1) @binding(3) var normal_tex: texture_2d<f32>;
 
 struct MeshIn {
     @location(0) position: vec3<f32>,
@@ -35,6 +37,8 @@ struct MeshIn {
     @location(5) m1: vec4<f32>,
     @location(6) m2: vec4<f32>,
     @location(7) m3: vec4<f32>,
+    // The glb's TANGENT (MikkTSpace) where a normal map reads it; zero elsewhere.
+    @location(8) tangent: vec4<f32>,
 };
 
 struct MeshOut {
@@ -42,6 +46,7 @@ struct MeshOut {
     @location(0) normal: vec3<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) color: vec4<f32>,
+    @location(3) tangent: vec4<f32>,
 };
 
 @vertex
@@ -52,18 +57,28 @@ fn vs_mesh(v: MeshIn) -> MeshOut {
     out.normal = (model * vec4<f32>(v.normal, 0.0)).xyz;
     out.uv = v.uv;
     out.color = v.color;
+    out.tangent = vec4<f32>((model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
     return out;
 }
 
 @fragment
 fn fs_mesh(in: MeshOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let c = m.base_color * in.color * textureSample(base_tex, base_sampler, in.uv);
+    // Sampled here, in uniform control flow (a flat texel without a normal map).
+    let mapped = textureSample(normal_tex, base_sampler, in.uv).xyz * 2.0 - 1.0;
     // The alpha test of glTF clients: the material's cutoff against the box-filtered mip
     // chain, which a leaf texture's mean alpha keeps above the cutoff (docs/glb.md).
     if m.params.x >= 0.0 && c.a < m.params.x {
         discard;
     }
     var n = normalize(in.normal);
+    // The normal map in the tangent frame the glb carries (bitangent = cross(N, T) * w),
+    // as glTF clients read it.
+    if dot(in.tangent.xyz, in.tangent.xyz) > 1e-12 {
+        let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
+        let b = cross(n, t) * select(1.0, -1.0, in.tangent.w < 0.0);
+        n = normalize(t * mapped.x + b * mapped.y + n * mapped.z);
+    }
     if !front {
         n = -n;
     }

@@ -7,6 +7,8 @@ use super::scene::TextureData;
 
 /// Model textures are sRGB images, decoded to linear when sampled for lighting.
 const IMAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Normal maps hold data, read as stored.
+const DATA_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// The samplers and the default texture every material may use.
 pub struct Samplers {
@@ -16,6 +18,8 @@ pub struct Samplers {
     pub sky: wgpu::Sampler,
     /// One white texel, for materials without a texture.
     pub white: wgpu::TextureView,
+    /// One flat normal (+Z in tangent space), for materials without a normal map.
+    pub flat_normal: wgpu::TextureView,
 }
 
 impl Samplers {
@@ -45,10 +49,17 @@ impl Samplers {
             levels: vec![vec![255; 4]],
         };
         let white = upload_texture(device, queue, &white_data);
+        let flat_data = TextureData {
+            width: 1,
+            height: 1,
+            levels: vec![vec![128, 128, 255, 255]],
+        };
+        let flat_normal = upload_data_texture(device, queue, &flat_data);
         Samplers {
             material: sampler,
             sky: sky_sampler,
             white,
+            flat_normal,
         }
     }
 }
@@ -60,8 +71,28 @@ pub fn upload_texture(
     queue: &wgpu::Queue,
     data: &TextureData,
 ) -> wgpu::TextureView {
+    upload(device, queue, data, IMAGE_FORMAT)
+}
+
+/// Uploads a data texture (a normal map) with its mip levels, read as stored; returns its
+/// view.
+#[must_use]
+pub fn upload_data_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    data: &TextureData,
+) -> wgpu::TextureView {
+    upload(device, queue, data, DATA_FORMAT)
+}
+
+fn upload(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    data: &TextureData,
+    format: wgpu::TextureFormat,
+) -> wgpu::TextureView {
     let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("base colour"),
+        label: Some("model texture"),
         size: wgpu::Extent3d {
             width: data.width,
             height: data.height,
@@ -70,7 +101,7 @@ pub fn upload_texture(
         mip_level_count: data.levels.len() as u32,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: IMAGE_FORMAT,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });

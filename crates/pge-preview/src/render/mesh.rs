@@ -307,13 +307,15 @@ impl GpuMesh {
     }
 }
 
-/// The material bind group of `mesh`: its uniform, its texture view (`view`) and `sampler`.
+/// The material bind group of `mesh`: its uniform, its texture view (`view`), `sampler` and
+/// normal map view (`normal`).
 pub(super) fn material_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     mesh: &SceneMesh,
     view: &wgpu::TextureView,
     sampler: &wgpu::Sampler,
+    normal: &wgpu::TextureView,
 ) -> wgpu::BindGroup {
     let uniform = material_uniform(
         mesh.base_color,
@@ -321,11 +323,12 @@ pub(super) fn material_group(
         mesh.double_sided,
         mesh.transmission,
     );
-    bind_material(device, layout, "material", &uniform, view, sampler)
+    bind_material(device, layout, "material", &uniform, view, sampler, normal)
 }
 
 /// A bind group of the material layout named `label`: the `uniform` (as
-/// [`material_uniform`] makes it) in a new buffer, the texture `view` and `sampler`.
+/// [`material_uniform`] makes it) in a new buffer, the texture `view`, `sampler` and the
+/// normal map `normal`.
 pub(super) fn bind_material(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -333,6 +336,7 @@ pub(super) fn bind_material(
     uniform: &[f32],
     view: &wgpu::TextureView,
     sampler: &wgpu::Sampler,
+    normal: &wgpu::TextureView,
 ) -> wgpu::BindGroup {
     let uniform = buffer_init(
         device,
@@ -355,6 +359,10 @@ pub(super) fn bind_material(
             wgpu::BindGroupEntry {
                 binding: 2,
                 resource: wgpu::BindingResource::Sampler(sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(normal),
             },
         ],
     })

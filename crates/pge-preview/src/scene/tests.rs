@@ -17,10 +17,12 @@ fn instances_are_grouped_per_mesh_and_counted() {
     assert_eq!(scene.meshes[0].instances.len(), 2);
     assert_eq!(scene.meshes[0].instances[1][12], 5.0, "translation column");
     assert_eq!(scene.meshes[0].vertices.len(), 3 * VERTEX_FLOATS);
-    // Vertex 1: position (1,0,0), normal +Z, no uv, white.
+    // Vertex 1: position (1,0,0), normal +Z, no uv, white, no tangent (no normal map).
     assert_eq!(
-        &scene.meshes[0].vertices[12..24],
-        &[1., 0., 0., 0., 0., 1., 0., 0., 1., 1., 1., 1.]
+        &scene.meshes[0].vertices[VERTEX_FLOATS..2 * VERTEX_FLOATS],
+        &[
+            1., 0., 0., 0., 0., 1., 0., 0., 1., 1., 1., 1., 0., 0., 0., 0.
+        ]
     );
     assert_eq!(scene.stats.triangles, 2);
     assert_eq!(scene.stats.vertices, 6);
@@ -335,4 +337,33 @@ fn textures_are_decoded_with_a_full_mip_chain() {
     assert_eq!(sizes, vec![32, 8, 4], "4x2, 2x1, 1x1");
     // Averaging red and transparent blue gives half alpha and gamma-correct halves.
     assert_eq!(&data.levels[1][0..4], &[186, 0, 186, 128]);
+}
+
+#[test]
+fn a_normal_mapped_mesh_carries_the_glb_tangents_and_its_map() {
+    let mut mesh = triangle();
+    mesh.uvs = vec![glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y];
+    let map =
+        Texture::from_rgba("bark normal", 2, 2, &[128, 128, 255, 255].repeat(4)).expect("png");
+    mesh.material = Arc::new(Material {
+        normal_texture: Some(Arc::new(map)),
+        ..Material::default()
+    });
+    let tangents = mesh.tangents().expect("a normal-mapped mesh has tangents");
+    let scene = Scene::new(&Model::from_mesh(mesh));
+    let drawn = &scene.meshes[0];
+    for (i, t) in tangents.iter().enumerate() {
+        let at = i * VERTEX_FLOATS + 12;
+        assert_eq!(&drawn.vertices[at..at + 4], &t.to_array(), "vertex {i}");
+    }
+    // u grows along +X here: the tangent is +X, the bitangent (+Y) on the positive side.
+    assert_eq!(tangents[0], glam::Vec4::new(1.0, 0.0, 0.0, 1.0));
+    let map = drawn.normal_texture.as_ref().expect("the map is decoded");
+    assert_eq!((map.width, map.height, map.levels.len()), (2, 2, 2));
+    assert_eq!(
+        map.levels[1],
+        [128, 128, 255, 255],
+        "a plain box filter of the data"
+    );
+    assert!(scene.meshes[0].texture.is_none());
 }
