@@ -467,8 +467,22 @@ fn interleave(mesh: &Mesh) -> Vec<f32> {
     out
 }
 
-/// Decodes a PNG texture and builds its mip chain (2x2 box filter, sRGB-aware).
+/// Decodes a colour texture (PNG or JPEG) and builds its mip chain (2x2 box filter,
+/// sRGB-aware).
 fn decode(texture: &Texture) -> Option<TextureData> {
+    decode_with(texture, downsample)
+}
+
+/// Decodes a texture holding data, not colour (a normal map), and builds its mip chain by a
+/// plain 2x2 box filter of the stored values.
+fn decode_linear(texture: &Texture) -> Option<TextureData> {
+    decode_with(texture, downsample_data)
+}
+
+fn decode_with(
+    texture: &Texture,
+    down: fn(&[u8], u32, u32, u32, u32) -> Vec<u8>,
+) -> Option<TextureData> {
     let img = image::load_from_memory(&texture.png).ok()?.to_rgba8();
     let (width, height) = img.dimensions();
     let mut levels = vec![img.into_raw()];
@@ -476,7 +490,7 @@ fn decode(texture: &Texture) -> Option<TextureData> {
     while w > 1 || h > 1 {
         let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
         let prev = levels.last().map(Vec::as_slice).unwrap_or_default();
-        levels.push(downsample(prev, w, h, nw, nh));
+        levels.push(down(prev, w, h, nw, nh));
         (w, h) = (nw, nh);
     }
     Some(TextureData {
@@ -486,37 +500,22 @@ fn decode(texture: &Texture) -> Option<TextureData> {
     })
 }
 
-/// Decodes a texture holding data, not colour (a normal map) and builds its mip chain by a
-/// plain 2x2 box filter of the stored values.
-fn decode_linear(texture: &Texture) -> Option<TextureData> {
-    let img = image::load_from_memory(&texture.png).ok()?.to_rgba8();
-    let (width, height) = img.dimensions();
-    let mut levels = vec![img.into_raw()];
-    let (mut w, mut h) = (width, height);
-    while w > 1 || h > 1 {
-        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
-        let prev = levels.last().map(Vec::as_slice).unwrap_or_default();
-        let mut next = vec![0u8; (nw * nh * 4) as usize];
-        for y in 0..nh {
-            for x in 0..nw {
-                for k in 0..4 {
-                    let mut sum = 0u32;
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
-                        sum += u32::from(prev[((sy * w + sx) * 4 + k) as usize]);
-                    }
-                    next[((y * nw + x) * 4 + k) as usize] = ((sum + 2) / 4) as u8;
+/// One mip level of data from the level above: the rounded mean of each 2x2 block.
+fn downsample_data(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
+    let mut next = vec![0u8; (nw * nh * 4) as usize];
+    for y in 0..nh {
+        for x in 0..nw {
+            for k in 0..4 {
+                let mut sum = 0u32;
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                    sum += u32::from(src[((sy * w + sx) * 4 + k) as usize]);
                 }
+                next[((y * nw + x) * 4 + k) as usize] = ((sum + 2) / 4) as u8;
             }
         }
-        levels.push(next);
-        (w, h) = (nw, nh);
     }
-    Some(TextureData {
-        width,
-        height,
-        levels,
-    })
+    next
 }
 
 /// The average linear RGB of sRGB-encoded RGBA8 pixels (alpha ignored).

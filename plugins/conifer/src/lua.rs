@@ -4,7 +4,6 @@
 use mlua::{Lua, Table, Value};
 use pge_engine::Plugin;
 use pge_engine::lua::{AlgorithmHandle, Bounds, Options, caller_location};
-use pge_tree::RadiiMode;
 
 use crate::conifer::Conifer;
 use crate::params::{
@@ -146,15 +145,7 @@ fn new_conifer(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
     if let Some(x) = o.integer("maxNodes", 1..=MAX_NODES as i64)? {
         p.max_nodes = x as usize;
     }
-    let mesh_radii_given = match o.value("mesh")? {
-        Value::Table(m) => !m.get::<Value>("radii")?.is_nil(),
-        _ => false,
-    };
-    p.tree = pge_tree::lua::tree_options(&o)?;
-    if !mesh_radii_given {
-        // The generator's radii (joints clamped) unless the script asks for the mesher's.
-        p.tree.mesh.radii = RadiiMode::Keep;
-    }
+    p.tree = pge_tree::lua::tree_options_keeping_radii(&o)?;
     o.finish()?;
     let conifer = Conifer::new(p, caller_location(lua)).map_err(|e| match e {
         pge_engine::Error::Script { message, .. } => o.error(message),

@@ -6,7 +6,6 @@ use std::sync::Arc;
 use mlua::{Lua, Table, Value};
 use pge_engine::Plugin;
 use pge_engine::lua::{AlgorithmHandle, Bounds, Options, caller_location, skeleton_from_value};
-use pge_tree::RadiiMode;
 
 use crate::growth::{Growth, GrowthParams, MAX_STEPS};
 
@@ -100,15 +99,7 @@ fn new_growth(lua: &Lua, v: Value) -> mlua::Result<AlgorithmHandle> {
     if let Some(x) = o.integer("seed", 0..=i64::MAX)? {
         p.seed = x as u64;
     }
-    let mesh_radii_given = match o.value("mesh")? {
-        Value::Table(m) => !m.get::<Value>("radii")?.is_nil(),
-        _ => false,
-    };
-    p.tree = pge_tree::lua::tree_options(&o)?;
-    if !mesh_radii_given {
-        // The transport model's own radii unless the script asks for the pipe model.
-        p.tree.mesh.radii = RadiiMode::Keep;
-    }
+    p.tree = pge_tree::lua::tree_options_keeping_radii(&o)?;
     o.finish()?;
     let growth = Growth::new(p, caller_location(lua)).map_err(|e| match e {
         pge_engine::Error::Script { message, .. } => o.error(message),

@@ -39,6 +39,21 @@ use crate::textures::{TextureFormat, load_png};
 
 pub use pge_lod::lua::lod_options;
 
+/// [`tree_options`] for a generator that computes its own radii (growth, conifer): the
+/// mesher keeps them ([`RadiiMode::Keep`](crate::RadiiMode::Keep)) unless the script's
+/// `mesh.radii` asks for another mode.
+pub fn tree_options_keeping_radii(o: &Options) -> mlua::Result<TreeOptions> {
+    let radii_given = match o.value("mesh")? {
+        Value::Table(m) => !m.get::<Value>("radii")?.is_nil(),
+        _ => false,
+    };
+    let mut tree = tree_options(o)?;
+    if !radii_given {
+        tree.mesh.radii = crate::RadiiMode::Keep;
+    }
+    Ok(tree)
+}
+
 /// Reads [`TreeOptions`] from a generator's options (the keys in the module docs), then
 /// resolves texture paths next to the calling script (recorded for live reload) and loads
 /// them. Every problem is a `FILE:LINE: WHAT: option ...` error at the calling line.
