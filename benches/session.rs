@@ -7,7 +7,7 @@
 
 // The process's CPU time, the measurement the tree crate's benches use too: a session runs
 // on the calling thread alone, so this is that thread's time.
-#[path = "../plugins/tree/benches/common/cpu.rs"]
+#[path = "../crates/pge-tree/benches/common/cpu.rs"]
 mod cpu;
 
 use cpu::ProcessCpu;

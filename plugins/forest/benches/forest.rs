@@ -13,7 +13,7 @@ use pge_forest::{
     Camera, Density, FbmOptions, Forest, Layer, Rect, Terrain, VariantLod, instance_leaves,
     poisson, transform,
 };
-use pge_tree::lod::Budget;
+use pge_lod::Budget;
 
 fn big_forest() -> Forest {
     let mut f = Forest::new([1000.0, 1000.0], 7, Some(250.0)).expect("forest");

@@ -6,7 +6,7 @@
 
 use pge_engine::RunContext;
 use pge_engine::geometry::Model;
-use pge_tree::lod::LodOptions;
+use pge_lod::LodOptions;
 use rayon::prelude::*;
 
 use crate::{

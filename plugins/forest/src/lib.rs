@@ -131,7 +131,7 @@ pub enum ForestError {
         /// The variant (0-based).
         variant: usize,
         /// Why.
-        error: pge_tree::lod::LodError,
+        error: pge_lod::LodError,
     },
     /// A layer's species is a script and the run has no [`SpeciesGrower`] to grow it.
     #[error("species scripts need a session created by an engine")]

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pge_engine::geometry::{GroupLod, LodTable, Mesh, MeshLod, Model, PrimitiveLod};
-use pge_tree::lod::{self as pge_lod, Axis, Budget, LodError, LodOptions};
+use pge_lod::{self, Axis, Budget, LodError, LodOptions};
 
 use crate::ForestError;
 use crate::layer::Variants;

@@ -19,7 +19,7 @@ pub struct LuaTurtle {
     pub turtle: Turtle,
     mesh: MeshOptions,
     leaves: Option<LeafOptions>,
-    lod: Option<pge_tree::LodOptions>,
+    lod: Option<pge_lod::LodOptions>,
     palette: Vec<[f32; 4]>,
 }
 
@@ -76,7 +76,7 @@ impl LuaTurtle {
             }
             None => None,
         };
-        let lod = pge_tree::lua::lod_options(o)?;
+        let lod = pge_lod::lua::lod_options(o)?;
         if let Some(v) = o.number_f32("leafSize", at_least_0)? {
             t.leaf_size = v;
         }

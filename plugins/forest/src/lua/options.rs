@@ -11,7 +11,7 @@ use mlua::{Function, Lua, Table, Value};
 use pge_engine::lua::{Bounds, Options, caller_location, resolve_path, to_engine_error};
 use pge_engine::{Error, Location};
 
-use pge_tree::lod::{Budget, LodOptions, MAX_SECTORS};
+use pge_lod::{Budget, LodOptions, MAX_SECTORS};
 
 use super::grower::grow_with_function;
 use super::{LuaForest, Setup};

@@ -60,11 +60,6 @@ pub use options::{
     Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
     TextureSource, TreeOptions, card_share,
 };
-/// The foliage levels of detail crate itself, for plugins that may depend on pge-tree but
-/// not on pge-lod (forests give their variants levels and budget their leaves with it).
-pub use pge_lod as lod;
-/// Foliage levels of detail options (`lod = {...}`), from `pge_lod`.
-pub use pge_lod::LodOptions;
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{

@@ -37,8 +37,6 @@ use crate::options::{
 };
 use crate::textures::{TextureFormat, load_png};
 
-pub use pge_lod::lua::lod_options;
-
 /// [`tree_options`] for a generator that computes its own radii (growth, conifer): the
 /// mesher keeps them ([`RadiiMode::Keep`](crate::RadiiMode::Keep)) unless the script's
 /// `mesh.radii` asks for another mode.
