@@ -14,6 +14,7 @@ mod run;
 mod shared;
 mod stages;
 mod tiles;
+mod world;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other
 /// objects and writes them as glTF 2.0.
@@ -37,6 +38,8 @@ enum Command {
     Tiles(tiles::TilesArgs),
     /// Join the tiles of a world directory (written by pge-world) into one .glb.
     Merge(merge::MergeArgs),
+    /// Record, adopt and verify a world directory's manifest (DIR/world.json).
+    World(world::WorldArgs),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +50,7 @@ fn main() -> ExitCode {
         Command::Preview(args) => preview::preview(args),
         Command::Tiles(args) => tiles::tiles(args),
         Command::Merge(args) => merge::merge(args),
+        Command::World(args) => world::world(args),
         Command::Derive(args) => args
             .script
             .engine()

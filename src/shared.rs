@@ -27,7 +27,7 @@ pub fn identity(script: &Path, meta: &ExportMeta) -> anyhow::Result<Map<String, 
     let mut info = Map::new();
     info.insert(
         "scriptSha256".into(),
-        crate::merge::sha256_hex(&bytes).into(),
+        crate::world::sha256_hex(&bytes).into(),
     );
     info.insert("seed".into(), meta.seed.into());
     let params: Map<String, Value> = meta.params.iter().cloned().collect();
@@ -179,7 +179,7 @@ pub fn read_variants(dir: &Path, script: &Path, seed: u64) -> anyhow::Result<Sha
             path.display()
         )
     };
-    if recorded("scriptSha256") != crate::merge::sha256_hex(&bytes) {
+    if recorded("scriptSha256") != crate::world::sha256_hex(&bytes) {
         return Err(other("script", recorded("scriptSha256")));
     }
     if recorded("seed") != seed {

@@ -27,8 +27,8 @@ fn root_extras(glb: &Path) -> Value {
     serde_json::from_str::<Value>(raw.get()).expect("json")["pge"].clone()
 }
 
-/// A world directory as `pge-world` writes it: every tile by `pge run --tile`, and the
-/// manifest.
+/// A world directory as `pge-world` writes it: every tile by `pge run --tile`, recorded by
+/// `pge world`.
 fn world(dir: &Path) {
     world_of(dir, false);
 }
@@ -38,16 +38,20 @@ fn world(dir: &Path) {
 fn world_of(dir: &Path, shared: bool) {
     let script = forest();
     let tiles: Value = serde_json::from_slice(&run_ok(&["tiles", &script])).expect("json");
-    std::fs::create_dir_all(dir.join("tiles")).expect("tiles folder");
     let d = dir.to_string_lossy().to_string();
+    let mut init = vec!["world", "init", &script, "--out", &d];
+    if !shared {
+        init.push("--standalone-tiles");
+    }
+    run_ok(&init);
+    std::fs::create_dir_all(dir.join("tiles")).expect("tiles folder");
     if shared {
         run_ok(&["run", &script, "--variants-out", &d, "-q"]);
+        run_ok(&["world", "variants", &d]);
     }
-    let mut entries = Vec::new();
     for t in tiles.as_array().expect("tiles") {
         let (i, j) = (t["i"].as_u64().expect("i"), t["j"].as_u64().expect("j"));
-        let file = format!("tiles/{i}_{j}.glb");
-        let out = dir.join(&file);
+        let out = dir.join(format!("tiles/{i}_{j}.glb"));
         let tile = format!("{i},{j}");
         let o = out.to_string_lossy().to_string();
         let mut args = vec!["run", &script, "--tile", &tile, "-o", &o, "-q"];
@@ -55,20 +59,9 @@ fn world_of(dir: &Path, shared: bool) {
             args.extend_from_slice(&["--variants", &d]);
         }
         run_ok(&args);
-        let instances = root_extras(&out)["forest"]["instances"].clone();
-        entries.push(
-            json!({"i": i, "j": j, "min": t["min"], "max": t["max"], "file": file,
-            "sha256": sha256(&out), "instances": instances}),
-        );
+        run_ok(&["world", "add", &d, &tile]);
     }
-    let params = root_extras(&dir.join("tiles/0_0.glb"))["params"].clone();
-    let mut manifest = json!({"format": "pge-world/1", "script": script, "scriptSha256": "",
-        "seed": 1, "set": {}, "params": params, "complete": true, "tiles": entries});
-    if shared {
-        manifest["variants"] = json!({"file": "variants.bin",
-            "sha256": sha256(&dir.join("variants.bin")), "description": "variants.json"});
-    }
-    std::fs::write(dir.join("world.json"), manifest.to_string()).expect("manifest");
+    run_ok(&["world", "finish", &d]);
 }
 
 /// Per mesh name: how many glTF meshes have it, and the placements (translations as bits,

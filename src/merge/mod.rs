@@ -3,7 +3,6 @@
 //! refer to the world's shared variants (`variants.bin`, by a relative URI): those are read
 //! once, however many tiles place them.
 
-mod manifest;
 mod world;
 
 use std::path::{Path, PathBuf};
@@ -16,8 +15,7 @@ use serde_json::{Map, Value};
 
 use crate::output::write_atomically;
 use crate::run::InstancingArg;
-pub(crate) use manifest::sha256_hex;
-use manifest::{Manifest, TileEntry, read_manifest};
+use crate::world::{Manifest, TileEntry, sha256_hex};
 use world::World;
 
 /// Arguments of `pge merge`.
@@ -54,7 +52,16 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         params,
         tiles,
         variants,
-    } = read_manifest(&args.dir)?;
+        complete,
+        ..
+    } = Manifest::read_existing(&args.dir)?;
+    if !complete {
+        bail!(
+            "{}: the world is not complete: run pge-world again on this directory to finish it",
+            args.dir.join("world.json").display()
+        );
+    }
+    let params: Vec<(String, Value)> = params.into_iter().collect();
     let chosen: Vec<&TileEntry> = tiles
         .iter()
         .filter(|t| match args.rect {
@@ -69,7 +76,8 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         );
     }
     let mut world = World::default();
-    if let Some((file, sha256, description)) = &variants {
+    if let Some(shared) = &variants {
+        let (file, sha256, description) = (&shared.file, &shared.sha256, &shared.description);
         let path = args.dir.join(file);
         let bytes =
             std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
