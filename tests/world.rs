@@ -54,7 +54,10 @@ fn a_world_is_recorded_tile_by_tile_verified_and_resumed() {
     let script = forest();
     let all = tiles(&script);
     let init = json(&pge_ok(&["world", "init", &script, "--out", &d]));
-    assert_eq!(init["created"], true);
+    assert_eq!(
+        (&init["created"], &init["fresh"]),
+        (&Value::Bool(true), &Value::Bool(true))
+    );
     assert_eq!(init["tiles"], Value::Array(vec![]));
     pge_ok(&["run", &script, "--variants-out", &d, "-q"]);
     let v = json(&pge_ok(&["world", "variants", &d]));
@@ -106,6 +109,7 @@ fn a_world_is_recorded_tile_by_tile_verified_and_resumed() {
 
     // Again: everything kept. A damaged tile is found, dropped on resume, regrown alone.
     let again = json(&pge_ok(&["world", "init", &script, "--out", &d]));
+    assert_eq!(again["fresh"], false);
     assert_eq!(
         (&again["complete"], &again["variants"]),
         (&Value::Bool(true), &Value::Bool(true))

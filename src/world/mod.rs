@@ -31,7 +31,8 @@ pub enum WorldCommand {
     /// Open DIR for growing SCRIPT's world: create it and DIR/tiles (or take an empty
     /// folder), or check that its manifest is of the same world and keep the tiles whose
     /// files are intact.
-    /// Prints {"created", "complete", "variants", "tiles": [[i, j], ...]} (the tiles kept).
+    /// Prints {"created", "fresh" (no manifest before), "complete", "variants", "tiles":
+    /// [[i, j], ...]} (the tiles kept).
     Init(InitArgs),
     /// Record the shared variants written into DIR (`pge run --variants-out DIR`); when they
     /// differ from the recorded ones every tile is dropped. Prints {"changed", "variants"}.
@@ -145,6 +146,7 @@ fn init(args: &InitArgs) -> anyhow::Result<Value> {
     std::fs::create_dir_all(tiles_folder(dir))
         .with_context(|| format!("cannot create {}", tiles_folder(dir).display()))?;
     remove_temporaries(dir);
+    let fresh = old.is_none();
     let mut m = match old {
         Some(old) if !old.is_world(&ident) => bail!(
             "{} holds another world (script {}, seed {}, set {}): choose another --out or delete \
@@ -178,10 +180,13 @@ fn init(args: &InitArgs) -> anyhow::Result<Value> {
     };
     m.complete = m.complete && m.tiles == was.tiles && (!shared || variants_ok);
     m.write(dir)?;
-    Ok(
-        json!({"created": created, "complete": m.complete, "variants": variants_ok,
-              "tiles": indices(&m)}),
-    )
+    Ok(json!({
+        "created": created,
+        "fresh": fresh,
+        "complete": m.complete,
+        "variants": variants_ok,
+        "tiles": indices(&m),
+    }))
 }
 
 /// Refuses a folder without a manifest unless it is empty or holds only what a world's

@@ -10,10 +10,9 @@ import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 
-from . import manifest as mf
 from .errors import WorldError
 from .plan import parse_tiles
-from .records import Tile, VariantsEntry
+from .records import Tile
 from .tile import last_line, pge_args
 
 
@@ -64,8 +63,8 @@ def start_variants(
         raise WorldError(f"cannot run {program}: {e}") from e
 
 
-def finish_variants(writer: subprocess.Popen[str], out: Path) -> VariantsEntry:
-    """Wait for :func:`start_variants`: the manifest's record of the variants.
+def finish_variants(writer: subprocess.Popen[str]) -> None:
+    """Wait for :func:`start_variants`.
 
     Raises :class:`~pge_world.errors.WorldError` with pge's error line when it failed.
     """
@@ -73,10 +72,6 @@ def finish_variants(writer: subprocess.Popen[str], out: Path) -> VariantsEntry:
     if writer.returncode != 0:
         message = last_line(err) or f"pge exited with status {writer.returncode}"
         raise WorldError(f"variants: {message}")
-    entry = mf.variants_entry(out)
-    if entry is None:
-        raise WorldError(f"variants: pge wrote no {mf.VARIANTS_JSON} in {out}")
-    return entry
 
 
 def stop(processes: Sequence[subprocess.Popen[str] | None]) -> None:

@@ -1,43 +1,31 @@
-"""The world directory: ``DIR/tiles/I_J.glb``, the shared variants and ``DIR/world.json``.
+"""The world directory and its manifest ``DIR/world.json``, through ``pge world``.
 
-The manifest is always written whole (a temporary file renamed over the old one). While a
-world grows it lists the tiles done so far with ``"complete": false``; the last write has
-``"complete": true``. A run on the same directory skips every listed tile whose file still
-has the recorded SHA-256 (:func:`done_tiles`).
+``pge world`` (Rust, docs/worlds.md) is the one writer of the manifest: it opens the
+directory (refusing another world's, or a folder of other files), records the shared
+variants and each tile written (checking it is this world's), adopts the tiles a job array
+left, and marks the world complete. This module runs it on this machine and reads what it
+prints; it also writes a tile sent back from a worker (atomically) before it is recorded.
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
+import shutil
+import subprocess
 import tempfile
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import cast
+from typing import Any, cast
 
-from . import glb
 from .errors import WorldError
-from .records import Identity, Manifest, Params, Tile, TileEntry, TileKey, VariantsEntry, key
+from .records import TileKey, VariantsEntry
 
-FORMAT = "pge-world/1"
 MANIFEST = "world.json"
 VARIANTS_BIN = "variants.bin"
 VARIANTS_JSON = "variants.json"
-
-
-def sha256_bytes(data: bytes) -> str:
-    """Return the SHA-256 of ``data`` as 64 hex digits."""
-    return hashlib.sha256(data).hexdigest()
-
-
-def sha256_file(path: Path) -> str | None:
-    """Return the SHA-256 of the file at ``path``, or None when it cannot be read."""
-    try:
-        return sha256_bytes(path.read_bytes())
-    except OSError:
-        return None
 
 
 def tile_file(i: int, j: int) -> str:
@@ -45,23 +33,13 @@ def tile_file(i: int, j: int) -> str:
     return f"tiles/{i}_{j}.glb"
 
 
-def tile_entry(tile: Tile, data_sha256: str, size: int, instances: int) -> TileEntry:
-    """Return the manifest's record of ``tile`` written as a file of that hash and length."""
-    return {
-        "i": tile["i"],
-        "j": tile["j"],
-        "min": tile["min"],
-        "max": tile["max"],
-        "file": tile_file(tile["i"], tile["j"]),
-        "sha256": data_sha256,
-        "bytes": size,
-        "instances": instances,
-    }
-
-
 def write_atomically(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file renamed over it."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".", suffix=".tmp")
+    """Write ``data`` to ``path`` through a temporary file renamed over it.
+
+    The temporary file is named as pge names its own (``.tmp*``), so ``pge world`` removes
+    it when a killed process leaves it.
+    """
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp")
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
@@ -73,137 +51,113 @@ def write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
-def identity(
-    script_sha256: str | None, seed: int, overrides: Iterable[tuple[str, str]]
-) -> Identity:
-    """Return the identity of a world (:class:`~pge_world.records.Identity`)."""
-    return {"scriptSha256": script_sha256, "seed": seed, "set": dict(overrides)}
+@dataclass(frozen=True)
+class Opened:
+    """A world directory opened by ``pge world init``.
+
+    ``created``: it did not exist; ``fresh``: it had no manifest (``init`` wrote a new one,
+    with no tile); ``complete``: the manifest lists every tile, all intact;
+    ``variants``: the shared variants it records are there unchanged; ``tiles``: the tiles
+    kept (their files intact).
+    """
+
+    created: bool
+    fresh: bool
+    complete: bool
+    variants: bool
+    tiles: frozenset[TileKey]
 
 
-def read(directory: Path) -> Manifest | None:
-    """Return the manifest in ``directory``, or None when there is none."""
-    path = directory / MANIFEST
-    if not path.exists():
-        return None
+def _pairs(value: Any) -> list[TileKey]:
+    return [(int(i), int(j)) for i, j in value]
+
+
+def _world(program: str, args: Sequence[str]) -> str:
+    """Run ``pge world ARGS``: its standard output; its error line as a WorldError."""
     try:
-        with path.open(encoding="utf-8") as f:
-            manifest = json.load(f)
-    except (OSError, ValueError) as e:
-        raise WorldError(f"{path}: not a world manifest ({e}); choose another --out") from e
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-        raise WorldError(f"{path}: not a {FORMAT} manifest; choose another --out")
-    return cast(Manifest, manifest)
+        proc = subprocess.run(
+            [program, "world", *args],
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+        )
+    except OSError as e:
+        raise WorldError(f"cannot run {program}: {e}") from e
+    if proc.returncode != 0:
+        lines = [line.strip() for line in proc.stderr.splitlines() if line.strip()]
+        raise WorldError(lines[-1] if lines else f"pge world exited with {proc.returncode}")
+    return proc.stdout
 
 
-def same_world(manifest: Manifest, ident: Identity) -> bool:
-    """Whether ``manifest`` was written for the world ``ident`` (see :func:`identity`)."""
-    return (
-        manifest.get("scriptSha256") == ident["scriptSha256"]
-        and manifest.get("seed") == ident["seed"]
-        and manifest.get("set") == ident["set"]
+def _json(program: str, args: Sequence[str]) -> Any:
+    text = _world(program, args)
+    try:
+        return json.loads(text)
+    except ValueError as e:
+        raise WorldError(f"pge world {args[0]} printed no JSON ({e}): is pge too old?") from e
+
+
+def init(
+    program: str,
+    script: Path,
+    seed: int,
+    overrides: Sequence[tuple[str, str]],
+    out: Path,
+    shared: bool,
+) -> Opened:
+    """Open ``out`` for the world of ``script``, ``seed`` and ``overrides`` (``pge world init``).
+
+    Raises :class:`~pge_world.errors.WorldError` when it holds another world, is a folder of
+    other files, or its manifest is not one.
+    """
+    args = ["init", str(script), "--out", str(out), "--seed", str(seed)]
+    for name, value in overrides:
+        args += ["--set", f"{name}={value}"]
+    if not shared:
+        args.append("--standalone-tiles")
+    state = _json(program, args)
+    return Opened(
+        created=bool(state["created"]),
+        fresh=bool(state["fresh"]),
+        complete=bool(state["complete"]),
+        variants=bool(state["variants"]),
+        tiles=frozenset(_pairs(state["tiles"])),
     )
 
 
-def done_tiles(directory: Path, manifest: Manifest) -> dict[TileKey, TileEntry]:
-    """Return the tiles of ``manifest`` whose file in ``directory`` still has the recorded hash."""
-    done = {}
-    for t in manifest.get("tiles", []):
-        if sha256_file(directory / t["file"]) == t["sha256"]:
-            done[key(t)] = t
-    return done
+def forget(out: Path, opened: Opened) -> None:
+    """Leave ``out`` as it was before a run that failed without recording a tile.
 
-
-def variants_entry(directory: Path) -> VariantsEntry | None:
-    """Return the record of the shared variants in ``directory``; None when either file is missing.
-
-    They are the files ``pge run --variants-out`` writes: the binary and its description.
+    A folder the run created is removed; a manifest it wrote into a folder without one is.
     """
-    try:
-        binary = (directory / VARIANTS_BIN).read_bytes()
-        description = (directory / VARIANTS_JSON).read_bytes()
-    except OSError:
-        return None
-    return {
-        "file": VARIANTS_BIN,
-        "sha256": sha256_bytes(binary),
-        "bytes": len(binary),
-        "description": VARIANTS_JSON,
-        "descriptionSha256": sha256_bytes(description),
-        "descriptionBytes": len(description),
-    }
+    if opened.created:
+        shutil.rmtree(out, ignore_errors=True)
+    elif opened.fresh:
+        with contextlib.suppress(OSError):
+            (out / MANIFEST).unlink()
 
 
-def variants_intact(directory: Path, manifest: Manifest) -> bool:
-    """Whether the shared variants ``manifest`` records are in ``directory`` unchanged."""
-    recorded = manifest.get("variants")
-    return recorded is not None and variants_entry(directory) == recorded
+def record_variants(program: str, out: Path) -> tuple[bool, VariantsEntry]:
+    """Record the shared variants written into ``out`` (``pge world variants``).
 
-
-def tile_params(data: bytes) -> Params:
-    """Return the declared parameters' values recorded in a tile (its ``extras.pge.params``)."""
-    params: Params = glb.root_extras(data).get("params", {})
-    return params
-
-
-def write(
-    directory: Path,
-    ident: Identity,
-    script: Path,
-    params: Params,
-    tiles: Iterable[TileEntry],
-    complete: bool,
-    variants: VariantsEntry | None = None,
-) -> None:
-    """Write the manifest atomically.
-
-    It lists ``tiles`` in (i, j) order with their instance total, and the shared variants'
-    record (:func:`variants_entry`) when the tiles refer to them.
+    Returns whether they differ from those recorded before (every tile then grows again)
+    and their record.
     """
-    ordered = sorted(tiles, key=key)
-    manifest: Manifest = {
-        "format": FORMAT,
-        "script": str(script),
-        "scriptSha256": ident["scriptSha256"],
-        "seed": ident["seed"],
-        "set": ident["set"],
-        "params": params,
-        "complete": complete,
-        "instances": sum(t["instances"] for t in ordered),
-        "tiles": ordered,
-    }
-    if variants is not None:
-        manifest["variants"] = variants
-    text = json.dumps(_in_order(manifest), indent=1) + "\n"
-    write_atomically(directory / MANIFEST, text.encode("utf-8"))
+    state = _json(program, ["variants", str(out)])
+    return bool(state["changed"]), cast(VariantsEntry, state["variants"])
 
 
-#: The manifest's keys in the order it is written (the variants before ``complete``).
-_ORDER: Sequence[str] = (
-    "format",
-    "script",
-    "scriptSha256",
-    "seed",
-    "set",
-    "params",
-    "variants",
-    "complete",
-    "instances",
-    "tiles",
-)
+def add(program: str, out: Path, tiles: Sequence[TileKey]) -> None:
+    """Record the tiles written into ``out/tiles`` (``pge world add``)."""
+    if tiles:
+        _world(program, ["add", str(out), *(f"{i},{j}" for i, j in tiles)])
 
 
-def _in_order(manifest: Manifest) -> dict[str, object]:
-    fields: Mapping[str, object] = manifest
-    return {k: fields[k] for k in _ORDER if k in fields}
+def adopt(program: str, out: Path) -> list[TileKey]:
+    """Record the tile files in ``out/tiles`` the manifest did not list (``pge world adopt``)."""
+    return _pairs(_json(program, ["adopt", str(out)]))
 
 
-def clean_scratch(folder: Path) -> None:
-    """Remove what a ``pge`` killed while writing a tile left in ``folder``.
-
-    That is its temporary ``.tmp*`` files; the tile itself is renamed into place whole or
-    not at all.
-    """
-    for path in folder.iterdir():
-        if path.name.startswith(".tmp"):
-            with contextlib.suppress(OSError):
-                path.unlink()
+def finish(program: str, out: Path) -> int:
+    """Mark the world complete (``pge world finish``): its instances."""
+    return int(_json(program, ["finish", str(out)])["instances"])

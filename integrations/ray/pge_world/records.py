@@ -1,19 +1,12 @@
-"""The records pge-world reads and writes, as typed dictionaries (they travel as JSON).
+"""The records pge-world reads, as typed dictionaries (they travel as JSON).
 
-A :class:`Tile` is what ``pge tiles`` lists; a :class:`Manifest` is ``DIR/world.json``
-with a :class:`TileEntry` per tile written and, when the tiles refer to shared variants,
-a :class:`VariantsEntry`.
+A :class:`Tile` is what ``pge tiles`` lists; a :class:`VariantsEntry` is the manifest's
+record of the shared variants, as ``pge world variants`` prints it.
 """
 
 from __future__ import annotations
 
-from typing import TypedDict, Union
-
-#: A JSON value (a parameter's value as ``extras.pge.params`` records it).
-JsonValue = Union[None, bool, int, float, str, list["JsonValue"], dict[str, "JsonValue"]]
-
-#: The declared parameters of a script and their values.
-Params = dict[str, JsonValue]
+from typing import TypedDict
 
 #: A tile's index (i, j): the key of the tiles done.
 TileKey = tuple[int, int]
@@ -28,15 +21,6 @@ class Tile(TypedDict):
     max: list[float]
 
 
-class TileEntry(Tile):
-    """The manifest's record of a tile written: its file, SHA-256, length, instances."""
-
-    file: str
-    sha256: str
-    bytes: int
-    instances: int
-
-
 class VariantsEntry(TypedDict):
     """The manifest's record of the shared variants: each file's name, SHA-256, length."""
 
@@ -46,32 +30,6 @@ class VariantsEntry(TypedDict):
     description: str
     descriptionSha256: str
     descriptionBytes: int
-
-
-class Identity(TypedDict):
-    """What makes two runs the same world: the script's hash, the seed, the --set values."""
-
-    scriptSha256: str | None
-    seed: int
-    set: dict[str, str]
-
-
-class _ManifestRequired(TypedDict):
-    format: str
-    script: str
-    scriptSha256: str | None
-    seed: int
-    set: dict[str, str]
-    params: Params
-    complete: bool
-    instances: int
-    tiles: list[TileEntry]
-
-
-class Manifest(_ManifestRequired, total=False):
-    """``DIR/world.json``: the world's identity, parameters and tiles written so far."""
-
-    variants: VariantsEntry
 
 
 def key(tile: Tile) -> TileKey:

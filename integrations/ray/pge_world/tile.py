@@ -1,6 +1,7 @@
 """Tiles on a worker: ONE ``pge run SCRIPT --tile I,J --tile ...`` for a batch of tiles.
 
-It reports their hashes, instance counts and (without a shared folder) bytes.
+It reports the tiles grown and (without a shared folder) their bytes; the driver records
+them with ``pge world add``, which reads and hashes each file.
 
 This module imports nothing from Ray nor from the rest of the package: a Ray task takes it
 by value (workers need Ray and ``pge``, not this package), and the same function runs in a
@@ -9,17 +10,15 @@ test or by hand.
 
 from __future__ import annotations
 
-import getpass
-import hashlib
-import json
+import contextlib
+import os
 import shutil
-import signal
 import socket
+import stat
 import subprocess
-import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TypedDict
 
@@ -34,13 +33,10 @@ class TileFailed(Exception):
 class _GrownTile(TypedDict):
     i: int
     j: int
-    sha256: str
-    bytes: int
-    instances: int
 
 
 class GrownTile(_GrownTile, total=False):
-    """A tile a batch grew: its index, hash, length, instances; ``glb``: its bytes.
+    """A tile a batch grew: its index; ``glb``: its bytes.
 
     The bytes are sent back only when the worker does not see the world directory.
     """
@@ -56,28 +52,16 @@ class BatchResult(TypedDict):
     tiles: list[GrownTile]
 
 
-def _prctl() -> Callable[..., int] | None:
-    """Libc's prctl, resolved in the parent: the child before exec should do little."""
-    if not sys.platform.startswith("linux"):
-        return None
-    try:
-        import ctypes
+def die_with_parent() -> list[str]:
+    """Return the command prefix that has ``pge`` killed when the worker that started it dies.
 
-        prctl: Callable[..., int] = ctypes.CDLL("libc.so.6", use_errno=True).prctl
-    except (OSError, AttributeError):
-        return None
-    return prctl
-
-
-def _die_with_parent() -> Callable[[], object] | None:
-    """Return a ``preexec_fn`` that has the child killed when the worker that started it dies.
-
-    So a killed worker leaves no ``pge`` running on (Linux); None where that cannot be done.
+    ``setpriv --pdeathsig KILL`` (util-linux) where it is on the PATH, so a killed worker
+    leaves no ``pge`` running; nothing elsewhere. (A ``preexec_fn`` would do the same from
+    Python, but runs Python code between fork and exec: unsafe in Ray's multi-threaded
+    worker.)
     """
-    prctl = _prctl()
-    if prctl is None:
-        return None
-    return lambda: prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    setpriv = shutil.which("setpriv")
+    return [setpriv, "--pdeathsig", "KILL", "--"] if setpriv is not None else []
 
 
 def last_line(text: str) -> str:
@@ -102,26 +86,39 @@ def pge_args(
 
 
 def default_variant_cache() -> Path:
-    """Return this machine's variant cache: a folder of the user's in the temporary folder.
+    """Return this machine's variant cache: a private folder of the user's in the temp folder.
 
-    The tiles that run on one machine then grow each species variant once.
+    The tiles that run on one machine then grow each species variant once. Its name holds
+    the user's id; :func:`private_folder` creates it 0700 and refuses one that another user
+    could have planted or can write into.
     """
-    try:
-        user = getpass.getuser()
-    except (KeyError, OSError):
-        user = "user"
-    return Path(tempfile.gettempdir()) / f"pge-variants-{user}"
+    return Path(tempfile.gettempdir()) / f"pge-variants-{os.getuid()}"
 
 
-def instances_by_tile(stats: str) -> dict[tuple[int, int], int]:
-    """Return each tile's instance count from pge's ``--stats`` lines (a JSON object a tile)."""
-    counts = {}
-    for line in stats.splitlines():
-        if line.strip():
-            s = json.loads(line)
-            i, j = s["tile"]
-            counts[(i, j)] = int(s.get("instances", 0))
-    return counts
+def private_folder(path: Path, uid: int | None = None) -> Path:
+    """Create ``path`` mode 0700 if missing; return it once checked private to ``uid``.
+
+    Raises :class:`TileFailed` when it is a link or not a folder, is owned by another user
+    (default: this process's), or can be written by the group or others: a cache there
+    could be read from or written to by someone else.
+    """
+    owner = os.getuid() if uid is None else uid
+    with contextlib.suppress(FileExistsError):
+        path.mkdir(mode=0o700)
+    st = os.lstat(path)
+    why = None
+    if not stat.S_ISDIR(st.st_mode):
+        why = "not a folder (a link, or a file)"
+    elif st.st_uid != owner:
+        why = f"owned by another user (uid {st.st_uid})"
+    elif st.st_mode & 0o022:
+        why = f"writable by others (mode {stat.S_IMODE(st.st_mode):o})"
+    if why is not None:
+        raise TileFailed(
+            f"the variant cache {path} on {socket.gethostname()} is {why}: remove it, or pass "
+            "--variant-cache with a folder of your own"
+        )
+    return path
 
 
 class TileJob(TypedDict):
@@ -131,8 +128,8 @@ class TileJob(TypedDict):
     ``--threads``; ``shared``: the tiles refer to the world's shared variants
     (``../variants.bin``) rather than carry them. ``variant_cache`` (standalone tiles) is
     pge's ``--variant-cache`` folder: ``""`` for the worker machine's own
-    (:func:`default_variant_cache`), None for none. ``out`` is the world directory when the
-    worker sees it (the driver's machine, or a shared folder), else None.
+    (:func:`default_variant_cache`, checked private), None for none. ``out`` is the world
+    directory when the worker sees it (the driver's machine, or a shared folder), else None.
     """
 
     program: str
@@ -156,7 +153,7 @@ def grow_tiles(
     bytes) unless the job has an ``out``.
 
     With ``out`` pge writes the tiles into ``out/tiles/`` itself (each file atomically) and
-    reads the shared variants' description there; nothing but hashes travels back. Without
+    reads the shared variants' description there; nothing but the indices travels back. Without
     it the tiles are written into a scratch folder laid out as the world directory and
     their bytes are returned; shared variants then need ``description`` (the bytes of
     ``variants.json``, written into the scratch folder: the worker needs neither the binary
@@ -186,7 +183,7 @@ def grow_tiles(
         cmd = [exe, "run", *shared_args]
         for i, j in tiles:
             cmd += ["--tile", f"{i},{j}"]
-        cmd += ["--out-dir", str(folder), "-q", "--stats", "--threads", str(job["threads"])]
+        cmd += ["--out-dir", str(folder), "-q", "--threads", str(job["threads"])]
         if shared:
             if out is None:
                 folder.mkdir()
@@ -195,35 +192,26 @@ def grow_tiles(
         else:
             cache = job["variant_cache"]
             if cache == "":
-                cache = str(default_variant_cache())
+                cache = str(private_folder(default_variant_cache()))
             if cache is not None:
                 cmd += ["--variant-cache", cache]
             folder.mkdir(parents=True, exist_ok=True)
         proc = subprocess.run(
-            cmd,
-            stdin=subprocess.DEVNULL,
-            capture_output=True,
-            text=True,
-            preexec_fn=_die_with_parent(),
+            [*die_with_parent(), *cmd], stdin=subprocess.DEVNULL, capture_output=True, text=True
         )
         if proc.returncode != 0:
             message = last_line(proc.stderr) or f"pge exited with status {proc.returncode}"
             raise TileFailed(message)
-        try:
-            instances = instances_by_tile(proc.stdout)
-            grown: list[GrownTile] = []
-            for i, j in tiles:
-                data = (folder / f"{i}_{j}.glb").read_bytes()
-                entry: GrownTile = {
-                    "i": i,
-                    "j": j,
-                    "sha256": hashlib.sha256(data).hexdigest(),
-                    "bytes": len(data),
-                    "instances": instances[(i, j)],
-                }
+        grown: list[GrownTile] = []
+        for i, j in tiles:
+            entry: GrownTile = {"i": i, "j": j}
+            path = folder / f"{i}_{j}.glb"
+            try:
                 if out is None:
-                    entry["glb"] = data
-                grown.append(entry)
-        except (OSError, ValueError, KeyError, TypeError) as e:
-            raise TileFailed(f"pge wrote no tile on {host}: {e}") from e
+                    entry["glb"] = path.read_bytes()
+                elif not path.is_file():
+                    raise OSError(f"no {path}")
+            except OSError as e:
+                raise TileFailed(f"pge wrote no tile {i},{j} on {host}: {e}") from e
+            grown.append(entry)
     return {"node": host, "seconds": time.monotonic() - start, "tiles": grown}

@@ -1,9 +1,9 @@
 """The run of ``pge-world``: from the options to a complete world directory.
 
-The steps have their own modules: the tile list and the shared variants on this machine
-(:mod:`.local`), what is kept of an earlier run (:mod:`.resume`), the batches
-(:mod:`.plan`), the tasks (:mod:`.cluster`), the manifest (:mod:`.manifest`) and what the
-run says (:mod:`.report`).
+The steps have their own modules: the world directory and its manifest, kept by ``pge
+world`` (:mod:`.manifest`), the tile list and the shared variants on this machine
+(:mod:`.local`), the batches (:mod:`.plan`), the tasks (:mod:`.cluster`) and what the run
+says (:mod:`.report`).
 """
 
 from __future__ import annotations
@@ -13,16 +13,13 @@ import shutil
 import time
 from pathlib import Path
 
-from . import cluster, local, plan, resume
+from . import cluster, local, plan
 from . import manifest as mf
 from .args import Options
 from .errors import WorldError
-from .records import Params, Tile, TileEntry, key
+from .records import TileKey, key
 from .report import Clock, FinishedBatch, Progress, variants_line
 from .tile import GrownTile, TileJob
-
-#: Seconds between two writes of the manifest while tiles come back.
-MANIFEST_EVERY = 2.0
 
 
 def grow(opts: Options) -> int:
@@ -39,37 +36,44 @@ def grow(opts: Options) -> int:
             "(cargo build --release) and put it on the PATH, or pass --pge PATH"
         )
     overrides = opts.overrides
-    ident = mf.identity(mf.sha256_file(script), opts.seed, overrides)
     out = Path(os.path.abspath(opts.out))
-    old = mf.read(out) if out.is_dir() else None
-    resume.refuse_other_world(old, ident, opts.out)
     shared = not opts.standalone_tiles
-    variants_ok = shared and old is not None and mf.variants_intact(out, old)
-    clock.mark("Python started, manifest read")
+    # pge opens the directory first: another world's, or a folder of other files, is
+    # refused before anything runs or is written.
+    opened = mf.init(program, script, opts.seed, overrides, out, shared)
+    variants_ok = shared and opened.variants
+    clock.mark("Python started, world directory opened")
 
     # pge lists the tiles and writes the shared variants (on all this machine's cores) while
     # Ray is imported and connects; the tasks get the variants' description through the
     # object store, or read it from DIR on a shared folder.
-    created = not out.exists()
-    lister = local.start_tile_list(program, script, opts.seed, overrides)
-    writer = None
-    if shared and not variants_ok:
-        out.mkdir(parents=True, exist_ok=True)
-        writer = local.start_variants(program, script, opts.seed, overrides, opts.time_limit, out)
+    lister = writer = None
     connected = False
     progress = Progress(0, 0, opts.quiet)
     try:
-        if resume.likely_work(old, shared, variants_ok):
+        lister = local.start_tile_list(program, script, opts.seed, overrides)
+        if shared and not variants_ok:
+            writer = local.start_variants(
+                program, script, opts.seed, overrides, opts.time_limit, out
+            )
+        if likely_work(opened, shared):
             cluster.connect(opts.address)
             connected = True
             clock.mark("Ray imported and connected")
         tiles = local.tile_list(lister, script)
         clock.mark("pge tiles")
         progress.total = len(tiles)
-        done = resume.kept_tiles(out, old, shared)
-        params = old.get("params") if old is not None else None
+        done = set(opened.tiles)
+        if writer is not None:
+            waiting = time.monotonic()
+            local.finish_variants(writer)
+            changed, variants = mf.record_variants(program, out)
+            if changed:
+                done = set()
+            progress.later(variants_line(variants, time.monotonic() - waiting))
+            clock.mark("variants written")
         if opts.adopt:
-            done, params = resume.adopt_all(out, tiles, done, opts.seed, overrides, params, shared)
+            done |= set(mf.adopt(program, out))
         todo = [t for t in tiles if key(t) not in done]
         if todo and not connected:
             cluster.connect(opts.address)
@@ -78,26 +82,18 @@ def grow(opts: Options) -> int:
         # No warm-up task: it starts a worker of its own beside the tiles' (measured: the
         # extra Python processes on each node slowed the tiles more than they saved).
         nodes, on_this_machine = cluster.nodes() if connected else ([], True)
-        variants = old.get("variants") if old is not None and variants_ok else None
-        if writer is not None:
-            waiting = time.monotonic()
-            variants = local.finish_variants(writer, out)
-            progress.later(variants_line(variants, time.monotonic() - waiting))
-            clock.mark("variants written")
     except BaseException:
         local.stop([lister, writer])
-        if created:
-            # Nothing of this world was there before: leave nothing behind.
-            shutil.rmtree(out, ignore_errors=True)
+        # Nothing grown: leave the folder as it was (no manifest where there was none).
+        mf.forget(out, opened)
         raise
-    if resume.variants_changed(old, shared, variants):
-        done = {}
-        todo = list(tiles)
     progress.done = progress.skipped = len(tiles) - len(todo)
     if done:
-        progress.say(f"{len(done)} of {len(tiles)} tiles already in {opts.out}: skipped")
+        progress.say(
+            f"{len(tiles) - len(todo)} of {len(tiles)} tiles already in {opts.out}: skipped"
+        )
     if not todo:
-        mf.write(out, ident, script, params or {}, done.values(), True, variants)
+        mf.finish(program, out)
         if progress.note is not None:
             progress.say(progress.note)
         progress.say(f"world complete: {len(tiles)} tiles in {opts.out}, nothing to do")
@@ -108,7 +104,6 @@ def grow(opts: Options) -> int:
         cluster.connect(opts.address)
         nodes, on_this_machine = cluster.nodes()
     shared_fs = on_this_machine if opts.shared_fs is None else opts.shared_fs
-    (out / "tiles").mkdir(parents=True, exist_ok=True)
     variant_cache = opts.variant_cache and os.path.abspath(opts.variant_cache)
     job: TileJob = {
         "program": opts.pge,
@@ -126,9 +121,8 @@ def grow(opts: Options) -> int:
     batches = plan.batches_of(todo, slots, opts.tiles_per_task)
     running = cluster.submit(job, opts.retries, description, batches)
     clock.mark(f"{len(running)} tasks of {len(todo)} tiles submitted")
-    written = dict(done)
     finished: list[FinishedBatch] = []
-    last_write = time.monotonic()
+    recorded = False
     try:
         while running:
             back = running.wait()
@@ -141,26 +135,19 @@ def grow(opts: Options) -> int:
                         seconds=result["seconds"],
                     )
                 )
-                bounds = {key(t): t for t in batch}
-                for grown in result["tiles"]:
-                    t = bounds[(grown["i"], grown["j"])]
-                    written[key(t)] = save_tile(out, t, grown)
-                    if params is None:
-                        params = params_of(out, t, grown)
-                    progress.tile(t["i"], t["j"])
+                grown = [save_tile(out, g) for g in result["tiles"]]
+                mf.add(program, out, grown)
+                recorded = True
+                for i, j in grown:
+                    progress.tile(i, j)
                 clock.mark(f"batch of {len(batch)} tiles back from {result['node']}")
-            if back and time.monotonic() - last_write > MANIFEST_EVERY and running:
-                mf.write(out, ident, script, params or {}, written.values(), False, variants)
-                last_write = time.monotonic()
     except BaseException:
         running.cancel()
-        if len(written) > len(done):
-            mf.write(out, ident, script, params or {}, written.values(), False, variants)
+        if not recorded:
+            mf.forget(out, opened)
         raise
-    mf.write(out, ident, script, params or {}, written.values(), True, variants)
-    mf.clean_scratch(out / "tiles")
+    total = mf.finish(program, out)
     clock.mark("manifest written")
-    total = sum(e["instances"] for e in written.values())
     elapsed = time.monotonic() - progress.start
     progress.say(
         f"world complete: {len(tiles)} tiles, {total} instances in {opts.out} ({elapsed:.1f}s)"
@@ -169,21 +156,22 @@ def grow(opts: Options) -> int:
     return 0
 
 
-def save_tile(out: Path, tile: Tile, grown: GrownTile) -> TileEntry:
-    """Return the manifest entry of a tile a task grew, its file written when the task sent it.
+def likely_work(opened: mf.Opened, shared: bool) -> bool:
+    """Whether a run likely grows something, so connects to Ray at once.
 
-    A task that sees the world directory (a shared folder) wrote the file itself and sent
-    its hash; otherwise the file is written here, atomically.
+    A complete world with intact variants is checked first, without Ray.
     """
+    return not opened.complete or (shared and not opened.variants)
+
+
+def save_tile(out: Path, grown: GrownTile) -> TileKey:
+    """Return the index of a tile a task grew, its file written here when the task sent it.
+
+    A task that sees the world directory (a shared folder) wrote the file itself; otherwise
+    its bytes came back and are written here, atomically. ``pge world add`` then records it.
+    """
+    i, j = grown["i"], grown["j"]
     data = grown.get("glb")
     if data is not None:
-        mf.write_atomically(out / mf.tile_file(tile["i"], tile["j"]), data)
-    return mf.tile_entry(tile, grown["sha256"], grown["bytes"], grown["instances"])
-
-
-def params_of(out: Path, tile: Tile, grown: GrownTile) -> Params:
-    """Return the declared parameters' values, from a tile's ``extras.pge.params``."""
-    data = grown.get("glb")
-    if data is None:
-        data = (out / mf.tile_file(tile["i"], tile["j"])).read_bytes()
-    return mf.tile_params(data)
+        mf.write_atomically(out / mf.tile_file(i, j), data)
+    return (i, j)

@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import json
 import os
-import struct
 import sys
 from pathlib import Path
-from typing import Any
 
 # A `pge` that does to the file system what pge-world asks of it: `pge tiles` prints two
-# tiles; `pge run --variants-out D` writes the variants; `pge run --tile ... --out-dir D
-# --stats` writes one file a tile (its bytes name the tile, the seed and, with `--variants
-# D`, hold D/variants.json) and prints one --stats line a tile (none with `--set quiet=1`).
+# tiles; `pge run --variants-out D` writes the variants; `pge run --tile ... --out-dir D`
+# writes one file a tile (its bytes name the tile, the seed and, with `--variants D`, hold
+# D/variants.json; none with `--set quiet=1`). `pge world init SCRIPT --out D` creates
+# D/tiles and prints a new world's state, or the JSON in $FAKE_WORLD_INIT; `pge world
+# variants D` prints the record of D's variants (changed when $FAKE_WORLD_CHANGED is set);
+# `adopt` prints [[1, 0]]; `finish` 42 instances; `add` prints nothing.
 # It records its arguments in $FAKE_PGE_LOG; `--set fail=MESSAGE` fails like pge, its
 # error the last line on stderr.
 FAKE_PGE = """\
@@ -27,6 +28,25 @@ for s in sets:
     if s.startswith("fail="):
         sys.stderr.write("warming up\\n" + s[5:] + "\\n\\n")
         sys.exit(1)
+if args[0] == "world":
+    what = args[1]
+    if what == "init":
+        os.makedirs(os.path.join(after("--out"), "tiles"), exist_ok=True)
+        default = (
+            '{"created": true, "fresh": true, "complete": false, "variants": false, "tiles": []}'
+        )
+        print(os.environ.get("FAKE_WORLD_INIT", default))
+    elif what == "variants":
+        record = {"file": "variants.bin", "sha256": "0" * 64, "bytes": 1,
+                  "description": "variants.json", "descriptionSha256": "1" * 64,
+                  "descriptionBytes": 1}
+        print(json.dumps({"changed": bool(os.environ.get("FAKE_WORLD_CHANGED")),
+                          "variants": record}))
+    elif what == "adopt":
+        print("[[1, 0]]")
+    elif what == "finish":
+        print('{"tiles": 2, "instances": 42}')
+    sys.exit(0)
 if args[0] == "tiles":
     print(json.dumps([{"i": i, "j": 0, "min": [i, 0], "max": [i + 1, 1]} for i in range(2)]))
     sys.exit(0)
@@ -42,10 +62,9 @@ if after("--variants"):
 tiles = [args[k + 1] for k, a in enumerate(args) if a == "--tile"]
 for t in tiles:
     i, j = (int(x) for x in t.split(","))
-    with open(os.path.join(after("--out-dir"), f"{i}_{j}.glb"), "w") as f:
-        f.write(f"tile {i},{j} seed {after('--seed')} {description}")
     if "quiet=1" not in sets:
-        print(json.dumps({"tile": [i, j], "instances": 10 * i + j}))
+        with open(os.path.join(after("--out-dir"), f"{i}_{j}.glb"), "w") as f:
+            f.write(f"tile {i},{j} seed {after('--seed')} {description}")
 """
 
 
@@ -60,35 +79,3 @@ def fake_pge(folder: Path) -> Path:
 def calls(log: Path) -> list[list[str]]:
     """Return the argument lists the fake ``pge`` was called with."""
     return [json.loads(line) for line in log.read_text().splitlines()]
-
-
-def glb(document: dict[str, Any]) -> bytes:
-    """Return a .glb whose JSON chunk is ``document`` (no binary chunk)."""
-    text = json.dumps(document).encode()
-    text += b" " * (-len(text) % 4)
-    header = struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(text))
-    return header + struct.pack("<I4s", len(text), b"JSON") + text
-
-
-def tile_glb(
-    i: int,
-    j: int,
-    seed: int = 1,
-    params: dict[str, Any] | None = None,
-    instances: int = 7,
-    shared: bool = True,
-) -> bytes:
-    """Return a tile as ``pge run --tile I,J`` writes it, as far as pge-world reads one."""
-    document: dict[str, Any] = {
-        "asset": {"version": "2.0"},
-        "extras": {
-            "pge": {
-                "seed": seed,
-                "params": params if params is not None else {"spin": 0, "broken": False},
-                "forest": {"tileIndex": [i, j], "instances": instances},
-            }
-        },
-    }
-    if shared:
-        document["buffers"] = [{"uri": "../variants.bin", "byteLength": 4}]
-    return glb(document)

@@ -6,13 +6,11 @@ from pathlib import Path
 
 import pytest
 from conftest import FakePge
-from fakes import tile_glb
 
 from pge_world import cli, local, world
 from pge_world import manifest as mf
 from pge_world.args import Options, parse
 from pge_world.errors import WorldError
-from pge_world.records import Tile
 from pge_world.tile import GrownTile
 
 pytestmark = pytest.mark.unit
@@ -138,23 +136,12 @@ def test_errors_before_any_work_are_one_line(
         "pge-world: no `no-such-pge-here` program on this machine's PATH: build pge "
         "(cargo build --release) and put it on the PATH, or pass --pge PATH\n"
     )
-    # Another world's directory: refused before pge or Ray runs, the manifest untouched.
-    out.mkdir()
-    ident = mf.identity(mf.sha256_file(script), 2, [])
-    mf.write(out, ident, script, {}, [], True)
-    before = (out / "world.json").read_bytes()
-    status, err = run_cli([*base, "--pge", fake_pge.path], capsys)
-    assert status == 1 and err.count("\n") == 1
-    assert err.startswith(f"pge-world: {out} holds another world (script {script}, seed 2")
-    assert (out / "world.json").read_bytes() == before
-    assert fake_pge.calls() == []
-    # Not a manifest: refused too.
-    (out / "world.json").write_text("{}")
-    status, err = run_cli([*base, "--pge", fake_pge.path], capsys)
-    assert (status, err) == (
-        1,
-        f"pge-world: {out / 'world.json'}: not a pge-world/1 manifest; choose another --out\n",
-    )
+    # pge world refuses the directory (another world's, a folder of other files): one
+    # line, and nothing else runs.
+    refusal = f"{out} holds another world (script /a.lua, seed 2, set {{}}): choose another"
+    status, err = run_cli([*base, "--pge", fake_pge.path, "--set", f"fail={refusal}"], capsys)
+    assert (status, err) == (1, f"pge-world: {refusal}\n")
+    assert [c[:2] for c in fake_pge.calls()] == [["world", "init"]]
 
 
 def test_the_tile_list_and_the_variants_come_from_pge(tmp_path: Path, fake_pge: FakePge) -> None:
@@ -165,8 +152,7 @@ def test_the_tile_list_and_the_variants_come_from_pge(tmp_path: Path, fake_pge: 
         {"i": 1, "j": 0, "min": [1, 0], "max": [2, 1]},
     ]
     writer = local.start_variants(fake_pge.path, script, 5, [], 3.0, tmp_path)
-    entry = local.finish_variants(writer, tmp_path)
-    assert entry == mf.variants_entry(tmp_path)
+    local.finish_variants(writer)
     assert (tmp_path / "variants.bin").read_text() == "variants.bin of seed 5"
     tiles_call, variants_call = fake_pge.calls()
     assert tiles_call == ["tiles", "/w/forest.lua", "--seed", "5", "--set", "spin=1"]
@@ -194,36 +180,29 @@ def test_pges_errors_on_this_machine_are_its_last_line(tmp_path: Path, fake_pge:
         fake_pge.path, script, 1, [("fail", "x.lua:3: oops")], None, tmp_path
     )
     with pytest.raises(WorldError) as e:
-        local.finish_variants(writer, tmp_path)
+        local.finish_variants(writer)
     assert str(e.value) == "variants: x.lua:3: oops"
     with pytest.raises(WorldError) as e:
         local.start_tile_list(str(tmp_path / "nothing"), script, 1, [])
     assert str(e.value).startswith(f"cannot run {tmp_path / 'nothing'}: ")
 
 
-def test_a_tile_sent_back_is_written_and_recorded(tmp_path: Path) -> None:
+def test_a_tile_sent_back_is_written_here(tmp_path: Path) -> None:
     (tmp_path / "tiles").mkdir()
-    tile: Tile = {"i": 1, "j": 2, "min": [0.0, 0.0], "max": [1.0, 1.0]}
-    data = tile_glb(1, 2, params={"spin": 4})
-    hashed: GrownTile = {
-        "i": 1,
-        "j": 2,
-        "sha256": mf.sha256_bytes(data),
-        "bytes": len(data),
-        "instances": 3,
-    }
-    sent: GrownTile = {**hashed, "glb": data}
-    entry = world.save_tile(tmp_path, tile, sent)
-    assert (tmp_path / "tiles" / "1_2.glb").read_bytes() == data
-    assert entry == {
-        **tile,
-        "file": "tiles/1_2.glb",
-        "sha256": hashed["sha256"],
-        "bytes": len(data),
-        "instances": 3,
-    }
-    assert world.params_of(tmp_path, tile, sent) == {"spin": 4}
-    # A task that wrote the tile itself sent only its hash: the file is read, not written.
-    (tmp_path / "tiles" / "1_2.glb").write_bytes(tile_glb(1, 2, params={"spin": 5}))
-    assert world.save_tile(tmp_path, tile, hashed) == entry
-    assert world.params_of(tmp_path, tile, hashed) == {"spin": 5}
+    sent: GrownTile = {"i": 1, "j": 2, "glb": b"the tile"}
+    assert world.save_tile(tmp_path, sent) == (1, 2)
+    assert (tmp_path / "tiles" / "1_2.glb").read_bytes() == b"the tile"
+    # A task that wrote the tile itself sent only its index: the file is not touched.
+    (tmp_path / "tiles" / "1_2.glb").write_bytes(b"written by the task")
+    assert world.save_tile(tmp_path, {"i": 1, "j": 2}) == (1, 2)
+    assert (tmp_path / "tiles" / "1_2.glb").read_bytes() == b"written by the task"
+
+
+def test_only_a_complete_world_with_intact_variants_waits_to_connect() -> None:
+    def opened(complete: bool, variants: bool) -> mf.Opened:
+        return mf.Opened(False, False, complete=complete, variants=variants, tiles=frozenset())
+
+    assert not world.likely_work(opened(True, True), shared=True)
+    assert not world.likely_work(opened(True, False), shared=False)
+    assert world.likely_work(opened(True, False), shared=True)
+    assert world.likely_work(opened(False, True), shared=True)

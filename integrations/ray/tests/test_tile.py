@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import getpass
-import hashlib
+import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -16,10 +16,12 @@ from conftest import FakePge
 from pge_world.tile import (
     TileFailed,
     TileJob,
+    default_variant_cache,
+    die_with_parent,
     grow_tiles,
-    instances_by_tile,
     last_line,
     pge_args,
+    private_folder,
 )
 
 pytestmark = pytest.mark.unit
@@ -61,32 +63,82 @@ def test_every_pge_call_shares_script_seed_sets_and_time_limit() -> None:
     assert pge_args(SCRIPT, 3, [], 2.5)[-2:] == ["--time-limit", "2.5"]
 
 
-def test_instances_come_from_the_stats_lines() -> None:
-    stats = '{"tile": [0, 1], "instances": 5}\n\n{"tile": [2, 0]}\n'
-    assert instances_by_tile(stats) == {(0, 1): 5, (2, 0): 0}
-
-
 def test_a_batch_without_the_world_directory_returns_the_tiles_bytes(fake_pge: FakePge) -> None:
     result = grow_tiles(job(fake_pge.path), [(1, 0), (0, 2)], None)
     assert result["node"] == socket.gethostname() and result["seconds"] >= 0
-    assert [(t["i"], t["j"], t["instances"]) for t in result["tiles"]] == [(1, 0, 10), (0, 2, 2)]
+    assert [(t["i"], t["j"]) for t in result["tiles"]] == [(1, 0), (0, 2)]
     for t in result["tiles"]:
-        assert t["glb"].startswith(f"tile {t['i']},{t['j']} seed 7".encode())
-        assert t["sha256"] == hashlib.sha256(t["glb"]).hexdigest()
-        assert t["bytes"] == len(t["glb"])
+        assert t["glb"] == f"tile {t['i']},{t['j']} seed 7 ".encode()
     [call] = fake_pge.calls()
     assert call[:6] == ["run", "/w/forest.lua", "--seed", "7", "--set", "spin=0"]
     assert call[6:10] == ["--tile", "1,0", "--tile", "0,2"]
-    assert call[10] == "--out-dir" and call[12:] == ["-q", "--stats", "--threads", "2"]
+    assert call[10] == "--out-dir" and call[12:] == ["-q", "--threads", "2"]
 
 
-def test_standalone_tiles_use_this_machines_variant_cache(fake_pge: FakePge) -> None:
+def test_standalone_tiles_use_this_machines_variant_cache(
+    fake_pge: FakePge, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     grow_tiles(job(fake_pge.path, variant_cache=""), [(0, 0)], None)
     grow_tiles(job(fake_pge.path, variant_cache="/shared/cache"), [(0, 0)], None)
     first, second = fake_pge.calls()
-    cache = str(Path(tempfile.gettempdir()) / f"pge-variants-{getpass.getuser()}")
-    assert first[-2:] == ["--variant-cache", cache]
+    cache = tmp_path / f"pge-variants-{os.getuid()}"
+    assert default_variant_cache() == cache
+    assert first[-2:] == ["--variant-cache", str(cache)]
     assert second[-2:] == ["--variant-cache", "/shared/cache"]
+    # Created private to this user.
+    assert cache.is_dir() and (cache.stat().st_mode & 0o777) == 0o700
+
+
+def test_the_default_variant_cache_is_refused_unless_private(tmp_path: Path) -> None:
+    mine = tmp_path / "mine"
+    assert private_folder(mine) == mine and (mine.stat().st_mode & 0o777) == 0o700
+    assert private_folder(mine) == mine  # already there, still private
+    open_to_all = tmp_path / "open"
+    open_to_all.mkdir()
+    open_to_all.chmod(0o777)
+    planted = tmp_path / "planted"
+    planted.symlink_to(mine)
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    for path, why in [
+        (open_to_all, "writable by others (mode 777)"),
+        (planted, "not a folder"),
+        (a_file, "not a folder"),
+    ]:
+        with pytest.raises(TileFailed) as e:
+            private_folder(path)
+        assert str(e.value).startswith(f"the variant cache {path} on ") and why in str(e.value)
+    group = tmp_path / "group"
+    group.mkdir()
+    group.chmod(0o770)
+    with pytest.raises(TileFailed, match="writable by others"):
+        private_folder(group)
+    # Owned by someone else (another uid than the folder's owner).
+    with pytest.raises(TileFailed, match="owned by another user"):
+        private_folder(mine, uid=os.getuid() + 1)
+
+
+def test_a_worker_starts_pge_without_a_preexec_fn(
+    fake_pge: FakePge, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # pge dies with the worker through `setpriv --pdeathsig KILL` where there is one, not
+    # through Python code run between fork and exec in a multi-threaded worker.
+    seen: list[tuple[list[str], dict[str, object]]] = []
+    real = subprocess.run
+
+    def spy(cmd: list[str], **kwargs: object) -> object:
+        seen.append((cmd, kwargs))
+        return real(cmd, **kwargs)  # type: ignore[call-overload]
+
+    monkeypatch.setattr(subprocess, "run", spy)
+    grow_tiles(job(fake_pge.path), [(0, 0)], None)
+    [(cmd, kwargs)] = seen
+    assert kwargs.get("preexec_fn") is None
+    setpriv = shutil.which("setpriv")
+    prefix = [setpriv, "--pdeathsig", "KILL", "--"] if setpriv else []
+    assert die_with_parent() == prefix
+    assert cmd[: len(prefix) + 2] == [*prefix, shutil.which(fake_pge.path), "run"]
 
 
 def test_shared_tiles_get_the_description_in_a_scratch_world(fake_pge: FakePge) -> None:
@@ -106,7 +158,7 @@ def test_a_batch_in_the_world_directory_leaves_the_tiles_there(
     assert "glb" not in grown
     data = (tmp_path / "tiles" / "3_1.glb").read_bytes()
     assert data == b"tile 3,1 seed 7 world's"
-    assert grown["sha256"] == hashlib.sha256(data).hexdigest() and grown["instances"] == 31
+    assert grown == {"i": 3, "j": 1}
     [call] = fake_pge.calls()
     assert call[call.index("--variants") + 1] == str(tmp_path)
     assert call[call.index("--out-dir") + 1] == str(tmp_path / "tiles")
@@ -140,7 +192,7 @@ def test_pges_error_is_the_tiles_message(fake_pge: FakePge) -> None:
 def test_a_pge_that_reports_no_tile_fails(fake_pge: FakePge) -> None:
     with pytest.raises(TileFailed) as e:
         grow_tiles(job(fake_pge.path, overrides=[("quiet", "1")]), [(0, 0)], None)
-    assert str(e.value).startswith(f"pge wrote no tile on {socket.gethostname()}: ")
+    assert str(e.value).startswith(f"pge wrote no tile 0,0 on {socket.gethostname()}: ")
 
 
 def test_the_task_travels_by_value_to_a_worker_without_the_package(
@@ -163,10 +215,10 @@ def test_the_task_travels_by_value_to_a_worker_without_the_package(
         "sys.modules['pge_world'] = None  # not installed on this worker\n"
         "task, job, tiles = pickle.loads(sys.stdin.buffer.read())\n"
         "result = task(job, tiles, None)\n"
-        "print(result['tiles'][0]['instances'], type(task).__module__)\n"
+        "print(result['tiles'][0]['glb'].decode().split()[1], type(task).__module__)\n"
     )
     p = subprocess.run(
         [sys.executable, "-c", worker], input=payload, capture_output=True, check=False
     )
     assert p.returncode == 0, p.stderr.decode()
-    assert p.stdout.decode().split() == ["11", "builtins"]
+    assert p.stdout.decode().split() == ["1,1", "builtins"]

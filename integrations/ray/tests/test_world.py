@@ -16,7 +16,12 @@ import time
 import pytest
 from conftest import FOREST
 
-from pge_world import glb
+
+def root_extras(data):
+    """Return a .glb's root ``extras.pge`` (its JSON chunk, after the 12-byte header)."""
+    length = int.from_bytes(data[12:16], "little")
+    return json.loads(data[20 : 20 + length])["extras"]["pge"]
+
 
 # The console script the package installs, beside this Python.
 CLI = [os.path.join(os.path.dirname(sys.executable), "pge-world")]
@@ -155,7 +160,7 @@ def test_a_world_is_the_local_tiles_and_a_second_run_does_no_work(cluster, refer
         assert t["sha256"] == hashlib.sha256(data).hexdigest()
         assert t["bytes"] == len(data)
         assert (t["min"], t["max"]) == bounds[(t["i"], t["j"])]
-        forest = glb.root_extras(data)["forest"]
+        forest = root_extras(data)["forest"]
         assert t["instances"] == forest["instances"]
         total += t["instances"]
     assert world["instances"] == total > 0
@@ -214,7 +219,7 @@ def test_tiles_that_share_their_variants_are_the_local_ones(cluster, pge_bin, tm
     assert got == reference
     for t in world["tiles"]:
         assert t["sha256"] == hashlib.sha256(got[(t["i"], t["j"])]).hexdigest()
-        assert t["instances"] == glb.root_extras(got[(t["i"], t["j"])])["forest"]["instances"]
+        assert t["instances"] == root_extras(got[(t["i"], t["j"])])["forest"]["instances"]
     # Every tile is small: the variants are not in it.
     assert max(len(b) for b in got.values()) * 4 < len(variants["variants.bin"])
 
@@ -433,6 +438,21 @@ def test_shared_tiles_written_by_a_job_array_are_adopted(cluster, pge_bin, refer
     assert "0_0.glb: the tile carries its variants" in p.stderr, p.stderr
     assert p.stderr.count("\n") == 1, p.stderr
     assert not (other / "world.json").exists()
+
+
+def test_a_folder_of_other_files_is_refused_and_left_as_it_was(cluster, tmp_path):
+    out = tmp_path / "home"
+    (out / "tiles").mkdir(parents=True)
+    (out / "notes.txt").write_text("mine")
+    (out / "tiles" / ".tmp-mine").write_text("mine too")
+    p = pge_world(cluster, "--out", str(out))
+    assert p.returncode == 1
+    assert p.stderr.count("\n") == 1 and "not empty and not a world" in p.stderr, p.stderr
+    assert sorted(str(f.relative_to(out)) for f in out.rglob("*")) == [
+        "notes.txt",
+        "tiles",
+        "tiles/.tmp-mine",
+    ]
 
 
 def test_an_output_that_is_a_file_is_one_line(cluster, tmp_path):
