@@ -373,10 +373,10 @@ fn verify(dir: &Path) -> anyhow::Result<String> {
             dir.join(file).display()
         )
     };
-    if let Some(v) = &m.variants {
-        if VariantsEntry::of(dir)?.as_ref() != Some(v) {
-            return Err(differs(VARIANTS_BIN));
-        }
+    if let Some(v) = &m.variants
+        && VariantsEntry::of(dir)?.as_ref() != Some(v)
+    {
+        return Err(differs(VARIANTS_BIN));
     }
     for t in &m.tiles {
         if !Manifest::tile_intact(dir, t)? {

@@ -8,6 +8,9 @@ use serde_json::{Map, Value};
 
 use super::manifest::{Manifest, TileEntry, VARIANTS_BIN, sha256_hex, tile_file};
 
+/// A tile of a world's grid: `(i, j, min, max)`, the bounds (x, z) in metres.
+pub type GridTile = (u64, u64, [f64; 2], [f64; 2]);
+
 /// A tile file as `pge run --tile I,J` wrote it.
 pub struct TileFile {
     pub seed: u64,
@@ -69,7 +72,7 @@ impl TileFile {
     }
 
     /// Every tile of its world, `(i, j, min, max)`, `i` fastest (the forest's own grid).
-    pub fn grid(&self) -> anyhow::Result<Vec<(u64, u64, [f64; 2], [f64; 2])>> {
+    pub fn grid(&self) -> anyhow::Result<Vec<GridTile>> {
         let forest = pge_forest::Forest::new(self.size, 0, Some(self.tile))?;
         let tiles = forest.tiles().context("a forest without tiles")?;
         Ok(tiles
