@@ -17,6 +17,9 @@ use crate::module_string::ModuleString;
 /// Modules of a step's string rewritten per piece by the next step.
 const PIECE: usize = 1 << 10;
 
+/// Where the last step's pieces go.
+type Sink<'s, E> = &'s mut dyn FnMut(&ModuleString) -> Result<(), E>;
+
 /// One step's buffer and state.
 #[derive(Default)]
 struct Level {
@@ -33,7 +36,7 @@ struct Run<'s, E> {
     /// The earliest step that failed, and its first error.
     held: Option<(usize, E)>,
     /// Where the last step's pieces go (`None`: counted).
-    sink: Option<&'s mut dyn FnMut(&ModuleString) -> Result<(), E>>,
+    sink: Option<Sink<'s, E>>,
     /// The successors of counted rules (see [`Deriver::count_after`]).
     successors: ModuleString,
     /// The module caps were checked by a count of the same steps: a system of fixed
@@ -51,7 +54,7 @@ impl Deriver<'_> {
         src: &ModuleString,
         steps: &[StepOptions],
         host: &mut H,
-        sink: Option<&mut dyn FnMut(&ModuleString) -> Result<(), H::Error>>,
+        sink: Option<Sink<'_, H::Error>>,
         checked: bool,
     ) -> Result<u64, H::Error> {
         let mut run = Run {
