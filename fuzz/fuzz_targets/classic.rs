@@ -1,9 +1,10 @@
 //! The classic notation: the first line is the axiom, each further line a production.
-//! Parsing, compiling and a few derivation steps must return errors, never panic.
+//! Parsing, compiling and a few derivation steps (kept, counted and in pieces) must return
+//! errors, never panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+use pge_lsystem::{DeriveOptions, ModuleString, NativeHost, Output, SymbolTable, System};
 use rand_mt::Mt;
 
 fuzz_target!(|text: &str| {
@@ -23,30 +24,35 @@ fuzz_target!(|text: &str| {
             return;
         }
     }
-    if system.prepare(&symbols).is_err() {
+    let Ok(prepared) = system.prepare(&symbols) else {
         return;
-    }
+    };
     let mut draws = 0.0;
-    let Ok(mut string) = system.parse_string(axiom, &mut symbols, &mut || {
+    let Ok(axiom) = system.parse_string(axiom, &mut symbols, &mut || {
         draws += 0.37;
         draws % 1.0
     }) else {
         return;
     };
-    let mut next = ModuleString::new();
-    let mut rng = Mt::new(7);
-    for step in 1..=4 {
-        let opts = StepOptions {
-            step,
-            max_modules: 2_000,
-            stream: false,
-        };
-        if system
-            .step(&string, &mut next, &mut NativeHost { rng: &mut rng }, &opts)
-            .is_err()
-        {
-            return;
-        }
-        std::mem::swap(&mut string, &mut next);
-    }
+    // Four steps kept, counted and in pieces: however the derivation takes them.
+    let opts = DeriveOptions::new(1, 4, 2_000);
+    let mut string = ModuleString::new();
+    let _ = prepared.derive(
+        &axiom,
+        &opts,
+        &mut NativeHost { rng: &mut Mt::new(7) },
+        Output::Keep(&mut string),
+    );
+    let _ = prepared.derive(
+        &axiom,
+        &opts,
+        &mut NativeHost { rng: &mut Mt::new(7) },
+        Output::Count,
+    );
+    let _ = prepared.derive(
+        &axiom,
+        &opts,
+        &mut NativeHost { rng: &mut Mt::new(7) },
+        Output::Pieces(&mut |_| Ok(())),
+    );
 });

@@ -21,11 +21,11 @@
 //! Criterion reports modules produced per second ("elements").
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+use pge_lsystem::{DeriveOptions, ModuleString, NativeHost, Output, Prepared, SymbolTable, System};
 use rand_mt::Mt;
 
 struct Setup {
-    system: System,
+    prepared: Prepared,
     axiom: ModuleString,
     symbols: SymbolTable,
 }
@@ -42,12 +42,12 @@ fn setup(axiom: &str, rules: &[&str], globals: &[(&str, f64)], ignore: &str) -> 
             .add_production(r, None, 0, &mut symbols)
             .expect("rule");
     }
-    system.prepare(&symbols).expect("prepare");
+    let prepared = system.prepare(&symbols).expect("prepare");
     let axiom = system
         .parse_string(axiom, &mut symbols, &mut || 0.0)
         .expect("axiom");
     Setup {
-        system,
+        prepared,
         axiom,
         symbols,
     }
@@ -59,14 +59,15 @@ fn derive(s: &Setup, steps: u32, a: &mut ModuleString, b: &mut ModuleString) -> 
     let mut rng = Mt::new(1);
     let mut produced = 0u64;
     for step in 1..=steps {
-        let opts = StepOptions {
-            step,
-            max_modules: 100_000_000,
-            stream: false,
-        };
+        let opts = DeriveOptions::new(step, 1, 100_000_000);
         let src = if step == 1 { &s.axiom } else { &*a };
-        s.system
-            .step(src, b, &mut NativeHost { rng: &mut rng }, &opts)
+        s.prepared
+            .derive(
+                src,
+                &opts,
+                &mut NativeHost { rng: &mut rng },
+                Output::Keep(b),
+            )
             .expect("derive");
         produced += b.len() as u64;
         std::mem::swap(a, b);

@@ -1,16 +1,19 @@
-//! An L-system's rules and how they are added; compilation ([`compile`]), context matching
-//! ([`context`]) and the derivation step ([`derive`](mod@derive)) live in their own files.
+//! An L-system's rules and how they are added; compilation ([`compile`]) makes the
+//! [`Prepared`] form that derives ([`prepared`]); context matching ([`context`]), the
+//! derivation step ([`derive`](mod@derive)), counting ([`count`]) and the depth-first
+//! pipeline ([`stream`]) live in their own files.
 
 mod compile;
 mod context;
+mod count;
 mod derive;
 mod fixed;
 mod host;
+mod prepared;
 mod rule;
 mod stream;
 
 use self::compile::Tables;
-use self::derive::Deriver;
 use self::rule::{Kind, Lhs, RuleDef, normalise, pattern_items};
 use crate::classic::{self, LhsAst};
 use crate::error::LsError;
@@ -18,23 +21,27 @@ use crate::expr::{Ast, Expr, Operand};
 use crate::module_string::ModuleString;
 use crate::symbol::{Sym, SymbolTable};
 
-pub use self::derive::StepOptions;
 pub use self::host::{Host, NativeHost};
+pub use self::prepared::{DeriveOptions, Output, Prepared};
 
+/// An L-system's rules as they are added: classic productions, rules computed by the host,
+/// declared names, ignored symbols and numeric globals. [`System::prepare`] compiles them
+/// into the [`Prepared`] form that derives.
 ///
 /// ```
-/// use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+/// use pge_lsystem::{DeriveOptions, ModuleString, NativeHost, Output, SymbolTable, System};
 /// use rand_mt::Mt;
 ///
 /// let mut symbols = SymbolTable::new();
 /// let mut system = System::new();
 /// system.add_production("F -> F[+F]F", None, 0, &mut symbols).unwrap();
-/// system.prepare(&symbols).unwrap();
+/// let prepared = system.prepare(&symbols).unwrap();
 /// let axiom = system.parse_string("F", &mut symbols, &mut || 0.0).unwrap();
 /// let mut next = ModuleString::new();
 /// let mut rng = Mt::new(1);
-/// let opts = StepOptions { step: 1, max_modules: 1000, stream: false };
-/// system.step(&axiom, &mut next, &mut NativeHost { rng: &mut rng }, &opts).unwrap();
+/// let opts = DeriveOptions::new(1, 1, 1000);
+/// let host = &mut NativeHost { rng: &mut rng };
+/// prepared.derive(&axiom, &opts, host, Output::Keep(&mut next)).unwrap();
 /// assert_eq!(next.len(), 6);
 /// ```
 #[derive(Clone, Debug, Default)]
@@ -44,8 +51,6 @@ pub struct System {
     ignore_syms: Vec<Sym>,
     global_names: Vec<String>,
     global_values: Vec<f64>,
-    tables: Tables,
-    prepared: bool,
 }
 
 impl System {
@@ -64,7 +69,6 @@ impl System {
         }
         self.declared
             .sort_by(|a, b| b.len().cmp(&a.len()).then(a.cmp(b)));
-        self.prepared = false;
     }
 
     /// Symbols skipped when matching contexts (names separated by spaces).
@@ -75,7 +79,6 @@ impl System {
                 self.ignore_syms.push(s);
             }
         }
-        self.prepared = false;
     }
 
     /// Sets a numeric global, readable by name in classic expressions.
@@ -85,7 +88,6 @@ impl System {
             None => {
                 self.global_names.push(name.to_string());
                 self.global_values.push(value);
-                self.prepared = false;
             }
         }
     }
@@ -217,7 +219,6 @@ impl System {
             kind: kind(lhs.condition.clone()),
             key,
         });
-        self.prepared = false;
         Ok(self.defs.len() - 1)
     }
 
@@ -290,183 +291,15 @@ impl System {
         Ok((out, constant))
     }
 
-    /// Compiles every rule: names resolve against formals and globals, dispatch tables are
-    /// built. Called before the first step and again after any change.
-    pub fn prepare(&mut self, symbols: &SymbolTable) -> Result<(), LsError> {
-        self.tables = Tables::build(&self.defs, &self.ignore_syms, &self.global_names, symbols)?;
-        self.prepared = true;
-        Ok(())
-    }
-
-    /// Matches a left context of symbols (leftmost first) for module `i` of `src`: the path
-    /// toward the root, skipping whole branches, climbing out of enclosing ones and skipping
-    /// ignored symbols. `matches` pairs brackets (see [`ModuleString::bracket_matches`]); only
-    /// the entries of `]` before `i` are read. Pushes the matched indices, leftmost first.
-    pub fn match_left_context(
-        &self,
-        left: &[Sym],
-        src: &ModuleString,
-        matches: &[u32],
-        i: usize,
-        out: &mut Vec<usize>,
-    ) -> bool {
-        context::match_left(
-            &self.tables.ignored,
-            left.iter().copied(),
-            src,
-            matches,
-            i,
-            out,
-        )
-    }
-
-    /// One derivation step: rewrites `src` into `out` (cleared first).
-    ///
-    /// # Panics
-    /// If the rules changed since the last [`System::prepare`].
-    pub fn step<H: Host>(
-        &self,
-        src: &ModuleString,
-        out: &mut ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-    ) -> Result<(), H::Error> {
-        assert!(
-            self.prepared,
-            "System::prepare must be called after changing the rules"
-        );
-        self.deriver().step(src, out, host, opts)
-    }
-
-    /// One derivation step delivered in pieces, for a caller that streams the result instead
-    /// of keeping it: rewrites `src` like [`System::step`], appending the successors of every
-    /// `chunk` modules of `src` to `buf` (cleared before each piece) and handing it to `sink`.
-    /// The module cap holds for the whole step. Returns the number of modules produced.
-    ///
-    /// # Panics
-    /// If the rules changed since the last [`System::prepare`].
-    pub fn step_chunks<H: Host>(
-        &self,
-        src: &ModuleString,
-        buf: &mut ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-        chunk: usize,
-        sink: &mut dyn FnMut(&ModuleString) -> Result<(), H::Error>,
-    ) -> Result<u64, H::Error> {
-        assert!(
-            self.prepared,
-            "System::prepare must be called after changing the rules"
-        );
-        self.deriver()
-            .step_chunks(src, buf, host, opts, chunk, sink)
-    }
-
-    /// The number of modules one step would make of `src`, without keeping them (checking
-    /// the module cap and every rule as [`System::step`] does). A system of fixed successors
-    /// is counted without rewriting; otherwise modules without rules are counted, not copied.
-    ///
-    /// # Panics
-    /// If the rules changed since the last [`System::prepare`].
-    pub fn step_count<H: Host>(
-        &self,
-        src: &ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-    ) -> Result<u64, H::Error> {
-        assert!(
-            self.prepared,
-            "System::prepare must be called after changing the rules"
-        );
-        let deriver = self.deriver();
-        if deriver.plain_fast_path(src, opts) {
-            return Ok(deriver.plain_count(src, opts)?);
-        }
-        if deriver.fixed_pass(src, opts) {
-            let mut buf = ModuleString::new();
-            return deriver.step_chunks(src, &mut buf, host, opts, 1 << 16, &mut |_| Ok(()));
-        }
-        deriver.count(src, host, opts)
-    }
-
-    /// Whether [`System::count_two_steps`] and [`System::step_chunks_two`] take the steps
-    /// depth first, piece by piece, never keeping the string between them: rules without
-    /// contexts that draw no random numbers, no rule functions, no streaming interpretation.
-    #[must_use]
-    pub fn two_steps_depth_first(&self, first: &StepOptions, second: &StepOptions) -> bool {
-        self.prepared && self.deriver().depth_first(first, second)
-    }
-
-    /// The number of modules the steps `first` and then `second` make of `src`: the first
-    /// step's and the second's, the second counted as [`System::step_count`] counts. The
-    /// errors (module caps, rules, the host's checks) are those of the two steps taken one
-    /// after the other.
-    ///
-    /// # Panics
-    /// If the rules changed since the last [`System::prepare`].
-    pub fn count_two_steps<H: Host>(
-        &self,
-        src: &ModuleString,
-        host: &mut H,
-        first: &StepOptions,
-        second: &StepOptions,
-    ) -> Result<(u64, u64), H::Error> {
-        assert!(
-            self.prepared,
-            "System::prepare must be called after changing the rules"
-        );
-        let deriver = self.deriver();
-        if deriver.depth_first(first, second) {
-            return deriver.count_two(src, host, first, second);
-        }
-        let mut between = ModuleString::new();
-        deriver.step(src, &mut between, host, first)?;
-        let n = self.step_count(&between, host, second)?;
-        Ok((between.len() as u64, n))
-    }
-
-    /// The steps `first` and then `second` of `src` delivered in pieces of the second step,
-    /// as [`System::step_chunks`] delivers one step (`chunk` modules between the steps per
-    /// piece). Returns the number of modules of the second step.
-    ///
-    /// # Panics
-    /// If the rules changed since the last [`System::prepare`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn step_chunks_two<H: Host>(
-        &self,
-        src: &ModuleString,
-        buf: &mut ModuleString,
-        host: &mut H,
-        first: &StepOptions,
-        second: &StepOptions,
-        chunk: usize,
-        sink: &mut dyn FnMut(&ModuleString) -> Result<(), H::Error>,
-    ) -> Result<u64, H::Error> {
-        assert!(
-            self.prepared,
-            "System::prepare must be called after changing the rules"
-        );
-        let deriver = self.deriver();
-        if deriver.depth_first(first, second) {
-            return deriver.step_chunks_two(src, buf, host, first, second, chunk, sink);
-        }
-        let mut between = ModuleString::new();
-        deriver.step(src, &mut between, host, first)?;
-        deriver.step_chunks(&between, buf, host, second, chunk, sink)
-    }
-
-    fn deriver(&self) -> Deriver<'_> {
-        Deriver {
-            defs: &self.defs,
-            globals: &self.global_values,
-            tables: &self.tables,
-            args: self
-                .tables
-                .exprs
-                .iter()
-                .map(|e| e.bind(&self.global_values))
-                .collect(),
-        }
+    /// Compiles every rule (names resolve against formals and globals, dispatch tables are
+    /// built) into the form that derives. A [`Prepared`] system does not follow later
+    /// changes of this one: prepare it again after them.
+    pub fn prepare(&self, symbols: &SymbolTable) -> Result<Prepared, LsError> {
+        Ok(Prepared {
+            defs: self.defs.clone().into(),
+            global_values: self.global_values.clone(),
+            tables: Tables::build(&self.defs, &self.ignore_syms, &self.global_names, symbols)?,
+        })
     }
 }
 

@@ -2,7 +2,7 @@
 //! the text of a derived string (what `pge derive --format text` prints) parses back to the
 //! same string.
 
-use pge_lsystem::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+use pge_lsystem::{DeriveOptions, ModuleString, NativeHost, Output, SymbolTable, System};
 use proptest::prelude::*;
 use rand_mt::Mt;
 
@@ -106,20 +106,21 @@ fn derive(
             .add_production(p, None, i as u32, &mut symbols)
             .ok()?;
     }
-    system.prepare(&symbols).ok()?;
+    let prepared = system.prepare(&symbols).ok()?;
     let mut draws = Mt::new(seed);
     let mut rand = || f64::from(draws.next_u32()) / 4_294_967_296.0;
     let mut string = system.parse_string(axiom, &mut symbols, &mut rand).ok()?;
     let mut next = ModuleString::new();
     let mut rng = Mt::new(seed);
     for step in 1..=steps {
-        let opts = StepOptions {
-            step,
-            max_modules: 4_000,
-            stream: false,
-        };
-        if system
-            .step(&string, &mut next, &mut NativeHost { rng: &mut rng }, &opts)
+        let opts = DeriveOptions::new(step, 1, 4_000);
+        if prepared
+            .derive(
+                &string,
+                &opts,
+                &mut NativeHost { rng: &mut rng },
+                Output::Keep(&mut next),
+            )
             .is_err()
         {
             break;

@@ -20,12 +20,14 @@ use super::derive::{LastStep, StreamHost};
 use super::host::{HostError, LuaHost};
 use super::session_symbols;
 use super::symbols::tags;
-use crate::{Host, LsError, ModuleString, StepOptions, SymbolTable, System};
+use crate::{DeriveOptions, Host, LsError, ModuleString, Output, Prepared, SymbolTable, System};
 
 /// A derivation in progress: the string, the instance (`this`), the generator.
 pub struct LSystemAlgorithm {
     lua: WeakLua,
     cfg: Config,
+    /// The rules compiled by `init` (and again when a global changes).
+    prepared: Option<Prepared>,
     symbols: Rc<RefCell<SymbolTable>>,
     string: ModuleString,
     scratch: ModuleString,
@@ -60,6 +62,7 @@ impl LSystemAlgorithm {
             lua: lua.weak(),
             symbols: session_symbols(lua),
             cfg,
+            prepared: None,
             string: ModuleString::new(),
             scratch: ModuleString::new(),
             side: Vec::new(),
@@ -114,10 +117,11 @@ impl LSystemAlgorithm {
     }
 
     /// Derives like [`pge_engine::algorithm::grow`] for `pge derive`. When nothing of Lua
-    /// takes part in the last step (no interpretation, rule functions or callbacks), that
-    /// step is only counted, checking every limit, and returned to be streamed: the current
-    /// string is then the one before it (before the last two steps, when the system lets
-    /// them be taken depth first: see [`crate::System::two_steps_depth_first`]).
+    /// takes part in the last steps (no interpretation, rule functions or callbacks), those
+    /// steps are only counted, checking every limit, and returned to be streamed: the
+    /// current string is then the one before them (the axiom, when the rules let every step
+    /// be taken depth first: see [`Prepared::derives_in_pieces`]; else the string before
+    /// the last step).
     pub(crate) fn grow_for_output(
         &mut self,
         ctx: &RunContext,
@@ -128,22 +132,9 @@ impl LSystemAlgorithm {
             && self.skip_interpretation
             && !self.lua_involved
             && !self.cfg.system.has_external();
-        let last_opts = |step: u32| StepOptions {
-            step,
-            max_modules: self.max_modules,
-            stream: false,
-        };
-        // The last two steps of a system that allows it are taken depth first: the string
-        // between them is never kept either.
-        let two = stream
-            && target >= 2
-            && self
-                .cfg
-                .system
-                .two_steps_depth_first(&last_opts(target - 1), &last_opts(target));
-        let before = match (stream, two) {
-            (true, true) => target - 2,
-            (true, false) => target - 1,
+        let before = match &self.prepared {
+            Some(p) if stream && p.derives_in_pieces() => 0,
+            _ if stream => target - 1,
             _ => target,
         };
         while self.done < before {
@@ -157,40 +148,36 @@ impl LSystemAlgorithm {
         // The previous step's buffer is not needed any more.
         self.scratch = ModuleString::new();
         self.guarded(ctx, |me, _, ctx| {
-            let opts = StepOptions {
-                step: me.done + 1,
-                max_modules: me.max_modules,
-                stream: false,
-            };
+            let prepared = me.prepared()?.clone();
+            let opts = DeriveOptions::new(me.done + 1, target - me.done, me.max_modules);
             let rng = me.rng.clone();
             let location = me.cfg.location.clone();
             let mut host = StreamHost {
                 rng: &mut me.rng,
                 limits: Some((ctx, &location)),
             };
-            let (first, opts, len) = if two {
-                let second = StepOptions {
-                    step: opts.step + 1,
-                    ..opts
-                };
-                let (_, len) = me
-                    .cfg
-                    .system
-                    .count_two_steps(&me.string, &mut host, &opts, &second)?;
-                (Some(opts), second, len)
-            } else {
-                let len = me.cfg.system.step_count(&me.string, &mut host, &opts)?;
-                (None, opts, len)
-            };
-            me.done = opts.step;
+            let len = prepared.derive(&me.string, &opts, &mut host, Output::Count)?;
+            me.done = target;
             Ok(Some(LastStep {
-                system: me.cfg.system.clone(),
+                prepared,
                 rng,
                 opts,
-                first,
                 len,
             }))
         })
+    }
+
+    /// The compiled rules (`init` compiles them).
+    fn prepared(&self) -> Result<&Prepared, HostError> {
+        self.prepared.as_ref().ok_or_else(|| self.not_initialised())
+    }
+
+    #[cold]
+    fn not_initialised(&self) -> HostError {
+        HostError::Engine(Error::script(
+            self.cfg.location.clone(),
+            format!("L-system '{}' derived before its init", self.cfg.name),
+        ))
     }
 
     fn upgrade(&self) -> pge_engine::Result<Lua> {
@@ -255,6 +242,10 @@ impl LSystemAlgorithm {
             &mut ModuleString,
         ) -> Result<R, HostError>,
     ) -> Result<R, HostError> {
+        let prepared = match &self.prepared {
+            Some(p) => p,
+            None => return Err(self.not_initialised()),
+        };
         let instance_ud = match &self.this_rw {
             Value::UserData(ud) if !self.interpreters.is_empty() => Some(ud.clone()),
             _ => None,
@@ -264,6 +255,7 @@ impl LSystemAlgorithm {
             ctx,
             cfg: &self.cfg,
             system: &self.cfg.system,
+            prepared,
             symbols: &self.symbols,
             side: &mut self.side,
             parse_cache: &mut self.parse_cache,
@@ -377,7 +369,7 @@ impl LSystemAlgorithm {
                 self.cfg.system.set_global(&k.to_str()?, v);
             }
         }
-        self.cfg.system.prepare(&self.symbols.borrow())?;
+        self.prepared = Some(self.cfg.system.prepare(&self.symbols.borrow())?);
         self.max_modules = self.cfg.max_modules.unwrap_or(ctx.max_modules);
         self.rng = instance_rng(ctx.seed, self.cfg.index);
         self.lua_involved = !self.cfg.rrules.is_empty()
@@ -472,10 +464,9 @@ impl LSystemAlgorithm {
         }
         let stream = self.cfg.every_step && self.lua_involved && !self.skip_interpretation;
         let lua_involved = self.lua_involved;
-        let opts = StepOptions {
-            step: self.done + 1,
-            max_modules: self.max_modules,
-            stream,
+        let opts = DeriveOptions {
+            interpret: stream,
+            ..DeriveOptions::new(self.done + 1, 1, self.max_modules)
         };
         let body = |me: &mut Self| -> Result<(), HostError> {
             if stream {
@@ -489,13 +480,10 @@ impl LSystemAlgorithm {
                 }
                 me.sync_globals()?;
             }
-            me.with_host(
-                lua,
-                ctx,
-                lua_involved,
-                stream,
-                |host, system, string, out| system.step(string, out, host, &opts),
-            )?;
+            me.with_host(lua, ctx, lua_involved, stream, |host, _, string, out| {
+                let prepared = host.prepared;
+                prepared.derive(string, &opts, host, Output::Keep(out))
+            })?;
             std::mem::swap(&mut me.string, &mut me.scratch);
             me.compact_side();
             me.done += 1;
@@ -537,10 +525,12 @@ impl LSystemAlgorithm {
             }
         }
         if changed {
-            self.cfg
-                .system
-                .prepare(&self.symbols.borrow())
-                .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?;
+            self.prepared = Some(
+                self.cfg
+                    .system
+                    .prepare(&self.symbols.borrow())
+                    .map_err(|e| mlua::Error::RuntimeError(e.to_string()))?,
+            );
         }
         Ok(())
     }

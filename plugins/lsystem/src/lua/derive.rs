@@ -11,29 +11,26 @@ use rand_mt::Mt;
 use super::algorithm::LSystemAlgorithm;
 use super::host::HostError;
 use super::object::LuaLSystem;
-use crate::{Host, LsError, ModuleString, StepOptions, SymbolTable, System};
+use crate::{DeriveOptions, Host, LsError, ModuleString, Output, Prepared, SymbolTable};
 
-/// The last derivation step, left to be streamed: derived anew, piece by piece, each time the
-/// string is read, and never kept whole.
+/// The last derivation steps, left to be streamed: derived anew, piece by piece, each time
+/// the string is read, and never kept whole.
 #[derive(Clone, Debug)]
 pub(crate) struct LastStep {
-    /// The rules (prepared).
-    pub(crate) system: System,
-    /// The instance's generator as the step starts.
+    /// The rules.
+    pub(crate) prepared: Prepared,
+    /// The instance's generator as the steps start.
     pub(crate) rng: Mt,
-    /// The step's number and module cap.
-    pub(crate) opts: StepOptions,
-    /// The step before it, when the two are streamed depth first (see
-    /// [`System::step_chunks_two`]): the derivation then holds the string before both.
-    pub(crate) first: Option<StepOptions>,
-    /// The number of modules the step makes (counted once, checking every limit).
+    /// The steps and the module cap.
+    pub(crate) opts: DeriveOptions,
+    /// The number of modules the steps make (counted once, checking every limit).
     pub(crate) len: u64,
 }
 
-/// The host of a streamed last step: the instance's generator and, while the step is
+/// The host of streamed last steps: the instance's generator and, while the steps are
 /// counted, the run's deadline (its errors point at the location). No Lua takes part in such
-/// a step. Writing derives the step again without checking the deadline: the count took as
-/// long, within the limit, and a write stopped halfway would leave half an output.
+/// steps. Writing derives the steps again without checking the deadline: the count took
+/// about as long, within the limit, and a write stopped halfway would leave half an output.
 pub(crate) struct StreamHost<'a> {
     pub(crate) rng: &'a mut Mt,
     pub(crate) limits: Option<(&'a RunContext, &'a Location)>,
@@ -69,9 +66,10 @@ impl Host for StreamHost<'_> {
 }
 
 /// The result of a derivation: the final string with its symbol names and parameters. The
-/// last step of a system without Lua is not kept: it is derived again, piece by piece, while
-/// the string is written, so a derivation holds the string of the step before (of the two
-/// steps before, for systems whose last two steps are taken depth first).
+/// last steps of a system without Lua are not kept: they are derived again, piece by piece,
+/// while the string is written, so a derivation holds the axiom (for rules that let every
+/// step be taken depth first: see [`Prepared::derives_in_pieces`]) or the string before the
+/// last step.
 #[derive(Clone, Debug)]
 pub struct Derivation {
     /// The final string, or the one before the streamed steps when `last` is set.
@@ -152,10 +150,38 @@ fn positional(v: &Value, out: &mut String) {
     }
 }
 
-/// Text written before flushing to the output.
+/// JSON written before flushing to the output.
 const FLUSH_AT: usize = 60_000;
-/// Modules of the string before the last step rewritten per piece of a streamed step.
-const PIECE: usize = 1 << 14;
+/// Text written before flushing to the output.
+const TEXT_CHUNK: usize = 1 << 20;
+
+/// The text format on its way out: every module is written with the space before it, and
+/// the first module's is dropped.
+struct TextOut<'w> {
+    w: &'w mut dyn Write,
+    buf: Vec<u8>,
+    /// Some text was written.
+    started: bool,
+}
+
+impl TextOut<'_> {
+    /// Writes the buffer once it holds a chunk.
+    #[inline]
+    fn flush_full(&mut self) -> io::Result<()> {
+        if self.buf.len() >= TEXT_CHUNK {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        let skip = usize::from(!self.started && self.buf.first() == Some(&b' '));
+        self.w.write_all(&self.buf[skip..])?;
+        self.started |= !self.buf.is_empty();
+        self.buf.clear();
+        Ok(())
+    }
+}
 
 impl Derivation {
     /// Number of modules, brackets included.
@@ -174,7 +200,7 @@ impl Derivation {
     }
 
     /// Hands every piece of the final string to `f` in order (the whole string, or the
-    /// streamed last step piece by piece).
+    /// streamed last steps piece by piece).
     fn for_each_piece(&self, f: &mut dyn FnMut(&ModuleString) -> io::Result<()>) -> io::Result<()> {
         let Some(last) = &self.last else {
             return f(&self.string);
@@ -184,7 +210,6 @@ impl Derivation {
             rng: &mut rng,
             limits: None,
         };
-        let mut buf = ModuleString::new();
         let mut failed = None;
         let mut sink = |piece: &ModuleString| {
             f(piece).map_err(|e| {
@@ -194,25 +219,12 @@ impl Derivation {
                 })
             })
         };
-        let result = match &last.first {
-            Some(first) => last.system.step_chunks_two(
-                &self.string,
-                &mut buf,
-                &mut host,
-                first,
-                &last.opts,
-                PIECE,
-                &mut sink,
-            ),
-            None => last.system.step_chunks(
-                &self.string,
-                &mut buf,
-                &mut host,
-                &last.opts,
-                PIECE,
-                &mut sink,
-            ),
-        };
+        let result = last.prepared.derive(
+            &self.string,
+            &last.opts,
+            &mut host,
+            Output::Pieces(&mut sink),
+        );
         match (result, failed) {
             (_, Some(e)) => Err(e),
             (Ok(_), None) => Ok(()),
@@ -225,7 +237,7 @@ impl Derivation {
     }
 
     /// Module `i` as `Name` or `Name(p1,p2,...)` (positional numeric parameters, shortest
-    /// round-trip form). Reading a module of a streamed last step derives the step up to it.
+    /// round-trip form). Reading a module of streamed last steps derives them up to it.
     #[must_use]
     pub fn module_text(&self, i: usize) -> String {
         let mut out = String::new();
@@ -253,26 +265,59 @@ impl Derivation {
         }
     }
 
-    /// Writes the `text` format: modules separated by one space, then a newline.
+    /// Writes the `text` format: modules separated by one space, then a newline, in chunks
+    /// of a mebibyte. Modules without parameters are written from a table of
+    /// their names, each with the space before it (one byte for every one-letter name).
     pub fn write_text(&self, w: &mut dyn Write) -> io::Result<()> {
-        let mut buf = String::with_capacity(FLUSH_AT + 4096);
-        let mut first = true;
+        let names: Vec<&str> = (0..self.symbols.len())
+            .map(|i| self.symbols.name(crate::Sym(i as u32)))
+            .collect();
+        let letters: Option<Vec<u8>> = names
+            .iter()
+            .map(|n| match n.as_bytes() {
+                [b] => Some(*b),
+                _ => None,
+            })
+            .collect();
+        let spaced: Vec<Vec<u8>> = names.iter().map(|n| format!(" {n}").into_bytes()).collect();
+        let mut out = TextOut {
+            w,
+            buf: Vec::with_capacity(TEXT_CHUNK + (1 << 16)),
+            started: false,
+        };
+        let mut module = String::new();
         self.for_each_piece(&mut |piece| {
-            for i in 0..piece.len() {
-                if !first {
-                    buf.push(' ');
+            if !piece.is_flat() {
+                for i in 0..piece.len() {
+                    module.clear();
+                    self.write_module(piece, i, &mut module);
+                    out.buf.push(b' ');
+                    out.buf.extend_from_slice(module.as_bytes());
+                    out.flush_full()?;
                 }
-                first = false;
-                self.write_module(piece, i, &mut buf);
-                if buf.len() > FLUSH_AT {
-                    w.write_all(buf.as_bytes())?;
-                    buf.clear();
+                return Ok(());
+            }
+            for syms in piece.raw_syms().chunks(1 << 14) {
+                match &letters {
+                    Some(letters) => {
+                        let start = out.buf.len();
+                        out.buf.resize(start + 2 * syms.len(), b' ');
+                        for (pair, &s) in out.buf[start..].chunks_exact_mut(2).zip(syms) {
+                            pair[1] = letters[s as usize];
+                        }
+                    }
+                    None => {
+                        for &s in syms {
+                            out.buf.extend_from_slice(&spaced[s as usize]);
+                        }
+                    }
                 }
+                out.flush_full()?;
             }
             Ok(())
         })?;
-        buf.push('\n');
-        w.write_all(buf.as_bytes())
+        out.buf.push(b'\n');
+        out.flush()
     }
 
     /// Writes the `json` format: an array of `{"name": ..., "params": ...}` (params is an
@@ -321,8 +366,9 @@ impl Derivation {
 
 /// Derives the L-system a script returned (`value`), taking `ctx.steps` steps or the
 /// system's own `iterations`. A system without IRules and rule functions is not interpreted
-/// (interpretation could not change its string); when no Lua takes part in its last step
-/// either, that step is only counted here (checking every limit) and streamed when written.
+/// (interpretation could not change its string); when no Lua takes part in its last steps
+/// either, those steps are only counted here (checking every limit) and streamed when
+/// written.
 pub fn derive_value(
     lua: &Lua,
     value: &Value,

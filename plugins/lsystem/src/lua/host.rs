@@ -12,7 +12,7 @@ use rand_mt::Mt;
 
 use super::config::{Config, LuaRule};
 use super::symbols::SymbolTags;
-use crate::{Host, LsError, ModuleString, Sym, SymbolTable, System};
+use crate::{Host, LsError, ModuleString, Prepared, Sym, SymbolTable, System};
 use pge_engine::random::uniform;
 
 /// How deeply a successor's arrays may nest (each level is a branch).
@@ -101,6 +101,8 @@ pub(crate) struct LuaHost<'a> {
     pub(crate) ctx: &'a RunContext,
     pub(crate) cfg: &'a Config,
     pub(crate) system: &'a System,
+    /// The rules compiled from `system`.
+    pub(crate) prepared: &'a Prepared,
     pub(crate) symbols: &'a RefCell<SymbolTable>,
     pub(crate) side: &'a mut Vec<Value>,
     pub(crate) parse_cache: &'a mut HashMap<String, ModuleString>,

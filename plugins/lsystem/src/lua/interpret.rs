@@ -38,7 +38,7 @@ impl LuaHost<'_> {
                 } else {
                     let mut matched = std::mem::take(&mut self.imatched);
                     matched.clear();
-                    let found = self.system.match_left_context(
+                    let found = self.prepared.match_left_context(
                         &rule.left,
                         s,
                         &self.imatches,

@@ -69,8 +69,8 @@ fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usi
 /// for the pass over a string without parameters, the left neighbour of the next module.
 #[derive(Default)]
 pub(super) struct Scratch {
-    matched: Vec<usize>,
-    gathered: Vec<f64>,
+    pub(super) matched: Vec<usize>,
+    pub(super) gathered: Vec<f64>,
     /// The context code (see [`super::fixed::FixedTables`]) of the symbol a one-symbol left
     /// context of the next module matches (0: none or no context's symbol), kept as the
     /// modules go by rather than found by walking back.
@@ -217,126 +217,6 @@ impl Deriver<'_> {
         }
     }
 
-    /// The number of modules one step makes of `src`, without keeping them: runs of modules
-    /// without rules are counted, not copied, and the successors of rules are written to a
-    /// small scratch string only, their conditions and parameters evaluated in order as
-    /// [`Deriver::step`] evaluates them (the same random draws, the same errors, the same
-    /// module cap).
-    pub(super) fn count<H: Host>(
-        &self,
-        src: &ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-    ) -> Result<u64, H::Error> {
-        let matches = self.bracket_matches(src);
-        let mut scratch = Scratch::default();
-        let mut successors = ModuleString::new();
-        self.count_after(src, &matches, 0, host, opts, &mut scratch, &mut successors)
-    }
-
-    /// [`Deriver::count`] of the whole of `src`, a piece of a step of which `before` modules
-    /// were produced earlier (for the module cap); `matches` as [`Deriver::context_table`]
-    /// gives them, `scratch` and `successors` reused buffers. Returns the modules made of
-    /// `src`.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn count_after<H: Host>(
-        &self,
-        src: &ModuleString,
-        matches: &[u32],
-        before: u64,
-        host: &mut H,
-        opts: &StepOptions,
-        scratch: &mut Scratch,
-        successors: &mut ModuleString,
-    ) -> Result<u64, H::Error> {
-        let max = (opts.max_modules as u64).saturating_sub(before);
-        let mut total = 0u64;
-        let n = src.len();
-        let mut i = 0;
-        let mut next_check = 0;
-        while i < n {
-            if i >= next_check {
-                host.check()?;
-                next_check = (i | 0xFFFF) + 1;
-            }
-            let mut bulk = false;
-            match self.tables.dispatch.get(src.sym(i).index()) {
-                Some(Dispatch::Plain { len, .. }) => {
-                    total += u64::from(*len);
-                    i += 1;
-                }
-                Some(Dispatch::Direct { rule }) => {
-                    total += self.count_direct(*rule as usize, src, i, host)?;
-                    i += 1;
-                }
-                Some(Dispatch::Rules { start, len }) => {
-                    if successors.len() > 4096 {
-                        successors.clear();
-                    }
-                    let mark = successors.len();
-                    let list = &self.tables.rule_lists[*start as usize..(*start + *len) as usize];
-                    let applied = self.apply_rules(
-                        list,
-                        src,
-                        matches,
-                        i,
-                        successors,
-                        host,
-                        &mut scratch.matched,
-                        &mut scratch.gathered,
-                    )?;
-                    total += if applied {
-                        (successors.len() - mark) as u64
-                    } else {
-                        1
-                    };
-                    i += 1;
-                }
-                _ => {
-                    let mut j = i + 1;
-                    let stop = n.min(next_check);
-                    while j < stop
-                        && matches!(
-                            self.tables.dispatch.get(src.sym(j).index()),
-                            None | Some(Dispatch::Copy)
-                        )
-                    {
-                        j += 1;
-                    }
-                    total += (j - i) as u64;
-                    bulk = true;
-                    i = j;
-                }
-            }
-            if total > max {
-                // A run stops where a module-by-module copy would have.
-                let count = if bulk { total.min(max + 1) } else { total };
-                return Err(self.too_many(opts, before + count).into());
-            }
-        }
-        Ok(total)
-    }
-
-    /// The number of modules one step of a plain system makes of `src` (see
-    /// [`Deriver::plain_fast_path`]), failing over the module cap.
-    pub(super) fn plain_count(
-        &self,
-        src: &ModuleString,
-        opts: &StepOptions,
-    ) -> Result<u64, LsError> {
-        let mut total = 0u64;
-        for &s in src.raw_syms() {
-            total += match self.tables.dispatch.get(s as usize) {
-                Some(Dispatch::Plain { len, .. }) => u64::from(*len),
-                _ => 1,
-            };
-        }
-        if total > opts.max_modules as u64 {
-            return Err(self.too_many(opts, total));
-        }
-        Ok(total)
-    }
-
     /// Whether a step of `src` copies fixed strings of symbols only (no parameters, no
     /// conditions, no contexts, no streaming interpretation).
     pub(super) fn plain_fast_path(&self, src: &ModuleString, opts: &StepOptions) -> bool {
@@ -359,7 +239,7 @@ impl Deriver<'_> {
     /// What context matching reads during a step: the right neighbours of the modules for
     /// [`Deriver::step_fixed`] (when a rule has a right context), the bracket pairs for the
     /// general path (when a rule has a context).
-    fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Context {
+    pub(super) fn context_table(&self, src: &ModuleString, opts: &StepOptions) -> Context {
         match &self.tables.fixed {
             Some(fixed) if self.fixed_pass(src, opts) => Context::Rights(if fixed.uses_right {
                 fixed.right_codes(src)
@@ -370,7 +250,7 @@ impl Deriver<'_> {
         }
     }
 
-    fn bracket_matches(&self, src: &ModuleString) -> Vec<u32> {
+    pub(super) fn bracket_matches(&self, src: &ModuleString) -> Vec<u32> {
         if self.tables.uses_context {
             src.bracket_matches()
         } else {
@@ -380,7 +260,7 @@ impl Deriver<'_> {
 
     /// Appends the successors of the parameterless modules `syms` of a plain system.
     #[inline]
-    fn expand_plain(&self, syms: &[u32], out: &mut ModuleString) {
+    pub(super) fn expand_plain(&self, syms: &[u32], out: &mut ModuleString) {
         for &s in syms {
             match self.tables.dispatch.get(s as usize) {
                 Some(Dispatch::Plain { start, len }) => out.extend_plain(
@@ -489,7 +369,7 @@ impl Deriver<'_> {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn apply_rules<H: Host>(
+    pub(super) fn apply_rules<H: Host>(
         &self,
         list: &[u32],
         src: &ModuleString,
@@ -616,7 +496,7 @@ impl Deriver<'_> {
     /// The parameters rule `r` (without contexts) reads from module `i`, and whether its
     /// condition holds for them.
     #[inline]
-    fn direct_params<'s, H: Host>(
+    pub(super) fn direct_params<'s, H: Host>(
         &self,
         r: usize,
         condition: Option<u32>,
@@ -677,38 +557,8 @@ impl Deriver<'_> {
         Ok(true)
     }
 
-    /// The number of modules [`Deriver::apply_direct`] would append, its parameters evaluated
-    /// (the same random draws and errors) but not kept.
-    #[inline]
-    fn count_direct<H: Host>(
-        &self,
-        r: usize,
-        src: &ModuleString,
-        i: usize,
-        host: &mut H,
-    ) -> Result<u64, H::Error> {
-        let CKind::Classic {
-            condition,
-            successor,
-            ..
-        } = &self.tables.rules[r].kind
-        else {
-            return Ok(1);
-        };
-        let Some(params) = self.direct_params(r, *condition, src, i, host)? else {
-            return Ok(1);
-        };
-        for a in &self.args[successor.arg_range()] {
-            let v = a.eval(params, self.globals, &mut || host.random());
-            if !v.is_finite() {
-                return Err(self.not_finite(r, v).into());
-            }
-        }
-        Ok(successor.syms.len() as u64)
-    }
-
     #[cold]
-    fn not_finite(&self, r: usize, v: f64) -> LsError {
+    pub(super) fn not_finite(&self, r: usize, v: f64) -> LsError {
         let def = &self.defs[r];
         LsError::Rule {
             origin: def.origin,
@@ -745,7 +595,7 @@ impl Deriver<'_> {
     }
 
     #[inline]
-    fn check_arity(
+    pub(super) fn check_arity(
         &self,
         def: &RuleDef,
         src: &ModuleString,

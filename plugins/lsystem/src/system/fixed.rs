@@ -313,7 +313,7 @@ impl Deriver<'_> {
 
 #[cfg(test)]
 mod tests {
-    use crate::{ModuleString, NativeHost, StepOptions, SymbolTable, System};
+    use crate::{DeriveOptions, ModuleString, NativeHost, Output, SymbolTable, System};
     use rand_mt::Mt;
 
     /// One step of `text` by `rules` (with `ignore` ignored), and the modules produced.
@@ -326,19 +326,19 @@ mod tests {
                 .add_production(r, None, 0, &mut symbols)
                 .expect("rule");
         }
-        system.prepare(&symbols).expect("prepare");
+        let prepared = system.prepare(&symbols).expect("prepare");
         let src = system
             .parse_string(text, &mut symbols, &mut || 0.0)
             .expect("string");
         let mut out = ModuleString::new();
-        let opts = StepOptions {
-            step: 1,
-            max_modules: 1_000_000,
-            stream: false,
-        };
         let mut rng = Mt::new(1);
-        system
-            .step(&src, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+        prepared
+            .derive(
+                &src,
+                &DeriveOptions::new(1, 1, 1_000_000),
+                &mut NativeHost { rng: &mut rng },
+                Output::Keep(&mut out),
+            )
             .expect("step");
         out.to_text(&symbols, "")
     }

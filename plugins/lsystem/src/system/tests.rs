@@ -10,7 +10,7 @@ mod counting;
 
 struct Run {
     symbols: SymbolTable,
-    system: System,
+    prepared: Prepared,
     string: ModuleString,
     rng: Mt,
     steps: u32,
@@ -31,13 +31,13 @@ impl Run {
                 .add_production(r, None, 0, &mut symbols)
                 .expect("rule parses");
         }
-        system.prepare(&symbols).expect("compiles");
+        let prepared = system.prepare(&symbols).expect("compiles");
         let string = system
             .parse_string(axiom, &mut symbols, &mut || 0.0)
             .expect("axiom");
         Run {
             symbols,
-            system,
+            prepared,
             string,
             rng: Mt::new(7),
             steps: 0,
@@ -48,16 +48,11 @@ impl Run {
     fn step(&mut self) -> Result<(), LsError> {
         self.steps += 1;
         let mut next = ModuleString::new();
-        let opts = StepOptions {
-            step: self.steps,
-            max_modules: self.max,
-            stream: false,
-        };
-        self.system.step(
+        self.prepared.derive(
             &self.string,
-            &mut next,
+            &DeriveOptions::new(self.steps, 1, self.max),
             &mut NativeHost { rng: &mut self.rng },
-            &opts,
+            Output::Keep(&mut next),
         )?;
         self.string = next;
         Ok(())
@@ -364,19 +359,19 @@ fn stochastic_choice_is_weighted_and_deterministic_per_seed() {
         system
             .add_production(rules[1], Some(1.0), 0, &mut symbols)
             .expect("ok");
-        system.prepare(&symbols).expect("ok");
+        let prepared = system.prepare(&symbols).expect("ok");
         let axiom = system
             .parse_string(&"A".repeat(4000), &mut symbols, &mut || 0.0)
             .expect("ok");
         let mut out = ModuleString::new();
         let mut rng = Mt::new(seed);
-        let opts = StepOptions {
-            step: 1,
-            max_modules: 100_000,
-            stream: false,
-        };
-        system
-            .step(&axiom, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+        prepared
+            .derive(
+                &axiom,
+                &DeriveOptions::new(1, 1, 100_000),
+                &mut NativeHost { rng: &mut rng },
+                Output::Keep(&mut out),
+            )
             .expect("ok");
         out.to_text(&symbols, "")
     };
@@ -420,36 +415,34 @@ fn growth_past_max_modules_fails_before_allocating() {
     );
 }
 
-/// One step of `r` delivered in pieces of `chunk` source modules, joined.
-fn chunked(r: &Run, chunk: usize, max: usize) -> Result<(ModuleString, u64), LsError> {
+/// `steps` steps of `r` under the cap `max` delivered in pieces, joined, with the number of
+/// pieces; and counted, with the same result.
+fn in_pieces(r: &Run, steps: u32, max: usize) -> Result<(ModuleString, u64, usize), LsError> {
     let mut joined = ModuleString::new();
-    let mut buf = ModuleString::new();
-    let mut rng = r.rng.clone();
-    let opts = StepOptions {
-        step: r.steps + 1,
-        max_modules: max,
-        stream: false,
-    };
-    let n = r.system.step_chunks(
+    let mut pieces = 0;
+    let opts = DeriveOptions::new(r.steps + 1, steps, max);
+    let n = r.prepared.derive(
         &r.string,
-        &mut buf,
-        &mut NativeHost { rng: &mut rng },
         &opts,
-        chunk,
-        &mut |piece| {
-            joined.append(piece);
-            Ok(())
-        },
-    )?;
-    let counted = r.system.step_count(
-        &r.string,
         &mut NativeHost {
             rng: &mut r.rng.clone(),
         },
+        Output::Pieces(&mut |piece| {
+            joined.append(piece);
+            pieces += 1;
+            Ok(())
+        }),
+    );
+    let counted = r.prepared.derive(
+        &r.string,
         &opts,
-    )?;
+        &mut NativeHost {
+            rng: &mut r.rng.clone(),
+        },
+        Output::Count,
+    );
     assert_eq!(counted, n);
-    Ok((joined, n))
+    Ok((joined, n?, pieces))
 }
 
 #[test]
@@ -485,28 +478,31 @@ fn a_step_in_pieces_joins_to_the_whole_step() {
         let mut whole = Run {
             string: r.string.clone(),
             symbols: r.symbols.clone(),
-            system: r.system.clone(),
+            prepared: r.prepared.clone(),
             rng: r.rng.clone(),
             steps: r.steps,
             max: r.max,
         };
-        whole.step().expect("derives");
-        for chunk in [1, 3, 1000] {
-            let (joined, n) = chunked(&r, chunk, r.max).expect("derives");
-            assert_eq!(
-                n as usize,
-                whole.string.len(),
-                "{axiom} in pieces of {chunk}"
+        let mut lengths = Vec::new();
+        for steps in 1..=3 {
+            whole.step().expect("derives");
+            lengths.push(whole.string.len());
+            let (joined, n, pieces) = in_pieces(&r, steps, r.max).expect("derives");
+            assert_eq!(n as usize, whole.string.len(), "{axiom}, {steps} steps");
+            assert_eq!(joined, whole.string, "{axiom}, {steps} steps");
+            if whole.string.len() > 100_000 {
+                assert!(pieces > 1, "{axiom}, {steps} steps: never whole");
+            }
+            // The cap holds for each whole step, not for each piece: the first step longer
+            // than it fails.
+            let max = whole.string.len() - 1;
+            let fails = r.steps + 1 + lengths.iter().position(|&n| n > max).unwrap_or(0) as u32;
+            let err = in_pieces(&r, steps, max).expect_err("over the cap");
+            assert!(
+                matches!(err, LsError::TooManyModules { step, .. } if step == fails),
+                "{axiom}, {steps} steps: {err:?}"
             );
-            assert_eq!(joined, whole.string, "{axiom} in pieces of {chunk}");
         }
-        // The cap holds for the whole step, not for each piece.
-        let max = whole.string.len() - 1;
-        let err = chunked(&r, 2, max).expect_err("over the cap");
-        assert!(
-            matches!(err, LsError::TooManyModules { step: 5, .. }),
-            "{err:?}"
-        );
     }
 }
 
@@ -529,19 +525,20 @@ fn bad_rules_name_themselves() {
     let mut s = System::new();
     s.add_production("A(x, y) -> B(x)", None, 0, &mut symbols)
         .expect("parses");
-    s.prepare(&symbols).expect("ok");
+    let p = s.prepare(&symbols).expect("ok");
     let axiom = s
         .parse_string("A(1)", &mut symbols, &mut || 0.0)
         .expect("ok");
     let mut out = ModuleString::new();
     let mut rng = Mt::new(1);
-    let opts = StepOptions {
-        step: 1,
-        max_modules: 100,
-        stream: false,
-    };
-    let e = s
-        .step(&axiom, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+    let opts = DeriveOptions::new(1, 1, 100);
+    let e = p
+        .derive(
+            &axiom,
+            &opts,
+            &mut NativeHost { rng: &mut rng },
+            Output::Keep(&mut out),
+        )
         .expect_err("arity");
     assert_eq!(
         e.to_string(),
@@ -550,12 +547,17 @@ fn bad_rules_name_themselves() {
     let mut s = System::new();
     s.add_production("A(x) -> B(1/x)", None, 0, &mut symbols)
         .expect("parses");
-    s.prepare(&symbols).expect("ok");
+    let p = s.prepare(&symbols).expect("ok");
     let axiom = s
         .parse_string("A(0)", &mut symbols, &mut || 0.0)
         .expect("ok");
-    let e = s
-        .step(&axiom, &mut out, &mut NativeHost { rng: &mut rng }, &opts)
+    let e = p
+        .derive(
+            &axiom,
+            &opts,
+            &mut NativeHost { rng: &mut rng },
+            Output::Keep(&mut out),
+        )
         .expect_err("inf");
     assert!(e.to_string().ends_with("evaluated to inf"), "{e}");
 }
@@ -599,7 +601,7 @@ fn external_rules_fall_through_on_nil_and_stream_interpretation() {
     let mut s = System::new();
     s.add_external("A", 0, 0, &mut symbols).expect("ok");
     s.add_external("A > B", 1, 0, &mut symbols).expect("ok");
-    s.prepare(&symbols).expect("ok");
+    let p = s.prepare(&symbols).expect("ok");
     let axiom = s
         .parse_string("AAB", &mut symbols, &mut || 0.0)
         .expect("ok");
@@ -609,12 +611,12 @@ fn external_rules_fall_through_on_nil_and_stream_interpretation() {
         calls: Vec::new(),
         interpreted: Vec::new(),
     };
-    let opts = StepOptions {
-        step: 1,
-        max_modules: 100,
-        stream: true,
+    let opts = DeriveOptions {
+        interpret: true,
+        ..DeriveOptions::new(1, 1, 100)
     };
-    s.step(&axiom, &mut out, &mut host, &opts).expect("ok");
+    p.derive(&axiom, &opts, &mut host, Output::Keep(&mut out))
+        .expect("ok");
     // Rule 0 declines both A; rule 1 applies to the A before B only.
     assert_eq!(
         host.calls,

@@ -1,33 +1,30 @@
-//! Tests of steps counted without being kept, and of two steps taken depth first, against
-//! the same steps taken whole.
+//! Tests of steps counted without being kept, and of steps taken depth first, against the
+//! same steps taken whole one after the other.
 
 use super::*;
 
 /// One step of `r` under the cap `max`, whole and counted: the module count or the error.
 fn whole_and_counted(r: &Run, max: usize) -> (Result<usize, LsError>, Result<u64, LsError>) {
-    let opts = StepOptions {
-        step: r.steps + 1,
-        max_modules: max,
-        stream: false,
-    };
+    let opts = DeriveOptions::new(r.steps + 1, 1, max);
     let mut out = ModuleString::new();
     let whole = r
-        .system
-        .step(
+        .prepared
+        .derive(
             &r.string,
-            &mut out,
+            &opts,
             &mut NativeHost {
                 rng: &mut r.rng.clone(),
             },
-            &opts,
+            Output::Keep(&mut out),
         )
-        .map(|()| out.len());
-    let counted = r.system.step_count(
+        .map(|_| out.len());
+    let counted = r.prepared.derive(
         &r.string,
+        &opts,
         &mut NativeHost {
             rng: &mut r.rng.clone(),
         },
-        &opts,
+        Output::Count,
     );
     (whole, counted)
 }
@@ -99,35 +96,33 @@ fn a_counted_step_has_the_length_and_the_errors_of_the_step() {
     assert_eq!(failed, ["A(1)", "A(1) F A(1,2)"]);
 }
 
-/// Two steps of `r` under the cap `max`, one after the other: the lengths and the second
-/// string, or the first error.
-fn two_whole_steps(r: &Run, max: usize) -> Result<(u64, u64, ModuleString), LsError> {
+/// `n` steps of `r` under the cap `max`, one after the other: the lengths of their strings
+/// and the last string, or the first error.
+fn whole_steps(r: &Run, n: u32, max: usize) -> Result<(Vec<u64>, ModuleString), LsError> {
     let mut rng = r.rng.clone();
-    let mut strings = [r.string.clone(), ModuleString::new(), ModuleString::new()];
-    for k in 0..2 {
-        let opts = StepOptions {
-            step: r.steps + 1 + k as u32,
-            max_modules: max,
-            stream: false,
-        };
-        let (done, rest) = strings.split_at_mut(k + 1);
-        r.system.step(
-            &done[k],
-            &mut rest[0],
+    let mut string = r.string.clone();
+    let mut next = ModuleString::new();
+    let mut lengths = Vec::new();
+    for k in 0..n {
+        r.prepared.derive(
+            &string,
+            &DeriveOptions::new(r.steps + 1 + k, 1, max),
             &mut NativeHost { rng: &mut rng },
-            &opts,
+            Output::Keep(&mut next),
         )?;
+        std::mem::swap(&mut string, &mut next);
+        lengths.push(string.len() as u64);
     }
-    let [_, a, b] = strings;
-    Ok((a.len() as u64, b.len() as u64, b))
+    Ok((lengths, string))
 }
 
 #[test]
-fn two_steps_depth_first_equal_two_steps_one_after_the_other() {
-    // The first step fails in a later piece than the second: the first step's error.
+fn steps_in_pieces_equal_steps_one_after_the_other() {
+    // A later step fails in an earlier piece than an earlier step's own failure: the
+    // earlier step's error.
     let late = format!("B(1e200){}A(1e300)", " F".repeat(5000));
     // (axiom, rules, taken depth first)
-    let cases: [(&str, &[&str], bool); 9] = [
+    let cases: [(&str, &[&str], bool); 10] = [
         (
             &late,
             &[
@@ -145,10 +140,13 @@ fn two_steps_depth_first_equal_two_steps_one_after_the_other() {
             ],
             true,
         ),
-        ("X", &["X -> F[+X]F[-X]+X", "F -> FF"], false),
+        // Fixed strings: counted a symbol at a time, written depth first.
+        ("X", &["X -> F[+X]F[-X]+X", "F -> FF"], true),
         ("X", &["X -> F[+X]F[-X]+X", "F -> FF", "F -> G"], true),
-        // Overflow: the error of the step in which it happens, even when the second step of
-        // a pair overflows in an earlier piece than the first step's own failure.
+        // Fixed strings that shrink, and a symbol whose successor is empty.
+        ("AB", &["A -> ABA", "B -> C", "C -> "], true),
+        // Overflow: the error of the step in which it happens, even when a later step
+        // overflows in an earlier piece than the earlier step's own failure.
         (
             "A(1)",
             &["A(x) -> A(x*1e100) F B(x)", "B(x) -> B(x) C(x*1e150)"],
@@ -170,75 +168,55 @@ fn two_steps_depth_first_equal_two_steps_one_after_the_other() {
     let mut failures = 0;
     for (axiom, rules, depth_first) in cases {
         let mut r = Run::new(axiom, rules);
+        assert_eq!(r.prepared.derives_in_pieces(), depth_first, "{axiom}");
         for _ in 0..5 {
-            let first = StepOptions {
-                step: r.steps + 1,
-                max_modules: r.max,
-                stream: false,
-            };
-            let second = StepOptions {
-                step: r.steps + 2,
-                ..first
-            };
-            assert_eq!(
-                r.system.two_steps_depth_first(&first, &second),
-                depth_first,
-                "{axiom}"
-            );
-            let whole = two_whole_steps(&r, r.max);
-            let (n1, n2) = match &whole {
-                Ok((n1, n2, _)) => (*n1 as usize, *n2 as usize),
-                Err(_) => (1, 1),
-            };
-            failures += usize::from(whole.is_err());
-            for max in [r.max, n2, n2 - 1, n2 / 2, n1, n1 - 1, n1 / 2, 0] {
-                let want = two_whole_steps(&r, max).map(|(a, b, _)| (a, b));
-                let first = StepOptions {
-                    max_modules: max,
-                    ..first
+            for n in 1..=4 {
+                let whole = whole_steps(&r, n, r.max);
+                let lengths = match &whole {
+                    Ok((lengths, _)) => lengths.clone(),
+                    Err(_) => vec![1; n as usize],
                 };
-                let second = StepOptions {
-                    max_modules: max,
-                    ..second
-                };
-                let mut rng = r.rng.clone();
-                let got = r.system.count_two_steps(
-                    &r.string,
-                    &mut NativeHost { rng: &mut rng },
-                    &first,
-                    &second,
-                );
-                assert_eq!(
-                    got,
-                    want,
-                    "{} after {} steps under {max}",
-                    axiom.chars().take(8).collect::<String>(),
-                    r.steps
-                );
-            }
-            if let Ok((_, n2, string)) = &whole {
-                for chunk in [1, 5, 100_000] {
+                failures += usize::from(whole.is_err());
+                let mut caps = vec![r.max as u64, 0];
+                for &len in &lengths {
+                    caps.extend([len, len.saturating_sub(1), len / 2]);
+                }
+                for max in caps {
+                    let max = max as usize;
+                    let want = whole_steps(&r, n, max).map(|(l, _)| l[l.len() - 1]);
+                    let opts = DeriveOptions::new(r.steps + 1, n, max);
+                    let got = r.prepared.derive(
+                        &r.string,
+                        &opts,
+                        &mut NativeHost {
+                            rng: &mut r.rng.clone(),
+                        },
+                        Output::Count,
+                    );
+                    let what = format!(
+                        "{}, {n} steps after {} under {max}",
+                        axiom.chars().take(8).collect::<String>(),
+                        r.steps
+                    );
+                    assert_eq!(got, want, "counted: {what}");
                     let mut joined = ModuleString::new();
-                    let mut buf = ModuleString::new();
-                    let n = r
-                        .system
-                        .step_chunks_two(
-                            &r.string,
-                            &mut buf,
-                            &mut NativeHost {
-                                rng: &mut r.rng.clone(),
-                            },
-                            &first,
-                            &second,
-                            chunk,
-                            &mut |piece| {
-                                joined.append(piece);
-                                Ok(())
-                            },
-                        )
-                        .expect("derives");
-                    assert_eq!(n, *n2);
-                    assert_eq!(&joined, string, "{axiom} in pieces of {chunk}");
+                    let got = r.prepared.derive(
+                        &r.string,
+                        &opts,
+                        &mut NativeHost {
+                            rng: &mut r.rng.clone(),
+                        },
+                        Output::Pieces(&mut |piece| {
+                            joined.append(piece);
+                            Ok(())
+                        }),
+                    );
+                    assert_eq!(got, want, "in pieces: {what}");
+                    if let (Ok(_), Ok((_, string))) = (&got, &whole)
+                        && max == r.max
+                    {
+                        assert_eq!(&joined, string, "in pieces: {what}");
+                    }
                 }
             }
             if r.step().is_err() {
