@@ -18,6 +18,12 @@ use std::path::{Path, PathBuf};
 
 pub use pge_engine;
 
+pub mod embed;
+
+pub use embed::{
+    Error, ErrorKind, Generation, Request, Script, Tile, VERSION, generate, params, tiles,
+};
+
 /// The file that marks a folder as PGE's script library (the repository's `scripts/`).
 pub const LIBRARY_MARKER: &str = ".pge-library";
 
