@@ -174,6 +174,7 @@ impl Request {
         Ok(Grown {
             models: Models::One(Box::new(model)),
             meta,
+            files: session.loaded_files(),
         })
     }
 
@@ -247,6 +248,7 @@ impl Request {
         Ok(Grown {
             meta: export_meta(self.seed, &session.declared_params()),
             models: Models::Stages(models),
+            files: session.loaded_files(),
         })
     }
 }
@@ -258,6 +260,9 @@ pub struct Grown {
     pub models: Models,
     /// What the glb records: the seed and the parameters' values.
     pub meta: ExportMeta,
+    /// Every file the run read (the script, the modules it required, meshes, textures): a
+    /// host that regenerates on save watches them.
+    pub files: Vec<PathBuf>,
 }
 
 /// The model of a run, or of each of its stages.
@@ -377,6 +382,8 @@ pub struct Generation {
     pub stats: Value,
     /// The run's warnings, `FILE:LINE: warning: ...` (those `pge run` prints on stderr).
     pub warnings: Vec<String>,
+    /// Every file the run read ([`Grown::files`]).
+    pub files: Vec<PathBuf>,
 }
 
 /// Generates `request`'s model: the glb bytes `pge run` writes for the same arguments
@@ -394,6 +401,7 @@ pub fn generate(request: &Request) -> Result<Generation, Error> {
             glb,
             stats: grown.stats(t0.elapsed().as_secs_f64()),
             warnings: grown.warnings(),
+            files: std::mem::take(&mut grown.files),
         })
     };
     match request.threads {

@@ -66,7 +66,16 @@ fn a_script_given_as_text_is_the_file_it_names() {
         text: std::fs::read_to_string(root().join(script)).expect("script"),
     });
     request.steps = Some(3);
-    assert!(pge::generate(&request).expect("generates").glb == bytes);
+    let generation = pge::generate(&request).expect("generates");
+    assert!(generation.glb == bytes);
+    // What a host watches to regenerate on save: the script and the module it requires.
+    let names: Vec<_> = generation
+        .files
+        .iter()
+        .filter_map(|f| f.file_name())
+        .collect();
+    assert!(names.contains(&"spiral.lua".as_ref()), "{names:?}");
+    assert!(names.contains(&"box.lua".as_ref()), "{names:?}");
 }
 
 #[test]

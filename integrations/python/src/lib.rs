@@ -176,7 +176,7 @@ fn detached<T: Send>(
     outcome.map_err(pyo3::exceptions::PyRuntimeError::new_err)
 }
 
-/// `pge._pge.generate`: (glb bytes, stats as JSON text, warnings).
+/// `pge._pge.generate`: (glb bytes, stats as JSON text, warnings, files read).
 #[pyfunction]
 #[pyo3(signature = (script=None, *, source=None, name=None, params=None, seed=None, steps=None,
     stages=None, threads=None, time_limit=None, memory_limit=None))]
@@ -193,7 +193,12 @@ fn generate<'py>(
     threads: Option<&Bound<'py, PyAny>>,
     time_limit: Option<&Bound<'py, PyAny>>,
     memory_limit: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Bound<'py, PyBytes>, String, Vec<String>)> {
+) -> PyResult<(
+    Bound<'py, PyBytes>,
+    String,
+    Vec<String>,
+    Vec<std::path::PathBuf>,
+)> {
     let mut request = request(script, source, name, params)?;
     let some = |v: Option<&Bound<'py, PyAny>>| v.filter(|v| !v.is_none()).cloned();
     if let Some(seed) = some(seed) {
@@ -237,6 +242,7 @@ fn generate<'py>(
         PyBytes::new(py, &generation.glb),
         generation.stats.to_string(),
         generation.warnings,
+        generation.files,
     ))
 }
 
@@ -304,10 +310,17 @@ fn tiles<'py>(
     Ok(out)
 }
 
+/// `pge._pge.library`: the script library's folder as `pge run` finds it, or `None`.
+#[pyfunction]
+fn library() -> Option<std::path::PathBuf> {
+    pge::library_folder()
+}
+
 /// The native module.
 #[pymodule]
 fn _pge(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("version", pge::VERSION)?;
+    m.add_function(wrap_pyfunction!(library, m)?)?;
     m.add_function(wrap_pyfunction!(generate, m)?)?;
     m.add_function(wrap_pyfunction!(params, m)?)?;
     m.add_function(wrap_pyfunction!(tiles, m)?)?;

@@ -70,6 +70,9 @@ def test_params_seed_and_steps_are_pge_runs_flags(tmp_path: Path) -> None:
     assert result.glb == glb
     other = pge.generate("scripts/examples/spiral.lua", params={"count": 12}, seed=3)
     assert other.glb != glb
+    # The files to watch: the script and the module it requires.
+    assert {Path(f).name for f in result.files} >= {"spiral.lua", "box.lua"}
+    assert pge.library() == str(ROOT / "scripts")
 
 
 def test_stages_are_scenes_of_one_glb(tmp_path: Path) -> None:

@@ -29,6 +29,7 @@ __all__ = [
     "ScriptError",
     "TimeLimit",
     "generate",
+    "library",
     "params",
     "tiles",
     "version",
@@ -79,15 +80,19 @@ class Result:
 
     ``glb``: the ``.glb`` file (bytes), exactly what ``pge run`` writes for the same
     arguments; ``stats``: what ``pge run --stats`` prints (a dict, without ``output``);
-    ``warnings``: the run's warnings (``FILE:LINE: warning: ...``).
+    ``warnings``: the run's warnings (``FILE:LINE: warning: ...``); ``files``: every file
+    the run read (the script, the modules it required, meshes, textures), to watch.
     """
 
-    __slots__ = ("glb", "stats", "warnings")
+    __slots__ = ("files", "glb", "stats", "warnings")
 
-    def __init__(self, glb: bytes, stats: dict[str, Any], warnings: list[str]):
+    def __init__(
+        self, glb: bytes, stats: dict[str, Any], warnings: list[str], files: list[str]
+    ):
         self.glb = glb
         self.stats = stats
         self.warnings = warnings
+        self.files = files
 
     def __repr__(self) -> str:
         return (
@@ -123,7 +128,7 @@ def generate(
     :class:`InstructionLimit`) for a failing script, ``TypeError``/``ValueError`` for bad
     arguments, ``KeyboardInterrupt`` when interrupted.
     """
-    glb, stats, warnings = _pge.generate(
+    glb, stats, warnings, files = _pge.generate(
         script,
         source=source,
         name=name,
@@ -135,7 +140,13 @@ def generate(
         time_limit=time_limit,
         memory_limit=memory_limit,
     )
-    return Result(glb, json.loads(stats), warnings)
+    return Result(glb, json.loads(stats), warnings, [str(f) for f in files])
+
+
+def library() -> Optional[str]:
+    """The script library's folder as ``pge run`` finds it (see the module's doc), or None."""
+    found = _pge.library()
+    return None if found is None else str(found)
 
 
 def params(
