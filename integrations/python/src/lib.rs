@@ -176,6 +176,15 @@ fn detached<T: Send>(
     outcome.map_err(pyo3::exceptions::PyRuntimeError::new_err)
 }
 
+/// What `pge._pge.generate` returns: the glb, the stats as JSON text, the warnings and the
+/// files the run read.
+type Generated<'py> = (
+    Bound<'py, PyBytes>,
+    String,
+    Vec<String>,
+    Vec<std::path::PathBuf>,
+);
+
 /// `pge._pge.generate`: (glb bytes, stats as JSON text, warnings, files read).
 #[pyfunction]
 #[pyo3(signature = (script=None, *, source=None, name=None, params=None, seed=None, steps=None,
@@ -193,12 +202,7 @@ fn generate<'py>(
     threads: Option<&Bound<'py, PyAny>>,
     time_limit: Option<&Bound<'py, PyAny>>,
     memory_limit: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(
-    Bound<'py, PyBytes>,
-    String,
-    Vec<String>,
-    Vec<std::path::PathBuf>,
-)> {
+) -> PyResult<Generated<'py>> {
     let mut request = request(script, source, name, params)?;
     let some = |v: Option<&Bound<'py, PyAny>>| v.filter(|v| !v.is_none()).cloned();
     if let Some(seed) = some(seed) {
