@@ -86,6 +86,9 @@ pub struct Request {
     pub memory_limit_mib: usize,
     /// Set from another thread to stop the run ([`ErrorKind::Cancelled`]).
     pub cancel: Option<Arc<AtomicBool>>,
+    /// The script library's folder; `None`: found as `pge run` finds it
+    /// ([`crate::library_folder`]).
+    pub library: Option<PathBuf>,
 }
 
 impl Request {
@@ -102,6 +105,7 @@ impl Request {
             time_limit: Duration::from_secs(300),
             memory_limit_mib: 4096,
             cancel: None,
+            library: None,
         }
     }
 
@@ -132,10 +136,14 @@ impl Request {
             .memory_limit_mib(self.memory_limit_mib)
     }
 
-    /// The engine of [`crate::default_engine`] with this request's limits.
+    /// The engine of [`crate::default_engine`] with this request's limits and library.
     pub fn engine(&self) -> Result<Engine, Error> {
         self.check()?;
-        Ok(self.limits(crate::default_engine()).build()?)
+        let mut builder = self.limits(crate::default_engine());
+        if let Some(folder) = &self.library {
+            builder = builder.library(folder);
+        }
+        Ok(builder.build()?)
     }
 
     /// A session of `engine` for this request (seed, parameters, steps, cancel flag; the
