@@ -62,10 +62,20 @@ impl ScriptArgs {
 
     /// `builder` with these limits (`--time-limit`, `--memory-limit`).
     pub fn limits(&self, builder: EngineBuilder) -> EngineBuilder {
+        self.request(None).limits(builder)
+    }
+
+    /// The library's request for these arguments and `steps` (`--steps`); the threads are
+    /// the global pool's, set by the command.
+    pub fn request(&self, steps: Option<u32>) -> pge::Request {
+        let mut request = pge::Request::new(pge::Script::File(self.script.clone()));
+        request.params = self.set.clone();
+        request.seed = self.seed;
+        request.steps = steps;
         // `--time-limit` is checked positive and finite when the arguments are parsed.
-        builder
-            .time_limit(Some(Duration::from_secs_f64(self.time_limit)))
-            .memory_limit_mib(self.memory_limit)
+        request.time_limit = Duration::from_secs_f64(self.time_limit);
+        request.memory_limit_mib = self.memory_limit;
+        request
     }
 
     /// Session options for these arguments.

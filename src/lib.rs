@@ -1,6 +1,10 @@
 //! PGE, the procedural generation engine: this package is the `pge` command and the
 //! batteries-included engine.
 //!
+//! [`generate`] is the one call a host makes: a script and `pge run`'s arguments in
+//! ([`Request`]), the glb bytes `pge run` writes, its `--stats` and warnings out, errors
+//! typed with their file and line ([`Error`]). Below it:
+//!
 //! [`default_engine`] returns an [`EngineBuilder`](pge_engine::EngineBuilder) with every
 //! plugin of the project and the script library, so a host application generates a model
 //! in a few lines:
@@ -17,6 +21,12 @@
 use std::path::{Path, PathBuf};
 
 pub use pge_engine;
+
+pub mod embed;
+
+pub use embed::{
+    Error, ErrorKind, Generation, Request, Script, Tile, VERSION, generate, params, tiles,
+};
 
 /// The file that marks a folder as PGE's script library (the repository's `scripts/`).
 pub const LIBRARY_MARKER: &str = ".pge-library";

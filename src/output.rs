@@ -5,21 +5,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use pge_engine::ParamInfo;
+pub use pge::embed::export_meta;
 use pge_engine::export::{ExportMeta, Instancing, obj_files, write_glb_with};
 use pge_engine::geometry::Model;
-
-/// The metadata a `.glb` records: the seed and the parameters' values, in order.
-#[must_use]
-pub fn export_meta(seed: u64, params: &[ParamInfo]) -> ExportMeta {
-    ExportMeta {
-        seed,
-        params: params
-            .iter()
-            .map(|p| (p.name.clone(), p.value.to_json()))
-            .collect(),
-    }
-}
 
 /// Writes `bytes` to `path` atomically, as [`write_atomically_with`] does.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {

@@ -234,9 +234,8 @@ fn run_one(
     t0: Instant,
 ) -> anyhow::Result<()> {
     let Target { tile, output } = target;
-    let session = engine.session(args.script.session_options(args.steps))?;
     // Files a script writes (`img:save`) go beside the output.
-    session.set_output_folder(output.parent().unwrap_or(std::path::Path::new("")))?;
+    let folder = output.parent().unwrap_or(std::path::Path::new(""));
     let bar = progress_bar(args.quiet);
     if let Some(bar) = &bar {
         bar.set_message(args.script.script.display().to_string());
@@ -250,46 +249,51 @@ fn run_one(
         }
     };
     let script = &args.script.script;
-    let generated = grow(&session, script, product, *tile, &mut progress);
+    let grown = match (product, tile) {
+        // The single model: the library's entry point, which hosts call too.
+        (Product::Model, None) => args
+            .script
+            .request(args.steps)
+            .grow_model(engine, Some(folder), &mut progress)
+            .map_err(anyhow::Error::from),
+        _ => (|| {
+            let session = engine.session(args.script.session_options(args.steps))?;
+            session.set_output_folder(folder)?;
+            let generated = grow(&session, script, product, *tile, &mut progress)?;
+            let meta = export_meta(args.script.seed, &generated.params);
+            Ok((generated.model, meta))
+        })(),
+    };
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let mut generated = generated?;
-    for w in &generated.model.stats.warnings {
+    let (mut model, meta) = grown?;
+    for w in &model.stats.warnings {
         eprintln!("{w}");
     }
     let te = Instant::now();
-    let meta = export_meta(args.script.seed, &generated.params);
     let instancing = args.instancing.into();
     let mut summary = None;
     let written = match product {
         Product::SharedVariants(dir) => {
             let info = crate::shared::identity(script, &meta)?;
-            crate::shared::write_variants(dir, &generated.model, info)?;
-            summary = Some(crate::shared::summary(&generated.model));
+            crate::shared::write_variants(dir, &model, info)?;
+            summary = Some(crate::shared::summary(&model));
             dir.join(crate::shared::DESCRIPTION)
         }
         Product::Referring { dir, shared } => {
             let uri = crate::shared::relative_uri(dir, output)?;
-            let bytes = pge_engine::export::glb_bytes_shared(
-                &generated.model,
-                &meta,
-                instancing,
-                shared,
-                &uri,
-            )?;
+            let bytes =
+                pge_engine::export::glb_bytes_shared(&model, &meta, instancing, shared, &uri)?;
             crate::output::write_atomically(output, &bytes)?;
             output.clone()
         }
         Product::Model => {
-            write_model(&generated.model, &meta, output, instancing)?;
+            write_model(&model, &meta, output, instancing)?;
             output.clone()
         }
     };
-    generated
-        .model
-        .stats
-        .add_phase("export", te.elapsed().as_secs_f64());
+    model.stats.add_phase("export", te.elapsed().as_secs_f64());
     if let Some(summary) = &summary
         && !args.quiet
         && !args.stats
@@ -306,7 +310,7 @@ fn run_one(
             _ => None,
         };
         let report = Report {
-            model: &generated.model,
+            model: &model,
             seconds,
             output: &written,
             tile: *tile,

@@ -289,19 +289,45 @@ impl Session {
                 "cannot read script: not a file",
             ));
         }
+        self.run_main(shown, canonical, None)
+    }
+
+    /// Runs `source` as the main script, as [`Session::run_script`] runs a file: `name` is
+    /// the file it is shown as in errors (`name:LINE: message`), and the folder of `name`
+    /// (relative to the current folder), when it exists, is the script's folder for
+    /// `require` and `pge.load`; otherwise the script reads only the library. For a host
+    /// that holds a script's text (an editor's unsaved buffer).
+    pub fn run_source(&self, name: &str, source: &str) -> Result<Value> {
+        let shown = name.replace('\\', "/");
+        let file = Path::new(name).file_name().unwrap_or_default();
+        let dir = match Path::new(name).parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let canonical = match dir.canonicalize() {
+            Ok(dir) if dir.is_dir() => dir.join(file),
+            _ => PathBuf::from(file),
+        };
+        self.run_main(shown, canonical, Some(source.to_string()))
+    }
+
+    /// Runs the main script `canonical` (its text `source`, or the file's), shown as `shown`.
+    fn run_main(&self, shown: String, canonical: PathBuf, source: Option<String>) -> Result<Value> {
         *self.script.borrow_mut() = Some(shown.clone());
         if let Some(mut st) = self.lua.app_data_mut::<SessionState>() {
-            let dir = canonical
-                .parent()
-                .map(Path::to_path_buf)
-                .unwrap_or_default();
-            st.roots.insert(0, dir.clone());
-            st.main_dir = Some(dir);
+            let dir = canonical.parent().map(Path::to_path_buf);
+            if let Some(dir) = dir.filter(|d| d.is_absolute()) {
+                st.roots.insert(0, dir.clone());
+                st.main_dir = Some(dir);
+            }
         }
         params::begin_main(&self.lua, &shown, &self.overrides);
         self.start_clock();
-        let value = crate::lua::sandbox_exec(&self.lua, shown, canonical)
-            .map_err(|e| to_engine_error(&self.lua, e))?;
+        let value = match source {
+            Some(text) => crate::lua::sandbox_exec_source(&self.lua, shown, canonical, text),
+            None => crate::lua::sandbox_exec(&self.lua, shown, canonical),
+        }
+        .map_err(|e| to_engine_error(&self.lua, e))?;
         params::end_main(&self.lua)
             .map_err(|(location, message)| Error::script(location, message))?;
         Ok(value)
@@ -339,6 +365,19 @@ impl Session {
         Ok(Started {
             session: self,
             path: path.to_path_buf(),
+            value,
+            t0,
+            script_seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// [`Session::start`] for a main script given as text ([`Session::run_source`]).
+    pub fn start_source(&self, name: &str, source: &str) -> Result<Started<'_>> {
+        let t0 = Instant::now();
+        let value = self.run_source(name, source)?;
+        Ok(Started {
+            session: self,
+            path: PathBuf::from(name),
             value,
             t0,
             script_seconds: t0.elapsed().as_secs_f64(),

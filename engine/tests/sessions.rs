@@ -120,3 +120,39 @@ fn sandbox_has_no_files_or_binary_chunks() {
     let err = session.eval::<mlua::Value>("return load(string.dump(function() end))()");
     assert!(err.is_err(), "binary chunks are refused");
 }
+
+#[test]
+fn a_script_given_as_text_reads_the_folder_of_its_name_and_is_named_in_errors() {
+    let engine = Engine::builder().build().expect("engine");
+    let session = engine
+        .session(SessionOptions {
+            params: vec![("n".into(), "4".into())],
+            ..Default::default()
+        })
+        .expect("session");
+    // The text of main.lua, as an editor holds it: it requires its sibling modules.
+    let name = script("unsaved.lua");
+    let text = std::fs::read_to_string(script("main.lua")).expect("main.lua");
+    let value = session
+        .run_source(&name.to_string_lossy(), &text)
+        .expect("runs");
+    let t = value.as_table().expect("a table");
+    assert_eq!(t.get::<i64>("child").expect("child"), 12);
+    assert_eq!(session.declared_params()[0].name, "n");
+
+    let session = engine.session(SessionOptions::default()).expect("session");
+    let err = session
+        .run_source("nowhere/tree.lua", "local x = 1\nerror('no tree')")
+        .expect_err("fails");
+    assert_eq!(
+        err.location().map(ToString::to_string).as_deref(),
+        Some("nowhere/tree.lua:2")
+    );
+    assert!(err.to_string().ends_with("no tree"), "{err}");
+    // With no folder, a module beside the name is out of reach.
+    let session = engine.session(SessionOptions::default()).expect("session");
+    let err = session
+        .run_source("nowhere/tree.lua", "return require('sub.child')")
+        .expect_err("no folder");
+    assert!(err.to_string().starts_with("nowhere/tree.lua:1: "), "{err}");
+}

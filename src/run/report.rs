@@ -26,31 +26,18 @@ impl Report<'_> {
     /// The object printed.
     pub(super) fn json(self) -> Value {
         let m = self.model;
-        let phases: serde_json::Map<String, Value> = m
-            .stats
-            .phases
-            .iter()
-            .map(|(k, v)| (k.clone(), (*v).into()))
-            .collect();
         // A tile that refers to shared variants counts what their instances draw and stand
         // for, as its glb's extras.pge.stats do, and names them.
         let (referred, [sv, st, sn, sl]) = match self.shared {
             Some(shared) => crate::shared::referred(m, shared),
             None => (Vec::new(), [0; 4]),
         };
-        let mut stats = serde_json::json!({
-            "vertices": m.vertex_count() as u64 + sv,
-            "triangles": m.triangle_count() as u64 + st,
-            "nodes": m.stats.nodes + sn,
-            "leaves": m.stats.leaves + sl,
-            "modules": m.stats.modules,
-            "meshes": m.meshes.len(),
-            "instances": m.forest.as_ref().map_or(m.instances.len() as u64, |f| f.instances),
-            "seconds": self.seconds,
-            "phases": phases,
-            "warnings": m.stats.warnings,
-            "output": self.output.display().to_string(),
-        });
+        let mut stats = pge::embed::model_stats(m, self.seconds);
+        stats["vertices"] = (m.vertex_count() as u64 + sv).into();
+        stats["triangles"] = (m.triangle_count() as u64 + st).into();
+        stats["nodes"] = (m.stats.nodes + sn).into();
+        stats["leaves"] = (m.stats.leaves + sl).into();
+        stats["output"] = self.output.display().to_string().into();
         if let Some((i, j)) = self.tile {
             stats["tile"] = serde_json::json!([i, j]);
         }

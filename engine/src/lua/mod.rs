@@ -34,6 +34,7 @@ pub use options::{Bounds, KeyStyle, Options};
 pub use order::{key_order, sorted_keys, sorted_pairs};
 pub use random::{LuaRng, current_uniform, swap_rng};
 pub(crate) use sandbox::exec_file as sandbox_exec;
+pub(crate) use sandbox::exec_source as sandbox_exec_source;
 pub use sandbox::{resolve_path, writable_path, write_inside};
 pub use services::{
     DefaultInterpreter, InstanceFactory, ModelMaker, ReadOnlyPhase, check_mutable,

@@ -106,6 +106,17 @@ pub(crate) fn exec_file(lua: &Lua, display: String, path: PathBuf) -> mlua::Resu
             format!("cannot read script: {e}"),
         ))
     })?;
+    exec_source(lua, display, path, source)
+}
+
+/// Runs `source` as the chunk of the file `path` (which need not exist: a script held by a
+/// host), named after its shown path; records it for reload.
+pub(crate) fn exec_source(
+    lua: &Lua,
+    display: String,
+    path: PathBuf,
+    source: String,
+) -> mlua::Result<Value> {
     // Like `lua script.lua`, a first line starting with '#' (a shebang) is skipped.
     let source = if source.starts_with('#') {
         source
