@@ -83,6 +83,14 @@ impl SharedVariants {
         if root.buffer_views.iter().any(|v| v.buffer.value() != 0) {
             return Err(bad("a buffer view of another buffer"));
         }
+        // The importer's checks, as for any glTF PGE reads: indices in range (the gltf
+        // crate's own validation would panic on some), every accessor inside its view with a
+        // stride that holds its element, every view inside the binary file's recorded length.
+        let document = crate::import::open(text)
+            .map_err(|e| bad(&e.to_string()))?
+            .document;
+        let length = usize::try_from(bin_bytes).map_err(|_| bad("its buffer is too long"))?;
+        crate::import::check_layout(&document, &[length]).map_err(|e| bad(&e.to_string()))?;
         let mut groups = Vec::new();
         for g in info
             .get("groups")
