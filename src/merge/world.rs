@@ -16,8 +16,6 @@ use pge_engine::import::{
 };
 use serde_json::{Map, Value};
 
-use super::normal_path;
-
 /// The model being merged.
 #[derive(Default)]
 pub(super) struct World {
@@ -37,14 +35,16 @@ pub(super) struct World {
 }
 
 impl World {
-    /// Adds the terrain patch and the placements of one tile's glb (in `folder`, against
-    /// which the URIs of its external buffers resolve).
+    /// Adds the terrain patch and the placements of one tile's glb (the file `tile`, against
+    /// whose folder the URIs of its external buffers resolve, read by `reader`).
     pub(super) fn add_tile(
         &mut self,
         bytes: &[u8],
         index: (u64, u64),
-        folder: &Path,
+        reader: &mut super::Files,
+        tile: &Path,
     ) -> anyhow::Result<()> {
+        let folder = tile.parent().unwrap_or(Path::new("."));
         let gltf = open(bytes).context("not a readable .glb")?;
         let blob = gltf.blob.as_deref();
         // Buffer 0 is the binary chunk; the others are files beside the tile.
@@ -53,18 +53,22 @@ impl World {
             let gltf::buffer::Source::Uri(uri) = buffer.source() else {
                 bail!("buffer {} has no URI", buffer.index());
             };
-            let path = normal_path(&folder.join(relative_file(uri)?))?;
-            let data = match self.external.get(&path) {
+            let named = folder.join(relative_file(uri)?);
+            let resolved = std::fs::canonicalize(&named).ok();
+            let data = match resolved.as_ref().and_then(|p| self.external.get(p)) {
                 Some(d) => d.clone(),
                 None => {
-                    let d = std::fs::read(&path).with_context(|| {
-                        format!("cannot read {} (buffer {})", path.display(), buffer.index())
-                    })?;
+                    let (_, d) = reader
+                        .read(&named)
+                        .with_context(|| format!("buffer {} ('{uri}')", buffer.index()))?;
                     let d = Arc::new(d);
-                    self.external.insert(path.clone(), d.clone());
+                    if let Some(p) = &resolved {
+                        self.external.insert(p.clone(), d.clone());
+                    }
                     d
                 }
             };
+            let path = resolved.unwrap_or(named);
             files.push(Some((path, data)));
         }
         let data: Vec<Option<&[u8]>> = files
