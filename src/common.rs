@@ -100,6 +100,25 @@ macro_rules! usage {
 }
 pub(crate) use usage;
 
+/// Writes `text` and a newline to stdout, an error when it cannot (a closed pipe, as in
+/// `pge tiles ... | head`: [`is_closed_stdout`] tells `main` to exit quietly then).
+pub fn print_line(text: impl std::fmt::Display) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{text}")?;
+    out.flush()?;
+    Ok(())
+}
+
+/// Whether `e` comes from writing to a stdout whose reader has gone (`EPIPE`): the reader
+/// took what it wanted, so the command stops without a message.
+pub fn is_closed_stdout(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
 /// One line for the terminal: script errors are already `FILE:LINE: message`.
 pub fn describe_error(e: &anyhow::Error) -> String {
     let mut s = e.to_string();

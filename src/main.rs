@@ -54,6 +54,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if common::is_closed_stdout(&e) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<common::Usage>().is_some() => {
             eprintln!("error: {e}");
             ExitCode::from(2)

@@ -295,7 +295,7 @@ fn run_one(
         && !args.stats
     {
         for line in crate::shared::summary_lines(summary) {
-            println!("{line}");
+            crate::common::print_line(line)?;
         }
     }
     if args.stats {
@@ -313,7 +313,7 @@ fn run_one(
             shared,
             summary,
         };
-        println!("{}", report.json());
+        crate::common::print_line(report.json())?;
     }
     Ok(())
 }

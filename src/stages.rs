@@ -132,7 +132,7 @@ pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Resu
             "stages": list,
             "output": output.display().to_string(),
         });
-        println!("{stats}");
+        crate::common::print_line(stats)?;
     }
     Ok(())
 }
