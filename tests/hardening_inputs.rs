@@ -1,0 +1,388 @@
+//! Hostile and careless inputs to the commands that read files PGE wrote (tiles, shared
+//! variants, world directories) and to their outputs: each is a one-line error with exit 1
+//! and nothing written, never a panic, a hang or a read outside the world directory.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use common::{pge, pge_ok, ray_forest as forest};
+use serde_json::{Value, json};
+
+fn s(p: &Path) -> String {
+    p.to_string_lossy().to_string()
+}
+
+fn sha256(path: &Path) -> String {
+    use sha2::Digest;
+    let bytes = std::fs::read(path).expect("read");
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Checks a failed command: exit 1, one line holding every needle, no panic.
+fn one_line_error(o: &Output, needles: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "exit code: {err}");
+    assert!(!err.contains("panicked"), "a panic: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "'{n}' not in: {err}");
+    }
+    err
+}
+
+/// A glb's JSON chunk changed by `edit`, written back with the same binary chunk.
+fn edit_glb(path: &Path, edit: impl FnOnce(&mut Value)) {
+    let bytes = std::fs::read(path).expect("read");
+    let glb = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+    let mut json: Value = serde_json::from_slice(&glb.json).expect("json");
+    edit(&mut json);
+    let text = serde_json::to_vec(&json).expect("json");
+    let out = gltf::binary::Glb {
+        header: glb.header,
+        json: text.into(),
+        bin: glb.bin.clone(),
+    };
+    std::fs::write(path, out.to_vec().expect("glb")).expect("write");
+}
+
+/// A JSON file changed by `edit`.
+fn edit_json(path: &Path, edit: impl FnOnce(&mut Value)) {
+    let mut json: Value =
+        serde_json::from_slice(&std::fs::read(path).expect("read")).expect("json");
+    edit(&mut json);
+    std::fs::write(path, json.to_string()).expect("write");
+}
+
+/// The ways a glTF is tampered with: a `byteStride` smaller than the element, and an
+/// attribute naming an accessor that does not exist.
+fn tampered() -> [(&'static str, fn(&mut Value)); 2] {
+    [
+        ("byteStride", |j: &mut Value| {
+            j["bufferViews"][0]["byteStride"] = json!(4);
+        }),
+        ("accessor 999", |j: &mut Value| {
+            j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(999);
+        }),
+    ]
+}
+
+#[test]
+fn a_tampered_shared_variants_description_is_an_error_not_a_tile() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (needle, tamper) in tampered() {
+        let v = dir.path().join(needle.replace(' ', "_"));
+        pge_ok(&["run", &forest(), "--variants-out", &s(&v), "-q"]);
+        edit_json(&v.join("variants.json"), tamper);
+        let out = v.join("tile.glb");
+        let o = pge(&[
+            "run",
+            &forest(),
+            "--tile",
+            "0,0",
+            "--variants",
+            &s(&v),
+            "-o",
+            &s(&out),
+            "-q",
+        ]);
+        one_line_error(&o, &["variants.json", needle]);
+        assert!(!out.exists(), "a tile was written on tampered variants");
+    }
+}
+
+#[test]
+fn a_mesh_shape_from_a_tampered_gltf_is_a_located_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tile = dir.path().join("tile.glb");
+    pge_ok(&["run", &forest(), "--tile", "0,0", "-o", &s(&tile), "-q"]);
+    for (needle, tamper) in tampered() {
+        let path = dir.path().join("shape.glb");
+        std::fs::copy(&tile, &path).expect("copy");
+        edit_glb(&path, tamper);
+        std::fs::write(
+            dir.path().join("main.lua"),
+            "local s = pge.shape.mesh{path = \"shape.glb\"}\nreturn pge.Lines()\n",
+        )
+        .expect("script");
+        let o = common::pge_in(&["run", "main.lua", "-o", "out.glb", "-q"], dir.path());
+        let err = one_line_error(&o, &[needle]);
+        assert!(err.starts_with("main.lua:1: "), "{err}");
+    }
+}
+
+/// A world directory of the test forest's tiles `tiles` (standalone, or referring to the
+/// world's shared variants when `shared`), with its manifest.
+fn world(dir: &Path, tiles: &[(u64, u64)], shared: bool) {
+    std::fs::create_dir_all(dir.join("tiles")).expect("tiles folder");
+    if shared {
+        pge_ok(&["run", &forest(), "--variants-out", &s(dir), "-q"]);
+    }
+    let script = forest();
+    for &(i, j) in tiles {
+        let out = dir.join(format!("tiles/{i}_{j}.glb"));
+        let tile = format!("{i},{j}");
+        let (d, o) = (s(dir), s(&out));
+        let mut args = vec!["run", &script, "--tile", &tile, "-o", &o, "-q"];
+        if shared {
+            args.extend_from_slice(&["--variants", &d]);
+        }
+        pge_ok(&args);
+    }
+    write_manifest(dir, tiles, shared);
+}
+
+/// The manifest of `dir` for tiles `tiles/I_J.glb` as they are now.
+fn write_manifest(dir: &Path, tiles: &[(u64, u64)], shared: bool) {
+    let entries: Vec<Value> = tiles
+        .iter()
+        .map(|&(i, j)| {
+            let file = format!("tiles/{i}_{j}.glb");
+            json!({"i": i, "j": j, "file": file, "sha256": sha256(&dir.join(&file))})
+        })
+        .collect();
+    let mut manifest = json!({"format": "pge-world/1", "seed": 1, "params": {},
+        "complete": true, "tiles": entries});
+    if shared {
+        manifest["variants"] = json!({"file": "variants.bin",
+            "sha256": sha256(&dir.join("variants.bin")), "description": "variants.json"});
+    }
+    std::fs::write(dir.join("world.json"), manifest.to_string()).expect("manifest");
+}
+
+fn merge(dir: &Path, extra: &[&str]) -> (Output, PathBuf) {
+    let out = dir.parent().expect("parent").join("merged.glb");
+    let _ = std::fs::remove_file(&out);
+    let (d, o) = (s(dir), s(&out));
+    let mut args = vec!["merge", &d, "-o", &o];
+    args.extend_from_slice(extra);
+    (pge(&args), out)
+}
+
+fn merge_fails(dir: &Path, extra: &[&str], needles: &[&str]) {
+    let (o, out) = merge(dir, extra);
+    one_line_error(&o, needles);
+    assert!(!out.exists(), "merge wrote {}", out.display());
+}
+
+#[test]
+fn merge_reads_nothing_outside_the_world_directory() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let w = dir.path().join("world");
+    world(&w, &[(0, 0)], true);
+    assert!(merge(&w, &[]).0.status.success());
+
+    // A manifest entry leading out: by `..`, by an absolute path, by a link in the folder.
+    std::fs::copy(w.join("tiles/0_0.glb"), dir.path().join("outside.glb")).expect("copy");
+    let tile = |file: &str, sha: &str| {
+        edit_json(&w.join("world.json"), |m| {
+            m["tiles"][0]["file"] = json!(file);
+            m["tiles"][0]["sha256"] = json!(sha);
+        });
+    };
+    let sha = sha256(&w.join("tiles/0_0.glb"));
+    tile("../outside.glb", &sha);
+    merge_fails(
+        &w,
+        &[],
+        &["outside.glb", "leads outside the world directory"],
+    );
+    tile("/dev/zero", &sha);
+    merge_fails(&w, &[], &["/dev/zero", "leads outside the world directory"]);
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("/dev/zero", w.join("tiles/zero.glb")).expect("link");
+        tile("tiles/zero.glb", &sha);
+        merge_fails(&w, &[], &["zero.glb", "leads outside the world directory"]);
+        std::fs::remove_file(w.join("tiles/zero.glb")).expect("unlink");
+        // A FIFO inside the folder is not read (a read would wait forever).
+        let fifo = w.join("tiles/fifo.glb");
+        assert!(
+            std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .expect("mkfifo")
+                .success()
+        );
+        tile("tiles/fifo.glb", &sha);
+        merge_fails(&w, &[], &["fifo.glb", "not a regular file"]);
+    }
+    tile("tiles/0_0.glb", &sha);
+    assert!(merge(&w, &[]).0.status.success());
+
+    // A tile's buffer URI: percent-encoded to an absolute path, or `..` out of the world.
+    std::fs::copy(w.join("variants.bin"), dir.path().join("variants.bin")).expect("copy");
+    for (uri, needle) in [
+        ("%2Fdev%2Fzero", "is not a relative file"),
+        (
+            "..%2F..%2Fvariants.bin",
+            "leads outside the world directory",
+        ),
+        ("../../variants.bin", "leads outside the world directory"),
+    ] {
+        let path = w.join("tiles/0_0.glb");
+        let kept = std::fs::read(&path).expect("tile");
+        edit_glb(&path, |j| j["buffers"][1]["uri"] = json!(uri));
+        write_manifest(&w, &[(0, 0)], true);
+        merge_fails(&w, &[], &["0_0.glb", needle]);
+        std::fs::write(&path, kept).expect("restore");
+    }
+}
+
+#[test]
+fn merge_of_tampered_tiles_is_an_error_not_a_panic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let w = dir.path().join("world");
+    world(&w, &[(0, 0)], false);
+    let path = w.join("tiles/0_0.glb");
+    let kept = std::fs::read(&path).expect("tile");
+    for (needle, tamper) in tampered() {
+        edit_glb(&path, tamper);
+        write_manifest(&w, &[(0, 0)], false);
+        merge_fails(&w, &[], &["0_0.glb", needle]);
+        std::fs::write(&path, &kept).expect("restore");
+    }
+}
+
+#[test]
+fn merge_refuses_a_tile_listed_twice_and_keeps_to_its_limits() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let w = dir.path().join("world");
+    world(&w, &[(0, 0), (1, 0), (2, 0)], false);
+    let (o, _) = merge(&w, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The files weigh more than 1 MiB: the memory limit is met on the way, nothing written.
+    let bytes: u64 = (0..3)
+        .map(|i| {
+            std::fs::metadata(w.join(format!("tiles/{i}_0.glb")))
+                .expect("tile")
+                .len()
+        })
+        .sum();
+    assert!(bytes > 1 << 20, "{bytes} bytes");
+    merge_fails(&w, &["--memory-limit", "1"], &["memory limit of 1 MiB"]);
+    merge_fails(&w, &["--time-limit", "0.000000001"], &["time limit"]);
+    let (o, _) = merge(&w, &["--memory-limit", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+
+    edit_json(&w.join("world.json"), |m| {
+        let first = m["tiles"][0].clone();
+        m["tiles"].as_array_mut().expect("tiles").push(first);
+    });
+    merge_fails(&w, &[], &["tile 0,0 is listed twice"]);
+}
+
+/// Runs `pge run main.lua -o out.glb -q` plus `extra` in a folder holding `files` (name,
+/// text); checks a one-line error at `main.lua:LINE:` (or at `at` when given) holding every
+/// needle, no model written. Returns the line.
+fn script_fails(files: &[(&str, &str)], extra: &[&str], at: &str, needles: &[&str]) -> String {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).expect("script");
+    }
+    let mut args = vec!["run", "main.lua", "-o", "out.glb", "-q"];
+    args.extend_from_slice(extra);
+    let o = common::pge_in(&args, dir.path());
+    let err = one_line_error(&o, needles);
+    assert!(err.starts_with(at), "expected '{at}...', got: {err}");
+    assert!(!dir.path().join("out.glb").exists(), "a model was written");
+    err
+}
+
+const BUSH: &str = "pge.SpaceColonization{envelope = pge.shape.sphere{center = {0, 0.5, 0}, \
+                    radius = 0.4}, points = 10, roots = {{0, 0, 0}}}";
+
+#[test]
+fn a_density_or_species_function_calling_its_own_forest_is_a_located_error() {
+    // forest:instances lays out the forest, calling the density function, which changes it.
+    let script = format!(
+        "local f = pge.Forest{{size = {{20, 20}}, seed = 1}}\n\
+         f:scatter{{species = function() return {BUSH} end, minDistance = 4,\n\
+           density = function(x, z)\n\
+             f:terrain{{height = 1}}\n\
+             return 1\n\
+           end}}\n\
+         local list = f:instances()\n\
+         return f\n"
+    );
+    script_fails(
+        &[("main.lua", &script)],
+        &[],
+        "main.lua:4: ",
+        &["forest:terrain", "busy"],
+    );
+    // Reading it meanwhile is fine: forest:height from the density function.
+    let reading = script.replace("f:terrain{height = 1}", "local h = f:height(x, z)");
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("main.lua"), reading).expect("script");
+    let o = common::pge_in(&["run", "main.lua", "-o", "out.glb", "-q"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn a_forest_that_is_its_own_species_is_a_located_error() {
+    // A species function returning the forest.
+    script_fails(
+        &[(
+            "main.lua",
+            "local f = pge.Forest{size = {20, 20}, seed = 1}\n\
+             f:scatter{species = function() return f end, minDistance = 4}\n\
+             return f\n",
+        )],
+        &[],
+        "main.lua:2: ",
+        &["deeper than the limit of 8"],
+    );
+    // A species script that is the forest's own script.
+    script_fails(
+        &[(
+            "main.lua",
+            "local f = pge.Forest{size = {20, 20}, seed = 1}\n\
+             f:scatter{species = \"main.lua\", minDistance = 4}\n\
+             return f\n",
+        )],
+        &[],
+        "main.lua:2: forest:scatter: species 'main.lua' failed: main.lua: it grows the forest",
+        &["a forest cannot be its own species"],
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    use std::process::{Command, Stdio};
+    // The reader closes the pipe before pge writes: `pge tiles ... | head -c 0`.
+    for args in [
+        vec!["tiles".to_string(), forest()],
+        vec![
+            "run".into(),
+            forest(),
+            "--tile".into(),
+            "0,0".into(),
+            "-o".into(),
+            "-".into(),
+        ],
+    ] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut args = args;
+        if let Some(o) = args.iter().position(|a| a == "-") {
+            args[o] = s(&dir.path().join("t.glb"));
+            args.push("--stats".into());
+        }
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pge"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("pge runs");
+        drop(child.stdout.take());
+        let o = child.wait_with_output().expect("pge ends");
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
