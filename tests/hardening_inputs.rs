@@ -386,3 +386,35 @@ fn a_closed_stdout_ends_the_command_quietly() {
         assert!(err.is_empty(), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn img_save_in_a_species_script_writes_beside_the_output() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::create_dir_all(dir.path().join("lib")).expect("lib");
+    std::fs::create_dir_all(dir.path().join("out")).expect("out");
+    std::fs::write(
+        dir.path().join("lib/bush.lua"),
+        format!("pge.Image.new(2, 2):save(\"bark.png\")\nreturn {BUSH}\n"),
+    )
+    .expect("species");
+    std::fs::write(
+        dir.path().join("main.lua"),
+        "local f = pge.Forest{size = {10, 10}, seed = 1}\n\
+         f:scatter{species = \"lib/bush.lua\", minDistance = 4, variants = 1}\n\
+         return f\n",
+    )
+    .expect("script");
+    let o = common::pge_in(
+        &["run", "main.lua", "-o", "out/forest.glb", "-q"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        dir.path().join("out/bark.png").is_file(),
+        "not beside the output"
+    );
+    assert!(
+        !dir.path().join("lib/bark.png").exists(),
+        "written beside the species"
+    );
+}

@@ -33,6 +33,9 @@ pub struct SessionGrower {
     engine: Engine,
     /// The species scripts whose sessions this grower's forest runs inside, outermost first.
     within: Vec<PathBuf>,
+    /// The folder the forest's session writes into: its species' sessions write there too
+    /// (`img:save` of a library species goes beside the output, not into the library).
+    output: Option<PathBuf>,
 }
 
 /// How deep forests may grow inside species (a forest whose species is a forest...): past
@@ -51,6 +54,7 @@ impl SessionGrower {
         SessionGrower {
             engine,
             within: Vec::new(),
+            output: None,
         }
     }
 
@@ -61,7 +65,11 @@ impl SessionGrower {
             Some(w) => w.0.clone(),
             None => pge_engine::lua::main_script(lua).into_iter().collect(),
         };
-        SessionGrower { engine, within }
+        SessionGrower {
+            engine,
+            within,
+            output: pge_engine::lua::write_folder(lua),
+        }
     }
 }
 
@@ -93,6 +101,9 @@ impl SpeciesGrower for SessionGrower {
             steps: None,
             cancel: ctx.cancel.clone(),
         })?;
+        if let Some(output) = &self.output {
+            session.set_output_folder(output)?;
+        }
         let mut within = self.within.clone();
         within.push(path);
         session.lua().set_app_data(Within(within));
