@@ -65,7 +65,7 @@ pub struct RunArgs {
     /// Write the variants of the forest's layers of a few variants once, into
     /// DIR/variants.bin and its glTF description DIR/variants.json, for tiles that refer to
     /// them (--variants DIR); no trees are placed.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["tile", "variants", "stages", "output"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["tile", "variants", "stages", "steps", "output"])]
     pub variants_out: Option<PathBuf>,
     /// Refer to the variants written by --variants-out DIR instead of growing them: the glb
     /// holds the terrain and the trees' placements, its variant meshes are in DIR/variants.bin

@@ -133,7 +133,7 @@ pub fn referred(model: &Model, shared: &SharedVariants) -> (Vec<Value>, [u64; 4]
         let n = group.transforms.len() as u64;
         let per = [g.vertices, g.triangles, g.nodes, g.leaves];
         for (s, p) in sum.iter_mut().zip(per) {
-            *s += n * p;
+            *s = s.saturating_add(n.saturating_mul(p));
         }
         list.push(serde_json::json!({
             "name": group.name,

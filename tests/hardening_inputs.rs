@@ -418,3 +418,43 @@ fn img_save_in_a_species_script_writes_beside_the_output() {
         "written beside the species"
     );
 }
+
+#[test]
+fn variants_out_refuses_steps_and_tampered_counts_are_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let v = dir.path().join("v");
+    let o = pge(&["run", &forest(), "--variants-out", &s(&v), "--steps", "1"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!v.exists(), "--variants-out --steps wrote variants");
+
+    pge_ok(&["run", &forest(), "--variants-out", &s(&v), "-q"]);
+    let tile = dir.path().join("tile.glb");
+    let args = [
+        "run",
+        &forest(),
+        "--tile",
+        "0,0",
+        "--variants",
+        &s(&v),
+        "-o",
+        &s(&tile),
+        "--stats",
+    ]
+    .map(str::to_string);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    edit_json(&v.join("variants.json"), |j| {
+        for g in j["extras"]["pge"]["variants"]["groups"]
+            .as_array_mut()
+            .expect("groups")
+        {
+            g["nodes"] = json!(u64::MAX / 2);
+        }
+    });
+    one_line_error(&pge(&args), &["variants.json", "nodes", "2^32"]);
+    assert!(!tile.exists());
+}

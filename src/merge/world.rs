@@ -222,9 +222,10 @@ impl World {
     fn add_extras(&mut self, json: &Value, (i, j): (u64, u64)) -> anyhow::Result<()> {
         let pge = json.pointer("/extras/pge").cloned().unwrap_or(Value::Null);
         let count = |p: &str| pge.pointer(p).and_then(Value::as_u64).unwrap_or(0);
-        self.model.stats.nodes += count("/stats/nodes");
-        self.model.stats.leaves += count("/stats/leaves");
-        self.model.stats.modules += count("/stats/modules");
+        let stats = &mut self.model.stats;
+        stats.nodes = stats.nodes.saturating_add(count("/stats/nodes"));
+        stats.leaves = stats.leaves.saturating_add(count("/stats/leaves"));
+        stats.modules = stats.modules.saturating_add(count("/stats/modules"));
         self.tiles.push([i, j]);
         let Some(value) = pge.get("forest") else {
             return Ok(());

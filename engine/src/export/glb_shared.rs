@@ -97,10 +97,12 @@ impl SharedVariants {
             .and_then(JsonValue::as_array)
             .ok_or_else(|| bad("no groups"))?
         {
+            // What one instance draws and stands for: at most what a glTF count holds.
             let number = |k: &str| {
                 g.get(k)
                     .and_then(JsonValue::as_u64)
-                    .ok_or_else(|| bad(&format!("a group without {k}")))
+                    .filter(|&n| n <= u64::from(u32::MAX))
+                    .ok_or_else(|| bad(&format!("a group without {k} (a count below 2^32)")))
             };
             let mesh = number("mesh")?;
             if mesh >= root.meshes.len() as u64 {
@@ -320,7 +322,7 @@ impl Builder {
                     .iter_mut()
                     .zip([g.vertices, g.triangles, g.nodes, g.leaves])
                 {
-                    *s += n * per;
+                    *s = s.saturating_add(n.saturating_mul(per));
                 }
             }
         }
