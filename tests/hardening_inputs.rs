@@ -458,3 +458,58 @@ fn variants_out_refuses_steps_and_tampered_counts_are_refused() {
     one_line_error(&pge(&args), &["variants.json", "nodes", "2^32"]);
     assert!(!tile.exists());
 }
+
+#[test]
+fn options_that_would_do_nothing_are_errors() {
+    let scatter = |extra: &str| {
+        format!(
+            "local f = pge.Forest{{size = {{20, 20}}, seed = 1}}\n\
+             f:scatter{{species = function() return {BUSH} end, minDistance = 4{extra}}}\n\
+             return f\n"
+        )
+    };
+    script_fails(
+        &[("main.lua", &scatter(", jitter = 0.3"))],
+        &[],
+        "main.lua:2: ",
+        &["jitter", "jittered"],
+    );
+    script_fails(
+        &[("main.lua", &scatter(", method = \"poisson\", jitter = 0.3"))],
+        &[],
+        "main.lua:2: ",
+        &["jitter"],
+    );
+    let dir = tempfile::tempdir().expect("tempdir");
+    image::GrayImage::from_pixel(4, 4, image::Luma([128]))
+        .save(dir.path().join("h.png"))
+        .expect("png");
+    for option in [
+        "scale = 50",
+        "octaves = 3",
+        "lacunarity = 2",
+        "persistence = 0.4",
+    ] {
+        let script = format!(
+            "local f = pge.Forest{{size = {{20, 20}}, seed = 1}}\n\
+             f:terrain{{image = \"h.png\", height = 5, {option}}}\n\
+             return f\n"
+        );
+        std::fs::write(dir.path().join("main.lua"), script).expect("script");
+        let o = common::pge_in(&["run", "main.lua", "-o", "out.glb", "-q"], dir.path());
+        let name = option.split(' ').next().expect("name");
+        let err = one_line_error(&o, &[name, "image"]);
+        assert!(err.starts_with("main.lua:2: forest:terrain"), "{err}");
+    }
+    // Each alone is fine.
+    let script = format!(
+        "local f = pge.Forest{{size = {{20, 20}}, seed = 1}}\n\
+         f:terrain{{image = \"h.png\", height = 5}}\n\
+         f:scatter{{species = function() return {BUSH} end, minDistance = 4, \
+         method = \"jittered\", jitter = 0.3}}\n\
+         return f\n"
+    );
+    std::fs::write(dir.path().join("main.lua"), script).expect("script");
+    let o = common::pge_in(&["run", "main.lua", "-o", "out.glb", "-q"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

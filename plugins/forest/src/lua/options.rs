@@ -177,19 +177,39 @@ pub(super) fn terrain(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
     if let Some(h) = height {
         fbm.height = h;
     }
-    if let Some(s) = o.number("scale", Bounds::Above(0.0))? {
+    let scale = o.number("scale", Bounds::Above(0.0))?;
+    let octaves = o.integer("octaves", 1..=16)?;
+    let lacunarity = o.number("lacunarity", Bounds::Above(0.0))?;
+    let persistence = o.number("persistence", Bounds::Above(0.0))?;
+    let path = o.string("image")?;
+    // The noise's options shape generated terrain only: with an image they would do nothing.
+    if path.is_some() {
+        let noise = [
+            ("scale", scale.is_some()),
+            ("octaves", octaves.is_some()),
+            ("lacunarity", lacunarity.is_some()),
+            ("persistence", persistence.is_some()),
+        ];
+        if let Some((name, _)) = noise.iter().find(|(_, given)| *given) {
+            return Err(o.problem(
+                name,
+                "shapes the generated terrain and does nothing with image (give one or the \
+                 other)",
+            ));
+        }
+    }
+    if let Some(s) = scale {
         fbm.scale = s;
     }
-    if let Some(n) = o.integer("octaves", 1..=16)? {
+    if let Some(n) = octaves {
         fbm.octaves = n as usize;
     }
-    if let Some(x) = o.number("lacunarity", Bounds::Above(0.0))? {
+    if let Some(x) = lacunarity {
         fbm.lacunarity = x;
     }
-    if let Some(x) = o.number("persistence", Bounds::Above(0.0))? {
+    if let Some(x) = persistence {
         fbm.persistence = x;
     }
-    let path = o.string("image")?;
     o.finish()?;
     // The noise crate's lattice index must fit an integer: the finest octave's coordinates
     // (half the world over `scale`, times lacunarity^(octaves-1)) stay within 1e12.
@@ -282,6 +302,12 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
         Some("jittered") => Method::Jittered {
             jitter: jitter.unwrap_or(0.2),
         },
+        _ if jitter.is_some() => {
+            return Err(o.problem(
+                "jitter",
+                "is for method = \"jittered\" only (Poisson disc sampling has no jitter)",
+            ));
+        }
         _ => Method::Poisson,
     };
     let density_need = "a number between 0 and 1, a function(x, z) or a PNG path";
