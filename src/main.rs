@@ -41,6 +41,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    output::remove_on_signals();
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
         #[cfg(feature = "preview")]

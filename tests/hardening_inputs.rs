@@ -513,3 +513,133 @@ fn options_that_would_do_nothing_are_errors() {
     let o = common::pge_in(&["run", "main.lua", "-o", "out.glb", "-q"], dir.path());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// A folder with `main.lua` (`source`) and `out/`.
+fn case(source: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("main.lua"), source).expect("script");
+    std::fs::create_dir(dir.path().join("out")).expect("out");
+    dir
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .expect("folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().to_string())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn an_obj_set_or_a_variants_pair_is_written_whole_or_not_at_all() {
+    // A textured model as .obj: its .mtl cannot take its place (a folder is there), so the
+    // older .obj stays as it was and no texture of the new set is left.
+    let dir = case(
+        "local img = pge.Image.new(2, 2)\n\
+         local m = pge.Lines{width = 0.1}\n\
+         m:add({0, 0, 0}, {0, 1, 0})\n\
+         return img:applyTo(m:model())\n",
+    );
+    std::fs::write(dir.path().join("out/model.obj"), "old").expect("old obj");
+    std::fs::create_dir(dir.path().join("out/model.mtl")).expect("a folder in the way");
+    let o = common::pge_in(
+        &["run", "main.lua", "-o", "out/model.obj", "-q"],
+        dir.path(),
+    );
+    one_line_error(&o, &["model.mtl", "folder"]);
+    let out = dir.path().join("out");
+    assert_eq!(
+        std::fs::read_to_string(out.join("model.obj")).expect("obj"),
+        "old"
+    );
+    assert_eq!(names(&out), ["model.mtl", "model.obj"], "{:?}", names(&out));
+    std::fs::remove_dir(out.join("model.mtl")).expect("rmdir");
+    let o = common::pge_in(
+        &["run", "main.lua", "-o", "out/model.obj", "-q"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        names(&out).iter().any(|n| n.ends_with(".png")),
+        "{:?}",
+        names(&out)
+    );
+
+    // --variants-out: variants.json cannot take its place, variants.bin stays the old one.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let v = dir.path().join("v");
+    std::fs::create_dir_all(v.join("variants.json")).expect("a folder in the way");
+    std::fs::write(v.join("variants.bin"), "old").expect("old bin");
+    let o = pge(&["run", &forest(), "--variants-out", &s(&v), "-q"]);
+    one_line_error(&o, &["variants.json", "folder"]);
+    assert_eq!(std::fs::read(v.join("variants.bin")).expect("bin"), b"old");
+    assert_eq!(names(&v), ["variants.bin", "variants.json"]);
+}
+
+#[test]
+fn temporary_files_of_a_killed_run_are_removed_by_the_next_run_into_the_folder() {
+    let dir = case("local l = pge.LSystem()\nl:axiom(\"F\")\nreturn l\n");
+    let out = dir.path().join("out");
+    // Process ids never go past 2^22 on Linux: this writer is gone. Process 1 runs.
+    for name in [
+        ".pge-tmp-999999999-a1b2c3",
+        ".pge-tmp-1-a1b2c3",
+        ".tmpa1b2c3",
+        "notes.txt",
+    ] {
+        std::fs::write(out.join(name), "x").expect("file");
+    }
+    let o = common::pge_in(
+        &["run", "main.lua", "-o", "out/model.glb", "-q"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let left = names(&out);
+    if Path::new("/proc/self").exists() {
+        assert_eq!(
+            left,
+            [".pge-tmp-1-a1b2c3", ".tmpa1b2c3", "model.glb", "notes.txt"],
+            "only the dead writer's temporary file is removed"
+        );
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_during_the_write_leaves_no_temporary_file() {
+    // Thick lines make a big mesh: the glb takes a while to build, its temporary file open.
+    let dir = case(
+        "local l = pge.Lines{width = 0.01}\n\
+         for i = 1, 300000 do l:add({i, 0, 0}, {i, 1, 0}) end\n\
+         return l\n",
+    );
+    let out = dir.path().join("out");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pge"))
+        .args(["run", "main.lua", "-o", "out/model.glb", "-q"])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("pge runs");
+    let started = std::time::Instant::now();
+    let mut seen = false;
+    while started.elapsed() < std::time::Duration::from_secs(120) {
+        if names(&out).iter().any(|n| n.starts_with(".pge-tmp-")) {
+            seen = true;
+            break;
+        }
+        if child.try_wait().expect("wait").is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    assert!(seen, "the write was never seen in progress");
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let status = child.wait().expect("pge ends");
+    assert_eq!(status.code(), Some(128 + 15), "{status:?}");
+    assert!(names(&out).is_empty(), "left behind: {:?}", names(&out));
+}

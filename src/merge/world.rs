@@ -343,9 +343,14 @@ mod tests {
         let written = json.pointer("/extras/pge/forest").expect("a forest");
         assert_eq!(forest_stats(written), Some(stats));
         let mut world = World::default();
-        let here = Path::new(".");
-        world.add_tile(&bytes, (1, 0), here).expect("reads");
-        world.add_tile(&bytes, (0, 0), here).expect("reads");
+        let here = Path::new("tile.glb");
+        let mut files = super::super::Files::new(Path::new("."), 60.0, 64).expect("files");
+        world
+            .add_tile(&bytes, (1, 0), &mut files, here)
+            .expect("reads");
+        world
+            .add_tile(&bytes, (0, 0), &mut files, here)
+            .expect("reads");
         let merged = world.finish().forest.expect("a forest");
         assert_eq!(merged.instances, 10);
         assert_eq!(merged.species[0].count, 10);
@@ -355,7 +360,7 @@ mod tests {
         bad["extras"]["pge"]["forest"]["species"] = Value::Null;
         let bin = file.bin.expect("bin").to_vec();
         let err = World::default()
-            .add_tile(&glb(&bad, &bin), (2, 3), here)
+            .add_tile(&glb(&bad, &bin), (2, 3), &mut files, here)
             .expect_err("refused");
         assert!(format!("{err:#}").contains("tile 2,3"), "{err:#}");
     }
@@ -367,9 +372,10 @@ mod tests {
         let bytes = pge_engine::export::glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default())
             .expect("glb");
         let mut world = World::default();
-        let here = Path::new(".");
+        let here = Path::new("tile.glb");
+        let mut files = super::super::Files::new(Path::new("."), 60.0, 64).expect("files");
         world
-            .add_tile(&bytes, (0, 0), here)
+            .add_tile(&bytes, (0, 0), &mut files, here)
             .expect("a valid tile reads");
         assert_eq!(world.model.meshes.len(), 1);
 
@@ -390,7 +396,7 @@ mod tests {
             (glb(&sparse, &bin), "sparse"),
         ] {
             let err = World::default()
-                .add_tile(&bad, (0, 0), here)
+                .add_tile(&bad, (0, 0), &mut files, here)
                 .expect_err("refused");
             assert!(format!("{err:#}").contains(needle), "{err:#}");
         }
