@@ -643,3 +643,38 @@ fn sigterm_during_the_write_leaves_no_temporary_file() {
     assert_eq!(status.code(), Some(128 + 15), "{status:?}");
     assert!(names(&out).is_empty(), "left behind: {:?}", names(&out));
 }
+
+#[test]
+fn a_density_function_s_wrong_answers_are_located_at_its_scatter() {
+    for (body, line, needles) in [
+        ("return true", 2, &["density", "returned a boolean"][..]),
+        (
+            "return 5",
+            2,
+            &["forest:scatter: density", "returned 5"][..],
+        ),
+        ("return 0/0", 2, &["forest:scatter: density", "NaN"][..]),
+        (
+            "error({})",
+            2,
+            &["an error raised with a table value, not a message"][..],
+        ),
+        ("error(\"no light\")", 4, &["no light"][..]),
+    ] {
+        let script = format!(
+            "local f = pge.Forest{{size = {{20, 20}}, seed = 1}}\n\
+             f:scatter{{species = function() return {BUSH} end, minDistance = 4,\n\
+               density = function(x, z)\n\
+                 {body}\n\
+               end}}\n\
+             return f\n"
+        );
+        let err = script_fails(
+            &[("main.lua", &script)],
+            &[],
+            &format!("main.lua:{line}: "),
+            needles,
+        );
+        assert!(!err.contains("0x"), "an address: {err}");
+    }
+}

@@ -320,18 +320,29 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
         }
         Value::String(s) => Density::Map(image(lua, &o, "density", &s.to_string_lossy())?),
         Value::Function(f) => {
+            // Every error of the function is placed: its own line when Lua knows it, else
+            // the `forest:scatter` line that gave the function.
             let location = caller_location(lua);
             Density::Function(Rc::new(move |x: f64, z: f64| {
-                f.call::<Value>((x, z))
-                    .and_then(|v| match v {
-                        Value::Integer(i) => Ok(i as f64),
-                        Value::Number(n) => Ok(n),
-                        other => Err(mlua::Error::RuntimeError(format!(
-                            "density function: must return a number between 0 and 1, got {}",
-                            other.type_name()
-                        ))),
-                    })
-                    .map_err(|e| lua_error(&f, &location, e))
+                let wrong = |got: String| {
+                    Error::script(
+                        location.clone(),
+                        format!(
+                            "forest:scatter: density: the function returned {got} at ({x:.2}, \
+                             {z:.2}); it must return a number between 0 and 1"
+                        ),
+                    )
+                };
+                let d = match f.call::<Value>((x, z)) {
+                    Ok(Value::Integer(i)) => i as f64,
+                    Ok(Value::Number(n)) => n,
+                    Ok(other) => return Err(wrong(format!("a {}", other.type_name()))),
+                    Err(e) => return Err(lua_error(&f, &location, e)),
+                };
+                if !(0.0..=1.0).contains(&d) {
+                    return Err(wrong(d.to_string()));
+                }
+                Ok(d)
             }))
         }
         other => return Err(o.wrong_type("density", density_need, &other)),
@@ -370,7 +381,12 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
 /// The error of a call of the script's function `f`, with the script's file and line.
 fn lua_error(f: &Function, location: &Location, e: mlua::Error) -> Error {
     match f.weak_lua().try_upgrade() {
-        Some(lua) => to_engine_error(&lua, e),
+        Some(lua) => match to_engine_error(&lua, e) {
+            // Lua could not say where (an error value that is not a message): the
+            // `forest:scatter` line is.
+            e if e.location().is_some_and(|l| l.file == "?") => e.at(location.clone()),
+            e => e,
+        },
         None => Error::script(location.clone(), e.to_string()),
     }
 }
