@@ -123,8 +123,34 @@ pub fn is_closed_stdout(e: &anyhow::Error) -> bool {
 pub fn describe_error(e: &anyhow::Error) -> String {
     let mut s = e.to_string();
     for cause in e.chain().skip(1) {
-        s.push_str(": ");
-        s.push_str(&cause.to_string());
+        // An error that shows its cause in its own message (`invalid geometry: X`) is not
+        // followed by the cause again.
+        let cause = cause.to_string();
+        if !s.contains(&cause) {
+            s.push_str(": ");
+            s.push_str(&cause);
+        }
     }
     s.replace('\n', " ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cause_already_in_the_message_is_not_repeated() {
+        let io = || std::io::Error::other("uvs[18] is not a finite number");
+        let e =
+            anyhow::Error::new(io()).context("invalid geometry: uvs[18] is not a finite number");
+        assert_eq!(
+            describe_error(&e),
+            "invalid geometry: uvs[18] is not a finite number"
+        );
+        let e = anyhow::Error::new(io()).context("cannot write tree.glb");
+        assert_eq!(
+            describe_error(&e),
+            "cannot write tree.glb: uvs[18] is not a finite number"
+        );
+    }
 }

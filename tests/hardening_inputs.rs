@@ -678,3 +678,18 @@ fn a_density_function_s_wrong_answers_are_located_at_its_scatter() {
         assert!(!err.contains("0x"), "an address: {err}");
     }
 }
+
+#[test]
+fn a_skeleton_node_out_of_reach_is_a_located_error() {
+    let script = "local s = pge.Skeleton()\n\
+                  local a = s:add(0, {0, 0, 0}, 0.1)\n\
+                  local b = s:add(a, {0, 1e38, 0}, 0.05)\n\
+                  return pge.tree{skeleton = s}\n";
+    let err = script_fails(
+        &[("main.lua", script)],
+        &[],
+        "main.lua:3: ",
+        &["skeleton:add", "position must lie within 1e7 m", "1e38"],
+    );
+    assert!(!err.contains("uvs["), "{err}");
+}
