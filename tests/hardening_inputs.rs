@@ -693,3 +693,87 @@ fn a_skeleton_node_out_of_reach_is_a_located_error() {
     );
     assert!(!err.contains("uvs["), "{err}");
 }
+
+/// The skeleton (`extras.pge.skeleton`) of the bark mesh of the model `script` makes.
+fn grown_skeleton(script: &str) -> Value {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("main.lua"), script).expect("script");
+    let o = common::pge_in(&["run", "main.lua", "-o", "t.glb", "-q"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(dir.path().join("t.glb")).expect("glb");
+    let glb = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+    let json: Value = serde_json::from_slice(&glb.json).expect("json");
+    json["meshes"]
+        .as_array()
+        .expect("meshes")
+        .iter()
+        .find_map(|m| m.pointer("/extras/pge/skeleton").cloned())
+        .expect("a skeleton")
+}
+
+#[test]
+fn every_growth_option_changes_the_tree() {
+    let growth = |option: &str| {
+        grown_skeleton(&format!(
+            "return pge.Growth{{seed = 3, steps = 40, {option}}}\n"
+        ))
+    };
+    let plain = growth("");
+    assert_eq!(plain, growth(""), "the same options grow the same tree");
+    // Each at another value than its default grows another tree: an option that stopped
+    // working would grow the plain one.
+    for option in [
+        "directedness = 0",
+        "directedness = 1",
+        "localdepth = 0",
+        "localdepth = 8",
+        "spread = 0",
+        "spread = 1.5",
+        "splitdecay = 0.5",
+    ] {
+        assert_ne!(plain, growth(option), "{option} changed nothing");
+    }
+    // A wider spread turns new branches further from their parent's line: the crown is wider.
+    let width = |s: &Value| {
+        // A flat list: x, y, z of each node.
+        let flat: Vec<f64> = s["positions"]
+            .as_array()
+            .expect("positions")
+            .iter()
+            .map(|v| v.as_f64().expect("a number"))
+            .collect();
+        flat.chunks_exact(3)
+            .map(|p| (p[0] * p[0] + p[2] * p[2]).sqrt())
+            .fold(0.0, f64::max)
+    };
+    let (narrow, wide) = (width(&growth("spread = 0")), width(&growth("spread = 1.5")));
+    assert!(wide > narrow, "spread 1.5: {wide} m, spread 0: {narrow} m");
+}
+
+#[test]
+fn the_slope_filter_keeps_trees_off_steep_ground() {
+    // Every tree of a layer with slope = {0, 10} stands where the ground is at most 10 degrees
+    // steep, and there are fewer of them than without the filter.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = format!(
+        "local function forest(slope)\n\
+           local f = pge.Forest{{size = {{60, 60}}, seed = 2}}\n\
+           f:terrain{{height = 12, scale = 15, octaves = 2}}\n\
+           f:scatter{{species = function() return {BUSH} end, minDistance = 2, slope = slope}}\n\
+           return f\n\
+         end\n\
+         local filtered, all = forest({{0, 10}}):instances(), forest({{0, 90}}):instances()\n\
+         local f = forest({{0, 10}})\n\
+         for _, i in ipairs(filtered) do\n\
+           local n = f:normal(i.position.x, i.position.z)\n\
+           local degrees = math.deg(math.acos(n.y))\n\
+           assert(degrees <= 10.01, 'a tree on a slope of ' .. degrees .. ' degrees')\n\
+         end\n\
+         assert(#filtered > 0 and #filtered < #all, #filtered .. ' of ' .. #all)\n\
+         local l = pge.Lines()\n\
+         return l\n"
+    );
+    std::fs::write(dir.path().join("main.lua"), script).expect("script");
+    let o = common::pge_in(&["run", "main.lua", "-o", "t.glb", "-q"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
