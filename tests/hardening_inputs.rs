@@ -60,7 +60,10 @@ fn edit_json(path: &Path, edit: impl FnOnce(&mut Value)) {
 
 /// The ways a glTF is tampered with: a `byteStride` smaller than the element, and an
 /// attribute naming an accessor that does not exist.
-fn tampered() -> [(&'static str, fn(&mut Value)); 2] {
+/// A change made to a glTF's JSON.
+type Tamper = fn(&mut Value);
+
+fn tampered() -> [(&'static str, Tamper); 2] {
     [
         ("byteStride", |j: &mut Value| {
             j["bufferViews"][0]["byteStride"] = json!(4);
