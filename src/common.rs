@@ -110,12 +110,57 @@ macro_rules! usage {
 }
 pub(crate) use usage;
 
+/// Writes `text` and a newline to stdout, an error when it cannot (a closed pipe, as in
+/// `pge tiles ... | head`: [`is_closed_stdout`] tells `main` to exit quietly then).
+pub fn print_line(text: impl std::fmt::Display) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{text}")?;
+    out.flush()?;
+    Ok(())
+}
+
+/// Whether `e` comes from writing to a stdout whose reader has gone (`EPIPE`): the reader
+/// took what it wanted, so the command stops without a message.
+pub fn is_closed_stdout(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
 /// One line for the terminal: script errors are already `FILE:LINE: message`.
 pub fn describe_error(e: &anyhow::Error) -> String {
     let mut s = e.to_string();
     for cause in e.chain().skip(1) {
-        s.push_str(": ");
-        s.push_str(&cause.to_string());
+        // An error that shows its cause in its own message (`invalid geometry: X`) is not
+        // followed by the cause again.
+        let cause = cause.to_string();
+        if !s.contains(&cause) {
+            s.push_str(": ");
+            s.push_str(&cause);
+        }
     }
     s.replace('\n', " ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cause_already_in_the_message_is_not_repeated() {
+        let io = || std::io::Error::other("uvs[18] is not a finite number");
+        let e =
+            anyhow::Error::new(io()).context("invalid geometry: uvs[18] is not a finite number");
+        assert_eq!(
+            describe_error(&e),
+            "invalid geometry: uvs[18] is not a finite number"
+        );
+        let e = anyhow::Error::new(io()).context("cannot write tree.glb");
+        assert_eq!(
+            describe_error(&e),
+            "cannot write tree.glb: uvs[18] is not a finite number"
+        );
+    }
 }

@@ -44,6 +44,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    output::remove_on_signals();
     let result = match &cli.command {
         Command::Run(args) => run::run(args),
         #[cfg(feature = "preview")]
@@ -58,6 +59,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if common::is_closed_stdout(&e) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<common::Usage>().is_some() => {
             eprintln!("error: {e}");
             ExitCode::from(2)

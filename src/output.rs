@@ -27,21 +27,54 @@ pub fn write_atomically_with(
     file.finish()
 }
 
+/// Writes every file of a set (`path`, bytes) to a temporary file first, and puts them in
+/// place only once all are written: a failure on the way leaves every path as it was (an
+/// `.obj` with its `.mtl` and textures, shared variants' binary file and description).
+pub fn write_set(files: &[(PathBuf, &[u8])]) -> anyhow::Result<()> {
+    let mut written = Vec::with_capacity(files.len());
+    for (path, bytes) in files {
+        let mut file = AtomicFile::create(path)?;
+        file.tmp
+            .as_file_mut()
+            .write_all(bytes)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        written.push(file);
+    }
+    // What would make a rename fail half-way through the set: a folder in a file's place.
+    if let Some((path, _)) = files.iter().find(|(p, _)| p.is_dir()) {
+        anyhow::bail!("cannot write {}: a folder is in the way", path.display());
+    }
+    for file in written {
+        file.finish()?;
+    }
+    Ok(())
+}
+
+/// The prefix of the temporary files `pge` writes beside its outputs, followed by the
+/// writing process's id and a dash: `.pge-tmp-PID-XXXXXX`.
+const TMP_PREFIX: &str = ".pge-tmp-";
+
 /// A file being written at `path` as [`write_atomically_with`] does: its temporary file,
 /// created before the bytes are ready (a `.glb` is built meanwhile).
 struct AtomicFile<'a> {
     tmp: tempfile::NamedTempFile,
     path: &'a Path,
+    /// Keeps the temporary file on the list a signal clears.
+    _in_flight: InFlight,
 }
 
 impl<'a> AtomicFile<'a> {
-    /// The temporary file for `path`, in the same folder.
+    /// The temporary file for `path`, in the same folder (where temporary files a killed
+    /// run of `pge` left are removed first).
     fn create(path: &'a Path) -> anyhow::Result<AtomicFile<'a>> {
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        remove_stale(&dir);
+        let prefix = format!("{TMP_PREFIX}{}-", std::process::id());
         let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix);
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
@@ -51,12 +84,17 @@ impl<'a> AtomicFile<'a> {
         let tmp = builder
             .tempfile_in(&dir)
             .with_context(|| format!("cannot write in {}", dir.display()))?;
-        Ok(AtomicFile { tmp, path })
+        let in_flight = InFlight::new(tmp.path());
+        Ok(AtomicFile {
+            tmp,
+            path,
+            _in_flight: in_flight,
+        })
     }
 
     /// Puts the written temporary file in `path`'s place.
     fn finish(self) -> anyhow::Result<()> {
-        let AtomicFile { tmp, path } = self;
+        let AtomicFile { tmp, path, .. } = self;
         if let Some(old) = exchanged(&tmp, path) {
             // The temporary name now holds the old file, which dropping `tmp` unlinks; as
             // `old` still holds it, its pages and blocks are freed only when `old` is closed
@@ -69,6 +107,90 @@ impl<'a> AtomicFile<'a> {
         tmp.persist(path)
             .with_context(|| format!("cannot write {}", path.display()))?;
         Ok(())
+    }
+}
+
+/// The temporary files being written now, removed by [`remove_on_signals`]'s thread.
+static IN_FLIGHT: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A temporary file's place on the [`IN_FLIGHT`] list, for as long as it is held.
+struct InFlight(PathBuf);
+
+impl InFlight {
+    fn new(path: &Path) -> InFlight {
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        if let Ok(mut list) = IN_FLIGHT.lock() {
+            list.push(path.clone());
+        }
+        InFlight(path)
+    }
+}
+
+impl Drop for InFlight {
+    fn drop(&mut self) {
+        if let Ok(mut list) = IN_FLIGHT.lock()
+            && let Some(k) = list.iter().position(|p| *p == self.0)
+        {
+            list.swap_remove(k);
+        }
+    }
+}
+
+/// On SIGINT or SIGTERM, removes the temporary files being written and ends the process as
+/// the signal would (exit status 128 + its number): an interrupted run leaves nothing
+/// half-written and no temporary file behind.
+#[cfg(unix)]
+pub fn remove_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    let _ = std::thread::Builder::new()
+        .name("pge-signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                // The list stays locked: no new temporary file is registered meanwhile.
+                let list = IN_FLIGHT
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                for path in list.iter() {
+                    let _ = std::fs::remove_file(path);
+                }
+                std::process::exit(128 + signal);
+            }
+        });
+}
+
+/// Elsewhere the default handling stays.
+#[cfg(not(unix))]
+pub fn remove_on_signals() {}
+
+/// Removes the temporary files in `dir` that a `pge` process no longer running left there
+/// (killed while it wrote: `.pge-tmp-PID-...` whose process is gone). Files of running
+/// processes, and every other file, are left alone. Only where a process can be looked up
+/// (Linux's `/proc`).
+fn remove_stale(dir: &Path) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(TMP_PREFIX))
+            .and_then(|rest| rest.split_once('-'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let gone = !Path::new("/proc").join(pid.to_string()).exists();
+        let regular = entry.file_type().is_ok_and(|t| t.is_file());
+        if gone && regular {
+            let _ = std::fs::remove_file(entry.path());
+        }
     }
 }
 
@@ -110,7 +232,8 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 }
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
-/// folder (those first, the `.obj` last), anything else as `.glb` with `meta`.
+/// folder (all written before any takes its place, the `.obj` last), anything else as
+/// `.glb` with `meta`.
 pub fn write_model(
     model: &Model,
     meta: &ExportMeta,
@@ -130,11 +253,14 @@ pub fn write_model(
         let mtl = format!("{stem}.mtl");
         let files = obj_files(model, &mtl, &stem)?;
         let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
-        for (name, png) in &files.textures {
-            write_atomically(&dir.join(name), png)?;
-        }
-        write_atomically(&dir.join(&mtl), files.mtl.as_bytes())?;
-        write_atomically(output, files.obj.as_bytes())?;
+        let mut set: Vec<(PathBuf, &[u8])> = files
+            .textures
+            .iter()
+            .map(|(name, png)| (dir.join(name), png.as_slice()))
+            .collect();
+        set.push((dir.join(&mtl), files.mtl.as_bytes()));
+        set.push((output.to_path_buf(), files.obj.as_bytes()));
+        write_set(&set)?;
     } else {
         // Streamed from the model's memory: no buffer of the file's size. This thread builds
         // the glb and writes it; the temporary file is created (a tenth of a millisecond on

@@ -65,7 +65,7 @@ pub struct RunArgs {
     /// Write the variants of the forest's layers of a few variants once, into
     /// DIR/variants.bin and its glTF description DIR/variants.json, for tiles that refer to
     /// them (--variants DIR); no trees are placed.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["tile", "variants", "stages", "output"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["tile", "variants", "stages", "steps", "output"])]
     pub variants_out: Option<PathBuf>,
     /// Refer to the variants written by --variants-out DIR instead of growing them: the glb
     /// holds the terrain and the trees' placements, its variant meshes are in DIR/variants.bin
@@ -299,7 +299,7 @@ fn run_one(
         && !args.stats
     {
         for line in crate::shared::summary_lines(summary) {
-            println!("{line}");
+            crate::common::print_line(line)?;
         }
     }
     if args.stats {
@@ -317,7 +317,7 @@ fn run_one(
             shared,
             summary,
         };
-        println!("{}", report.json());
+        crate::common::print_line(report.json())?;
     }
     Ok(())
 }

@@ -11,7 +11,7 @@ use pge_engine::export::{ExportMeta, SharedVariants, variants_files};
 use pge_engine::geometry::Model;
 use serde_json::{Map, Value};
 
-use crate::output::write_atomically;
+use crate::output::write_set;
 
 /// The description of the shared variants in their folder.
 pub const DESCRIPTION: &str = "variants.json";
@@ -35,8 +35,9 @@ pub fn identity(script: &Path, meta: &ExportMeta) -> anyhow::Result<Map<String, 
     Ok(info)
 }
 
-/// Writes the variants model of a `--variants-out` run into `dir`: the binary file first,
-/// the description last (each atomically), so a description is never without its file.
+/// Writes the variants model of a `--variants-out` run into `dir`: both files written to
+/// temporaries before either takes its place (the binary file first, the description
+/// last), so a failed write leaves the pair as it was.
 pub fn write_variants(dir: &Path, model: &Model, info: Map<String, Value>) -> anyhow::Result<()> {
     let counts: Vec<[u64; 2]> = model
         .variant_counts
@@ -45,8 +46,7 @@ pub fn write_variants(dir: &Path, model: &Model, info: Map<String, Value>) -> an
         .collect();
     let (text, bin) = variants_files(model, &counts, info, BIN)?;
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    write_atomically(&dir.join(BIN), &bin)?;
-    write_atomically(&dir.join(DESCRIPTION), &text)
+    write_set(&[(dir.join(BIN), &bin), (dir.join(DESCRIPTION), &text)])
 }
 
 /// What each variant of a `--variants-out` run is, in the order of the description:
@@ -133,7 +133,7 @@ pub fn referred(model: &Model, shared: &SharedVariants) -> (Vec<Value>, [u64; 4]
         let n = group.transforms.len() as u64;
         let per = [g.vertices, g.triangles, g.nodes, g.leaves];
         for (s, p) in sum.iter_mut().zip(per) {
-            *s += n * p;
+            *s = s.saturating_add(n.saturating_mul(p));
         }
         list.push(serde_json::json!({
             "name": group.name,

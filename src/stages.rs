@@ -35,7 +35,7 @@ pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Resu
     if args.stats {
         let mut stats = grown.stats(t0.elapsed().as_secs_f64());
         stats["output"] = output.display().to_string().into();
-        println!("{stats}");
+        crate::common::print_line(stats)?;
     }
     Ok(())
 }

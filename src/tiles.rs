@@ -25,6 +25,6 @@ pub fn tiles(args: &TilesArgs) -> anyhow::Result<()> {
             })
         })
         .collect();
-    println!("{}", serde_json::Value::Array(out));
+    crate::common::print_line(serde_json::Value::Array(out))?;
     Ok(())
 }

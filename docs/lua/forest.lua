@@ -19,7 +19,7 @@
 ---@field species string|fun(params: table, seed: integer): any a species script or a function returning a tree
 ---@field minDistance number metres between trunks of this layer and from earlier layers (> 0)
 ---@field method? "poisson"|"jittered"
----@field jitter? number jittered grid: fraction of the cell, [0, 0.5) (default 0.2)
+---@field jitter? number jittered grid only: fraction of the cell, [0, 0.5) (default 0.2)
 ---@field density? number|string|fun(x: number, z: number): number 0..1, a PNG map or a function
 ---@field slope? {[1]: number, [2]: number} degrees {min, max}
 ---@field altitude? {[1]: number, [2]: number} metres {min, max}

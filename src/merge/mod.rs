@@ -7,6 +7,7 @@ mod world;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::Args;
@@ -32,6 +33,12 @@ pub struct MergeArgs {
     /// How the trees are written: gpu (EXT_mesh_gpu_instancing) or nodes.
     #[arg(long, value_enum, default_value_t = InstancingArg::Gpu)]
     pub instancing: InstancingArg,
+    /// Wall-clock limit of the merge, in seconds (> 0).
+    #[arg(long, value_name = "SECONDS", default_value_t = 300.0, value_parser = crate::common::parse_seconds)]
+    pub time_limit: f64,
+    /// Memory limit of the merge, in MiB (>= 1): the files it reads are charged to it.
+    #[arg(long, value_name = "MIB", default_value_t = 4096, value_parser = crate::common::parse_mib)]
+    pub memory_limit: usize,
 }
 
 fn parse_rect(s: &str) -> Result<[u64; 4], String> {
@@ -75,25 +82,30 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
             args.dir.display()
         );
     }
+    let mut files = Files::new(&args.dir, args.time_limit, args.memory_limit)?;
+    let mut seen = std::collections::HashSet::new();
+    if let Some(t) = tiles.iter().find(|t| !seen.insert((t.i, t.j))) {
+        bail!(
+            "{}: tile {},{} is listed twice (run pge-world again to rewrite it)",
+            args.dir.join("world.json").display(),
+            t.i,
+            t.j
+        );
+    }
     let mut world = World::default();
     if let Some(shared) = &variants {
         let (file, sha256, description) = (&shared.file, &shared.sha256, &shared.description);
-        let path = args.dir.join(file);
-        let bytes =
-            std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let (key, bytes) = files.read(&args.dir.join(file))?;
         if sha256_hex(&bytes) != *sha256 {
             bail!(
                 "{}: the file does not match world.json (run pge-world again to rewrite it)",
-                path.display()
+                key.display()
             );
         }
-        let key = normal_path(&path)?;
         world.external.insert(key.clone(), Arc::new(bytes));
         // The variant meshes' extras (skeletons) are in the description, not in the tiles.
         if let Some(description) = description {
-            let path = args.dir.join(description);
-            let text =
-                std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+            let (path, text) = files.read(&args.dir.join(description))?;
             let json: Value = serde_json::from_slice(&text)
                 .with_context(|| format!("{}: not a variants description", path.display()))?;
             let extras = json
@@ -113,20 +125,18 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         }
     }
     for t in &chosen {
-        let path = args.dir.join(&t.file);
-        let bytes =
-            std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let (path, bytes) = files.read(&args.dir.join(&t.file))?;
         if sha256_hex(&bytes) != t.sha256 {
             bail!(
                 "{}: the file does not match world.json (run pge-world again to regrow it)",
                 path.display()
             );
         }
-        let folder = path.parent().unwrap_or(Path::new("."));
         world
-            .add_tile(&bytes, (t.i, t.j), folder)
+            .add_tile(&bytes, (t.i, t.j), &mut files, &path)
             .with_context(|| path.display().to_string())?;
     }
+    files.check_time(&args.dir.join("world.json"))?;
     let model = world.finish();
     let output = args
         .output
@@ -138,21 +148,89 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
     write_atomically(&output, &bytes)
 }
 
-/// `path` made absolute, `.` and `..` folded (lexically), so one file has one key.
-fn normal_path(path: &Path) -> anyhow::Result<PathBuf> {
-    let absolute =
-        std::path::absolute(path).with_context(|| format!("cannot resolve {}", path.display()))?;
-    let mut out = PathBuf::new();
-    for c in absolute.components() {
-        match c {
-            std::path::Component::CurDir => {}
-            std::path::Component::ParentDir => {
-                out.pop();
-            }
-            other => out.push(other),
-        }
+/// How `pge merge` reads the world's files (the manifest's entries, the buffers the tiles
+/// name): each path resolved first (its links and `..` followed), then required to be a
+/// regular file inside the world directory, read within the run's time, and charged to its
+/// memory limit (the merged model holds about what the files hold).
+pub(super) struct Files {
+    /// The world directory, resolved.
+    root: PathBuf,
+    start: Instant,
+    time_limit: Duration,
+    /// Bytes left of the memory limit.
+    left: u64,
+    limit: usize,
+}
+
+impl Files {
+    fn new(dir: &Path, seconds: f64, mib: usize) -> anyhow::Result<Files> {
+        let root = std::fs::canonicalize(dir)
+            .with_context(|| format!("cannot resolve {}", dir.display()))?;
+        let limit = mib.saturating_mul(1 << 20);
+        Ok(Files {
+            root,
+            start: Instant::now(),
+            time_limit: Duration::from_secs_f64(seconds),
+            left: limit as u64,
+            limit,
+        })
     }
-    Ok(out)
+
+    /// The resolved path of `path` and its bytes.
+    pub(super) fn read(&mut self, path: &Path) -> anyhow::Result<(PathBuf, Vec<u8>)> {
+        self.check_time(path)?;
+        let resolved = std::fs::canonicalize(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        if !resolved.starts_with(&self.root) {
+            bail!(
+                "{}: leads outside the world directory {}",
+                path.display(),
+                self.root.display()
+            );
+        }
+        // Checked before opening too: opening a FIFO would wait for a writer.
+        let regular = |meta: std::io::Result<std::fs::Metadata>| -> anyhow::Result<u64> {
+            let meta = meta.with_context(|| format!("cannot read {}", path.display()))?;
+            if !meta.is_file() {
+                bail!("{}: not a regular file", path.display());
+            }
+            Ok(meta.len())
+        };
+        regular(std::fs::metadata(&resolved))?;
+        let mut file = std::fs::File::open(&resolved)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let len = regular(file.metadata())?;
+        if len > self.left {
+            return Err(pge_engine::Error::MemoryLimit {
+                location: location(path),
+                limit: self.limit,
+            }
+            .into());
+        }
+        self.left -= len;
+        let mut bytes = Vec::with_capacity(len as usize);
+        std::io::Read::read_to_end(&mut std::io::Read::take(&mut file, len), &mut bytes)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        Ok((resolved, bytes))
+    }
+
+    /// A time limit error at `path` when the run's time is up.
+    pub(super) fn check_time(&self, path: &Path) -> anyhow::Result<()> {
+        if self.start.elapsed() > self.time_limit {
+            return Err(pge_engine::Error::TimeLimit {
+                location: location(path),
+            }
+            .into());
+        }
+        Ok(())
+    }
+}
+
+fn location(path: &Path) -> pge_engine::Location {
+    pge_engine::Location {
+        file: path.display().to_string(),
+        line: None,
+    }
 }
 
 #[cfg(test)]

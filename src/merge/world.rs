@@ -16,8 +16,6 @@ use pge_engine::import::{
 };
 use serde_json::{Map, Value};
 
-use super::normal_path;
-
 /// The model being merged.
 #[derive(Default)]
 pub(super) struct World {
@@ -37,14 +35,16 @@ pub(super) struct World {
 }
 
 impl World {
-    /// Adds the terrain patch and the placements of one tile's glb (in `folder`, against
-    /// which the URIs of its external buffers resolve).
+    /// Adds the terrain patch and the placements of one tile's glb (the file `tile`, against
+    /// whose folder the URIs of its external buffers resolve, read by `reader`).
     pub(super) fn add_tile(
         &mut self,
         bytes: &[u8],
         index: (u64, u64),
-        folder: &Path,
+        reader: &mut super::Files,
+        tile: &Path,
     ) -> anyhow::Result<()> {
+        let folder = tile.parent().unwrap_or(Path::new("."));
         let gltf = open(bytes).context("not a readable .glb")?;
         let blob = gltf.blob.as_deref();
         // Buffer 0 is the binary chunk; the others are files beside the tile.
@@ -53,18 +53,22 @@ impl World {
             let gltf::buffer::Source::Uri(uri) = buffer.source() else {
                 bail!("buffer {} has no URI", buffer.index());
             };
-            let path = normal_path(&folder.join(relative_file(uri)?))?;
-            let data = match self.external.get(&path) {
+            let named = folder.join(relative_file(uri)?);
+            let resolved = std::fs::canonicalize(&named).ok();
+            let data = match resolved.as_ref().and_then(|p| self.external.get(p)) {
                 Some(d) => d.clone(),
                 None => {
-                    let d = std::fs::read(&path).with_context(|| {
-                        format!("cannot read {} (buffer {})", path.display(), buffer.index())
-                    })?;
+                    let (_, d) = reader
+                        .read(&named)
+                        .with_context(|| format!("buffer {} ('{uri}')", buffer.index()))?;
                     let d = Arc::new(d);
-                    self.external.insert(path.clone(), d.clone());
+                    if let Some(p) = &resolved {
+                        self.external.insert(p.clone(), d.clone());
+                    }
                     d
                 }
             };
+            let path = resolved.unwrap_or(named);
             files.push(Some((path, data)));
         }
         let data: Vec<Option<&[u8]>> = files
@@ -218,9 +222,10 @@ impl World {
     fn add_extras(&mut self, json: &Value, (i, j): (u64, u64)) -> anyhow::Result<()> {
         let pge = json.pointer("/extras/pge").cloned().unwrap_or(Value::Null);
         let count = |p: &str| pge.pointer(p).and_then(Value::as_u64).unwrap_or(0);
-        self.model.stats.nodes += count("/stats/nodes");
-        self.model.stats.leaves += count("/stats/leaves");
-        self.model.stats.modules += count("/stats/modules");
+        let stats = &mut self.model.stats;
+        stats.nodes = stats.nodes.saturating_add(count("/stats/nodes"));
+        stats.leaves = stats.leaves.saturating_add(count("/stats/leaves"));
+        stats.modules = stats.modules.saturating_add(count("/stats/modules"));
         self.tiles.push([i, j]);
         let Some(value) = pge.get("forest") else {
             return Ok(());
@@ -338,9 +343,14 @@ mod tests {
         let written = json.pointer("/extras/pge/forest").expect("a forest");
         assert_eq!(forest_stats(written), Some(stats));
         let mut world = World::default();
-        let here = Path::new(".");
-        world.add_tile(&bytes, (1, 0), here).expect("reads");
-        world.add_tile(&bytes, (0, 0), here).expect("reads");
+        let here = Path::new("tile.glb");
+        let mut files = super::super::Files::new(Path::new("."), 60.0, 64).expect("files");
+        world
+            .add_tile(&bytes, (1, 0), &mut files, here)
+            .expect("reads");
+        world
+            .add_tile(&bytes, (0, 0), &mut files, here)
+            .expect("reads");
         let merged = world.finish().forest.expect("a forest");
         assert_eq!(merged.instances, 10);
         assert_eq!(merged.species[0].count, 10);
@@ -350,7 +360,7 @@ mod tests {
         bad["extras"]["pge"]["forest"]["species"] = Value::Null;
         let bin = file.bin.expect("bin").to_vec();
         let err = World::default()
-            .add_tile(&glb(&bad, &bin), (2, 3), here)
+            .add_tile(&glb(&bad, &bin), (2, 3), &mut files, here)
             .expect_err("refused");
         assert!(format!("{err:#}").contains("tile 2,3"), "{err:#}");
     }
@@ -362,9 +372,10 @@ mod tests {
         let bytes = pge_engine::export::glb_bytes(&Model::from_mesh(mesh), &ExportMeta::default())
             .expect("glb");
         let mut world = World::default();
-        let here = Path::new(".");
+        let here = Path::new("tile.glb");
+        let mut files = super::super::Files::new(Path::new("."), 60.0, 64).expect("files");
         world
-            .add_tile(&bytes, (0, 0), here)
+            .add_tile(&bytes, (0, 0), &mut files, here)
             .expect("a valid tile reads");
         assert_eq!(world.model.meshes.len(), 1);
 
@@ -385,7 +396,7 @@ mod tests {
             (glb(&sparse, &bin), "sparse"),
         ] {
             let err = World::default()
-                .add_tile(&bad, (0, 0), here)
+                .add_tile(&bad, (0, 0), &mut files, here)
                 .expect_err("refused");
             assert!(format!("{err:#}").contains(needle), "{err:#}");
         }

@@ -104,11 +104,11 @@ pub fn world(args: &WorldArgs) -> anyhow::Result<()> {
         WorldCommand::Adopt(a) => adopt(&a.dir)?,
         WorldCommand::Finish(a) => finish(&a.dir)?,
         WorldCommand::Verify(a) => {
-            println!("{}", verify(&a.dir)?);
+            crate::common::print_line(verify(&a.dir)?)?;
             return Ok(());
         }
     };
-    println!("{out}");
+    crate::common::print_line(out)?;
     Ok(())
 }
 

@@ -73,7 +73,7 @@ fn serve(engine: &Engine, rx: &Receiver<Request>, reports: &Sender<Report>, wake
                 outcome: Outcome::Cancelled,
             });
         }
-        let outcome = generate_with(engine, &request, &mut kept);
+        let outcome = guarded(&mut kept, |kept| generate_with(engine, &request, kept));
         if reports
             .send(Report {
                 id: request.id,
@@ -85,6 +85,25 @@ fn serve(engine: &Engine, rx: &Receiver<Request>, reports: &Sender<Report>, wake
         }
         wake();
     }
+}
+
+/// `generate` with `kept`, a panic on the way (a bug, never the script's doing) reported
+/// as the generation's failure rather than ending the thread the window waits on; what
+/// `kept` holds is dropped then.
+fn guarded(kept: &mut Kept, generate: impl FnOnce(&mut Kept) -> Outcome) -> Outcome {
+    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| generate(&mut *kept)));
+    run.unwrap_or_else(|panic| {
+        kept.clear();
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Outcome::Failed {
+            message: format!("the generator failed (a bug in PGE, please report it): {what}"),
+            loaded: Vec::new(),
+        }
+    })
 }
 
 /// Runs one generation: the script, then its algorithm to the end or to the requested step
@@ -420,6 +439,22 @@ mod tests {
 
     use super::super::reload::Settings;
     use super::*;
+
+    #[test]
+    fn a_panic_while_generating_is_the_generation_s_failure() {
+        let mut kept = Kept::default();
+        let outcome = guarded(&mut kept, |_| panic!("index out of bounds"));
+        match outcome {
+            Outcome::Failed { message, .. } => {
+                assert!(message.contains("index out of bounds"), "{message}");
+            }
+            other => panic!("expected a failure, got {other:?}"),
+        }
+        assert!(matches!(
+            guarded(&mut kept, |_| Outcome::Gone),
+            Outcome::Gone
+        ));
+    }
 
     /// A generation with nothing kept from an earlier one.
     fn generate(engine: &Engine, request: &Request) -> Outcome {

@@ -83,16 +83,26 @@ impl SharedVariants {
         if root.buffer_views.iter().any(|v| v.buffer.value() != 0) {
             return Err(bad("a buffer view of another buffer"));
         }
+        // The importer's checks, as for any glTF PGE reads: indices in range (the gltf
+        // crate's own validation would panic on some), every accessor inside its view with a
+        // stride that holds its element, every view inside the binary file's recorded length.
+        let document = crate::import::open(text)
+            .map_err(|e| bad(&e.to_string()))?
+            .document;
+        let length = usize::try_from(bin_bytes).map_err(|_| bad("its buffer is too long"))?;
+        crate::import::check_layout(&document, &[length]).map_err(|e| bad(&e.to_string()))?;
         let mut groups = Vec::new();
         for g in info
             .get("groups")
             .and_then(JsonValue::as_array)
             .ok_or_else(|| bad("no groups"))?
         {
+            // What one instance draws and stands for: at most what a glTF count holds.
             let number = |k: &str| {
                 g.get(k)
                     .and_then(JsonValue::as_u64)
-                    .ok_or_else(|| bad(&format!("a group without {k}")))
+                    .filter(|&n| n <= u64::from(u32::MAX))
+                    .ok_or_else(|| bad(&format!("a group without {k} (a count below 2^32)")))
             };
             let mesh = number("mesh")?;
             if mesh >= root.meshes.len() as u64 {
@@ -312,7 +322,7 @@ impl Builder {
                     .iter_mut()
                     .zip([g.vertices, g.triangles, g.nodes, g.leaves])
                 {
-                    *s += n * per;
+                    *s = s.saturating_add(n.saturating_mul(per));
                 }
             }
         }

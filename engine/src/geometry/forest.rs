@@ -61,9 +61,10 @@ impl ForestStats {
     /// Adds another tile's trees to these (tiles merged): its instances, and each species'
     /// count where both list it.
     pub fn add_tile(&mut self, tile: &ForestStats) {
-        self.instances += tile.instances;
+        // Saturating: the counts come from files (a tampered tile must not wrap them).
+        self.instances = self.instances.saturating_add(tile.instances);
         for (a, b) in self.species.iter_mut().zip(&tile.species) {
-            a.count += b.count;
+            a.count = a.count.saturating_add(b.count);
         }
     }
 }

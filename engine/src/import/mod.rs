@@ -24,7 +24,9 @@
 mod read;
 mod scene;
 
-pub use read::{check_bounds, leaf_counts, read_instances, read_mesh, relative_file, split_lod};
+pub use read::{
+    check_bounds, check_layout, leaf_counts, read_instances, read_mesh, relative_file, split_lod,
+};
 pub use scene::{open, scene_triangles};
 
 /// Why a glTF file cannot be read.

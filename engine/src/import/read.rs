@@ -19,12 +19,16 @@ use crate::geometry::{
 /// cannot go out of bounds (the gltf crate's validation does not compare them with the bytes
 /// actually present). A `byteStride` smaller than its accessor's element is refused too.
 pub fn check_bounds(doc: &gltf::Document, data: &[Option<&[u8]>]) -> Result<(), ImportError> {
+    let present: Vec<usize> = data.iter().map(|d| d.map_or(0, <[u8]>::len)).collect();
+    check_layout(doc, &present)
+}
+
+/// [`check_bounds`] against the lengths of the buffers' data (`present[b]` bytes for buffer
+/// `b`, none past the list) rather than the data itself: a reader that has the description
+/// of a buffer before its bytes (shared variants) checks it the same way.
+pub fn check_layout(doc: &gltf::Document, present: &[usize]) -> Result<(), ImportError> {
     for buffer in doc.buffers() {
-        let present = data
-            .get(buffer.index())
-            .copied()
-            .flatten()
-            .map_or(0, <[u8]>::len);
+        let present = present.get(buffer.index()).copied().unwrap_or(0);
         if buffer.length() > present {
             let what = if buffer.index() == 0 {
                 "the binary chunk"
@@ -282,13 +286,12 @@ fn read_texture<'s>(
     Ok(Arc::new(texture))
 }
 
-/// The file a buffer's URI names, relative to the tile: percent-decoded; absolute paths,
-/// schemes (`data:`, `http:`) and `..` past nothing are refused.
+/// The file a buffer's URI names, relative to the tile: percent-decoded first, then
+/// refused when the decoded name is absolute, has a scheme (`data:`, `http:`) or a `\\`, or
+/// is empty (`%2F` must not reach an absolute path). A `..` stays: the caller resolves the
+/// path and requires it inside its folder.
 pub fn relative_file(uri: &str) -> Result<PathBuf, ImportError> {
     let refuse = || ImportError::BufferUri(uri.to_string());
-    if uri.starts_with('/') || uri.contains(':') || uri.contains('\\') || uri.is_empty() {
-        return Err(refuse());
-    }
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut k = 0;
@@ -303,5 +306,38 @@ pub fn relative_file(uri: &str) -> Result<PathBuf, ImportError> {
         }
     }
     let text = String::from_utf8(out).map_err(|_| refuse())?;
+    let absolute = text.starts_with('/') || std::path::Path::new(&text).is_absolute();
+    if absolute
+        || text.contains(':')
+        || text.contains('\\')
+        || text.is_empty()
+        || text.contains('\0')
+    {
+        return Err(refuse());
+    }
     Ok(PathBuf::from(text))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_buffer_uri_is_checked_after_it_is_decoded() {
+        assert_eq!(
+            relative_file("../variants%20a.bin").expect("relative"),
+            PathBuf::from("../variants a.bin")
+        );
+        for uri in [
+            "%2Fetc%2Fpasswd",
+            "/etc/passwd",
+            "data%3Abase64",
+            "a%5Cb",
+            "",
+            "%00",
+            "%2",
+        ] {
+            assert!(relative_file(uri).is_err(), "{uri}");
+        }
+    }
 }

@@ -213,7 +213,21 @@ fn parse_message(lua: &Lua, message: &str) -> (String, Option<Location>) {
                 }),
             )
         }
-        None => (message, None),
+        None => (without_address(message), None),
+    }
+}
+
+/// An error raised with a value that is not a message (`error({})`) reaches Rust as the
+/// value's address (`table: 0x55d0...`): said as what it is instead.
+fn without_address(message: String) -> String {
+    let value = message
+        .split_once(": 0x")
+        .filter(|(_, hex)| !hex.is_empty() && hex.chars().all(|c| c.is_ascii_hexdigit()));
+    match value {
+        Some((kind, _)) if ["table", "function", "userdata", "thread"].contains(&kind) => {
+            format!("an error raised with a {kind} value, not a message")
+        }
+        _ => message,
     }
 }
 

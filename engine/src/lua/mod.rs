@@ -56,6 +56,22 @@ pub fn run_context(lua: &mlua::Lua) -> RunContext {
         .unwrap_or_default()
 }
 
+/// The main script of the session of `lua` (its canonical path, the first file the session
+/// read), once one runs.
+#[must_use]
+pub fn main_script(lua: &mlua::Lua) -> Option<std::path::PathBuf> {
+    lua.app_data_ref::<state::SessionState>()
+        .and_then(|s| s.loaded_files.first().cloned())
+}
+
+/// The folder the scripts of the session of `lua` write into (`img:save`): the run's output
+/// folder when it has one, else the main script's folder once it runs.
+#[must_use]
+pub fn write_folder(lua: &mlua::Lua) -> Option<std::path::PathBuf> {
+    lua.app_data_ref::<state::SessionState>()
+        .and_then(|s| s.output_dir.clone().or_else(|| s.main_dir.clone()))
+}
+
 /// The session's memory budget in bytes: the memory limit of its Lua state (what
 /// `--memory-limit` set), and what one object's Rust-side buffers may take at most, so that
 /// plugins refuse an allocation that would exceed it (an image, a mesh being extruded, a

@@ -11,6 +11,9 @@ use super::errors::script_error;
 use super::math::LuaVec3;
 use crate::geometry::{Model, Skeleton};
 
+/// How far from the origin a skeleton node may be placed, in metres (10 000 km).
+const SKELETON_REACH: f32 = 1e7;
+
 /// A skeleton in Lua.
 #[derive(Clone, Debug, Default)]
 pub struct LuaSkeleton {
@@ -137,6 +140,18 @@ impl UserData for LuaSkeleton {
                         format!("{w}: position must be a vector {{x, y, z}}: {e}"),
                     )
                 })?;
+                // Far enough for any world; farther, the mesh's lengths and texture
+                // coordinates would overflow.
+                if !p.is_finite() || p.abs().max_element() > SKELETON_REACH {
+                    return Err(script_error(
+                        lua,
+                        format!(
+                            "{w}: position must lie within {SKELETON_REACH:e} m of the origin, \
+                             got {{{:?}, {:?}, {:?}}}",
+                            p.x, p.y, p.z
+                        ),
+                    ));
+                }
                 let r = match radius {
                     None | Some(Value::Nil) => 0.0,
                     Some(v) => {

@@ -14,7 +14,6 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use pge_engine::geometry::{Model, binary};
 
@@ -131,7 +130,7 @@ impl VariantCache {
             self.dir.join(format!("{a:016x}{b:016x}.pgevariant"))
         });
         if let (Some(material), Some(file)) = (&material, &file) {
-            match std::fs::read(file) {
+            match read_regular(file) {
                 Ok(bytes) => match read_entry(&bytes, material) {
                     Ok(Some(model)) => return Ok(model),
                     Ok(None) => {} // a file it read has changed: grow again
@@ -163,23 +162,32 @@ impl VariantCache {
         Ok(model)
     }
 
-    /// Writes `bytes` to `file` through a temporary file renamed over it.
+    /// Writes `bytes` to `file` through a temporary file renamed over it, created anew
+    /// under a random name (`O_CREAT | O_EXCL`: a link planted in the folder is never
+    /// followed); the rename replaces whatever `file` was, a link included, not its target.
     fn write(&self, file: &Path, bytes: &[u8]) -> std::io::Result<()> {
-        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        use std::io::Write;
         std::fs::create_dir_all(&self.dir)?;
-        let name = file.file_name().map(|n| n.to_string_lossy().to_string());
-        let tmp = self.dir.join(format!(
-            ".{}.{}.{}.tmp",
-            name.unwrap_or_default(),
-            std::process::id(),
-            COUNTER.fetch_add(1, Ordering::Relaxed)
-        ));
-        let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, file));
-        if written.is_err() {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        written
+        let mut tmp = tempfile::Builder::new()
+            .prefix(".pgevariant-")
+            .suffix(".tmp")
+            .tempfile_in(&self.dir)?;
+        tmp.write_all(bytes)?;
+        tmp.persist(file).map_err(|e| e.error)?;
+        Ok(())
     }
+}
+
+/// The bytes of `file` when it is a regular file (not a link, a FIFO or a device: a link to
+/// `/dev/zero` would never end, a FIFO would wait forever); `NotFound` when there is none.
+fn read_regular(file: &Path) -> std::io::Result<Vec<u8>> {
+    let meta = std::fs::symlink_metadata(file)?;
+    if !meta.is_file() {
+        return Err(std::io::Error::other(
+            "not a regular file; it is skipped and the variant grown again",
+        ));
+    }
+    std::fs::read(file)
 }
 
 /// 128 bits of a well-mixed hash of `bytes` (not cryptographic: it names and checks entries
@@ -281,6 +289,10 @@ fn read_entry(bytes: &[u8], key: &[u8]) -> Result<Option<Model>, &'static str> {
             r.u64().ok_or(damaged)?,
             r.u64().ok_or(damaged)?,
         );
+        // Only a regular file of the recorded length is read (an entry may name anything).
+        if !std::fs::metadata(&path).is_ok_and(|m| m.is_file() && m.len() == len) {
+            return Ok(None);
+        }
         match std::fs::read(&path) {
             Ok(now) if now.len() as u64 == len && digest(&now) == [a, b] => {}
             _ => return Ok(None),
@@ -484,5 +496,58 @@ mod tests {
         std::fs::write(&script, "return something").expect("write");
         cache.variant(&key, "f.lua:2", grow).expect("grows");
         assert_eq!(grown.get(), 4);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn planted_links_and_fifos_are_neither_followed_nor_read() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let script = dir.path().join("shrub.lua");
+        std::fs::write(&script, "return nothing").expect("write");
+        let shown = script.to_string_lossy().to_string();
+        let key = VariantKey {
+            shown: &shown,
+            params: &[],
+            seed: 5,
+            max_modules: 100,
+        };
+        let cache = VariantCache::new(dir.path().join("cache"));
+        let grow = || -> Result<GrownVariant, ()> { Ok((sample(), vec![script.clone()])) };
+        cache.variant(&key, "f.lua:2", grow).expect("grows");
+        let entry = std::fs::read_dir(cache.dir())
+            .expect("entries")
+            .next()
+            .expect("one entry")
+            .expect("entry")
+            .path();
+        // The entry is a link to an endless device, then a FIFO: skipped with a warning
+        // (reading either would never end), then replaced by a regular entry.
+        std::fs::remove_file(&entry).expect("unlink");
+        std::os::unix::fs::symlink("/dev/zero", &entry).expect("link");
+        let model = cache.variant(&key, "f.lua:2", grow).expect("grows");
+        let warning = model.stats.warnings.last().expect("a warning");
+        assert!(warning.contains("not a regular file"), "{warning}");
+        assert!(std::fs::symlink_metadata(&entry).expect("entry").is_file());
+        std::fs::remove_file(&entry).expect("unlink");
+        let made = std::process::Command::new("mkfifo").arg(&entry).status();
+        assert!(made.expect("mkfifo").success());
+        let model = cache.variant(&key, "f.lua:2", grow).expect("grows");
+        assert!(
+            model
+                .stats
+                .warnings
+                .last()
+                .expect("warns")
+                .contains("not a regular file")
+        );
+        // A dangling link planted at the entry's name is replaced, its target never made.
+        let outside = dir.path().join("outside");
+        std::fs::remove_file(&entry).expect("unlink");
+        std::os::unix::fs::symlink(&outside, &entry).expect("link");
+        cache.variant(&key, "f.lua:2", grow).expect("grows");
+        assert!(!outside.exists(), "the cache wrote through a planted link");
+        assert!(std::fs::symlink_metadata(&entry).expect("entry").is_file());
+        // No temporary file is left in the folder.
+        assert_eq!(std::fs::read_dir(cache.dir()).expect("entries").count(), 1);
     }
 }

@@ -85,7 +85,7 @@ impl Plugin for ForestPlugin {
     }
 
     fn register_in(&self, engine: &Engine, lua: &Lua, pge: &Table) -> mlua::Result<()> {
-        let grower = SessionGrower::new(engine.clone());
+        let grower = SessionGrower::for_session(engine.clone(), lua);
         self.install(lua, pge, Some(Arc::new(grower)))
     }
 }
@@ -119,25 +119,50 @@ pub struct LuaForest {
     spec: Rc<RefCell<ForestSpec>>,
     setup: Rc<Setup>,
 }
+impl LuaForest {
+    /// The forest's description, or a located error when a method of the forest runs while
+    /// another holds it (a density or species function calling its own forest's methods).
+    fn spec(&self, lua: &Lua, method: &str) -> mlua::Result<std::cell::Ref<'_, ForestSpec>> {
+        self.spec.try_borrow().map_err(|_| busy(lua, method))
+    }
+
+    /// [`LuaForest::spec`], to change it.
+    fn spec_mut(&self, lua: &Lua, method: &str) -> mlua::Result<std::cell::RefMut<'_, ForestSpec>> {
+        self.spec.try_borrow_mut().map_err(|_| busy(lua, method))
+    }
+}
+
+fn busy(lua: &Lua, method: &str) -> mlua::Error {
+    script_error(
+        lua,
+        format!(
+            "forest:{method}: the forest is busy laying out or growing itself (a density or \
+             species function cannot call its own forest's methods)"
+        ),
+    )
+}
+
 impl UserData for LuaForest {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("terrain", |lua, me, v: Value| {
-            terrain(lua, &mut me.spec.borrow_mut(), v)?;
+            terrain(lua, &mut *me.spec_mut(lua, "terrain")?, v)?;
             Ok(me.clone())
         });
         m.add_method("scatter", |lua, me, v: Value| {
-            scatter(lua, &mut me.spec.borrow_mut(), v)?;
+            scatter(lua, &mut *me.spec_mut(lua, "scatter")?, v)?;
             Ok(me.clone())
         });
         m.add_method("height", |lua, me, (x, z): (Value, Value)| {
             let x = finite_number(lua, &x, "forest:height: x")?;
             let z = finite_number(lua, &z, "forest:height: z")?;
-            Ok(me.spec.borrow().forest().terrain.height(x, z))
+            Ok(me.spec(lua, "height")?.forest().terrain.height(x, z))
         });
         m.add_method("normal", |lua, me, (x, z): (Value, Value)| {
             let x = finite_number(lua, &x, "forest:normal: x")?;
             let z = finite_number(lua, &z, "forest:normal: z")?;
-            Ok(LuaVec3(me.spec.borrow().forest().terrain.normal(x, z)))
+            Ok(LuaVec3(
+                me.spec(lua, "normal")?.forest().terrain.normal(x, z),
+            ))
         });
         m.add_method("selectTile", |lua, me, (i, j): (Value, Value)| {
             let i = finite_number(lua, &i, "forest:selectTile: i")?;
@@ -148,14 +173,14 @@ impl UserData for LuaForest {
                     format!("forest:selectTile: i and j must be integers >= 0, got {i}, {j}"),
                 ));
             }
-            let mut spec = me.spec.borrow_mut();
+            let mut spec = me.spec_mut(lua, "selectTile")?;
             if let Err(e) = spec.select_tile(i as usize, j as usize) {
                 return Err(at_forest(&spec, &e));
             }
             Ok(me.clone())
         });
         m.add_method("tiles", |lua, me, ()| {
-            let spec = me.spec.borrow();
+            let spec = me.spec(lua, "tiles")?;
             let tiles = spec.tiles().map_err(|e| at_forest(&spec, &e))?;
             let out = lua.create_table()?;
             for t in tiles {
@@ -169,7 +194,7 @@ impl UserData for LuaForest {
             Ok(out)
         });
         m.add_method("instances", |lua, me, ()| {
-            let spec = me.spec.borrow();
+            let spec = me.spec(lua, "instances")?;
             let layout = spec.forest().layout(spec.tile()).map_err(|e| match e {
                 ForestError::Script(e) => mlua::Error::external(e),
                 other => script_error(lua, format!("forest:instances: {other}")),
@@ -215,8 +240,8 @@ impl UserData for LuaForest {
             }
             Ok(out)
         });
-        m.add_method("algorithm", |_, me, ()| {
-            let run = me.setup.run(me.spec.borrow().clone());
+        m.add_method("algorithm", |lua, me, ()| {
+            let run = me.setup.run(me.spec(lua, "algorithm")?.clone());
             Ok(AlgorithmHandle::new(Box::new(run)))
         });
     }

@@ -2,7 +2,8 @@
 //! engine that made the forest's session ([`SessionGrower`]), and species functions in the
 //! forest's own session.
 
-use std::path::Path;
+use std::cell::Cell;
+use std::path::{Path, PathBuf};
 
 use mlua::{Function, Table, Value};
 use pge_engine::algorithm::run;
@@ -30,13 +31,45 @@ use crate::{GrownVariant, ScriptSpecies, SpeciesGrower};
 #[derive(Clone)]
 pub struct SessionGrower {
     engine: Engine,
+    /// The species scripts whose sessions this grower's forest runs inside, outermost first.
+    within: Vec<PathBuf>,
+    /// The folder the forest's session writes into: its species' sessions write there too
+    /// (`img:save` of a library species goes beside the output, not into the library).
+    output: Option<PathBuf>,
 }
+
+/// How deep forests may grow inside species (a forest whose species is a forest...): past
+/// it, a species is taken for a forest that grows itself.
+pub const NESTING_LIMIT: usize = 8;
+
+/// What a species script's session records for the forests it makes: the scripts it runs
+/// inside (the main script first), itself last.
+#[derive(Clone)]
+struct Within(Vec<PathBuf>);
 
 impl SessionGrower {
     /// A grower whose sessions `engine` creates.
     #[must_use]
     pub fn new(engine: Engine) -> SessionGrower {
-        SessionGrower { engine }
+        SessionGrower {
+            engine,
+            within: Vec::new(),
+            output: None,
+        }
+    }
+
+    /// A grower for the forests of the session of `lua`: inside the species scripts that
+    /// session grows for, or its main script for a session the host made.
+    pub(super) fn for_session(engine: Engine, lua: &mlua::Lua) -> SessionGrower {
+        let within = match lua.app_data_ref::<Within>() {
+            Some(w) => w.0.clone(),
+            None => pge_engine::lua::main_script(lua).into_iter().collect(),
+        };
+        SessionGrower {
+            engine,
+            within,
+            output: pge_engine::lua::write_folder(lua),
+        }
     }
 }
 
@@ -47,12 +80,33 @@ impl SpeciesGrower for SessionGrower {
         seed: u64,
         ctx: &RunContext,
     ) -> pge_engine::Result<GrownVariant> {
+        let path = std::fs::canonicalize(&species.path).unwrap_or_else(|_| (&species.path).into());
+        if self.within.contains(&path) || self.within.len() >= NESTING_LIMIT {
+            let message = if self.within.contains(&path) {
+                "it grows the forest it is part of (a forest cannot be its own species)".into()
+            } else {
+                format!("forests nested in species deeper than the limit of {NESTING_LIMIT}")
+            };
+            return Err(Error::script(
+                Location {
+                    file: species.path.clone(),
+                    line: None,
+                },
+                message,
+            ));
+        }
         let session = self.engine.session(SessionOptions {
             seed,
             params: species.params.clone(),
             steps: None,
             cancel: ctx.cancel.clone(),
         })?;
+        if let Some(output) = &self.output {
+            session.set_output_folder(output)?;
+        }
+        let mut within = self.within.clone();
+        within.push(path);
+        session.lua().set_app_data(Within(within));
         let model = session
             .generate(Path::new(&species.path), &mut |_, _| {})?
             .model;
@@ -73,9 +127,30 @@ pub(super) fn grow_with_function(
     let Some(lua) = f.weak_lua().try_upgrade() else {
         return Err(Error::script(location.clone(), "the Lua state is gone"));
     };
-    let value: Value = f
-        .call((params.clone(), ctx.seed))
-        .map_err(|e| to_engine_error(&lua, e))?;
-    let mut algorithm = algorithm_from(&lua, value, location)?;
-    run(&mut *algorithm, ctx, &mut |_| {})
+    let depth = FUNCTION_DEPTH.get();
+    if depth >= NESTING_LIMIT {
+        return Err(Error::script(
+            location.clone(),
+            format!(
+                "forests nested in species functions deeper than the limit of {NESTING_LIMIT} \
+                 (a species function that returns its own forest?)"
+            ),
+        ));
+    }
+    FUNCTION_DEPTH.set(depth + 1);
+    let grown = (|| {
+        let value: Value = f
+            .call((params.clone(), ctx.seed))
+            .map_err(|e| to_engine_error(&lua, e))?;
+        let mut algorithm = algorithm_from(&lua, value, location)?;
+        run(&mut *algorithm, ctx, &mut |_| {})
+    })();
+    FUNCTION_DEPTH.set(depth);
+    grown
+}
+
+thread_local! {
+    /// How many species functions are growing on this thread, one inside another (a Lua
+    /// state and the functions it calls stay on one thread).
+    static FUNCTION_DEPTH: Cell<usize> = const { Cell::new(0) };
 }

@@ -177,19 +177,39 @@ pub(super) fn terrain(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
     if let Some(h) = height {
         fbm.height = h;
     }
-    if let Some(s) = o.number("scale", Bounds::Above(0.0))? {
+    let scale = o.number("scale", Bounds::Above(0.0))?;
+    let octaves = o.integer("octaves", 1..=16)?;
+    let lacunarity = o.number("lacunarity", Bounds::Above(0.0))?;
+    let persistence = o.number("persistence", Bounds::Above(0.0))?;
+    let path = o.string("image")?;
+    // The noise's options shape generated terrain only: with an image they would do nothing.
+    if path.is_some() {
+        let noise = [
+            ("scale", scale.is_some()),
+            ("octaves", octaves.is_some()),
+            ("lacunarity", lacunarity.is_some()),
+            ("persistence", persistence.is_some()),
+        ];
+        if let Some((name, _)) = noise.iter().find(|(_, given)| *given) {
+            return Err(o.problem(
+                name,
+                "shapes the generated terrain and does nothing with image (give one or the \
+                 other)",
+            ));
+        }
+    }
+    if let Some(s) = scale {
         fbm.scale = s;
     }
-    if let Some(n) = o.integer("octaves", 1..=16)? {
+    if let Some(n) = octaves {
         fbm.octaves = n as usize;
     }
-    if let Some(x) = o.number("lacunarity", Bounds::Above(0.0))? {
+    if let Some(x) = lacunarity {
         fbm.lacunarity = x;
     }
-    if let Some(x) = o.number("persistence", Bounds::Above(0.0))? {
+    if let Some(x) = persistence {
         fbm.persistence = x;
     }
-    let path = o.string("image")?;
     o.finish()?;
     // The noise crate's lattice index must fit an integer: the finest octave's coordinates
     // (half the world over `scale`, times lacunarity^(octaves-1)) stay within 1e12.
@@ -282,6 +302,12 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
         Some("jittered") => Method::Jittered {
             jitter: jitter.unwrap_or(0.2),
         },
+        _ if jitter.is_some() => {
+            return Err(o.problem(
+                "jitter",
+                "is for method = \"jittered\" only (Poisson disc sampling has no jitter)",
+            ));
+        }
         _ => Method::Poisson,
     };
     let density_need = "a number between 0 and 1, a function(x, z) or a PNG path";
@@ -294,18 +320,29 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
         }
         Value::String(s) => Density::Map(image(lua, &o, "density", &s.to_string_lossy())?),
         Value::Function(f) => {
+            // Every error of the function is placed: its own line when Lua knows it, else
+            // the `forest:scatter` line that gave the function.
             let location = caller_location(lua);
             Density::Function(Rc::new(move |x: f64, z: f64| {
-                f.call::<Value>((x, z))
-                    .and_then(|v| match v {
-                        Value::Integer(i) => Ok(i as f64),
-                        Value::Number(n) => Ok(n),
-                        other => Err(mlua::Error::RuntimeError(format!(
-                            "density function: must return a number between 0 and 1, got {}",
-                            other.type_name()
-                        ))),
-                    })
-                    .map_err(|e| lua_error(&f, &location, e))
+                let wrong = |got: String| {
+                    Error::script(
+                        location.clone(),
+                        format!(
+                            "forest:scatter: density: the function returned {got} at ({x:.2}, \
+                             {z:.2}); it must return a number between 0 and 1"
+                        ),
+                    )
+                };
+                let d = match f.call::<Value>((x, z)) {
+                    Ok(Value::Integer(i)) => i as f64,
+                    Ok(Value::Number(n)) => n,
+                    Ok(other) => return Err(wrong(format!("a {}", other.type_name()))),
+                    Err(e) => return Err(lua_error(&f, &location, e)),
+                };
+                if !(0.0..=1.0).contains(&d) {
+                    return Err(wrong(d.to_string()));
+                }
+                Ok(d)
             }))
         }
         other => return Err(o.wrong_type("density", density_need, &other)),
@@ -344,7 +381,12 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
 /// The error of a call of the script's function `f`, with the script's file and line.
 fn lua_error(f: &Function, location: &Location, e: mlua::Error) -> Error {
     match f.weak_lua().try_upgrade() {
-        Some(lua) => to_engine_error(&lua, e),
+        Some(lua) => match to_engine_error(&lua, e) {
+            // Lua could not say where (an error value that is not a message): the
+            // `forest:scatter` line is.
+            e if e.location().is_some_and(|l| l.file == "?") => e.at(location.clone()),
+            e => e,
+        },
         None => Error::script(location.clone(), e.to_string()),
     }
 }
