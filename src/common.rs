@@ -74,7 +74,7 @@ impl ScriptArgs {
             seed: self.seed,
             params: self.set.clone(),
             steps,
-            cancel: None,
+            ..SessionOptions::default()
         }
     }
 }

@@ -25,7 +25,9 @@ pub fn tiles(args: &TilesArgs) -> anyhow::Result<()> {
             path.display()
         );
     };
-    let tiles = forest.tiles().map_err(|e| forest.engine_error(e))?;
+    let tiles = forest
+        .tiles(&session.context().budget)
+        .map_err(|e| forest.engine_error(e))?;
     let out: Vec<serde_json::Value> = tiles
         .iter()
         .map(|t| {

@@ -13,9 +13,10 @@ use pge_engine::{Engine, Error, Location, RunContext, SessionOptions};
 use crate::{GrownVariant, ScriptSpecies, SpeciesGrower};
 
 /// Grows each variant of a species script in a sandboxed session of its own, created by an
-/// engine (the same plugins, sandbox and limits as the forest's session; a variant that
-/// runs out of time fails with [`Error::TimeLimit`] at the species script's line). Sessions
-/// are made on whichever worker thread grows the variant.
+/// engine (the same plugins and sandbox as the forest's session), within the forest run's
+/// limits: its deadline and its memory budget, which the variants grown in parallel share
+/// (a variant that runs out of time fails with [`Error::TimeLimit`] at the species script's
+/// line). Sessions are made on whichever worker thread grows the variant.
 ///
 /// ```no_run
 /// use std::sync::Arc;
@@ -47,11 +48,14 @@ impl SpeciesGrower for SessionGrower {
         seed: u64,
         ctx: &RunContext,
     ) -> pge_engine::Result<GrownVariant> {
+        // The variant is part of the forest's run: its deadline and its memory budget.
         let session = self.engine.session(SessionOptions {
             seed,
             params: species.params.clone(),
             steps: None,
             cancel: ctx.cancel.clone(),
+            deadline: ctx.deadline,
+            budget: Some(ctx.budget.clone()),
         })?;
         let model = session
             .generate(Path::new(&species.path), &mut |_, _| {})?
