@@ -76,7 +76,7 @@ impl fmt::Debug for Species {
 /// let oak = Species::Script(ScriptSpecies::new("scripts/species/oak.lua", &[("points", "300")]));
 /// spec.add_layer(Layer::new("oak", 9.0), oak).unwrap();
 /// spec.select_tile(1, 0).unwrap();
-/// assert_eq!(spec.tiles().unwrap().len(), 4);
+/// assert_eq!(spec.tiles(&pge_engine::Budget::default()).unwrap().len(), 4);
 /// assert!(spec.select_tile(2, 0).is_err());
 /// ```
 #[derive(Clone, Debug)]
@@ -245,7 +245,10 @@ mod tests {
             .expect("layer");
         assert_eq!(spec.layer_origin(1).to_string(), "forest layer 2 (rust)");
         assert_eq!(spec.origin().to_string(), "forest");
-        assert!(matches!(spec.tiles(), Err(ForestError::NotTiled)));
+        assert!(matches!(
+            spec.tiles(&pge_engine::Budget::default()),
+            Err(ForestError::NotTiled)
+        ));
         assert!(matches!(spec.select_tile(0, 0), Err(ForestError::NotTiled)));
         assert_eq!(spec.tile(), None);
     }
