@@ -209,6 +209,23 @@ fn a_variant_that_fails_stops_the_others() {
 }
 
 #[test]
+fn the_foliage_lod_stops_at_the_time_limit() {
+    // 120 000 leaves given levels of detail: tens of seconds of simplification.
+    let case = Case::new(
+        "local s = pge.Skeleton()\n\
+         local root = s:add(0, {0, 0, 0}, 0.3)\n\
+         for i = 1, 3000 do\n\
+           local a, r = i * 2.399, 1 + (i % 50) * 0.08\n\
+           s:add(root, {r * math.cos(a), 2 + (i % 97) * 0.05, r * math.sin(a)}, 0.01)\n\
+         end\n\
+         return pge.tree{ skeleton = s, leaves = { perTip = {40, 40}, size = 0.2 },\n\
+           lod = {} }\n",
+    );
+    let o = case.run(&["--time-limit", "1"]);
+    limit(&o, "main.lua:7", &[TIME], &case.output());
+}
+
+#[test]
 fn skeletons_a_script_keeps_are_charged_to_its_memory_limit() {
     let case = Case::new(
         "local s = pge.Skeleton()\n\

@@ -291,6 +291,10 @@ impl ForestRun {
         match e {
             ForestError::Script(e) => e,
             ForestError::Species { error, .. } if error.is_limit() => error,
+            ForestError::Lod {
+                error: pge_lod::LodError::Limit(error),
+                ..
+            } => error,
             e @ ForestError::Species { layer, .. } => Error::script(
                 self.spec.layer_origin(layer),
                 format!("forest:scatter: {e}"),

@@ -250,7 +250,12 @@ impl UserData for LuaTurtle {
         m.add_method("model", |lua, me, ()| {
             me.model(run_context(lua).seed)
                 .map(LuaModel)
-                .map_err(|e| script_error(lua, format!("turtle:model: {e}")))
+                .map_err(|e| match e {
+                    pge_tree::TreeError::Lod(pge_lod::LodError::Limit(limit)) => {
+                        mlua::Error::external(limit)
+                    }
+                    other => script_error(lua, format!("turtle:model: {other}")),
+                })
         });
     }
 }
