@@ -75,7 +75,7 @@ pub enum LodError {
     /// The run's time ran out while the leaves were simplified: the engine's
     /// [`pge_engine::Error::TimeLimit`] at the `lod` option's line.
     #[error("{0}")]
-    Limit(pge_engine::Error),
+    Limit(Box<pge_engine::Error>),
 }
 
 impl LodError {
@@ -199,9 +199,9 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
     if let Some(d) = options.selection.deadline
         && std::time::Instant::now() >= d
     {
-        return Err(LodError::Limit(pge_engine::Error::TimeLimit {
+        return Err(LodError::Limit(Box::new(pge_engine::Error::TimeLimit {
             location: location_of(&options.source),
-        }));
+        })));
     }
     let total: usize = sectors.iter().map(|(c, _)| c.leaves.len()).sum();
     let mut out = Mesh {

@@ -102,7 +102,7 @@ impl TreeError {
     #[must_use]
     pub fn into_engine(self, at: pge_engine::Location, what: &str) -> pge_engine::Error {
         match self {
-            TreeError::Lod(pge_lod::LodError::Limit(e)) => e,
+            TreeError::Lod(pge_lod::LodError::Limit(e)) => *e,
             other => pge_engine::Error::script(at, format!("{what}{other}")),
         }
     }

@@ -57,7 +57,7 @@ fn tree(lua: &Lua, v: Value) -> mlua::Result<LuaModel> {
     build_tree(&skeleton, &options, seed)
         .map(LuaModel)
         .map_err(|e| match e {
-            crate::TreeError::Lod(pge_lod::LodError::Limit(limit)) => mlua::Error::external(limit),
+            crate::TreeError::Lod(pge_lod::LodError::Limit(limit)) => mlua::Error::external(*limit),
             other => o.error(other),
         })
 }

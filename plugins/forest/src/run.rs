@@ -294,7 +294,7 @@ impl ForestRun {
             ForestError::Lod {
                 error: pge_lod::LodError::Limit(error),
                 ..
-            } => error,
+            } => *error,
             e @ ForestError::Species { layer, .. } => Error::script(
                 self.spec.layer_origin(layer),
                 format!("forest:scatter: {e}"),

@@ -252,7 +252,7 @@ impl UserData for LuaTurtle {
                 .map(LuaModel)
                 .map_err(|e| match e {
                     pge_tree::TreeError::Lod(pge_lod::LodError::Limit(limit)) => {
-                        mlua::Error::external(limit)
+                        mlua::Error::external(*limit)
                     }
                     other => script_error(lua, format!("turtle:model: {other}")),
                 })
