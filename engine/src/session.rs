@@ -433,14 +433,11 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
         let used = lua.used_memory();
         let room = st.sync_memory(used);
         let here = || st.last_location.clone().unwrap_or_default();
-        let limit = if let Some(room) = room {
+        if let Some(room) = room {
             lua.set_memory_limit(room)?;
-            None
-        } else {
+        }
+        let limit = if room.is_none() {
             Some(st.ctx.budget.exceeded(&here(), None))
-        };
-        let limit = if limit.is_some() {
-            limit
         } else if st
             .ctx
             .cancel
