@@ -84,7 +84,7 @@ impl ScriptArgs {
             seed: self.seed,
             params: self.set.clone(),
             steps,
-            cancel: None,
+            ..SessionOptions::default()
         }
     }
 }

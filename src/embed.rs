@@ -158,6 +158,7 @@ impl Request {
             params: self.params.clone(),
             steps,
             cancel: self.cancel.clone(),
+            ..SessionOptions::default()
         })?)
     }
 
@@ -465,7 +466,9 @@ pub fn tiles(request: &Request) -> Result<Vec<Tile>, Error> {
         )
         .into());
     };
-    let tiles = forest.tiles().map_err(|e| forest.engine_error(e))?;
+    let tiles = forest
+        .tiles(&session.context().budget)
+        .map_err(|e| forest.engine_error(e))?;
     Ok(tiles
         .iter()
         .map(|t| Tile {

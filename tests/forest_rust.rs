@@ -140,7 +140,7 @@ fn the_algorithm_a_forest_script_returns_is_asked_for_its_tiles() {
         .expect("runs");
     let mut algorithm = session.algorithm_from(value).expect("an algorithm");
     let forest = ForestRun::of(&mut *algorithm).expect("a forest");
-    let tiles = forest.tiles().expect("tiled");
+    let tiles = forest.tiles(&pge_engine::Budget::default()).expect("tiled");
     assert_eq!(tiles.len(), 9);
     assert_eq!((tiles[4].i, tiles[4].j), (1, 1));
     assert_eq!(tiles[4].rect.min, [-50.0, -50.0]);

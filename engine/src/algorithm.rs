@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::geometry::{Model, Skeleton};
-use crate::{Error, Location, Result};
+use crate::{Budget, Error, Location, Result};
 
 /// What a step reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,6 +31,12 @@ pub struct RunContext {
     pub max_modules: usize,
     /// Set by another thread to stop the run early (the preview superseding a run).
     pub cancel: Option<Arc<AtomicBool>>,
+    /// The run's memory budget (`--memory-limit`), one for the whole run and every thread
+    /// of it: check a size before allocating a buffer that grows with the input
+    /// ([`Budget::check`]) and charge what is kept ([`Budget::charge`]). Its stop flag
+    /// ([`Budget::stop`]) ends the parts of a run that fail together, at their next
+    /// [`RunContext::check_deadline`].
+    pub budget: Budget,
 }
 
 impl Default for RunContext {
@@ -41,17 +47,21 @@ impl Default for RunContext {
             deadline: None,
             max_modules: 10_000_000,
             cancel: None,
+            budget: Budget::default(),
         }
     }
 }
 
 impl RunContext {
-    /// An error if the deadline has passed or the run was cancelled, pointing at `location`.
+    /// An error if the deadline has passed or the run was cancelled (or stopped by its
+    /// budget's flag, [`Budget::stop`]), pointing at `location`. Cheap: call it in every
+    /// loop whose length a script decides.
     pub fn check_deadline(&self, location: &Location) -> Result<()> {
         if self
             .cancel
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
+            || self.budget.stopped()
         {
             return Err(Error::Cancelled {
                 location: location.clone(),

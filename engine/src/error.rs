@@ -60,13 +60,17 @@ pub enum Error {
         /// Where the script (or the algorithm it started) was when the time ran out.
         location: Location,
     },
-    /// The Lua state went past its memory limit (`--memory-limit`, [`crate::Limits::memory`]).
-    #[error("{location}: memory limit of {} MiB exceeded (see --memory-limit)", limit >> 20)]
+    /// The run went past its memory limit (`--memory-limit`, [`crate::Limits::memory`]): its
+    /// Lua state, or a buffer the work it asked for needed ([`crate::Budget`]).
+    #[error("{location}: {}memory limit of {} MiB exceeded (see --memory-limit)", what_prefix(what), limit >> 20)]
     MemoryLimit {
         /// Where the script was when the allocation failed.
         location: Location,
         /// The limit in bytes.
         limit: usize,
+        /// What needed the memory and the option that sized it, when a size was checked
+        /// before allocating (`the terrain mesh (resolution = 0.01) needs 120 GiB`).
+        what: Option<String>,
     },
     /// The Lua code executed more instructions than [`crate::Limits::instructions`] allows.
     #[error("{location}: instruction limit of {limit} exceeded")]
@@ -181,6 +185,11 @@ impl OptionError {
     }
 }
 
+/// `what: ` before a limit's phrase, when the error says what needed the memory.
+fn what_prefix(what: &Option<String>) -> String {
+    what.as_ref().map(|w| format!("{w}: ")).unwrap_or_default()
+}
+
 impl Error {
     /// A script error at `location`.
     pub fn script(location: Location, message: impl Into<String>) -> Error {
@@ -212,8 +221,9 @@ impl Error {
         match self {
             Error::Script { message, .. } => message.clone(),
             Error::TimeLimit { .. } => "time limit exceeded (see --time-limit)".into(),
-            Error::MemoryLimit { limit, .. } => format!(
-                "memory limit of {} MiB exceeded (see --memory-limit)",
+            Error::MemoryLimit { limit, what, .. } => format!(
+                "{}memory limit of {} MiB exceeded (see --memory-limit)",
+                what_prefix(what),
                 limit >> 20
             ),
             Error::InstructionLimit { limit, .. } => {
@@ -280,9 +290,14 @@ impl Error {
             Error::TimeLimit { location } => Error::TimeLimit {
                 location: location.clone(),
             },
-            Error::MemoryLimit { location, limit } => Error::MemoryLimit {
+            Error::MemoryLimit {
+                location,
+                limit,
+                what,
+            } => Error::MemoryLimit {
                 location: location.clone(),
                 limit: *limit,
+                what: what.clone(),
             },
             Error::InstructionLimit { location, limit } => Error::InstructionLimit {
                 location: location.clone(),
@@ -350,6 +365,7 @@ mod tests {
             Error::MemoryLimit {
                 location: at.clone(),
                 limit: 16 << 20,
+                what: None,
             },
             Error::InstructionLimit {
                 location: at.clone(),

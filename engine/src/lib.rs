@@ -21,6 +21,7 @@
 
 pub mod algorithm;
 pub mod approx;
+mod budget;
 #[cfg(feature = "lua")]
 mod engine;
 mod error;
@@ -36,6 +37,7 @@ pub mod random;
 mod session;
 
 pub use algorithm::{Algorithm, RunContext, Step};
+pub use budget::{Budget, Charge};
 #[cfg(feature = "lua")]
 pub use engine::{Engine, EngineBuilder, Limits};
 pub use error::{Error, Location, OptionError, Result};

@@ -13,7 +13,7 @@ use crate::lua::params::{self, ParamInfo, ParamState};
 use crate::lua::random::CurrentRng;
 use crate::lua::state::SessionState;
 use crate::lua::to_engine_error;
-use crate::{Algorithm, Engine, Error, Limits, Location, Result, RunContext};
+use crate::{Algorithm, Budget, Engine, Error, Limits, Location, Result, RunContext};
 
 /// How often (in VM instructions) the hook checks the limits.
 const HOOK_INTERVAL: u32 = 4096;
@@ -29,6 +29,12 @@ pub struct SessionOptions {
     pub steps: Option<u32>,
     /// Set from another thread to stop the run (checked by the Lua hook and by algorithms).
     pub cancel: Option<Arc<AtomicBool>>,
+    /// The deadline of the run this session is part of (a forest's variant grown in a
+    /// session of its own): `None` starts the clock of `--time-limit` when the script starts.
+    pub deadline: Option<Instant>,
+    /// The memory budget of the run this session is part of, which its Lua state and its
+    /// work charge too: `None` for a budget of its own, of the engine's memory limit.
+    pub budget: Option<Budget>,
 }
 
 impl Default for SessionOptions {
@@ -38,6 +44,8 @@ impl Default for SessionOptions {
             params: Vec::new(),
             steps: None,
             cancel: None,
+            deadline: None,
+            budget: None,
         }
     }
 }
@@ -155,7 +163,11 @@ impl Session {
         })?;
         // What a session sets up is all kept: no garbage to collect until the script runs.
         lua.gc_stop();
-        lua.set_memory_limit(limits.memory)
+        let budget = options
+            .budget
+            .clone()
+            .unwrap_or_else(|| Budget::new(limits.memory));
+        lua.set_memory_limit(budget.available().max(1))
             .map_err(|e| Error::Plugin {
                 plugin: "lua".into(),
                 message: e.to_string(),
@@ -164,11 +176,11 @@ impl Session {
             ctx: RunContext {
                 seed: options.seed,
                 steps: options.steps,
-                deadline: None,
+                deadline: options.deadline,
                 max_modules: limits.max_modules,
                 cancel: options.cancel.clone(),
+                budget,
             },
-            memory_limit: limits.memory,
             instruction_limit: limits.instructions,
             ..SessionState::default()
         });
@@ -208,6 +220,12 @@ impl Session {
             message: e.to_string(),
         })?;
         lua.gc_restart();
+        if let Err(e) = sync_memory(&lua) {
+            return Err(e.at(Location {
+                file: "pge".into(),
+                line: None,
+            }));
+        }
         Ok(Session {
             lua,
             limits,
@@ -403,8 +421,28 @@ impl Session {
     }
 }
 
-/// The hook that enforces the time and instruction limits and remembers where the script
-/// is (memory errors carry no position).
+/// Charges the Lua state's use to the run's budget and lets it hold what the budget has
+/// left; an [`Error::MemoryLimit`] (placed nowhere yet) when nothing is left.
+fn sync_memory(lua: &Lua) -> Result<()> {
+    let used = lua.used_memory();
+    let Some(mut st) = lua.app_data_mut::<SessionState>() else {
+        return Ok(());
+    };
+    match st.sync_memory(used) {
+        Some(room) => {
+            lua.set_memory_limit(room).map_err(|e| Error::Plugin {
+                plugin: "lua".into(),
+                message: e.to_string(),
+            })?;
+            Ok(())
+        }
+        None => Err(st.ctx.budget.exceeded(&Location::default(), None)),
+    }
+}
+
+/// The hook that enforces the time and instruction limits, keeps the Lua state's memory in
+/// the run's budget (other sessions of the run and the buffers of its work leave it less
+/// room) and remembers where the script is (memory errors carry no position).
 fn install_hook(lua: &Lua) -> mlua::Result<()> {
     let triggers = HookTriggers::new().every_nth_instruction(HOOK_INTERVAL);
     lua.set_global_hook(triggers, |lua, debug| {
@@ -431,12 +469,20 @@ fn install_hook(lua: &Lua) -> mlua::Result<()> {
                 }
             }
         }
+        let used = lua.used_memory();
+        let room = st.sync_memory(used);
         let here = || st.last_location.clone().unwrap_or_default();
-        let limit = if st
+        if let Some(room) = room {
+            lua.set_memory_limit(room)?;
+        }
+        let limit = if room.is_none() {
+            Some(st.ctx.budget.exceeded(&here(), None))
+        } else if st
             .ctx
             .cancel
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
+            || st.ctx.budget.stopped()
         {
             Some(Error::Cancelled { location: here() })
         } else if st.ctx.deadline.is_some_and(|d| Instant::now() >= d) {

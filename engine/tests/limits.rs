@@ -66,7 +66,9 @@ fn memory_instructions_and_cancel_are_their_own_variants() {
         .eval::<()>("local t = {}\nfor i = 1, 1e8 do t[i] = {i} end")
         .expect_err("too big");
     match &err {
-        Error::MemoryLimit { location, limit } => {
+        Error::MemoryLimit {
+            location, limit, ..
+        } => {
             assert_eq!(*limit, 16 << 20);
             assert_eq!(location.file, "eval");
         }

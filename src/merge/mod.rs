@@ -204,6 +204,11 @@ impl Files {
             return Err(pge_engine::Error::MemoryLimit {
                 location: location(path),
                 limit: self.limit,
+                what: Some(format!(
+                    "reading {} needs {} MiB more",
+                    path.display(),
+                    len.div_ceil(1 << 20)
+                )),
             }
             .into());
         }

@@ -72,6 +72,34 @@ pub enum LodError {
     /// written).
     #[error(transparent)]
     Table(#[from] pge_engine::geometry::LodError),
+    /// The run's time ran out while the leaves were simplified: the engine's
+    /// [`pge_engine::Error::TimeLimit`] at the `lod` option's line.
+    #[error("{0}")]
+    Limit(Box<pge_engine::Error>),
+}
+
+impl LodError {
+    /// The run's limit this error is, if it is one (a host passes it on typed).
+    #[must_use]
+    pub fn limit(&self) -> Option<&pge_engine::Error> {
+        match self {
+            LodError::Limit(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// `FILE:LINE` (an option's `source`) as a location.
+fn location_of(source: &str) -> pge_engine::Location {
+    match source.rsplit_once(':') {
+        Some((file, line)) if line.parse::<u32>().is_ok() => {
+            pge_engine::Location::new(file, line.parse().unwrap_or(0))
+        }
+        _ => pge_engine::Location {
+            file: if source.is_empty() { "lod" } else { source }.to_string(),
+            line: None,
+        },
+    }
 }
 
 /// One sector's part of V: its leaves are `offset..offset + table.order.len()` of the mesh,
@@ -168,6 +196,13 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
         None
     };
     let sectors = simplify_sectors(&leaves, options);
+    if let Some(d) = options.selection.deadline
+        && std::time::Instant::now() >= d
+    {
+        return Err(LodError::Limit(Box::new(pge_engine::Error::TimeLimit {
+            location: location_of(&options.source),
+        })));
+    }
     let total: usize = sectors.iter().map(|(c, _)| c.leaves.len()).sum();
     let mut out = Mesh {
         name: mesh.name.clone(),

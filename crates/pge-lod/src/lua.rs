@@ -38,16 +38,23 @@ impl Plugin for LodPlugin {
 /// unknown keys are errors. The options remember the calling line for warnings.
 pub fn lod_options(o: &Options) -> mlua::Result<Option<LodOptions>> {
     let source = caller_location(o.lua()).to_string();
+    // The simplification keeps to the run's deadline.
+    let selection = crate::Selection {
+        deadline: pge_engine::lua::run_context(o.lua()).deadline,
+        ..crate::Selection::default()
+    };
     match o.value("lod")? {
         Value::Nil | Value::Boolean(false) => Ok(None),
         Value::Boolean(true) => Ok(Some(LodOptions {
             source,
+            selection,
             ..LodOptions::default()
         })),
         Value::Table(t) => {
             let lod = o.child("lod", t);
             let mut options = LodOptions {
                 source,
+                selection,
                 ..LodOptions::default()
             };
             if let Some(n) = lod.integer("sectors", 1..=i64::from(MAX_SECTORS))? {

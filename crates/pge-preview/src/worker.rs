@@ -124,6 +124,7 @@ pub fn generate_with(engine: &Engine, request: &Request, kept: &mut Kept) -> Out
         params: settings.params.clone(),
         steps: settings.steps,
         cancel: Some(request.cancel.clone()),
+        ..SessionOptions::default()
     };
     let session = match engine.session(options) {
         Ok(s) => s,

@@ -95,6 +95,19 @@ pub enum TreeError {
     Lod(#[from] pge_lod::LodError),
 }
 
+impl TreeError {
+    /// The engine's error for this one, at `at`: a limit of the run (the time ran out while
+    /// the leaves were given levels of detail) as the typed limit it is, anything else a
+    /// script error whose message is `what: ` and this error.
+    #[must_use]
+    pub fn into_engine(self, at: pge_engine::Location, what: &str) -> pge_engine::Error {
+        match self {
+            TreeError::Lod(pge_lod::LodError::Limit(e)) => *e,
+            other => pge_engine::Error::script(at, format!("{what}{other}")),
+        }
+    }
+}
+
 /// Checks that a skeleton is usable: equal array lengths, parents before children, finite
 /// positions and non-negative finite radii, leaf points on existing nodes.
 pub fn check_skeleton(skeleton: &Skeleton) -> Result<(), TreeError> {

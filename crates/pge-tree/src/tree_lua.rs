@@ -56,7 +56,10 @@ fn tree(lua: &Lua, v: Value) -> mlua::Result<LuaModel> {
     let seed = mix_seed_multiply(run_context(lua).seed, seed);
     build_tree(&skeleton, &options, seed)
         .map(LuaModel)
-        .map_err(|e| o.error(e))
+        .map_err(|e| match e {
+            crate::TreeError::Lod(pge_lod::LodError::Limit(limit)) => mlua::Error::external(*limit),
+            other => o.error(other),
+        })
 }
 
 #[cfg(test)]

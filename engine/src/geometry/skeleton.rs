@@ -41,6 +41,18 @@ impl Skeleton {
         Skeleton::default()
     }
 
+    /// The bytes its buffers hold (what a script that keeps it is charged,
+    /// [`crate::Budget`]).
+    #[must_use]
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.positions.as_slice())
+            + size_of_val(self.parents.as_slice())
+            + size_of_val(self.radii.as_slice())
+            + size_of_val(self.orders.as_slice())
+            + size_of_val(self.leaves.as_slice())
+    }
+
     /// Adds a node and returns its index.
     ///
     /// # Panics

@@ -51,7 +51,7 @@ impl UserData for AlgorithmHandle {
                     })?
                 }
             };
-            Ok(LuaSkeleton::new(skeleton))
+            LuaSkeleton::new(skeleton).into_lua_charged(lua)
         });
         m.add_method("name", |_, me, ()| Ok(me.0.name().to_string()));
     }

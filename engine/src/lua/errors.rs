@@ -145,7 +145,7 @@ fn describe(lua: &Lua, err: &mlua::Error) -> Described {
         E::MemoryError(_) => {
             let limit = lua
                 .app_data_ref::<SessionState>()
-                .map(|s| s.memory_limit)
+                .map(|s| s.ctx.budget.limit())
                 .unwrap_or(0);
             Typed(Error::MemoryLimit {
                 location: Location {
@@ -153,6 +153,7 @@ fn describe(lua: &Lua, err: &mlua::Error) -> Described {
                     line: None,
                 },
                 limit,
+                what: None,
             })
         }
         E::CallbackError { cause, .. } => describe(lua, cause),

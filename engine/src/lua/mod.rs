@@ -72,15 +72,64 @@ pub fn write_folder(lua: &mlua::Lua) -> Option<std::path::PathBuf> {
         .and_then(|s| s.output_dir.clone().or_else(|| s.main_dir.clone()))
 }
 
-/// The session's memory budget in bytes: the memory limit of its Lua state (what
-/// `--memory-limit` set), and what one object's Rust-side buffers may take at most, so that
-/// plugins refuse an allocation that would exceed it (an image, a mesh being extruded, a
-/// marching-cubes grid).
+/// The bytes the run's memory budget has left (`--memory-limit` less what the run's Lua
+/// states and kept buffers hold now): what one object's Rust-side buffers may take at
+/// most, so that plugins refuse an allocation that would exceed it (an image, a mesh being
+/// extruded, a marching-cubes grid). [`charge`] keeps a buffer in the budget.
 #[must_use]
 pub fn memory_budget(lua: &mlua::Lua) -> usize {
+    sync_lua_memory(lua);
     lua.app_data_ref::<state::SessionState>()
-        .map_or(crate::Limits::default().memory, |s| s.memory_limit)
+        .map_or(crate::Limits::default().memory, |s| {
+            s.ctx.budget.available()
+        })
 }
+
+/// Brings the Lua state's use up to date in the run's budget.
+fn sync_lua_memory(lua: &mlua::Lua) {
+    let used = lua.used_memory();
+    if let Some(mut s) = lua.app_data_mut::<state::SessionState>() {
+        s.sync_memory(used);
+    }
+}
+
+/// Charges `bytes` that a value the script keeps holds on the Rust side (a skeleton's
+/// nodes, a model's meshes and textures) to the run's budget, for as long as `value` lives:
+/// the charge is its user value, given back when Lua collects it. When the budget is
+/// short, Lua's garbage is collected first (it may hold charged values nothing uses); then
+/// an [`crate::Error::MemoryLimit`] at the calling line, `what` naming the value.
+pub fn charge(
+    lua: &mlua::Lua,
+    value: &mlua::AnyUserData,
+    bytes: usize,
+    what: &str,
+) -> mlua::Result<()> {
+    if bytes == 0 {
+        return Ok(());
+    }
+    let budget = run_context(lua).budget;
+    let attempt = || {
+        sync_lua_memory(lua);
+        budget.charge(bytes, &caller_location(lua), || {
+            format!("{what} holds {} MiB", bytes.div_ceil(1 << 20))
+        })
+    };
+    let charge = match attempt() {
+        Ok(c) => c,
+        Err(_) => {
+            lua.gc_collect()?;
+            lua.gc_collect()?;
+            attempt().map_err(mlua::Error::external)?
+        }
+    };
+    value.set_user_value(Held { _charge: charge })
+}
+
+/// A [`crate::Charge`] kept as a value's user value.
+struct Held {
+    _charge: crate::Charge,
+}
+impl mlua::UserData for Held {}
 
 /// Registers the support library into the `pge` table.
 pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Result<()> {

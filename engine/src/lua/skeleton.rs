@@ -32,6 +32,15 @@ impl LuaSkeleton {
             depths: None,
         }
     }
+
+    /// The skeleton as a Lua value, its buffers charged to the run's memory budget for as
+    /// long as the script keeps it ([`super::charge`]).
+    pub fn into_lua_charged(self, lua: &Lua) -> mlua::Result<mlua::AnyUserData> {
+        let bytes = self.skeleton.heap_bytes();
+        let value = lua.create_userdata(self)?;
+        super::charge(lua, &value, bytes, "pge.Skeleton")?;
+        Ok(value)
+    }
 }
 
 /// The skeleton a script value holds, if it is a `pge.Skeleton`.
@@ -171,8 +180,8 @@ impl UserData for LuaSkeleton {
                 Ok(i as usize + 1)
             },
         );
-        m.add_method("copy", |_, me, ()| {
-            Ok(LuaSkeleton::new(me.skeleton.clone()))
+        m.add_method("copy", |lua, me, ()| {
+            LuaSkeleton::new(me.skeleton.clone()).into_lua_charged(lua)
         });
         m.add_method("leafCount", |_, me, ()| Ok(me.skeleton.leaves.len()));
     }

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::{Location, RunContext};
+use crate::{Charge, Location, RunContext};
 
 /// A chunk the session loaded: the name errors show and the file behind it.
 #[derive(Clone, Debug)]
@@ -29,7 +29,8 @@ pub(crate) struct SessionState {
     pub loaded_files: Vec<PathBuf>,
     /// Where the Lua code was when the hook last ran (memory errors carry no position).
     pub last_location: Option<Location>,
-    pub memory_limit: usize,
+    /// The Lua state's own use, charged to the run's budget (`ctx.budget`).
+    pub lua_charge: Option<Charge>,
     pub instruction_limit: Option<u64>,
     pub instructions: u64,
 }
@@ -43,6 +44,19 @@ impl SessionState {
         } else {
             self.chunks.iter().rev().find(|c| c.display == display)
         }
+    }
+
+    /// Charges the Lua state's use (`used` bytes) to the run's budget and returns what the
+    /// state may hold now: the limit less what the rest of the run holds (other sessions'
+    /// states, the buffers the run's work keeps); `None` when that is no more than `used`.
+    pub fn sync_memory(&mut self, used: usize) -> Option<usize> {
+        let budget = &self.ctx.budget;
+        self.lua_charge
+            .get_or_insert_with(|| budget.empty_charge())
+            .set(used);
+        let others = budget.used().saturating_sub(used);
+        let room = budget.limit().saturating_sub(others);
+        (room > used).then_some(room)
     }
 
     pub fn record_file(&mut self, path: PathBuf) {

@@ -8,8 +8,8 @@ use glam::Vec4;
 use mlua::{Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
-    Bounds, LuaMesh, LuaModel, Options, finite_number, memory_budget, resolve_path, script_error,
-    to_model, vec3_arg, write_inside,
+    Bounds, LuaMesh, LuaModel, Options, caller_location, finite_number, memory_budget,
+    resolve_path, run_context, script_error, to_model, vec3_arg, write_inside,
 };
 
 use crate::{Image, Lines};
@@ -299,19 +299,17 @@ fn size(lua: &Lua, v: &Value, what: &str) -> mlua::Result<u32> {
     Ok(x as u32)
 }
 
-/// An image (and its PNG when exported) must fit in the memory limit.
+/// An image (and its PNG when exported) must fit in what the run's memory budget has left:
+/// else the typed memory limit at the calling line, naming the image.
 fn check_image_budget(lua: &Lua, w: u64, h: u64, what: &str) -> mlua::Result<()> {
     let bytes = w.saturating_mul(h).saturating_mul(8);
     let budget = memory_budget(lua) as u64;
     if bytes > budget {
-        return Err(script_error(
-            lua,
-            format!(
-                "{what}: a {w}x{h} image needs {} MiB, past the memory limit of {} MiB",
-                bytes >> 20,
-                budget >> 20
-            ),
-        ));
+        let exceeded = run_context(lua).budget.exceeded(
+            &caller_location(lua),
+            Some(format!("{what}: a {w}x{h} image needs {} MiB", bytes >> 20)),
+        );
+        return Err(mlua::Error::external(exceeded));
     }
     Ok(())
 }
@@ -437,7 +435,9 @@ mod tests {
             .eval::<()>("local a = 1\nlocal img = pge.Image.new(4096, 4096)")
             .expect_err("too big");
         assert!(
-            err.to_string().starts_with("eval:2: pge.Image.new: a 4096x4096 image needs 128 MiB, past the memory limit of 64 MiB"),
+            err.to_string()
+                == "eval:2: pge.Image.new: a 4096x4096 image needs 128 MiB: memory limit of 64 \
+                    MiB exceeded (see --memory-limit)",
             "{err}"
         );
         s.eval::<()>("local img = pge.Image.new(1024, 1024)")

@@ -117,7 +117,7 @@ impl Algorithm for Conifer {
         let built = self.build()?;
         let seconds = self.seconds + t.elapsed().as_secs_f64();
         let tree = pge_tree::build_tree(&built.skeleton, &self.params.tree, self.seed)
-            .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
+            .map_err(|e| e.into_engine(self.location.clone(), ""))?;
         let mut model = Model::new();
         model.stats.add_phase("growth", seconds);
         model.add_model(&tree, Mat4::IDENTITY);

@@ -19,9 +19,12 @@ use crate::{
 ///
 /// [`grow`](SpeciesGrower::grow) is called once per variant, from any worker thread and in
 /// no particular order, so what it returns must depend on its arguments alone (the output
-/// is then byte-identical for any thread count). An error stops the run: the first failing
-/// variant in (layer, variant) order is reported as [`ForestError::Species`], its error kept
-/// as it was (a [`pge_engine::Error::TimeLimit`] stays one).
+/// is then byte-identical for any thread count). `ctx` holds the forest run's deadline and
+/// memory budget, for the whole run: a grower charges what it holds to `ctx.budget` and
+/// stops at `ctx.deadline` (or when [`RunContext::check_deadline`] says the run stopped). An
+/// error stops the run and the variants still growing: the first failing variant in (layer,
+/// variant) order (the ones stopped by it aside) is reported as [`ForestError::Species`],
+/// its error kept as it was (a [`pge_engine::Error::TimeLimit`] stays one).
 ///
 /// Any `Fn(&ScriptSpecies, u64, &RunContext) -> pge_engine::Result<GrownVariant>` that is
 /// `Send + Sync` is a grower.
@@ -93,6 +96,14 @@ fn grow_cached(
     }
 }
 
+/// Where a variant of `species` that has not started yet stops: its script.
+fn species_origin(species: &ScriptSpecies) -> pge_engine::Location {
+    pge_engine::Location {
+        file: species.path.clone(),
+        line: None,
+    }
+}
+
 /// The seeds of every variant to grow, layer by layer, in a fixed order: `variants = N`
 /// layers their N variant seeds, `"unique"` layers one per instance of `layout`.
 fn variant_seeds(spec: &ForestSpec, layout: &Layout) -> Vec<Vec<u64>> {
@@ -156,17 +167,42 @@ pub(crate) fn grow_variants(
         let places: Vec<String> = (0..layers.len())
             .map(|l| spec.layer_origin(l).to_string())
             .collect();
+        // The variants fail together: the first failure stops the others (a variant not
+        // started yet is not started, one growing stops at its next check), whose
+        // cancellation is not the run's error.
+        let together = RunContext {
+            budget: ctx.budget.child(),
+            ..ctx.clone()
+        };
         let results: Vec<pge_engine::Result<Model>> = scripts
             .par_iter()
-            .map(|&(l, species, s)| grow_cached(grower, cached[l], species, s, ctx, &places[l]))
+            .map(|&(l, species, s)| {
+                together.check_deadline(&species_origin(species))?;
+                let r = grow_cached(grower, cached[l], species, s, &together, &places[l]);
+                if r.is_err() {
+                    together.budget.stop();
+                }
+                r
+            })
             .collect();
-        for (&(l, species, _), r) in scripts.iter().zip(results) {
-            let model = r.map_err(|error| ForestError::Species {
-                layer: l,
+        let failures: Vec<(usize, &ScriptSpecies, &pge_engine::Error)> = scripts
+            .iter()
+            .zip(&results)
+            .filter_map(|(&(l, species, _), r)| r.as_ref().err().map(|e| (l, species, e)))
+            .collect();
+        let first = failures
+            .iter()
+            .find(|(_, _, e)| !matches!(e, pge_engine::Error::Cancelled { .. }))
+            .or(failures.first());
+        if let Some((l, species, error)) = first {
+            return Err(ForestError::Species {
+                layer: *l,
                 species: species.path.clone(),
-                error,
-            })?;
-            grown[l].variants.push(model);
+                error: error.duplicate(),
+            });
+        }
+        for (&(l, _, _), r) in scripts.iter().zip(results) {
+            grown[l].variants.extend(r.ok());
         }
     }
     for (l, species) in spec.species().iter().enumerate() {

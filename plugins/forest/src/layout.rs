@@ -6,13 +6,22 @@ use rayon::prelude::*;
 use crate::ForestError;
 use crate::jittered::jittered;
 use crate::layer::{Density, Layer, Method, Variants};
-use crate::poisson::{Rect, Sample, block_size, poisson};
+use crate::poisson::{Rect, Sample, block_size, poisson_until};
 use crate::terrain::Terrain;
 use crate::trunks::Trunks;
 use pge_engine::random::{SplitMix64, hash_words};
+use pge_engine::{Budget, Location, RunContext};
 
 /// The most instances a layout may hold.
 pub const MAX_INSTANCES: usize = 10_000_000;
+
+/// Bytes the layout holds per sample it draws while it runs (the sample, its candidate
+/// instance, the kept trunk and its index, the instance): checked against the run's memory
+/// budget before the layout starts.
+const LAYOUT_BYTES: f64 = 160.0;
+
+/// Samples between two checks of the deadline.
+const CHECK_EVERY: usize = 1 << 16;
 
 /// One tree of the layout: 28 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,27 +114,39 @@ impl Forest {
         )
     }
 
-    /// Every tile, `i` fastest, or `None` when the forest is not tiled.
+    /// How many tiles there are along x and along z, `None` when the forest is not tiled
+    /// (counted, not listed: a forest of many tiny tiles costs nothing until they are).
+    #[must_use]
+    pub fn tile_counts(&self) -> Option<[usize; 2]> {
+        let t = self.tile?;
+        let n = |s: f64| (s / t - 1e-9).ceil().max(1.0) as usize;
+        Some([n(self.size[0]), n(self.size[1])])
+    }
+
+    /// The rectangle of tile `(i, j)` (within [`Forest::tile_counts`]).
+    fn tile_at(&self, t: f64, n: [usize; 2], i: usize, j: usize) -> Rect {
+        let w = self.world();
+        let min = [w.min[0] + i as f64 * t, w.min[1] + j as f64 * t];
+        let max = [
+            if i + 1 == n[0] { w.max[0] } else { min[0] + t },
+            if j + 1 == n[1] { w.max[1] } else { min[1] + t },
+        ];
+        Rect::new(min, max)
+    }
+
+    /// Every tile, `i` fastest, or `None` when the forest is not tiled. The list is as long
+    /// as [`Forest::tile_counts`] says: check it before asking for a world of tiny tiles.
     #[must_use]
     pub fn tiles(&self) -> Option<Vec<Tile>> {
         let t = self.tile?;
-        let w = self.world();
-        let n = [
-            (self.size[0] / t - 1e-9).ceil().max(1.0) as usize,
-            (self.size[1] / t - 1e-9).ceil().max(1.0) as usize,
-        ];
-        let mut out = Vec::with_capacity(n[0] * n[1]);
+        let n = self.tile_counts()?;
+        let mut out = Vec::with_capacity(n[0].saturating_mul(n[1]));
         for j in 0..n[1] {
             for i in 0..n[0] {
-                let min = [w.min[0] + i as f64 * t, w.min[1] + j as f64 * t];
-                let max = [
-                    if i + 1 == n[0] { w.max[0] } else { min[0] + t },
-                    if j + 1 == n[1] { w.max[1] } else { min[1] + t },
-                ];
                 out.push(Tile {
                     i,
                     j,
-                    rect: Rect::new(min, max),
+                    rect: self.tile_at(t, n, i, j),
                 });
             }
         }
@@ -134,56 +155,121 @@ impl Forest {
 
     /// Tile `(i, j)`, or an error when the forest has no `tile` or the index is outside.
     pub fn tile_rect(&self, i: usize, j: usize) -> Result<Rect, ForestError> {
-        let Some(tiles) = self.tiles() else {
+        let (Some(t), Some(n)) = (self.tile, self.tile_counts()) else {
             return Err(ForestError::NotTiled);
         };
-        let nx = tiles.iter().map(|t| t.i + 1).max().unwrap_or(1);
-        let nz = tiles.len() / nx;
-        tiles
-            .iter()
-            .find(|t| t.i == i && t.j == j)
-            .map(|t| t.rect)
-            .ok_or(ForestError::TileOutOfRange { i, j, nx, nz })
+        if i >= n[0] || j >= n[1] {
+            return Err(ForestError::TileOutOfRange {
+                i,
+                j,
+                nx: n[0],
+                nz: n[1],
+            });
+        }
+        Ok(self.tile_at(t, n, i, j))
     }
 
     /// The layout of the whole forest, or of tile `(i, j)`: a tile holds the instances whose
-    /// trunk is inside it, exactly as the whole forest places them.
+    /// trunk is inside it, exactly as the whole forest places them. Without a time or memory
+    /// limit: [`Forest::layout_within`] keeps to a run's.
     pub fn layout(&self, tile: Option<(usize, usize)>) -> Result<Layout, ForestError> {
-        for l in &self.layers {
-            l.check()?;
-        }
-        let world = self.world();
-        let estimate: f64 = self.layers.iter().map(|l| l.estimate(world.area())).sum();
-        if estimate > MAX_INSTANCES as f64 {
-            return Err(ForestError::TooMany {
-                estimate: estimate as u64,
-            });
-        }
-        let target = match tile {
-            Some((i, j)) => self.tile_rect(i, j)?,
-            None => world,
+        let unlimited = RunContext {
+            budget: Budget::new(usize::MAX),
+            ..RunContext::default()
         };
-        // Each layer must be right wherever a later one reads it.
+        self.layout_within(tile, &unlimited, &Location::new("forest", 0))
+    }
+
+    /// The regions each layer is sampled in for `target`: each layer must be right wherever
+    /// a later one reads it.
+    fn regions(&self, target: Rect) -> Vec<Rect> {
         let n = self.layers.len();
         let mut regions = vec![target; n];
         for l in (0..n.saturating_sub(1)).rev() {
             regions[l] = regions[l + 1].expand(self.layers[l + 1].reach());
         }
+        regions
+    }
+
+    /// About how many samples the layers draw for `target` (the whole world, or a tile and
+    /// the margins its layers read): what the layout's time and memory grow with.
+    #[must_use]
+    pub fn estimate(&self, target: Rect) -> f64 {
+        let world = self.world();
+        self.layers
+            .iter()
+            .zip(self.regions(target))
+            .map(|(l, region)| l.estimate(region.intersection(&world).area()))
+            .sum()
+    }
+
+    /// [`Forest::layout`] within a run's limits: sizes checked against `ctx.budget` before
+    /// anything is allocated, the deadline checked as the samples are drawn and kept (a
+    /// limit is an engine error placed at `at`, in [`ForestError::Script`]). Only the tile's
+    /// region counts: a tile of a world of any size is laid out in the time and memory of
+    /// its own trees.
+    pub fn layout_within(
+        &self,
+        tile: Option<(usize, usize)>,
+        ctx: &RunContext,
+        at: &Location,
+    ) -> Result<Layout, ForestError> {
+        for l in &self.layers {
+            l.check()?;
+        }
+        let world = self.world();
+        let target = match tile {
+            Some((i, j)) => self.tile_rect(i, j)?,
+            None => world,
+        };
+        let estimate = self.estimate(target);
+        if estimate > MAX_INSTANCES as f64 {
+            return Err(ForestError::TooMany {
+                estimate: estimate as u64,
+            });
+        }
+        ctx.budget
+            .check((estimate * LAYOUT_BYTES) as u64, at, || {
+                format!(
+                    "the layout of about {} trees needs {} MiB (raise minDistance, lower density or lay out a tile)",
+                    estimate as u64,
+                    (estimate * LAYOUT_BYTES / f64::from(1 << 20)).ceil()
+                )
+            })
+            .map_err(ForestError::Script)?;
+        let check = || ctx.check_deadline(at).map_err(ForestError::Script);
+        let stopped = || ctx.check_deadline(at).is_err();
+        let regions = self.regions(target);
         let mut layout = Layout::default();
         let mut trunks = Trunks::default();
         for (l, layer) in self.layers.iter().enumerate() {
+            check()?;
             let region = regions[l];
             let r = layer.min_distance;
             let index = trunks.index(r);
             let blocked = |x: f64, z: f64| index.any_within(x, z, r);
             let seed = hash_words(&[self.seed, 0x1a7e, l as u64]);
             let samples = match layer.method {
-                Method::Poisson => poisson(world, region, r, seed, &blocked, MAX_INSTANCES)
-                    .map_err(|_| ForestError::TooMany {
+                Method::Poisson => {
+                    let samples =
+                        poisson_until(world, region, r, seed, &blocked, MAX_INSTANCES, &stopped);
+                    check()?;
+                    samples.map_err(|_| ForestError::TooMany {
                         estimate: MAX_INSTANCES as u64 + 1,
-                    })?,
+                    })?
+                }
                 Method::Jittered { jitter } => {
-                    jittered(world, region, layer.cell(jitter), jitter, seed, &blocked)
+                    let samples = jittered(
+                        world,
+                        region,
+                        layer.cell(jitter),
+                        jitter,
+                        seed,
+                        &blocked,
+                        &stopped,
+                    );
+                    check()?;
+                    samples
                 }
             };
             // Cells along x, for the identity of "unique" trees.
@@ -204,11 +290,17 @@ impl Forest {
                 slope: layer.slope,
                 altitude: layer.altitude,
             };
-            let candidates: Vec<Option<(Instance, f64)>> =
-                samples.par_iter().map(|s| site.candidate(s)).collect();
+            let mut candidates: Vec<Option<(Instance, f64)>> = Vec::with_capacity(samples.len());
+            for chunk in samples.chunks(CHECK_EVERY) {
+                check()?;
+                candidates.par_extend(chunk.par_iter().map(|s| site.candidate(s)));
+            }
             let mut kept = Vec::new();
             let mut count = 0usize;
-            for (s, candidate) in samples.into_iter().zip(candidates) {
+            for (k, (s, candidate)) in samples.into_iter().zip(candidates).enumerate() {
+                if k % CHECK_EVERY == 0 {
+                    check()?;
+                }
                 let Some((inst, keep)) = candidate else {
                     continue;
                 };

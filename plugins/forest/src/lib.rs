@@ -58,7 +58,7 @@ pub use lua::ForestPlugin;
 pub use poisson::{Rect, Sample, block_size, poisson};
 pub use run::{ForestRun, levels};
 pub use shared::{VariantSharing, shared_layer, variants_model};
-pub use spec::{ForestSpec, ScriptSpecies, Species, VariantFn};
+pub use spec::{ForestSpec, ScriptSpecies, Species, TILE_BYTES, VariantFn};
 pub use terrain::{FbmOptions, Grid, Raster, Terrain};
 
 /// Why a forest cannot be laid out.

@@ -13,7 +13,9 @@ use std::rc::Rc;
 use std::sync::Arc;
 
 use mlua::{Lua, Table, UserData, UserDataMethods, Value};
-use pge_engine::lua::{AlgorithmHandle, LuaVec3, finite_number, run_context, script_error};
+use pge_engine::lua::{
+    AlgorithmHandle, LuaVec3, caller_location, finite_number, run_context, script_error,
+};
 use pge_engine::{Engine, Error, Plugin};
 
 use crate::{
@@ -181,7 +183,10 @@ impl UserData for LuaForest {
         });
         m.add_method("tiles", |lua, me, ()| {
             let spec = me.spec(lua, "tiles")?;
-            let tiles = spec.tiles().map_err(|e| at_forest(&spec, &e))?;
+            let tiles = spec.tiles(&run_context(lua).budget).map_err(|e| match e {
+                ForestError::Script(e) => mlua::Error::external(e.at(caller_location(lua))),
+                other => at_forest(&spec, &other),
+            })?;
             let out = lua.create_table()?;
             for t in tiles {
                 let e = lua.create_table()?;
@@ -195,10 +200,13 @@ impl UserData for LuaForest {
         });
         m.add_method("instances", |lua, me, ()| {
             let spec = me.spec(lua, "instances")?;
-            let layout = spec.forest().layout(spec.tile()).map_err(|e| match e {
-                ForestError::Script(e) => mlua::Error::external(e),
-                other => script_error(lua, format!("forest:instances: {other}")),
-            })?;
+            let layout = spec
+                .forest()
+                .layout_within(spec.tile(), &run_context(lua), &caller_location(lua))
+                .map_err(|e| match e {
+                    ForestError::Script(e) => mlua::Error::external(e),
+                    other => script_error(lua, format!("forest:instances: {other}")),
+                })?;
             // With a camera, each instance's leaves: the variants are grown to know theirs.
             let (leaves, lods) = if let Some(camera) = &spec.lod.camera {
                 check_budget(spec.forest(), camera)

@@ -52,6 +52,15 @@ impl Rect {
         }
     }
 
+    /// The part of this rectangle inside `other` (empty, of area 0, when they do not meet).
+    #[must_use]
+    pub fn intersection(&self, other: &Rect) -> Rect {
+        Rect {
+            min: [self.min[0].max(other.min[0]), self.min[1].max(other.min[1])],
+            max: [self.max[0].min(other.max[0]), self.max[1].min(other.max[1])],
+        }
+    }
+
     /// Area in square metres.
     #[must_use]
     pub fn area(&self) -> f64 {
@@ -110,6 +119,21 @@ pub fn poisson(
     blocked: &(dyn Fn(f64, f64) -> bool + Sync),
     cap: usize,
 ) -> Result<Vec<Sample>, usize> {
+    poisson_until(world, region, r, seed, blocked, cap, &|| false)
+}
+
+/// [`poisson`], cut short when `stopped` says so (checked between the phases of the
+/// sampling and its rows of blocks; the caller then reports its limit: what is returned is
+/// incomplete).
+pub(crate) fn poisson_until(
+    world: Rect,
+    region: Rect,
+    r: f64,
+    seed: u64,
+    blocked: &(dyn Fn(f64, f64) -> bool + Sync),
+    cap: usize,
+    stopped: &dyn Fn() -> bool,
+) -> Result<Vec<Sample>, usize> {
     let b = block_size(r);
     let nb = [
         ((world.max[0] - world.min[0]) / b).ceil().max(1.0) as i64,
@@ -138,6 +162,9 @@ pub fn poisson(
     let mut grid = Grid::new(world, lo, hi, r);
     let mut total = 0usize;
     for phase in 0..4i64 {
+        if stopped() {
+            return Ok(Vec::new());
+        }
         let (px, pz) = (phase & 1, phase >> 1);
         let blocks: Vec<(i64, i64)> = (lo[1]..=hi[1])
             .filter(|bz| bz.rem_euclid(2) == pz)
@@ -147,10 +174,17 @@ pub fn poisson(
                     .map(move |bx| (bx, bz))
             })
             .collect();
-        let sampled: Vec<Vec<Sample>> = blocks
-            .par_iter()
-            .map(|&(bx, bz)| grid.sample_block(bx, bz, seed, blocked))
-            .collect();
+        let mut sampled: Vec<Vec<Sample>> = Vec::with_capacity(blocks.len());
+        for chunk in blocks.chunks(1 << 12) {
+            if stopped() {
+                return Ok(Vec::new());
+            }
+            sampled.par_extend(
+                chunk
+                    .par_iter()
+                    .map(|&(bx, bz)| grid.sample_block(bx, bz, seed, blocked)),
+            );
+        }
         for ((bx, bz), samples) in blocks.into_iter().zip(sampled) {
             total += samples.len();
             grid.insert(bx, bz, samples);

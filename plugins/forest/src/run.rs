@@ -13,6 +13,10 @@ use crate::{
     check_budget, instance_leaves, layout_model, variant_lod, variants_model,
 };
 
+/// Bytes the assembly and the export hold per placed tree (its transform, its node or
+/// instance attributes).
+const PLACEMENT_BYTES: u64 = 96;
+
 /// A forest being run: a [`ForestSpec`], the [`SpeciesGrower`] that grows its script
 /// species and the run's [`ForestConfig`]. No Lua in it: a host builds the spec in Rust and
 /// hands over its own grower.
@@ -94,9 +98,9 @@ impl ForestRun {
         &self.spec
     }
 
-    /// The tiles of the forest ([`ForestSpec::tiles`]).
-    pub fn tiles(&self) -> Result<Vec<Tile>, ForestError> {
-        self.spec.tiles()
+    /// The tiles of the forest ([`ForestSpec::tiles`]), if the list fits in `budget`.
+    pub fn tiles(&self, budget: &pge_engine::Budget) -> Result<Vec<Tile>, ForestError> {
+        self.spec.tiles(budget)
     }
 
     /// Makes the run make tile `(i, j)` alone ([`ForestSpec::select_tile`]), from its start.
@@ -159,7 +163,16 @@ impl ForestRun {
     /// The layout of the forest (or its tile), its empty layers' warnings placed at the lines
     /// that described them.
     pub fn layout(&self) -> Result<Layout, ForestError> {
-        let mut layout = self.spec.forest().layout(self.spec.tile())?;
+        self.layout_within(&RunContext {
+            budget: pge_engine::Budget::new(usize::MAX),
+            ..RunContext::default()
+        })
+    }
+
+    /// [`ForestRun::layout`] within the run's limits ([`crate::Forest::layout_within`]).
+    pub fn layout_within(&self, ctx: &RunContext) -> Result<Layout, ForestError> {
+        let forest = self.spec.forest();
+        let mut layout = forest.layout_within(self.spec.tile(), ctx, &self.spec.origin())?;
         let empty = layout.counts.iter().enumerate().filter(|(_, c)| **c == 0);
         let located: Vec<String> = empty
             .zip(&layout.warnings)
@@ -234,7 +247,14 @@ impl ForestRun {
                     return Err(ForestError::CameraWithSharedVariants);
                 }
             }
-            self.layout = Some(self.layout()?);
+            // The terrain mesh the assembly will make is checked before anything runs.
+            let forest = self.spec.forest();
+            let grid = forest.terrain.grid(forest.tile);
+            let (kx, kz) = forest.terrain.patch(&grid, self.spec.tile());
+            forest
+                .terrain
+                .check_mesh(kx, kz, &ctx.budget, &self.spec.origin())?;
+            self.layout = Some(self.layout_within(ctx)?);
             return Ok(("layout", Step::Continue));
         };
         let Some(grown) = &self.grown else {
@@ -242,6 +262,17 @@ impl ForestRun {
             return Ok(("variants", Step::Continue));
         };
         if self.model.is_none() {
+            let origin = self.spec.origin();
+            ctx.check_deadline(&origin).map_err(ForestError::Script)?;
+            let placed = layout.instances.len() as u64;
+            ctx.budget
+                .check(placed.saturating_mul(PLACEMENT_BYTES), &origin, || {
+                    format!(
+                        "the placements of {placed} trees need {} MiB",
+                        (placed * PLACEMENT_BYTES).div_ceil(1 << 20)
+                    )
+                })
+                .map_err(ForestError::Script)?;
             self.model = Some(if writing {
                 variants_model(self.spec.forest(), grown)
             } else {
@@ -260,6 +291,10 @@ impl ForestRun {
         match e {
             ForestError::Script(e) => e,
             ForestError::Species { error, .. } if error.is_limit() => error,
+            ForestError::Lod {
+                error: pge_lod::LodError::Limit(error),
+                ..
+            } => *error,
             e @ ForestError::Species { layer, .. } => Error::script(
                 self.spec.layer_origin(layer),
                 format!("forest:scatter: {e}"),

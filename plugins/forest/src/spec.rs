@@ -10,6 +10,10 @@ use pge_engine::{Location, RunContext};
 
 use crate::{Forest, ForestError, ForestLod, Layer, Terrain, Tile};
 
+/// Bytes a listed tile is counted in a memory budget: the tile and what a caller makes of
+/// it (a Lua table, a JSON object).
+pub const TILE_BYTES: u64 = 256;
+
 /// A species grown from a script: the script's path (as its session is given it: errors
 /// name it, and the variant cache reads it) and its parameter overrides (as `--set`
 /// strings, sorted by name). Its variants are grown by the run's
@@ -72,7 +76,7 @@ impl fmt::Debug for Species {
 /// let oak = Species::Script(ScriptSpecies::new("scripts/species/oak.lua", &[("points", "300")]));
 /// spec.add_layer(Layer::new("oak", 9.0), oak).unwrap();
 /// spec.select_tile(1, 0).unwrap();
-/// assert_eq!(spec.tiles().unwrap().len(), 4);
+/// assert_eq!(spec.tiles(&pge_engine::Budget::default()).unwrap().len(), 4);
 /// assert!(spec.select_tile(2, 0).is_err());
 /// ```
 #[derive(Clone, Debug)]
@@ -148,8 +152,23 @@ impl ForestSpec {
         Ok(l)
     }
 
-    /// Every tile of the world, `i` fastest; [`ForestError::NotTiled`] without `tile`.
-    pub fn tiles(&self) -> Result<Vec<Tile>, ForestError> {
+    /// Every tile of the world, `i` fastest; [`ForestError::NotTiled`] without `tile`, and
+    /// an [`pge_engine::Error::MemoryLimit`] naming `tile` (in [`ForestError::Script`]) when
+    /// the list would not fit in `budget` (a listed tile, with what its callers make of it,
+    /// counts [`TILE_BYTES`]).
+    pub fn tiles(&self, budget: &pge_engine::Budget) -> Result<Vec<Tile>, ForestError> {
+        let n = self.forest.tile_counts().ok_or(ForestError::NotTiled)?;
+        let count = (n[0] as u64).saturating_mul(n[1] as u64);
+        budget
+            .check(count.saturating_mul(TILE_BYTES), &self.origin(), || {
+                format!(
+                    "tile = {} makes {} x {} tiles, too many to list",
+                    self.forest.tile.unwrap_or_default(),
+                    n[0],
+                    n[1]
+                )
+            })
+            .map_err(ForestError::Script)?;
         self.forest.tiles().ok_or(ForestError::NotTiled)
     }
 
@@ -226,7 +245,10 @@ mod tests {
             .expect("layer");
         assert_eq!(spec.layer_origin(1).to_string(), "forest layer 2 (rust)");
         assert_eq!(spec.origin().to_string(), "forest");
-        assert!(matches!(spec.tiles(), Err(ForestError::NotTiled)));
+        assert!(matches!(
+            spec.tiles(&pge_engine::Budget::default()),
+            Err(ForestError::NotTiled)
+        ));
         assert!(matches!(spec.select_tile(0, 0), Err(ForestError::NotTiled)));
         assert_eq!(spec.tile(), None);
     }

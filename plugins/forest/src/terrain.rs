@@ -10,6 +10,10 @@ use pge_engine::geometry::{Material, Mesh};
 
 use crate::ForestError;
 
+/// Bytes a terrain mesh holds per vertex (position, normal, texture coordinates, two
+/// triangles' indices).
+const TERRAIN_VERTEX_BYTES: u64 = 12 + 12 + 8 + 24;
+
 /// A greyscale image read as values in [0, 1], sampled bilinearly (heights, density maps).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Raster {
@@ -238,6 +242,42 @@ impl Terrain {
         } else {
             x0 + k as f64 * grid.step
         }
+    }
+
+    /// Checks that the mesh of the vertices `kx.0..=kx.1` by `kz.0..=kz.1` (of a [`Grid`]) can be
+    /// made, before it is: its vertices numbered by 32-bit indices (else an error naming
+    /// `resolution`) and its buffers within `budget` (else an
+    /// [`pge_engine::Error::MemoryLimit`] at `at` naming `resolution`, in
+    /// [`ForestError::Script`]).
+    pub fn check_mesh(
+        &self,
+        kx: (usize, usize),
+        kz: (usize, usize),
+        budget: &pge_engine::Budget,
+        at: &pge_engine::Location,
+    ) -> Result<(), ForestError> {
+        let side = |k: (usize, usize)| (k.1.saturating_sub(k.0) as u64).saturating_add(1);
+        let (nx, nz) = (side(kx), side(kz));
+        let vertices = nx.saturating_mul(nz);
+        if vertices > u64::from(u32::MAX) {
+            return Err(ForestError::Option {
+                option: "resolution",
+                message: format!(
+                    "{} m makes a terrain mesh of {nx} x {nz} vertices, more than a mesh holds (4294967295): raise resolution or use tiles",
+                    self.resolution
+                ),
+            });
+        }
+        let bytes = vertices.saturating_mul(TERRAIN_VERTEX_BYTES);
+        budget
+            .check(bytes, at, || {
+                format!(
+                    "the terrain mesh ({nx} x {nz} vertices at resolution = {} m) needs {} MiB",
+                    self.resolution,
+                    bytes.div_ceil(1 << 20)
+                )
+            })
+            .map_err(ForestError::Script)
     }
 
     /// The mesh of the vertices `kx.0..=kx.1` by `kz.0..=kz.1` of `grid` (named `terrain`).

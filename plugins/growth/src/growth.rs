@@ -320,7 +320,7 @@ impl Algorithm for Growth {
             &self.params.tree,
             mix_seed(ctx.seed, self.params.seed),
         )
-        .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
+        .map_err(|e| e.into_engine(self.location.clone(), ""))?;
         let mut model = Model::new();
         model.stats.add_phase("growth", self.seconds);
         model.add_model(&tree, Mat4::IDENTITY);

@@ -239,18 +239,23 @@ impl UserData for LuaTurtle {
                 .map(|(_, s)| s.len())
                 .sum::<usize>())
         });
-        m.add_method("skeleton", |_, me, ()| {
+        m.add_method("skeleton", |lua, me, ()| {
             // Every colour's skeleton joined into one (each keeps its roots).
             let mut joined = pge_engine::geometry::Skeleton::new();
             for (_, s) in me.turtle.skeletons() {
                 joined.append(s, &Mat4::IDENTITY);
             }
-            Ok(pge_engine::lua::LuaSkeleton::new(joined))
+            pge_engine::lua::LuaSkeleton::new(joined).into_lua_charged(lua)
         });
         m.add_method("model", |lua, me, ()| {
             me.model(run_context(lua).seed)
                 .map(LuaModel)
-                .map_err(|e| script_error(lua, format!("turtle:model: {e}")))
+                .map_err(|e| match e {
+                    pge_tree::TreeError::Lod(pge_lod::LodError::Limit(limit)) => {
+                        mlua::Error::external(*limit)
+                    }
+                    other => script_error(lua, format!("turtle:model: {other}")),
+                })
         });
     }
 }

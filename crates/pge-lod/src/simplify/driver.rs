@@ -33,6 +33,7 @@ pub(super) struct Simplifier {
     pub(super) max_overhang: f32,
     pub(super) axis: Axis,
     pub(super) inv_crown: f32,
+    deadline: Option<std::time::Instant>,
 }
 
 impl Simplifier {
@@ -73,6 +74,7 @@ impl Simplifier {
                 - 1e-6,
             axis,
             inv_crown: if crown > 0.0 { 1.0 / crown } else { 0.0 },
+            deadline: selection.deadline,
         }
     }
 
@@ -92,11 +94,17 @@ impl Simplifier {
         // The labels made before the last sweep began: it searched around each of them.
         let mut swept = 0u32;
         loop {
+            if self.past_deadline() {
+                return;
+            }
             self.rebuild_grid(fresh);
             self.pairs.clear();
             // Cell by cell, so neighbouring searches share the cells they read; the fresh
             // leaves are the last slots of each cell.
             for c in 0..self.grid.cells.len() {
+                if c % 4096 == 4095 && self.past_deadline() {
+                    return;
+                }
                 let cell = self.grid.cells[c];
                 for slot in (cell.start + cell.old) as usize..(cell.start + cell.len) as usize {
                     if sweep {
@@ -119,6 +127,12 @@ impl Simplifier {
                 swept = self.leaves.len() as u32;
             }
         }
+    }
+
+    /// Whether the run's deadline has passed (the simplification then stops unfinished).
+    fn past_deadline(&self) -> bool {
+        self.deadline
+            .is_some_and(|d| std::time::Instant::now() >= d)
     }
 
     /// Collapses the round's pairs cheapest first, each whose leaves both live and whose new

@@ -199,6 +199,9 @@ pub struct Selection {
     pub bounds: Bounds,
     /// The tree's axis; `None`: the vertical through the centre of the leaves' bounding box.
     pub axis: Option<Axis>,
+    /// When the run must stop (`--time-limit`): the simplification stops there, its chain
+    /// unfinished ([`crate::lod_mesh`] then fails with the time limit). `None`: no limit.
+    pub deadline: Option<std::time::Instant>,
 }
 
 /// Simplifies `leaves` into a collapse chain: until no allowed pair is left, collapse the

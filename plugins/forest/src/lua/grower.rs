@@ -14,9 +14,10 @@ use pge_engine::{Engine, Error, Location, RunContext, SessionOptions};
 use crate::{GrownVariant, ScriptSpecies, SpeciesGrower};
 
 /// Grows each variant of a species script in a sandboxed session of its own, created by an
-/// engine (the same plugins, sandbox and limits as the forest's session; a variant that
-/// runs out of time fails with [`Error::TimeLimit`] at the species script's line). Sessions
-/// are made on whichever worker thread grows the variant.
+/// engine (the same plugins and sandbox as the forest's session), within the forest run's
+/// limits: its deadline and its memory budget, which the variants grown in parallel share
+/// (a variant that runs out of time fails with [`Error::TimeLimit`] at the species script's
+/// line). Sessions are made on whichever worker thread grows the variant.
 ///
 /// ```no_run
 /// use std::sync::Arc;
@@ -95,11 +96,14 @@ impl SpeciesGrower for SessionGrower {
                 message,
             ));
         }
+        // The variant is part of the forest's run: its deadline and its memory budget.
         let session = self.engine.session(SessionOptions {
             seed,
             params: species.params.clone(),
             steps: None,
             cancel: ctx.cancel.clone(),
+            deadline: ctx.deadline,
+            budget: Some(ctx.budget.clone()),
         })?;
         if let Some(output) = &self.output {
             session.set_output_folder(output)?;
@@ -153,4 +157,78 @@ thread_local! {
     /// How many species functions are growing on this thread, one inside another (a Lua
     /// state and the functions it calls stay on one thread).
     static FUNCTION_DEPTH: Cell<usize> = const { Cell::new(0) };
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::{Duration, Instant};
+
+    use pge_engine::{Budget, Engine, Error, Location, RunContext};
+
+    use super::*;
+
+    /// A species script `source` in a folder of its own.
+    fn species(source: &str) -> (tempfile::TempDir, ScriptSpecies) {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("species.lua");
+        std::fs::write(&path, source).expect("script");
+        let species = ScriptSpecies::new(path.to_string_lossy().to_string(), &[]);
+        (dir, species)
+    }
+
+    fn grower() -> SessionGrower {
+        // No time limit of the engine's own: only the run's deadline can stop a variant.
+        let engine = Engine::builder().time_limit(None).build().expect("engine");
+        SessionGrower::new(engine)
+    }
+
+    #[test]
+    fn a_variant_keeps_to_the_runs_deadline() {
+        let (_dir, species) = species(
+            "for i = 1, 1e6 do end\nreturn pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, \
+             indices = {0,1,2} }",
+        );
+        let ctx = RunContext::default();
+        grower()
+            .grow(&species, 1, &ctx)
+            .expect("grows without a deadline");
+        let passed = RunContext {
+            deadline: Some(Instant::now() - Duration::from_secs(1)),
+            ..RunContext::default()
+        };
+        let e = grower()
+            .grow(&species, 1, &passed)
+            .expect_err("the run's time is up");
+        assert!(matches!(e, Error::TimeLimit { .. }), "{e:?}");
+    }
+
+    #[test]
+    fn a_variant_charges_the_runs_memory_budget() {
+        let (_dir, species) = species(
+            "local t = {}\nfor i = 1, 200000 do t[i] = i end\n\
+             return pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }",
+        );
+        // The run's budget: 16 MiB, of which the rest of the run holds all but 2.
+        let budget = Budget::new(16 << 20);
+        let held = budget
+            .charge(14 << 20, &Location::new("forest.lua", 1), String::new)
+            .expect("fits");
+        let ctx = RunContext {
+            budget: budget.clone(),
+            ..RunContext::default()
+        };
+        let e = grower()
+            .grow(&species, 1, &ctx)
+            .expect_err("past the budget");
+        assert!(matches!(e, Error::MemoryLimit { .. }), "{e:?}");
+        drop(held);
+        grower()
+            .grow(&species, 1, &ctx)
+            .expect("fits once the rest is given back");
+        assert_eq!(
+            budget.used(),
+            0,
+            "the variant's session gave its memory back"
+        );
+    }
 }

@@ -385,7 +385,7 @@ impl Algorithm for SpaceColonization {
         options.mesh.radii = pge_tree::RadiiMode::Keep;
         let seed = mix_seed(ctx.seed, self.params.seed);
         let tree = pge_tree::build_tree_in(&skeleton, &options, seed, &self.memory)
-            .map_err(|e| Error::script(self.location.clone(), e.to_string()))?;
+            .map_err(|e| e.into_engine(self.location.clone(), ""))?;
         let mut model = Model::new();
         model.stats.warnings.extend(self.warnings.iter().cloned());
         model.stats.add_phase("points", self.points_seconds);
