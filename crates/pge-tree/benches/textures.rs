@@ -121,27 +121,31 @@ fn texture_benches<M: Measurement>(group: &mut BenchmarkGroup<'_, M>) {
             },
         );
     }
-    // Every species of the gallery (scripts/species/): its bark style and leaf shape.
-    for (species, style, shape) in [
-        ("oak", BarkStyle::Furrowed, LeafShape::Lobed),
-        ("conifer", BarkStyle::Plated, LeafShape::Needles),
-        ("willow", BarkStyle::Fibrous, LeafShape::Lanceolate),
+    // Every species of the gallery (scripts/species/) as its script asks: its bark style and
+    // leaf shape, and its leaves a card (`perCard`; 1 when the script gives none).
+    for (species, style, shape, per_card) in [
+        ("oak", BarkStyle::Furrowed, LeafShape::Lobed, 12),
+        ("conifer", BarkStyle::Plated, LeafShape::Needles, 1),
+        ("spruce", BarkStyle::Scaly, LeafShape::Needles, 1),
+        ("willow", BarkStyle::Fibrous, LeafShape::Lanceolate, 12),
         (
             "maple (limbs_and_crown)",
             BarkStyle::Smooth,
             LeafShape::Palmate,
+            12,
         ),
-        ("bush", BarkStyle::Smooth, LeafShape::Ovate),
+        ("bush and poplar", BarkStyle::Smooth, LeafShape::Ovate, 12),
         (
-            "broadleaf and six more",
+            "broadleaf and five more",
             BarkStyle::Furrowed,
             LeafShape::Ovate,
+            12,
         ),
     ] {
         let leaf = LeafParams {
             shape,
             size: 512,
-            per_card: 1,
+            per_card,
         };
         group.bench_function(format!("species {species} 512"), |b| {
             b.iter(|| {

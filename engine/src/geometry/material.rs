@@ -67,8 +67,8 @@ impl Texture {
         quality: u8,
     ) -> Result<Texture, GeometryError> {
         let color = match channels {
-            1 => image::ExtendedColorType::L8,
-            3 => image::ExtendedColorType::Rgb8,
+            1 => jpeg_encoder::ColorType::Luma,
+            3 => jpeg_encoder::ColorType::Rgb,
             _ => {
                 return Err(GeometryError::Texture(format!(
                     "{channels} channels: a JPEG takes only 1 (grey) or 3 (RGB)"
@@ -76,16 +76,23 @@ impl Texture {
             }
         };
         let expected = width as usize * height as usize * channels as usize;
-        if pixels.len() != expected || width == 0 || height == 0 {
+        let side = |s: u32| u16::try_from(s).ok().filter(|&s| s > 0);
+        let (Some(w), Some(h)) = (side(width), side(height)) else {
+            return Err(GeometryError::Texture(format!(
+                "{width}x{height}: a JPEG is 1 to 65535 pixels a side"
+            )));
+        };
+        if pixels.len() != expected {
             return Err(GeometryError::Texture(format!(
                 "{width}x{height} with {channels} channels needs {expected} bytes, got {}",
                 pixels.len()
             )));
         }
         let mut jpeg = Vec::with_capacity(expected / 4);
-        let encoder =
-            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, quality.clamp(1, 100));
-        image::ImageEncoder::write_image(encoder, pixels, width, height, color)
+        let mut encoder = jpeg_encoder::Encoder::new(&mut jpeg, quality.clamp(1, 100));
+        encoder.set_sampling_factor(jpeg_encoder::SamplingFactor::R_4_4_4);
+        encoder
+            .encode(pixels, w, h, color)
             .map_err(|e| GeometryError::Texture(e.to_string()))?;
         Ok(Texture {
             name: name.into(),
