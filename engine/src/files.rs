@@ -20,6 +20,11 @@ pub trait Files: Send + Sync {
     /// The working folder, canonical: paths inside it are shown relative to it
     /// (`scripts/species/oak.lua:9:`).
     fn working_folder(&self) -> Option<PathBuf>;
+    /// Whether scripts may write files (`img:save`) on the file system: only when they read
+    /// from it.
+    fn writable(&self) -> bool {
+        false
+    }
 }
 
 /// The file system.
@@ -41,6 +46,10 @@ impl Files for DiskFiles {
 
     fn working_folder(&self) -> Option<PathBuf> {
         std::env::current_dir().ok()?.canonicalize().ok()
+    }
+
+    fn writable(&self) -> bool {
+        true
     }
 }
 
@@ -154,5 +163,6 @@ mod tests {
         );
         assert_eq!(files.working_folder(), Some(PathBuf::from("/")));
         assert_eq!(files.paths().count(), 2);
+        assert!(!files.writable() && DiskFiles.writable());
     }
 }

@@ -284,6 +284,20 @@ mod tests {
     }
 
     #[test]
+    fn a_script_reads_library_data_but_writes_no_file() {
+        let read = "local img = pge.Image.load(\"modellers/explorers_map.png\")\nreturn pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }\n";
+        generate(&request(json!({"source": read}))).expect("reads the bundled image");
+        let write = "local img = pge.Image.new(4, 4)\nimg:save(\"out.png\")\n";
+        let failure = generate(&request(json!({"source": write}))).expect_err("refused");
+        assert!(
+            failure.message.contains("cannot write 'out.png'"),
+            "{}",
+            failure.message
+        );
+        assert_eq!(failure.line, Some(2));
+    }
+
+    #[test]
     fn a_slow_script_is_stopped_by_the_time_limit() {
         let failure = generate(&request(
             json!({"source": "while true do end", "timeLimit": 0.2}),

@@ -249,6 +249,12 @@ pub fn resolve_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
 /// target included (a dangling one too), is refused. Write with [`write_inside`], which
 /// also never follows a link planted after this check.
 pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
+    if !with_files(lua, |files| files.writable()) {
+        return Err(script_error(
+            lua,
+            format!("cannot write '{relative}': this host keeps no files a script writes"),
+        ));
+    }
     let p = Path::new(relative);
     if relative.is_empty()
         || p.is_absolute()
