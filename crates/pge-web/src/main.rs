@@ -75,8 +75,12 @@ fn run(request: &str) -> Result<Output, Failure> {
 }
 
 /// Generates the request at `request` (a C string of JSON); 0 when a model was made.
+///
+/// # Safety
+/// `request` is null or a NUL-terminated string in the module's memory (JavaScript's
+/// `ccall` with a `string` argument passes one).
 #[unsafe(no_mangle)]
-pub extern "C" fn pge_web_generate(request: *const c_char) -> i32 {
+pub unsafe extern "C" fn pge_web_generate(request: *const c_char) -> i32 {
     let text = if request.is_null() {
         String::new()
     } else {
