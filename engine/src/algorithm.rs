@@ -1,8 +1,8 @@
 //! Algorithms: the unit of generation, run step by step.
 
+use crate::clock::Instant;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 use crate::geometry::{Model, Skeleton};
 use crate::{Budget, Error, Location, Result};

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
+use crate::files::{DiskFiles, Files};
 use crate::{Error, Plugin, Result, Session, SessionOptions};
 
 /// The limits every session of an engine runs under.
@@ -47,7 +48,7 @@ struct Library {
 }
 
 impl Library {
-    fn resolved(&self) -> Option<&(PathBuf, Option<PathBuf>)> {
+    fn resolved(&self, files: &dyn Files) -> Option<&(PathBuf, Option<PathBuf>)> {
         self.folder
             .get_or_init(|| {
                 let folder = match &self.source {
@@ -55,18 +56,19 @@ impl Library {
                     LibrarySource::Folder(folder) => Some(folder.clone()),
                     LibrarySource::Find(find) => find(),
                 }?;
-                let canonical = folder.canonicalize().ok();
+                let canonical = files.canonicalize(&folder).ok();
                 Some((folder, canonical))
             })
             .as_ref()
     }
 }
 
-/// Builds an [`Engine`]: plugins, limits, library folder.
+/// Builds an [`Engine`]: plugins, limits, library folder, files.
 pub struct EngineBuilder {
     plugins: Vec<Arc<dyn Plugin>>,
     limits: Limits,
     library: LibrarySource,
+    files: Arc<dyn Files>,
 }
 
 impl Default for EngineBuilder {
@@ -75,6 +77,7 @@ impl Default for EngineBuilder {
             plugins: Vec::new(),
             limits: Limits::default(),
             library: LibrarySource::None,
+            files: Arc::new(DiskFiles),
         }
     }
 }
@@ -133,6 +136,13 @@ impl EngineBuilder {
         self
     }
 
+    /// Where sessions read scripts and the files scripts name (default: the file system).
+    #[must_use]
+    pub fn files(mut self, files: impl Files + 'static) -> Self {
+        self.files = Arc::new(files);
+        self
+    }
+
     /// Builds the engine; two plugins with the same name are an error.
     pub fn build(self) -> Result<Engine> {
         for (i, p) in self.plugins.iter().enumerate() {
@@ -147,6 +157,7 @@ impl EngineBuilder {
                 source: self.library,
                 folder: OnceLock::new(),
             }),
+            files: self.files,
         })
     }
 }
@@ -158,6 +169,7 @@ pub struct Engine {
     plugins: Vec<Arc<dyn Plugin>>,
     limits: Limits,
     library: Arc<Library>,
+    files: Arc<dyn Files>,
 }
 
 impl Engine {
@@ -176,14 +188,22 @@ impl Engine {
     /// The library folder, if any (found now if the engine was built to find it).
     #[must_use]
     pub fn library(&self) -> Option<&Path> {
-        self.library.resolved().map(|(folder, _)| folder.as_path())
+        self.library
+            .resolved(&*self.files)
+            .map(|(folder, _)| folder.as_path())
     }
 
     /// The library folder, canonical: `None` without one, or when it cannot be read.
     pub(crate) fn canonical_library(&self) -> Option<&Path> {
         self.library
-            .resolved()
+            .resolved(&*self.files)
             .and_then(|(_, canonical)| canonical.as_deref())
+    }
+
+    /// Where sessions read scripts and the files scripts name.
+    #[must_use]
+    pub fn files(&self) -> &dyn Files {
+        &*self.files
     }
 
     /// The plugins, in the order they were added.

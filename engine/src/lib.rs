@@ -22,10 +22,13 @@
 pub mod algorithm;
 pub mod approx;
 mod budget;
+pub mod clock;
 #[cfg(feature = "lua")]
 mod engine;
 mod error;
 pub mod export;
+#[cfg(feature = "lua")]
+pub mod files;
 pub mod geometry;
 pub mod import;
 #[cfg(feature = "lua")]

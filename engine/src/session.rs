@@ -1,9 +1,9 @@
 //! Sessions: one sandboxed Lua state in which scripts run.
 
+use crate::clock::Instant;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 use mlua::{FromLuaMulti, HookTriggers, Lua, LuaOptions, StdLib, Value, VmState};
 
@@ -289,7 +289,8 @@ impl Session {
     /// `require` and `pge.load`; a `--set` override it does not declare is an error.
     pub fn run_script(&self, path: &Path) -> Result<Value> {
         let shown = path.to_string_lossy().replace('\\', "/");
-        let canonical = path.canonicalize().map_err(|e| {
+        let canonical = crate::lua::with_files(&self.lua, |files| files.canonicalize(path));
+        let canonical = canonical.map_err(|e| {
             Error::script(
                 Location {
                     file: shown.clone(),
@@ -298,7 +299,7 @@ impl Session {
                 format!("cannot read script: {e}"),
             )
         })?;
-        if !canonical.is_file() {
+        if !crate::lua::with_files(&self.lua, |files| files.is_file(&canonical)) {
             return Err(Error::script(
                 Location {
                     file: shown,

@@ -197,7 +197,7 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
     };
     let sectors = simplify_sectors(&leaves, options);
     if let Some(d) = options.selection.deadline
-        && std::time::Instant::now() >= d
+        && pge_engine::clock::Instant::now() >= d
     {
         return Err(LodError::Limit(Box::new(pge_engine::Error::TimeLimit {
             location: location_of(&options.source),

@@ -43,9 +43,9 @@ mod textures;
 #[cfg(feature = "lua")]
 mod tree_lua;
 
+use pge_engine::clock::Instant;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Instant;
 
 use glam::{Mat4, Vec3};
 use pge_engine::geometry::{GeometryError, Mesh, Model, Skeleton};

@@ -28,14 +28,15 @@ use std::path::PathBuf;
 
 use mlua::{Lua, Value};
 use pge_engine::lua::{
-    Bounds, Options, caller_location, error_message, resolve_path, script_error,
+    Bounds, Options, caller_location, error_message, read_file, resolve_path, script_error,
 };
 
+use crate::TreeError;
 use crate::options::{
     Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
     TextureSource, TreeOptions,
 };
-use crate::textures::{TextureFormat, load_png};
+use crate::textures::{TextureFormat, decode_png};
 
 /// [`tree_options`] for a generator that computes its own radii (growth, conifer): the
 /// mesher keeps them ([`RadiiMode::Keep`](crate::RadiiMode::Keep)) unless the script's
@@ -328,7 +329,12 @@ pub fn load_texture_for(
         let shown = path.to_string_lossy().into_owned();
         let file = resolve_path(lua, &shown)
             .map_err(|e| script_error(lua, format!("{what}: {key}: {}", error_message(lua, &e))))?;
-        let texture = load_png(&file, name)
+        let texture = read_file(lua, &file)
+            .map_err(|e| TreeError::Texture {
+                path: file.clone(),
+                message: e.to_string(),
+            })
+            .and_then(|bytes| decode_png(&file, &bytes, name))
             .map_err(|e| script_error(lua, format!("{what}: {key}: cannot read '{shown}': {e}")))?;
         *source = TextureSource::Image(texture);
     }

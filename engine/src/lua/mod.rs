@@ -35,7 +35,8 @@ pub use order::{key_order, sorted_keys, sorted_pairs};
 pub use random::{LuaRng, current_uniform, swap_rng};
 pub(crate) use sandbox::exec_file as sandbox_exec;
 pub(crate) use sandbox::exec_source as sandbox_exec_source;
-pub use sandbox::{resolve_path, writable_path, write_inside};
+pub(crate) use sandbox::with_files;
+pub use sandbox::{read_file, resolve_path, shown_path, writable_path, write_inside};
 pub use services::{
     DefaultInterpreter, InstanceFactory, ModelMaker, ReadOnlyPhase, check_mutable,
     default_instance, interpreters, read_only_phase, register_interpreter, register_model_maker,

@@ -7,7 +7,7 @@ use mlua::{AnyUserData, FromLua, Lua, ObjectLike, Table, UserData, UserDataMetho
 
 use super::errors::script_error;
 use super::math::LuaMat4;
-use super::sandbox::resolve_path;
+use super::sandbox::{read_file, resolve_path};
 use crate::RunContext;
 use crate::geometry::{AlphaMode, Material, Mesh, Model, Primitive, Texture};
 
@@ -169,7 +169,7 @@ pub fn texture_from_value(lua: &Lua, value: &Value, what: &str) -> mlua::Result<
         Value::String(path) => {
             let path = path.to_string_lossy();
             let file = resolve_path(lua, &path)?;
-            let bytes = std::fs::read(&file)
+            let bytes = read_file(lua, &file)
                 .map_err(|e| script_error(lua, format!("{what} '{path}': {e}")))?;
             Texture::from_image_bytes(path.clone(), &bytes)
                 .map_err(|e| script_error(lua, format!("{what} '{path}': {e}")))?

@@ -8,7 +8,8 @@ use mlua::{Lua, Table, Value};
 use super::chunks::{ShippedChunk, shipped_chunk};
 use super::errors::{caller_location, script_error};
 use super::params;
-use super::state::{self, Chunk, SessionState};
+use super::state::{self, Chunk, EngineHandle, SessionState};
+use crate::files::{DiskFiles, Files};
 use crate::{Error, Location};
 
 const LOADED_KEY: &str = "pge.loaded";
@@ -95,9 +96,35 @@ fn display_value(v: &Value) -> String {
     }
 }
 
+/// Runs `f` with the files of the session's engine (the file system without one).
+pub(crate) fn with_files<R>(lua: &Lua, f: impl FnOnce(&dyn Files) -> R) -> R {
+    match lua.app_data_ref::<EngineHandle>() {
+        Some(engine) => f(engine.0.files()),
+        None => f(&DiskFiles),
+    }
+}
+
+/// The bytes of a file a script names, once resolved ([`resolve_path`]): read from the
+/// engine's files (the file system, or memory in a browser).
+pub fn read_file(lua: &Lua, path: &Path) -> std::io::Result<Vec<u8>> {
+    with_files(lua, |files| files.read(path))
+}
+
+/// How a canonical path is shown: relative to the working folder when inside it
+/// (`scripts/species/oak.lua`), else as it is; with `/` between folders.
+pub fn shown_path(lua: &Lua, canonical: &Path) -> String {
+    shown_from_cwd(lua, canonical)
+        .to_string_lossy()
+        .replace('\\', "/")
+}
+
 /// Runs a script file as a chunk named after its shown path; records it for reload.
 pub(crate) fn exec_file(lua: &Lua, display: String, path: PathBuf) -> mlua::Result<Value> {
-    let source = std::fs::read_to_string(&path).map_err(|e| {
+    let source = read_file(lua, &path).and_then(|bytes| {
+        String::from_utf8(bytes)
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()))
+    });
+    let source = source.map_err(|e| {
         mlua::Error::external(Error::script(
             Location {
                 file: display.clone(),
@@ -175,11 +202,9 @@ fn normalize(p: &Path) -> PathBuf {
     out
 }
 
-/// How to show a canonical folder: relative to the working directory when inside it.
-fn shown_from_cwd(dir: &Path) -> PathBuf {
-    std::env::current_dir()
-        .ok()
-        .and_then(|cwd| cwd.canonicalize().ok())
+/// How to show a canonical path: relative to the working folder when inside it.
+fn shown_from_cwd(lua: &Lua, dir: &Path) -> PathBuf {
+    with_files(lua, |files| files.working_folder())
         .and_then(|cwd| dir.strip_prefix(cwd).ok().map(Path::to_path_buf))
         .unwrap_or_else(|| dir.to_path_buf())
 }
@@ -204,8 +229,7 @@ fn resolve(lua: &Lua, relative: &str, what: &str) -> mlua::Result<(String, PathB
         ));
     }
     let candidate = real_dir.join(rel);
-    let canonical = candidate
-        .canonicalize()
+    let canonical = with_files(lua, |files| files.canonicalize(&candidate))
         .map_err(|e| script_error(lua, format!("{what} '{relative}': {e}")))?;
     if !is_allowed(lua, &canonical) {
         return Err(script_error(
@@ -236,6 +260,12 @@ pub fn resolve_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
 /// target included (a dangling one too), is refused. Write with [`write_inside`], which
 /// also never follows a link planted after this check.
 pub fn writable_path(lua: &Lua, relative: &str) -> mlua::Result<PathBuf> {
+    if !with_files(lua, |files| files.writable()) {
+        return Err(script_error(
+            lua,
+            format!("cannot write '{relative}': this host keeps no files a script writes"),
+        ));
+    }
     let p = Path::new(relative);
     if relative.is_empty()
         || p.is_absolute()
@@ -359,14 +389,14 @@ fn find_module(lua: &Lua, name: &str) -> mlua::Result<(String, PathBuf)> {
     let library = state::library(lua);
     let mut dirs = vec![(shown_dir, real_dir)];
     for d in [main, library].into_iter().flatten() {
-        dirs.push((shown_from_cwd(&d), d));
+        dirs.push((shown_from_cwd(lua, &d), d));
     }
     let mut looked = Vec::new();
     for (shown, real) in &dirs {
         for file in [format!("{rel}.lua"), format!("{rel}/init.lua")] {
             let candidate = real.join(&file);
             looked.push(candidate.display().to_string());
-            if let Ok(canonical) = candidate.canonicalize() {
+            if let Ok(canonical) = with_files(lua, |files| files.canonicalize(&candidate)) {
                 if !is_allowed(lua, &canonical) {
                     continue;
                 }

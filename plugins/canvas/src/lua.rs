@@ -8,7 +8,7 @@ use glam::Vec4;
 use mlua::{Lua, MultiValue, Table, UserData, UserDataMethods, Value};
 use pge_engine::geometry::{Model, Texture};
 use pge_engine::lua::{
-    Bounds, LuaMesh, LuaModel, Options, caller_location, finite_number, memory_budget,
+    Bounds, LuaMesh, LuaModel, Options, caller_location, finite_number, memory_budget, read_file,
     resolve_path, run_context, script_error, to_model, vec3_arg, write_inside,
 };
 
@@ -366,7 +366,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
             };
             let p = p.to_str()?.to_string();
             let file = resolve_path(lua, &p)?;
-            let bytes = std::fs::read(&file)
+            let bytes = read_file(lua, &file)
                 .map_err(|e| script_error(lua, format!("pge.Image.load '{p}': {e}")))?;
             let img = Image::decode(&bytes)
                 .map_err(|e| script_error(lua, format!("pge.Image.load '{p}': {e}")))?;

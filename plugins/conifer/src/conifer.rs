@@ -2,7 +2,7 @@
 //! internode of the leader and one whorl of buds; `finish` builds the skeleton of the tree
 //! at its age and meshes it with [`pge_tree`].
 
-use std::time::Instant;
+use pge_engine::clock::Instant;
 
 use glam::Mat4;
 use pge_engine::geometry::{Model, Skeleton};

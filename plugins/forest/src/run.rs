@@ -1,8 +1,8 @@
 //! A forest run: the layout, then the variants, then the assembly, as three steps of an
 //! [`Algorithm`] (the phases `--stats` reports), or at once with [`ForestRun::run`].
 
+use pge_engine::clock::Instant;
 use std::sync::Arc;
-use std::time::Instant;
 
 use pge_engine::geometry::Model;
 use pge_engine::{Algorithm, Error, RunContext, Step};

@@ -42,7 +42,18 @@ impl Raster {
     /// (16-bit images keep their precision).
     pub fn load(path: &Path) -> Result<Raster, ForestError> {
         let shown = path.display().to_string();
-        let img = image::open(path).map_err(|e| ForestError::Image {
+        let bytes = std::fs::read(path).map_err(|e| ForestError::Image {
+            path: shown.clone(),
+            message: e.to_string(),
+        })?;
+        Raster::decode(&shown, &bytes)
+    }
+
+    /// [`Raster::load`] of an image file's bytes (read by the caller; `shown` names the
+    /// file in errors), its format found from its contents.
+    pub fn decode(shown: &str, bytes: &[u8]) -> Result<Raster, ForestError> {
+        let shown = shown.to_string();
+        let img = image::load_from_memory(bytes).map_err(|e| ForestError::Image {
             path: shown.clone(),
             message: e.to_string(),
         })?;

@@ -1,8 +1,8 @@
 //! The transport model as a step-wise [`Algorithm`]: one step is one feeding; `finish`
 //! turns the branches into the engine's [`Skeleton`] and meshes it with [`pge_tree`].
 
+use pge_engine::clock::Instant;
 use std::sync::Arc;
-use std::time::Instant;
 
 use glam::{DVec3, Mat4, Vec3};
 use pge_engine::geometry::{Model, Skeleton};

@@ -3,13 +3,14 @@
 //! parity (seed 000) and distance queries through a BVH (`obvhs`) built once per mesh.
 
 use std::collections::HashMap;
-use std::time::Duration;
 
 use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
-use obvhs::bvh2::builder::build_bvh2;
+use obvhs::bvh2::leaf_collapser::collapse;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::ploc::PlocBuilder;
 use obvhs::ray::Ray;
 use pge_engine::geometry::{Model, Primitive};
 
@@ -125,11 +126,7 @@ impl TriMesh {
                 Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
             })
             .collect();
-        let bvh = build_bvh2(
-            &boxes,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let bvh = build_bvh(&boxes, BvhBuildParams::medium_build());
         Ok(TriMesh {
             name: name.into(),
             open,
@@ -396,6 +393,32 @@ fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     }
     let denom = 1.0 / (va + vb + vc);
     a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// obvhs's `build_bvh2` without its build timer: the same steps, in the same order (the
+/// same tree), but no reading of `std::time::Instant`, which a host without a system clock
+/// (the browser build) cannot give.
+fn build_bvh(boxes: &[Aabb], config: BvhBuildParams) -> Bvh2 {
+    let mut bvh = PlocBuilder::with_capacity(boxes.len()).build(
+        config.ploc_search_distance,
+        boxes,
+        (0..boxes.len() as u32).collect::<Vec<_>>(),
+        config.sort_precision,
+        config.search_depth_threshold,
+    );
+    let mut reinsertion = ReinsertionOptimizer::default();
+    reinsertion.run(&mut bvh, config.reinsertion_batch_ratio, None);
+    collapse(
+        &mut bvh,
+        config.max_prims_per_leaf.clamp(1, 255),
+        config.collapse_traversal_cost,
+    );
+    reinsertion.run(
+        &mut bvh,
+        config.reinsertion_batch_ratio * config.post_collapse_reinsertion_batch_ratio_multiplier,
+        None,
+    );
+    bvh
 }
 
 #[cfg(test)]

@@ -33,7 +33,7 @@ pub(super) struct Simplifier {
     pub(super) max_overhang: f32,
     pub(super) axis: Axis,
     pub(super) inv_crown: f32,
-    deadline: Option<std::time::Instant>,
+    deadline: Option<pge_engine::clock::Instant>,
 }
 
 impl Simplifier {
@@ -132,7 +132,7 @@ impl Simplifier {
     /// Whether the run's deadline has passed (the simplification then stops unfinished).
     fn past_deadline(&self) -> bool {
         self.deadline
-            .is_some_and(|d| std::time::Instant::now() >= d)
+            .is_some_and(|d| pge_engine::clock::Instant::now() >= d)
     }
 
     /// Collapses the round's pairs cheapest first, each whose leaves both live and whose new

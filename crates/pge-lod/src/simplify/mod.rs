@@ -201,7 +201,7 @@ pub struct Selection {
     pub axis: Option<Axis>,
     /// When the run must stop (`--time-limit`): the simplification stops there, its chain
     /// unfinished ([`crate::lod_mesh`] then fails with the time limit). `None`: no limit.
-    pub deadline: Option<std::time::Instant>,
+    pub deadline: Option<pge_engine::clock::Instant>,
 }
 
 /// Simplifies `leaves` into a collapse chain: until no allowed pair is left, collapse the

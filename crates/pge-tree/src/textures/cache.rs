@@ -74,10 +74,15 @@ impl TextureCache {
 /// work while the cache's cell for it is held; a thread of the caller's pool waiting there
 /// would run other jobs of that pool meanwhile, and one of them (another variant of a
 /// forest) could ask the same cell for the same set: the thread would wait for itself. The
-/// texture threads run nothing but the set's own work, and the caller only waits.
+/// texture threads run nothing but the set's own work, and the caller only waits. A caller
+/// alone in its pool (`--threads 1`, a browser without threads) makes the set itself: its
+/// pool work runs in order on this thread, which never picks up another job meanwhile.
 fn generate(
     make: impl FnOnce() -> Result<TextureSet, TreeError> + Send,
 ) -> Result<TextureSet, GenerateError> {
+    if rayon::current_num_threads() == 1 {
+        return make().map_err(|e| GenerateError::Made(Arc::new(e)));
+    }
     static POOL: OnceLock<Result<rayon::ThreadPool, GenerateError>> = OnceLock::new();
     let pool = POOL
         .get_or_init(|| {

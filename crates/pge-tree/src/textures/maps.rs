@@ -247,7 +247,12 @@ pub fn load_png(path: &Path, name: &str) -> Result<Arc<Texture>, TreeError> {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    Texture::from_image_bytes(name, &bytes)
+    decode_png(path, &bytes, name)
+}
+
+/// Decodes the bytes of the image file at `path` (read by the caller) as [`load_png`] does.
+pub fn decode_png(path: &Path, bytes: &[u8], name: &str) -> Result<Arc<Texture>, TreeError> {
+    Texture::from_image_bytes(name, bytes)
         .map(Arc::new)
         .map_err(|e| TreeError::Texture {
             path: path.to_path_buf(),

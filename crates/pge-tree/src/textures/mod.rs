@@ -29,7 +29,7 @@ use crate::options::{BarkStyle, LeafShape};
 pub use bark::{bark_maps, bark_set};
 pub use cache::{TextureCache, bark_textures, leaf_textures};
 pub use leaves::{leaf_maps, leaf_set};
-pub use maps::{Maps, TextureFormat, encode_maps, encode_maps_as, load_png};
+pub use maps::{Maps, TextureFormat, decode_png, encode_maps, encode_maps_as, load_png};
 
 /// The parameters a bark texture set is made from: its cache key.
 #[derive(Clone, Copy, Debug, PartialEq)]

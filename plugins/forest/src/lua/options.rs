@@ -3,12 +3,14 @@
 //! the calling line name the option and what it needs.
 
 use std::cell::RefCell;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::rc::Rc;
 use std::sync::Arc;
 
 use mlua::{Function, Lua, Table, Value};
-use pge_engine::lua::{Bounds, Options, caller_location, resolve_path, to_engine_error};
+use pge_engine::lua::{
+    Bounds, Options, caller_location, read_file, resolve_path, shown_path, to_engine_error,
+};
 use pge_engine::{Error, Location};
 
 use pge_lod::{Budget, LodOptions, MAX_SECTORS};
@@ -145,17 +147,6 @@ fn forest_lod(o: &Options) -> mlua::Result<ForestLod> {
     })
 }
 
-/// The path a session is given for `canonical`: relative to the working directory when it
-/// lies inside it, so errors read `scripts/species/oak.lua:9:`.
-fn shown_path(canonical: &Path) -> String {
-    let rel = std::env::current_dir()
-        .ok()
-        .and_then(|d| d.canonicalize().ok())
-        .and_then(|d| canonical.strip_prefix(d).ok().map(Path::to_path_buf))
-        .unwrap_or_else(|| canonical.to_path_buf());
-    rel.to_string_lossy().replace('\\', "/")
-}
-
 fn image(lua: &Lua, o: &Options, key: &str, relative: &str) -> mlua::Result<Arc<Raster>> {
     let path: PathBuf = resolve_path(lua, relative).map_err(|e| {
         // The sandbox's message, without the location the option's error gives again.
@@ -163,7 +154,9 @@ fn image(lua: &Lua, o: &Options, key: &str, relative: &str) -> mlua::Result<Arc<
         let reason = text.find("file '").map_or(text.as_str(), |k| &text[k..]);
         o.problem(key, format!("cannot be read: {reason}"))
     })?;
-    Raster::load(&path)
+    let bytes =
+        read_file(lua, &path).map_err(|e| o.problem(key, format!("cannot be read: {e}")))?;
+    Raster::decode(&path.display().to_string(), &bytes)
         .map(Arc::new)
         .map_err(|e| o.problem(key, format!("cannot be read: {e}")))
 }
@@ -280,7 +273,8 @@ pub(super) fn scatter(lua: &Lua, spec: &mut ForestSpec, v: Value) -> mlua::Resul
                 .file_stem()
                 .map_or_else(|| format!("layer{n}"), |s| s.to_string_lossy().to_string());
             let params = species_params(&o, &params)?;
-            let path = shown_path(&canonical);
+            // Relative to the working folder, so errors read `scripts/species/oak.lua:9:`.
+            let path = shown_path(lua, &canonical);
             (Species::Script(ScriptSpecies { path, params }), name)
         }
         Value::Function(f) => {

@@ -43,7 +43,7 @@ mod state;
 #[cfg(test)]
 mod tests;
 
-use std::time::Instant;
+use pge_engine::clock::Instant;
 
 use glam::Vec3;
 use pge_engine::geometry::{Model, Skeleton};

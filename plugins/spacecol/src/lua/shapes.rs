@@ -7,8 +7,8 @@ use std::rc::Rc;
 use glam::{Vec2, Vec3};
 use mlua::{FromLua, Function, Lua, Table, UserData, UserDataMethods, Value};
 use pge_engine::lua::{
-    LuaMat4, LuaVec3, Options, caller_location, error_message, resolve_path, script_error,
-    to_engine_error, to_model,
+    LuaMat4, LuaVec3, Options, caller_location, error_message, read_file, resolve_path,
+    script_error, to_engine_error, to_model,
 };
 
 use crate::shape::Shape;
@@ -268,7 +268,7 @@ fn mesh(lua: &Lua, v: Value) -> mlua::Result<LuaShape> {
         (Some(path), None) => {
             let file = resolve_path(lua, &path)
                 .map_err(|e| script_error(lua, format!("{w}: {}", error_message(lua, &e))))?;
-            let bytes = std::fs::read(&file)
+            let bytes = read_file(lua, &file)
                 .map_err(|e| script_error(lua, format!("{w}: cannot read '{path}': {e}")))?;
             let lower = path.to_ascii_lowercase();
             let parsed: Result<_, Box<dyn std::error::Error>> = if lower.ends_with(".obj") {
