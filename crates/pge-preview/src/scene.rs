@@ -483,7 +483,7 @@ fn decode_with(
     texture: &Texture,
     down: fn(&[u8], u32, u32, u32, u32) -> Vec<u8>,
 ) -> Option<TextureData> {
-    let img = image::load_from_memory(&texture.png).ok()?.to_rgba8();
+    let img = image::load_from_memory(&texture.encoded).ok()?.to_rgba8();
     let (width, height) = img.dimensions();
     let mut levels = vec![img.into_raw()];
     let (mut w, mut h) = (width, height);

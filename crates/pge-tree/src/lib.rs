@@ -551,7 +551,7 @@ mod tests {
             panic!("masked leaves")
         };
         let texture = leaves.material.texture.as_ref().expect("leaf texture");
-        let rgba = image::load_from_memory(&texture.png)
+        let rgba = image::load_from_memory(&texture.encoded)
             .expect("png")
             .to_rgba8();
         let mean = pge_lod::mask::mean_alpha(&pge_lod::mask::alpha_of(rgba.as_raw()));

@@ -214,7 +214,7 @@ impl Builder {
         if let Some(i) = written(&self.images, tex) {
             return i;
         }
-        let view = self.view(Data::Png(tex.clone()), None);
+        let view = self.view(Data::Image(tex.clone()), None);
         let index = self.root.push(json::Image {
             buffer_view: Some(view),
             mime_type: Some(json::image::MimeType(tex.mime_type().into())),

@@ -39,7 +39,7 @@ fn the_environment_is_an_embedded_image_named_by_the_root_extras() {
     assert_eq!(mime_type, "image/png");
     let blob = gltf.blob.as_ref().expect("binary chunk");
     let png = &blob[view.offset()..view.offset() + view.length()];
-    assert_eq!(png, sky.png.as_slice());
+    assert_eq!(png, sky.encoded.as_slice());
     let decoded = image::load_from_memory(png).expect("png").to_rgba8();
     assert_eq!(decoded.dimensions(), (4, 2));
     assert_eq!(decoded.as_raw(), &rgba);
