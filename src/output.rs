@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
-use pge_engine::export::{ExportMeta, Instancing, obj_files, write_glb_with};
+use pge_engine::export::{ExportMeta, Instancing, Prepared, obj_files, write_glb_with};
 use pge_engine::geometry::Model;
 
 /// The metadata a `.glb` records: the seed and the parameters' values, in order.
@@ -122,9 +122,11 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 }
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
-/// folder (those first, the `.obj` last), anything else as `.glb` with `meta`.
+/// folder (those first, the `.obj` last), anything else as `.glb` with `meta` (the skeletons'
+/// texts taken from `prepared` where it has them).
 pub fn write_model(
     model: &Model,
+    prepared: &Prepared,
     meta: &ExportMeta,
     output: &Path,
     instancing: Instancing,
@@ -154,6 +156,7 @@ pub fn write_model(
         // the check passed.
         let file = write_glb_with(
             model,
+            prepared,
             meta,
             instancing,
             || AtomicFile::create(output),

@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pge_engine::export::Instancing;
+use pge_engine::export::{Instancing, Prepared};
 use pge_engine::{Algorithm, Generated, GrowOptions, Session};
 use pge_forest::{ForestPlugin, ForestRun, VariantCache, VariantSharing};
 
@@ -186,21 +186,24 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Plan::Runs { product, targets } => {
             let engine = engine(args, &product)?;
             match targets {
-                Targets::One(target) => run_one(args, &engine, &product, &target, t0),
+                Targets::One(target) => run_one(args, &engine, &product, &target, t0, None),
                 // The tiles one after the other in this process, each in a session of its
                 // own (so each file is the one `--tile I,J -o DIR/I_J.glb` writes), the
                 // engine and the shared variants' description made and read once. A tile
                 // that fails stops the run with `tile I,J: ` before its error; the tiles
-                // written before it stay (each file is whole).
+                // written before it stay (each file is whole). The skeletons' texts are
+                // formatted once for every tile that writes the same variants.
                 Targets::Tiles { dir, tiles } => {
                     std::fs::create_dir_all(&dir)
                         .with_context(|| format!("cannot create {}", dir.display()))?;
+                    let mut prepared = Prepared::default();
                     for (i, j) in tiles {
                         let target = Target {
                             tile: Some((i, j)),
                             output: dir.join(format!("{i}_{j}.glb")),
                         };
-                        run_one(args, &engine, &product, &target, Instant::now())
+                        let t = Instant::now();
+                        run_one(args, &engine, &product, &target, t, Some(&mut prepared))
                             .with_context(|| format!("tile {i},{j}"))?;
                     }
                     Ok(())
@@ -225,13 +228,16 @@ fn engine(args: &RunArgs, product: &Product) -> anyhow::Result<pge_engine::Engin
     args.script.engine_with_forest(forest)
 }
 
-/// Runs the script once (the tile of `target`, when given) and writes `target.output`.
+/// Runs the script once (the tile of `target`, when given) and writes `target.output`, with
+/// the skeletons' texts of `prepared` when given (which keeps the texts of this model's for
+/// the next run).
 fn run_one(
     args: &RunArgs,
     engine: &pge_engine::Engine,
     product: &Product,
     target: &Target,
     t0: Instant,
+    prepared: Option<&mut Prepared>,
 ) -> anyhow::Result<()> {
     let Target { tile, output } = target;
     let session = engine.session(args.script.session_options(args.steps))?;
@@ -282,7 +288,15 @@ fn run_one(
             output.clone()
         }
         Product::Model => {
-            write_model(&generated.model, &meta, output, instancing)?;
+            let none = Prepared::default();
+            let prepared = match prepared {
+                Some(prepared) => {
+                    prepared.extend(&generated.model)?;
+                    &*prepared
+                }
+                None => &none,
+            };
+            write_model(&generated.model, prepared, &meta, output, instancing)?;
             output.clone()
         }
     };

@@ -372,11 +372,6 @@ pub fn build_tree_in(
                     small && options.lod.is_none() && mesh.unusable_triangles_in(search).is_empty();
                 (mesh, clean)
             });
-            // The bark's skeleton as the glb writes it, formatted here beside a small tree's
-            // bark (which takes longer than its leaves) rather than in the export.
-            if has_bark && small {
-                model.prepare_skeleton_text(&prepared);
-            }
             (points, mesh)
         },
     );

@@ -14,7 +14,7 @@ use crate::geometry::{
 use crate::{Error, Result};
 
 pub use super::glb_container::{GLB_LIMIT, GlbFile, glb_container};
-use super::glb_extras::{Extra, JsonText, MeshExtras};
+use super::glb_extras::{Extra, JsonText, MeshExtras, Prepared};
 use super::glb_layout::{Attribute, Data, Layout, vec3_bounds};
 pub use super::glb_sky::UNLIT;
 use super::glb_sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
@@ -489,7 +489,15 @@ pub fn glb_bytes_with(model: &Model, meta: &ExportMeta, instancing: Instancing) 
 /// The file [`glb_bytes_with`] gives, not yet assembled: [`GlbFile::write_to`] writes it to a
 /// file from the model's own memory, with no buffer of the file's size.
 pub fn glb_file_with(model: &Model, meta: &ExportMeta, instancing: Instancing) -> Result<GlbFile> {
-    write_glb_with(model, meta, instancing, || Ok(()), |(), file| Ok(file))
+    let prepared = Prepared::default();
+    write_glb_with(
+        model,
+        &prepared,
+        meta,
+        instancing,
+        || Ok(()),
+        |(), file| Ok(file),
+    )
 }
 
 /// The `.glb` bytes of several stages of one growth (`pge run --stages`): one scene per
@@ -672,11 +680,19 @@ impl Builder {
         meta: &ExportMeta,
         stages: Option<JsonValue>,
     ) -> Result<Vec<u8>> {
-        self.file(model, meta, stages)?.to_vec()
+        self.file(model, &Prepared::default(), meta, stages)?
+            .to_vec()
     }
 
-    /// The root extras (describing `model`), the buffer and the GLB container.
-    fn file(self, model: &Model, meta: &ExportMeta, stages: Option<JsonValue>) -> Result<GlbFile> {
+    /// The root extras (describing `model`), the buffer and the GLB container, the
+    /// skeletons' texts taken from `prepared` where it has them.
+    fn file(
+        self,
+        model: &Model,
+        prepared: &Prepared,
+        meta: &ExportMeta,
+        stages: Option<JsonValue>,
+    ) -> Result<GlbFile> {
         let mut b = self;
         // What the instances of shared variants draw (a tile that refers to them).
         let [sv, st, sn, sl] = b.shared_counts(model);
@@ -724,7 +740,7 @@ impl Builder {
         } else {
             with_extensions(&mut b.root, &b.gpu_nodes, &b.unlit, &b.transmissive)?
         };
-        let json = JsonText::new(text, &b.skeletons, &model.skeleton_texts)?;
+        let json = JsonText::new(text, &b.skeletons, prepared)?;
         GlbFile::new(json, b.layout, bin_len, GLB_LIMIT)
     }
 }

@@ -300,6 +300,7 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
     let through = || {
         write_glb_with(
             &model,
+            &Prepared::default(),
             &meta,
             Instancing::Gpu,
             || Ok::<_, Error>(Trickle(Vec::new())),
@@ -438,6 +439,7 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
     // error returned.
     let written = write_glb_with(
         &model,
+        &Prepared::default(),
         &ExportMeta::default(),
         Instancing::Gpu,
         || Ok::<_, Error>(vec![1u8]),
@@ -456,6 +458,7 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
     let written = one.install(|| {
         write_glb_with(
             &model,
+            &Prepared::default(),
             &ExportMeta::default(),
             Instancing::Gpu,
             || {
@@ -497,6 +500,7 @@ fn the_calling_thread_opens_the_file_when_the_pool_is_busy() {
     let opened_on = Mutex::new(Vec::new());
     let written = write_glb_with(
         &model,
+        &Prepared::default(),
         &meta,
         Instancing::Gpu,
         || {

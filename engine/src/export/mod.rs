@@ -14,5 +14,5 @@ pub use glb::{
     ExportMeta, GLB_LIMIT, GPU_INSTANCING, GlbFile, Instancing, glb_bytes, glb_bytes_with,
     glb_container, glb_file_with, glb_stages_bytes, lod_from_json, write_glb_with,
 };
-pub use glb_extras::SkeletonText;
+pub use glb_extras::Prepared;
 pub use obj::{ObjFiles, obj_files};
