@@ -14,7 +14,7 @@ use serde_json::Value as JsonValue;
 use serde_json::ser::{CompactFormatter, Formatter};
 use serde_json::value::RawValue;
 
-use super::glb::lod_extras::LodJson;
+use super::lod_extras::LodJson;
 use crate::geometry::{Mesh, MeshLod, Model, Skeleton};
 use crate::{Error, Result};
 

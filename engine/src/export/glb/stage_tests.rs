@@ -1,9 +1,10 @@
 //! Tests of stages as scenes and of empty models.
 
+use super::extras::SkeletonText;
 use super::*;
-use crate::export::glb_extras::SkeletonText;
 use crate::export::{Instancing, Prepared, write_glb_with};
-use crate::geometry::Skeleton;
+use crate::geometry::{Mesh, Skeleton};
+use glam::{Mat4, Vec3};
 use serde_json::Map;
 
 #[test]

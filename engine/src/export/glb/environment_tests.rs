@@ -1,7 +1,8 @@
 //! Tests of the environment image and the sky dome that carries it to clients.
 
 use super::*;
-use glam::Vec2;
+use crate::geometry::{Material, Mesh, Texture};
+use glam::{Mat4, Vec2, Vec3};
 
 #[test]
 fn the_environment_is_an_embedded_image_named_by_the_root_extras() {

@@ -1,9 +1,10 @@
 //! Tests of the glb writer: meshes, materials, extras, instancing.
 
+use super::layout::{BOUNDS_PIECE, vec3_bounds};
 use super::*;
-use crate::export::glb_layout::{BOUNDS_PIECE, vec3_bounds};
+use crate::geometry::{AlphaMode, InstanceGroup, Texture};
 use crate::geometry::{Material, Mesh, Skeleton};
-use glam::{Quat, Vec2};
+use glam::{Mat4, Quat, Vec2, Vec3};
 
 pub(super) fn textured_model() -> Model {
     let mut mesh =
