@@ -12,7 +12,6 @@ mod output;
 mod preview;
 mod run;
 mod shared;
-mod stages;
 mod tiles;
 
 /// PGE: procedural generation driven by Lua scripts. Grows plants, trees, forests and other

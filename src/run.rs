@@ -1,21 +1,20 @@
 //! `pge run`: run a script and write its model.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-use pge_engine::export::{Instancing, Prepared};
+use pge_engine::export::Prepared;
 use pge_engine::{Algorithm, Generated, GrowOptions, Session};
 use pge_forest::{ForestPlugin, ForestRun, VariantCache, VariantSharing};
 
-use crate::common::ScriptArgs;
+use crate::common::{InstancingArg, ScriptArgs, progress_bar};
 use crate::output::{export_meta, write_model};
 
 mod plan;
 mod report;
+mod stages;
 
 use plan::{Plan, Product, Target, Targets};
 use report::Report;
@@ -72,24 +71,6 @@ pub struct RunArgs {
     /// (a second buffer, by a URI relative to the output). Only DIR/variants.json is read.
     #[arg(long, value_name = "DIR", conflicts_with = "stages")]
     pub variants: Option<PathBuf>,
-}
-
-/// `--instancing`.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InstancingArg {
-    /// One node per variant with EXT_mesh_gpu_instancing.
-    Gpu,
-    /// One node per instance.
-    Nodes,
-}
-
-impl From<InstancingArg> for Instancing {
-    fn from(arg: InstancingArg) -> Instancing {
-        match arg {
-            InstancingArg::Gpu => Instancing::Gpu,
-            InstancingArg::Nodes => Instancing::Nodes,
-        }
-    }
 }
 
 fn parse_tile(s: &str) -> Result<(usize, usize), String> {
@@ -162,27 +143,12 @@ fn grow(
     started.grow_with(options, prepare, progress)
 }
 
-/// The progress bar of a run, drawn on stderr; none with `--quiet`, or when stderr is not a
-/// terminal (where indicatif would draw nothing either: a hidden bar still costs a short run
-/// tens of microseconds to make and a clock read at every step).
-pub(crate) fn progress_bar(quiet: bool) -> Option<ProgressBar> {
-    if quiet || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} step {pos}{len_suffix} [{elapsed}]")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    Some(bar)
-}
-
 /// Runs `pge run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     set_threads(args.threads)?;
     match Plan::decide(args)? {
-        Plan::Stages { stages, output } => crate::stages::run_stages(args, &stages, &output),
+        Plan::Stages { stages, output } => self::stages::run_stages(args, &stages, &output),
         Plan::Runs { product, targets } => {
             let engine = engine(args, &product)?;
             match targets {

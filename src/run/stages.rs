@@ -8,8 +8,9 @@ use pge_engine::export::glb_stages_bytes;
 use pge_engine::geometry::Model;
 use pge_engine::{Error, Location, Step};
 
+use super::RunArgs;
+use crate::common::progress_bar;
 use crate::output::{export_meta, write_atomically};
-use crate::run::{RunArgs, progress_bar};
 
 /// The most steps a stage may ask for.
 pub const STAGE_CAP: u32 = 100_000;
