@@ -9,10 +9,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use pge_engine::geometry::{AlphaMode, DiffuseTransmission, Mesh, Model, Primitive, Texture};
 
-/// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4), tangent (4:
-/// the mesh's MikkTSpace tangent where its material has a normal map, as the glb's
-/// `TANGENT`; zero elsewhere).
-pub const VERTEX_FLOATS: usize = 16;
+use crate::VERTEX_FLOATS;
 
 /// An RGBA8 (sRGB) texture with its mip chain, largest first.
 #[derive(Debug)]
