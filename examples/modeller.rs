@@ -105,7 +105,7 @@ fn render(model: &Model) -> image::RgbImage {
         let mesh = &model.meshes[inst.mesh];
         let tex = mesh.material.texture.as_ref().and_then(|t| {
             textures.entry(inst.mesh).or_insert_with(|| {
-                image::load_from_memory(&t.png)
+                image::load_from_memory(&t.encoded)
                     .map(|i| i.to_rgba8())
                     .unwrap_or_default()
             });

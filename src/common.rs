@@ -144,6 +144,41 @@ pub fn describe_error(e: &anyhow::Error) -> String {
     s.replace('\n', " ")
 }
 
+/// `--instancing`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InstancingArg {
+    /// One node per variant with EXT_mesh_gpu_instancing.
+    Gpu,
+    /// One node per instance.
+    Nodes,
+}
+
+impl From<InstancingArg> for pge_engine::export::Instancing {
+    fn from(arg: InstancingArg) -> pge_engine::export::Instancing {
+        match arg {
+            InstancingArg::Gpu => pge_engine::export::Instancing::Gpu,
+            InstancingArg::Nodes => pge_engine::export::Instancing::Nodes,
+        }
+    }
+}
+
+/// The progress bar of a run, drawn on stderr; none with `--quiet`, or when stderr is not a
+/// terminal (where indicatif would draw nothing either: a hidden bar still costs a short run
+/// tens of microseconds to make and a clock read at every step).
+pub(crate) fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
+    if quiet || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {msg} step {pos}{len_suffix} [{elapsed}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    Some(bar)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,7 +12,6 @@ mod output;
 mod preview;
 mod run;
 mod shared;
-mod stages;
 mod tiles;
 mod world;
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 pub use pge::embed::export_meta;
-use pge_engine::export::{ExportMeta, Instancing, obj_files, write_glb_with};
+use pge_engine::export::{ExportMeta, Instancing, Prepared, obj_files, write_glb_with};
 use pge_engine::geometry::Model;
 
 /// Writes `bytes` to `path` atomically, as [`write_atomically_with`] does.
@@ -233,9 +233,10 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
 /// folder (all written before any takes its place, the `.obj` last), anything else as
-/// `.glb` with `meta`.
+/// `.glb` with `meta` (the skeletons' texts taken from `prepared` where it has them).
 pub fn write_model(
     model: &Model,
+    prepared: &Prepared,
     meta: &ExportMeta,
     output: &Path,
     instancing: Instancing,
@@ -268,6 +269,7 @@ pub fn write_model(
         // the check passed.
         let file = write_glb_with(
             model,
+            prepared,
             meta,
             instancing,
             || AtomicFile::create(output),

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use pge_engine::ParamInfo;
-use pge_engine::export::Instancing;
+use pge_engine::export::{Instancing, Prepared};
 use pge_engine::geometry::Model;
 use pge_preview::{CameraSpec, PreviewOptions};
 
@@ -40,7 +40,8 @@ pub struct PreviewArgs {
 
 /// Writes the preview's model as `pge run` does.
 fn export(model: &Model, seed: u64, params: &[ParamInfo], path: &Path) -> anyhow::Result<()> {
-    write_model(model, &export_meta(seed, params), path, Instancing::Gpu)
+    let meta = export_meta(seed, params);
+    write_model(model, &Prepared::default(), &meta, path, Instancing::Gpu)
 }
 
 /// Opens the preview window for `args`.

@@ -1,21 +1,20 @@
 //! `pge run`: run a script and write its model.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-use pge_engine::export::Instancing;
+use pge_engine::export::Prepared;
 use pge_engine::{Algorithm, Generated, GrowOptions, Session};
 use pge_forest::{ForestPlugin, ForestRun, VariantCache, VariantSharing};
 
-use crate::common::ScriptArgs;
+use crate::common::{InstancingArg, ScriptArgs, progress_bar};
 use crate::output::{export_meta, write_model};
 
 mod plan;
 mod report;
+mod stages;
 
 use plan::{Plan, Product, Target, Targets};
 use report::Report;
@@ -72,24 +71,6 @@ pub struct RunArgs {
     /// (a second buffer, by a URI relative to the output). Only DIR/variants.json is read.
     #[arg(long, value_name = "DIR", conflicts_with = "stages")]
     pub variants: Option<PathBuf>,
-}
-
-/// `--instancing`.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InstancingArg {
-    /// One node per variant with EXT_mesh_gpu_instancing.
-    Gpu,
-    /// One node per instance.
-    Nodes,
-}
-
-impl From<InstancingArg> for Instancing {
-    fn from(arg: InstancingArg) -> Instancing {
-        match arg {
-            InstancingArg::Gpu => Instancing::Gpu,
-            InstancingArg::Nodes => Instancing::Nodes,
-        }
-    }
 }
 
 fn parse_tile(s: &str) -> Result<(usize, usize), String> {
@@ -162,45 +143,33 @@ fn grow(
     started.grow_with(options, prepare, progress)
 }
 
-/// The progress bar of a run, drawn on stderr; none with `--quiet`, or when stderr is not a
-/// terminal (where indicatif would draw nothing either: a hidden bar still costs a short run
-/// tens of microseconds to make and a clock read at every step).
-pub(crate) fn progress_bar(quiet: bool) -> Option<ProgressBar> {
-    if quiet || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} step {pos}{len_suffix} [{elapsed}]")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    Some(bar)
-}
-
 /// Runs `pge run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     set_threads(args.threads)?;
     match Plan::decide(args)? {
-        Plan::Stages { stages, output } => crate::stages::run_stages(args, &stages, &output),
+        Plan::Stages { stages, output } => self::stages::run_stages(args, &stages, &output),
         Plan::Runs { product, targets } => {
             let engine = engine(args, &product)?;
             match targets {
-                Targets::One(target) => run_one(args, &engine, &product, &target, t0),
+                Targets::One(target) => run_one(args, &engine, &product, &target, t0, None),
                 // The tiles one after the other in this process, each in a session of its
                 // own (so each file is the one `--tile I,J -o DIR/I_J.glb` writes), the
                 // engine and the shared variants' description made and read once. A tile
                 // that fails stops the run with `tile I,J: ` before its error; the tiles
-                // written before it stay (each file is whole).
+                // written before it stay (each file is whole). The skeletons' texts are
+                // formatted once for every tile that writes the same variants.
                 Targets::Tiles { dir, tiles } => {
                     std::fs::create_dir_all(&dir)
                         .with_context(|| format!("cannot create {}", dir.display()))?;
+                    let mut prepared = Prepared::default();
                     for (i, j) in tiles {
                         let target = Target {
                             tile: Some((i, j)),
                             output: dir.join(format!("{i}_{j}.glb")),
                         };
-                        run_one(args, &engine, &product, &target, Instant::now())
+                        let t = Instant::now();
+                        run_one(args, &engine, &product, &target, t, Some(&mut prepared))
                             .with_context(|| format!("tile {i},{j}"))?;
                     }
                     Ok(())
@@ -225,13 +194,16 @@ fn engine(args: &RunArgs, product: &Product) -> anyhow::Result<pge_engine::Engin
     args.script.engine_with_forest(forest)
 }
 
-/// Runs the script once (the tile of `target`, when given) and writes `target.output`.
+/// Runs the script once (the tile of `target`, when given) and writes `target.output`, with
+/// the skeletons' texts of `prepared` when given (which keeps the texts of this model's for
+/// the next run).
 fn run_one(
     args: &RunArgs,
     engine: &pge_engine::Engine,
     product: &Product,
     target: &Target,
     t0: Instant,
+    prepared: Option<&mut Prepared>,
 ) -> anyhow::Result<()> {
     let Target { tile, output } = target;
     // Files a script writes (`img:save`) go beside the output.
@@ -289,7 +261,15 @@ fn run_one(
             output.clone()
         }
         Product::Model => {
-            write_model(&model, &meta, output, instancing)?;
+            let none = Prepared::default();
+            let prepared = match prepared {
+                Some(prepared) => {
+                    prepared.extend(&model)?;
+                    &*prepared
+                }
+                None => &none,
+            };
+            write_model(&model, prepared, &meta, output, instancing)?;
             output.clone()
         }
     };

@@ -67,7 +67,7 @@ fn png(name: &str, bytes: usize) -> Option<Arc<Texture>> {
         name: name.into(),
         width: 512,
         height: 512,
-        png,
+        encoded: png,
     }))
 }
 

@@ -14,8 +14,8 @@ use clap::Args;
 use pge_engine::export::{ExportMeta, Instancing};
 use serde_json::{Map, Value};
 
+use crate::common::InstancingArg;
 use crate::output::write_atomically;
-use crate::run::InstancingArg;
 use crate::world::{Manifest, TileEntry, sha256_hex};
 use world::World;
 

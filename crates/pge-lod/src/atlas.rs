@@ -10,7 +10,7 @@
 use std::sync::Arc;
 
 use glam::Vec2;
-use pge_engine::geometry::{GeometryError, Texture};
+use pge_engine::geometry::{GeometryError, ImageFormat, Texture};
 use rand_mt::Mt64;
 
 use crate::mask;
@@ -214,7 +214,11 @@ struct Sprite {
 
 impl Sprite {
     fn decode(texture: &Texture) -> Result<Sprite, GeometryError> {
-        let img = image::load_from_memory_with_format(&texture.png, image::ImageFormat::Png)
+        let format = match texture.format() {
+            ImageFormat::Png => image::ImageFormat::Png,
+            ImageFormat::Jpeg => image::ImageFormat::Jpeg,
+        };
+        let img = image::load_from_memory_with_format(&texture.encoded, format)
             .map_err(|e| GeometryError::Texture(format!("{}: {e}", texture.name)))?
             .to_rgba8();
         Ok(Sprite {
@@ -400,7 +404,7 @@ mod tests {
     }
 
     fn opaque_fraction(atlas: &Atlas, cell: &Cell) -> f32 {
-        let img = image::load_from_memory(&atlas.texture.png)
+        let img = image::load_from_memory(&atlas.texture.encoded)
             .expect("decode")
             .to_rgba8();
         let s = ATLAS_SIZE as f32;
@@ -446,7 +450,7 @@ mod tests {
     }
 
     fn decode(texture: &Texture) -> image::RgbaImage {
-        image::load_from_memory(&texture.png)
+        image::load_from_memory(&texture.encoded)
             .expect("decode")
             .to_rgba8()
     }

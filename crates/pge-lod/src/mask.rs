@@ -273,7 +273,7 @@ pub struct Masked {
 /// is dilated from the others ([`dilate_color`]) and the texture re-encoded as PNG under its
 /// name. The same texture gives the same bytes.
 pub fn mask_texture(texture: &Texture) -> Result<Masked, GeometryError> {
-    let image = image::load_from_memory(&texture.png)
+    let image = image::load_from_memory(&texture.encoded)
         .map_err(|e| GeometryError::Texture(format!("{}: {e}", texture.name)))?
         .to_rgba8();
     let (w, h) = (image.width() as usize, image.height() as usize);
@@ -422,7 +422,7 @@ mod tests {
         let m = mask_texture(&png).expect("masked");
         assert_eq!(m.widened_from, None);
         assert!(m.mean_alpha >= m.cutoff + MARGIN);
-        let back = image::load_from_memory(&m.texture.png)
+        let back = image::load_from_memory(&m.texture.encoded)
             .expect("png")
             .to_rgba8();
         assert!(back.pixels().all(|p| p.0[..3] == [30, 90, 20]), "dilated");
@@ -440,7 +440,7 @@ mod tests {
         );
         assert!(
             mask_texture(&Texture {
-                png: vec![1, 2],
+                encoded: vec![1, 2],
                 ..png
             })
             .is_err()

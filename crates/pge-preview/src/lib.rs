@@ -51,6 +51,11 @@ use pge_engine::{Engine, ParamInfo};
 use self::app::{AppOptions, PreviewApp};
 use self::reload::Settings;
 
+/// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4), tangent (4:
+/// the mesh's MikkTSpace tangent where its material has a normal map, as the glb's
+/// `TANGENT`; zero elsewhere).
+pub const VERTEX_FLOATS: usize = 16;
+
 /// Writes a model to a file as the host's command line does (`pge run`'s writer: `.glb`, or
 /// `.obj` with its `.mtl` and textures): the preview's export button. Receives the model,
 /// the seed and the declared parameters with their values, and the file.

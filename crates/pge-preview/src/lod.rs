@@ -7,7 +7,7 @@ use std::ops::Range;
 use pge_engine::geometry::MeshLod;
 use pge_lod::{Row, first_levels};
 
-use super::scene::VERTEX_FLOATS;
+use crate::VERTEX_FLOATS;
 
 /// Parses `--lod-level`: a fraction of the leaves between 0.01 and 1.
 pub fn parse_fraction(text: &str) -> Result<f64, String> {

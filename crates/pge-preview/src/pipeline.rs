@@ -4,7 +4,7 @@
 use eframe::egui_wgpu::wgpu;
 use pge_engine::geometry::DiffuseTransmission;
 
-use super::scene::VERTEX_FLOATS;
+use crate::VERTEX_FLOATS;
 
 /// The viewport texture holds sRGB-encoded values in a plain format: egui samples every
 /// texture as gamma-encoded colour. The shaders encode.

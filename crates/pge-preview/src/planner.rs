@@ -340,7 +340,8 @@ mod tests {
     use glam::{Mat4, Vec3};
 
     use super::*;
-    use crate::scene::{SceneMesh, SceneStats, VERTEX_FLOATS};
+    use crate::VERTEX_FLOATS;
+    use crate::scene::{SceneMesh, SceneStats};
 
     /// A scene with one rigid forest mesh of `n` instances along -Z, `offset` metres apart.
     fn scene(n: usize, offset: f32) -> Arc<Scene> {

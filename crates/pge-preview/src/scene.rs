@@ -9,10 +9,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use pge_engine::geometry::{AlphaMode, DiffuseTransmission, Mesh, Model, Primitive, Texture};
 
-/// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4), tangent (4:
-/// the mesh's MikkTSpace tangent where its material has a normal map, as the glb's
-/// `TANGENT`; zero elsewhere).
-pub const VERTEX_FLOATS: usize = 16;
+use crate::VERTEX_FLOATS;
 
 /// An RGBA8 (sRGB) texture with its mip chain, largest first.
 #[derive(Debug)]
@@ -483,7 +480,7 @@ fn decode_with(
     texture: &Texture,
     down: fn(&[u8], u32, u32, u32, u32) -> Vec<u8>,
 ) -> Option<TextureData> {
-    let img = image::load_from_memory(&texture.png).ok()?.to_rgba8();
+    let img = image::load_from_memory(&texture.encoded).ok()?.to_rgba8();
     let (width, height) = img.dimensions();
     let mut levels = vec![img.into_raw()];
     let (mut w, mut h) = (width, height);

@@ -277,11 +277,6 @@ pub fn build_tree_in(
                     small && options.lod.is_none() && mesh.unusable_triangles_in(search).is_empty();
                 (mesh, clean)
             });
-            // The bark's skeleton as the glb writes it, formatted here beside a small tree's
-            // bark (which takes longer than its leaves) rather than in the export.
-            if has_bark && small {
-                model.prepare_skeleton_text(&prepared);
-            }
             (points, mesh)
         },
     );
@@ -457,7 +452,7 @@ mod tests {
             panic!("masked leaves")
         };
         let texture = leaves.material.texture.as_ref().expect("leaf texture");
-        let rgba = image::load_from_memory(&texture.png)
+        let rgba = image::load_from_memory(&texture.encoded)
             .expect("png")
             .to_rgba8();
         let mean = pge_lod::mask::mean_alpha(&pge_lod::mask::alpha_of(rgba.as_raw()));

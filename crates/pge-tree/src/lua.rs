@@ -606,7 +606,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let png =
             pge_engine::geometry::Texture::from_rgba("x", 1, 1, &[1, 2, 3, 255]).expect("png");
-        std::fs::write(dir.path().join("leaf.png"), &png.png).expect("write png");
+        std::fs::write(dir.path().join("leaf.png"), &png.encoded).expect("write png");
         run(
             dir.path(),
             "local s = opts{ leaves = { texture = 'leaf.png' } }\nassert(s:find('Image'), s)",

@@ -127,7 +127,7 @@ pub fn obj_files(model: &Model, mtl_name: &str, stem: &str) -> Result<ObjFiles> 
             if !matches!(m.alpha, crate::geometry::AlphaMode::Opaque) {
                 writeln!(out.mtl, "map_d {file}").map_err(e)?;
             }
-            out.textures.push((file, t.png.clone()));
+            out.textures.push((file, t.encoded.clone()));
         }
     }
     Ok(out)

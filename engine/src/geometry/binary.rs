@@ -5,8 +5,8 @@
 //! Decoding reads untrusted bytes: it never panics, and refuses with a typed
 //! [`BinaryError`] anything that is not a model (truncated or damaged bytes, trailing bytes,
 //! LOD tables that break their invariants, instances, groups and skeletons that point past
-//! their arrays). What is left out: the timings of the run ([`Stats::phases`]) and the glb
-//! caches ([`Model::clean`], [`Model::skeleton_texts`]). Meshes, materials, textures and
+//! their arrays). What is left out: the timings of the run ([`Stats::phases`]) and the
+//! list of meshes known clean ([`Model::clean`]). Meshes, materials, textures and
 //! skeletons that were shared (one `Arc`) are shared again.
 //!
 //! ```

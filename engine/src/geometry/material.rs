@@ -23,35 +23,50 @@ pub struct Texture {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// The image file's bytes: PNG, or JPEG (see [`Texture::mime_type`]).
+    /// The image file's bytes, encoded as [`Texture::format`] says (PNG, or JPEG).
     #[serde(with = "super::binary::bytes")]
-    pub png: Vec<u8>,
+    pub encoded: Vec<u8>,
+}
+
+/// How a [`Texture`]'s bytes are encoded (read from the bytes' own header).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// A PNG file.
+    Png,
+    /// A baseline JPEG file (opaque maps).
+    Jpeg,
 }
 
 /// The first bytes of every JPEG file (start of image, then a marker).
 const JPEG_MAGIC: [u8; 3] = [0xFF, 0xD8, 0xFF];
 
 impl Texture {
-    /// Whether the bytes are a JPEG file (else PNG).
+    /// How the bytes are encoded: JPEG when they start as a JPEG file does, PNG otherwise.
     #[must_use]
-    pub fn is_jpeg(&self) -> bool {
-        self.png.starts_with(&JPEG_MAGIC)
+    pub fn format(&self) -> ImageFormat {
+        if self.encoded.starts_with(&JPEG_MAGIC) {
+            ImageFormat::Jpeg
+        } else {
+            ImageFormat::Png
+        }
     }
 
     /// The image's media type as glTF names it: `image/jpeg` or `image/png`.
     #[must_use]
     pub fn mime_type(&self) -> &'static str {
-        if self.is_jpeg() {
-            "image/jpeg"
-        } else {
-            "image/png"
+        match self.format() {
+            ImageFormat::Jpeg => "image/jpeg",
+            ImageFormat::Png => "image/png",
         }
     }
 
     /// The usual file extension of the image: `jpg` or `png`.
     #[must_use]
     pub fn extension(&self) -> &'static str {
-        if self.is_jpeg() { "jpg" } else { "png" }
+        match self.format() {
+            ImageFormat::Jpeg => "jpg",
+            ImageFormat::Png => "png",
+        }
     }
 
     /// Encodes 8-bit pixels of `channels` (1: grey, 3: RGB) per pixel, row-major with the
@@ -98,7 +113,7 @@ impl Texture {
             name: name.into(),
             width,
             height,
-            png: jpeg,
+            encoded: jpeg,
         })
     }
 
@@ -119,7 +134,7 @@ impl Texture {
             name: name.into(),
             width,
             height,
-            png: bytes,
+            encoded: bytes,
         })
     }
 
@@ -153,7 +168,7 @@ impl Texture {
             name: name.into(),
             width,
             height,
-            png,
+            encoded: png,
         })
     }
 
@@ -194,7 +209,7 @@ impl Texture {
             name: name.into(),
             width,
             height,
-            png,
+            encoded: png,
         })
     }
 
@@ -331,13 +346,15 @@ mod tests {
         let px: Vec<u8> = (0..4 * 4 * 4).map(|i| i as u8).collect();
         let a = Texture::from_rgba("t", 4, 4, &px).expect("encodes");
         let b = Texture::from_rgba("t", 4, 4, &px).expect("encodes");
-        assert_eq!(a.png, b.png);
+        assert_eq!(a.encoded, b.encoded);
         assert!(Texture::from_rgba("t", 4, 4, &px[1..]).is_err());
-        let back = Texture::from_image_bytes("t", &a.png).expect("decodes");
-        assert_eq!(back.png, a.png);
+        let back = Texture::from_image_bytes("t", &a.encoded).expect("decodes");
+        assert_eq!(back.encoded, a.encoded);
         let rgb: Vec<u8> = (0..4 * 4 * 3).map(|i| i as u8).collect();
         let fast = Texture::from_pixels_fast("t", 4, 4, 3, &rgb).expect("encodes");
-        let decoded = image::load_from_memory(&fast.png).expect("png").to_rgb8();
+        let decoded = image::load_from_memory(&fast.encoded)
+            .expect("png")
+            .to_rgb8();
         assert_eq!(decoded.as_raw(), &rgb);
         assert!(Texture::from_pixels_fast("t", 4, 4, 4, &rgb).is_err());
         assert!(Texture::from_pixels_fast("t", 4, 4, 2, &rgb).is_err());
@@ -352,10 +369,10 @@ mod tests {
             .collect();
         let a = Texture::from_pixels_jpeg("t", 32, 32, 3, &rgb, 95).expect("encodes");
         let b = Texture::from_pixels_jpeg("t", 32, 32, 3, &rgb, 95).expect("encodes");
-        assert_eq!(a.png, b.png);
-        assert!(a.is_jpeg());
+        assert_eq!(a.encoded, b.encoded);
+        assert_eq!(a.format(), ImageFormat::Jpeg);
         assert_eq!((a.mime_type(), a.extension()), ("image/jpeg", "jpg"));
-        let decoded = image::load_from_memory(&a.png).expect("jpeg").to_rgb8();
+        let decoded = image::load_from_memory(&a.encoded).expect("jpeg").to_rgb8();
         let worst = decoded
             .as_raw()
             .iter()
@@ -366,16 +383,19 @@ mod tests {
         let grey: Vec<u8> = (0..16 * 16).map(|i| i as u8).collect();
         let g = Texture::from_pixels_jpeg("g", 16, 16, 1, &grey, 90).expect("encodes");
         assert_eq!(
-            image::load_from_memory(&g.png).expect("jpeg").color(),
+            image::load_from_memory(&g.encoded).expect("jpeg").color(),
             image::ColorType::L8
         );
         assert!(Texture::from_pixels_jpeg("t", 32, 32, 4, &rgb, 90).is_err());
         assert!(Texture::from_pixels_jpeg("t", 32, 31, 3, &rgb, 90).is_err());
         // Read back as it is, its size from its header; PNG too; nothing else.
-        let back = Texture::from_encoded("t", a.png.clone()).expect("a jpeg");
-        assert_eq!((back.width, back.height, &back.png), (32, 32, &a.png));
+        let back = Texture::from_encoded("t", a.encoded.clone()).expect("a jpeg");
+        assert_eq!(
+            (back.width, back.height, &back.encoded),
+            (32, 32, &a.encoded)
+        );
         let png = Texture::from_rgba("p", 3, 2, &[0; 24]).expect("png");
-        let back = Texture::from_encoded("p", png.png.clone()).expect("a png");
+        let back = Texture::from_encoded("p", png.encoded.clone()).expect("a png");
         assert_eq!((back.width, back.height), (3, 2));
         assert!(Texture::from_encoded("x", b"glTF".to_vec()).is_err());
         assert!(Texture::from_encoded("x", JPEG_MAGIC.to_vec()).is_err());

@@ -1,7 +1,7 @@
 //! Geometry: what every generator produces and every exporter writes.
 //!
 //! A [`Model`] holds shared [`Mesh`]es and the instances that place them; a mesh owns its
-//! [`Material`], which may carry a PNG [`Texture`]. Trees also attach their branch
+//! [`Material`], which may carry a PNG or JPEG [`Texture`]. Trees also attach their branch
 //! [`Skeleton`] to the bark mesh so games can read the graph back from the glTF extras, and
 //! leaf meshes written for levels of detail their [`MeshLod`]; a forest's model records the
 //! forest ([`ForestStats`]). [`binary`] is a model's exact binary form.
@@ -19,7 +19,7 @@ mod triangles;
 
 pub use forest::{ForestPart, ForestStats, SpeciesCount, VariantCounts};
 pub use lod::{GroupLod, LodError, LodLevel, LodSector, LodTable, MeshLod, PrimitiveLod};
-pub use material::{AlphaMode, DiffuseTransmission, Material, Texture};
+pub use material::{AlphaMode, DiffuseTransmission, ImageFormat, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};
 pub use model::{Instance, InstanceGroup, InstanceTransform, Model, PlacementLeaves, Stats};
 pub use resident::{SearchMemory, resident_vec};

@@ -2,8 +2,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::{ForestStats, GeometryError, Mesh, Skeleton, Texture, VariantCounts};
-use crate::export::SkeletonText;
+use super::{ForestStats, GeometryError, Mesh, Texture, VariantCounts};
 
 /// One placement of a mesh in the model (a glTF node).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -152,11 +151,6 @@ pub struct Model {
     /// change: `Arc::make_mut` copies a shared mesh, and the copy is searched.
     #[serde(skip)]
     pub clean: Vec<Arc<Mesh>>,
-    /// Texts of the meshes' skeletons for the glb, formatted ahead of the export where a
-    /// core had time to spare ([`Model::prepare_skeleton_text`]); the export uses each for
-    /// the skeletons with its numbers and formats the others.
-    #[serde(skip)]
-    pub skeleton_texts: Vec<Arc<SkeletonText>>,
 }
 
 impl Model {
@@ -224,11 +218,6 @@ impl Model {
                 self.clean.push(mesh.clone());
             }
         }
-        for text in &other.skeleton_texts {
-            if !self.skeleton_texts.iter().any(|t| Arc::ptr_eq(t, text)) {
-                self.skeleton_texts.push(text.clone());
-            }
-        }
         self.stats.merge(&other.stats);
         for (k, v) in &other.extras {
             self.extras.entry(k.clone()).or_insert_with(|| v.clone());
@@ -241,15 +230,6 @@ impl Model {
         }
         if self.environment.is_none() {
             self.environment.clone_from(&other.environment);
-        }
-    }
-
-    /// Formats the text of `skeleton` for the glb now, on the calling thread (see
-    /// [`Model::skeleton_texts`]), as a small tree's leaves do beside its bark. Formatting
-    /// into memory does not fail; should it, the export formats the skeleton and reports why.
-    pub fn prepare_skeleton_text(&mut self, skeleton: &Skeleton) {
-        if let Ok(text) = SkeletonText::new(skeleton) {
-            self.skeleton_texts.push(Arc::new(text));
         }
     }
 

@@ -151,7 +151,7 @@ impl Image {
         Ok(self
             .texture("image")
             .map_err(|e| ImageError::Encode(e.to_string()))?
-            .png)
+            .encoded)
     }
 
     /// The image as a texture for a material.

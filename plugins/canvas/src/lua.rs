@@ -135,7 +135,7 @@ impl UserData for LuaTexture {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("width", |_, me, ()| Ok(me.0.width));
         m.add_method("height", |_, me, ()| Ok(me.0.height));
-        m.add_method("pngBytes", |lua, me, ()| lua.create_string(&me.0.png));
+        m.add_method("pngBytes", |lua, me, ()| lua.create_string(&me.0.encoded));
     }
 }
 

@@ -31,7 +31,7 @@ impl Conifer {
     pub fn new(params: ConiferParams, location: Location) -> Result<Conifer> {
         params
             .validate()
-            .map_err(|m| Error::script(location.clone(), m))?;
+            .map_err(|e| Error::script(location.clone(), e.to_string()))?;
         Ok(Conifer {
             params,
             location,

@@ -34,5 +34,5 @@ pub use conifer::Conifer;
 pub use lua::ConiferPlugin;
 pub use params::{
     ConiferParams, Crown, DEFAULT_MAX_NODES, MAX_INTERWHORL, MAX_NODES, MAX_PER_WHORL, MAX_PROFILE,
-    MAX_SEGMENTS, MAX_YEARS, SprayPattern,
+    MAX_SEGMENTS, MAX_YEARS, ParamError, SprayPattern,
 };

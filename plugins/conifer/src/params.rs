@@ -191,53 +191,136 @@ impl Default for ConiferParams {
     }
 }
 
-fn positive(name: &str, x: f32) -> Result<(), String> {
-    if x.is_finite() && x > 0.0 {
+/// A parameter out of its range: what [`ConiferParams::validate`] refuses, naming the option
+/// as Lua spells it and what it needs.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    /// A number that must be finite and above 0.
+    #[error("{name} must be a number > 0, got {value}")]
+    NotPositive {
+        /// The option.
+        name: &'static str,
+        /// What it was.
+        value: f32,
+    },
+    /// A number that must lie in `lo..=hi`.
+    #[error("{name} must be a number between {lo} and {hi}, got {value}")]
+    Between {
+        /// The option.
+        name: &'static str,
+        /// What it was.
+        value: f32,
+        /// The least allowed.
+        lo: f32,
+        /// The most allowed.
+        hi: f32,
+    },
+    /// An integer that must lie in `min..=max`.
+    #[error("{name} must be an integer between {min} and {max}, got {value}")]
+    Integer {
+        /// The option.
+        name: &'static str,
+        /// What it was.
+        value: u64,
+        /// The least allowed.
+        min: u64,
+        /// The most allowed.
+        max: u64,
+    },
+    /// A `{min, max}` count range that must satisfy `least <= min <= max <= most`.
+    #[error(
+        "{name} must be {{min, max}} with {least} <= min <= max <= {most}, got {{{}, {}}}",
+        got.0,
+        got.1
+    )]
+    CountRange {
+        /// The option.
+        name: &'static str,
+        /// What it was.
+        got: (u32, u32),
+        /// The least allowed `min`.
+        least: u32,
+        /// The most allowed `max`.
+        most: u32,
+    },
+    /// A crown profile of too few or too many values.
+    #[error("crown must be a list of 2 to {MAX_PROFILE} numbers, got {0}")]
+    ProfileLength(usize),
+    /// A crown profile value that is negative or not a number.
+    #[error("crown values must be numbers >= 0, got {0}")]
+    ProfileValue(f32),
+    /// `jointRatio` outside `(0, 1]`.
+    #[error("jointRatio must be a number greater than 0 and at most 1, got {0}")]
+    JointRatio(f32),
+    /// A root position that is not finite.
+    #[error("root must be a finite vector")]
+    Root,
+}
+
+fn positive(name: &'static str, value: f32) -> Result<(), ParamError> {
+    if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(format!("{name} must be a number > 0, got {x}"))
+        Err(ParamError::NotPositive { name, value })
     }
 }
 
-fn between(name: &str, x: f32, lo: f32, hi: f32) -> Result<(), String> {
-    if x.is_finite() && x >= lo && x <= hi {
+fn between(name: &'static str, value: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+    if value.is_finite() && value >= lo && value <= hi {
         Ok(())
     } else {
-        Err(format!(
-            "{name} must be a number between {lo} and {hi}, got {x}"
-        ))
+        Err(ParamError::Between {
+            name,
+            value,
+            lo,
+            hi,
+        })
     }
 }
 
-fn count_range(name: &str, (lo, hi): (u32, u32), min: u32, max: u32) -> Result<(), String> {
-    if lo < min || hi > max || lo > hi {
-        return Err(format!(
-            "{name} must be {{min, max}} with {min} <= min <= max <= {max}, got {{{lo}, {hi}}}"
-        ));
+fn integer(name: &'static str, value: u64, min: u64, max: u64) -> Result<(), ParamError> {
+    if (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(ParamError::Integer {
+            name,
+            value,
+            min,
+            max,
+        })
+    }
+}
+
+fn count_range(
+    name: &'static str,
+    got: (u32, u32),
+    least: u32,
+    most: u32,
+) -> Result<(), ParamError> {
+    let (lo, hi) = got;
+    if lo < least || hi > most || lo > hi {
+        return Err(ParamError::CountRange {
+            name,
+            got,
+            least,
+            most,
+        });
     }
     Ok(())
 }
 
 impl ConiferParams {
     /// Checks every range: the error names the option (as Lua spells it) and what it needs.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.years < 1 || self.years > MAX_YEARS {
-            return Err(format!(
-                "years must be an integer between 1 and {MAX_YEARS}, got {}",
-                self.years
-            ));
-        }
+    pub fn validate(&self) -> Result<(), ParamError> {
+        integer("years", self.years.into(), 1, MAX_YEARS.into())?;
         positive("height", self.height)?;
         positive("crownRadius", self.crown_radius)?;
         if let Crown::Profile(values) = &self.crown {
             if values.len() < 2 || values.len() > MAX_PROFILE {
-                return Err(format!(
-                    "crown must be a list of 2 to {MAX_PROFILE} numbers, got {}",
-                    values.len()
-                ));
+                return Err(ParamError::ProfileLength(values.len()));
             }
             if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-                return Err(format!("crown values must be numbers >= 0, got {v}"));
+                return Err(ParamError::ProfileValue(*v));
             }
         }
         between("crownBase", self.crown_base, 0.0, 0.95)?;
@@ -249,33 +332,19 @@ impl ConiferParams {
         between("jitter", self.jitter, 0.0, 1.0)?;
         between("waviness", self.waviness, 0.0, 0.5)?;
         positive("segment", self.segment)?;
-        if !(1..=3).contains(&self.orders) {
-            return Err(format!(
-                "orders must be an integer between 1 and 3, got {}",
-                self.orders
-            ));
-        }
+        integer("orders", self.orders.into(), 1, 3)?;
         between("sprayAngle", self.spray_angle, 0.0, 90.0)?;
         between("sprayLength", self.spray_length, 0.0, 2.0)?;
         between("sprayDroop", self.spray_droop, 0.0, 90.0)?;
         between("bare", self.bare, 0.0, 1.0)?;
         count_range("interwhorl", self.interwhorl, 0, MAX_INTERWHORL)?;
         if !(self.joint_ratio.is_finite() && self.joint_ratio > 0.0 && self.joint_ratio <= 1.0) {
-            return Err(format!(
-                "jointRatio must be a number greater than 0 and at most 1, got {}",
-                self.joint_ratio
-            ));
+            return Err(ParamError::JointRatio(self.joint_ratio));
         }
         if !self.root.is_finite() {
-            return Err("root must be a finite vector".into());
+            return Err(ParamError::Root);
         }
-        if self.max_nodes < 1 || self.max_nodes > MAX_NODES {
-            return Err(format!(
-                "maxNodes must be an integer between 1 and {MAX_NODES}, got {}",
-                self.max_nodes
-            ));
-        }
-        Ok(())
+        integer("maxNodes", self.max_nodes as u64, 1, MAX_NODES as u64)
     }
 }
 
@@ -302,7 +371,7 @@ mod tests {
         let bad = |f: fn(&mut ConiferParams)| {
             let mut p = ConiferParams::default();
             f(&mut p);
-            p.validate().expect_err("invalid")
+            p.validate().expect_err("invalid").to_string()
         };
         assert_eq!(
             bad(|p| p.years = 0),

@@ -53,7 +53,11 @@ fn render(model: &Model, yaw: f32) -> Image {
     let sun = Vec3::new(0.4, 0.8, 0.5).normalize();
     for inst in &model.instances {
         let mesh = &model.meshes[inst.mesh];
-        let tex = mesh.material.texture.as_ref().and_then(|t| decode(&t.png));
+        let tex = mesh
+            .material
+            .texture
+            .as_ref()
+            .and_then(|t| decode(&t.encoded));
         let cutoff = match mesh.material.alpha {
             AlphaMode::Mask(c) => Some(c),
             _ => None,

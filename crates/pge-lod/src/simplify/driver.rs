@@ -4,8 +4,7 @@
 use glam::Vec3;
 
 use super::grid::Grid;
-use super::search::{NEAREST, SWEEP};
-use super::{Axis, Selection, Weights};
+use super::{Axis, NEAREST, SWEEP, Selection, Weights};
 use crate::leaf::Leaf;
 
 /// One allowed pair found by a round's searches: its sort key (see [`super::search::key`])

@@ -46,6 +46,13 @@ mod search;
 
 use driver::Simplifier;
 
+/// The most partners of a leaf a search lists (its nearest within the distance and angle
+/// bounds).
+const NEAREST: usize = 16;
+
+/// The same for the searches of a sweep, once the rounds have run out of pairs.
+const SWEEP: usize = 64;
+
 /// Weights of the collapse distance's terms (seed 003 §2.4.1). Every term is dimensionless,
 /// so the weights compare directly; a weight of 0 switches its term off.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,13 +6,6 @@ use std::ops::Range;
 use super::driver::Simplifier;
 use super::grid::Traits;
 
-/// The most partners of a leaf a search lists (its nearest within the distance and angle
-/// bounds).
-pub(super) const NEAREST: usize = 16;
-
-/// The same for the searches of a sweep, once the rounds have run out of pairs.
-pub(super) const SWEEP: usize = 64;
-
 /// A pair's sort key: the cost's bits (non-negative floats order like their bits) above the
 /// searching leaf's label.
 pub(super) fn key(cost: f32, label: u32) -> u64 {

@@ -282,6 +282,7 @@ mod tests {
     use super::*;
     use crate::textures::encode_maps;
     use crate::textures::test_support::{bark, decode};
+    use pge_engine::geometry::ImageFormat;
 
     #[test]
     fn every_bark_style_has_relief_and_tiles() {
@@ -337,7 +338,7 @@ mod tests {
                 rough.pixels().all(|p| p[1] > 100 && p[2] == 0),
                 "{style:?}: rough, not metal"
             );
-            colors.push(set.color.png.clone());
+            colors.push(set.color.encoded.clone());
         }
         colors.dedup();
         assert_eq!(colors.len(), STYLES.len(), "different patterns");
@@ -496,7 +497,7 @@ mod tests {
             })
             .expect("bark");
             for t in [&set.color, &set.normal, &set.roughness] {
-                assert!(t.is_jpeg(), "{style:?}: {}", t.name);
+                assert_eq!(t.format(), ImageFormat::Jpeg, "{style:?}: {}", t.name);
             }
             // The decoded normals' mean tilt within a degree of the exact map's, and every
             // normal within a few degrees of its own.

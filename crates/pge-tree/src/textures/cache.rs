@@ -162,8 +162,8 @@ mod tests {
         );
         // A new cache makes the same bytes: the sets depend on their parameters only.
         let again = TextureCache::default().bark(&params[1]).expect("bark");
-        assert_eq!(again.color.png, sets[1][0].color.png);
-        assert_eq!(again.normal.png, sets[1][0].normal.png);
+        assert_eq!(again.color.encoded, sets[1][0].color.encoded);
+        assert_eq!(again.normal.encoded, sets[1][0].normal.encoded);
     }
 
     #[test]

@@ -82,7 +82,9 @@ mod test_support {
 
     /// A map's image (PNG or JPEG) decoded.
     pub fn decode(t: &Texture) -> image::RgbaImage {
-        image::load_from_memory(&t.png).expect("decodes").to_rgba8()
+        image::load_from_memory(&t.encoded)
+            .expect("decodes")
+            .to_rgba8()
     }
 
     /// Dark brown bark of `style` at relief 1.

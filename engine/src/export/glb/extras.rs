@@ -1,8 +1,8 @@
 //! A mesh's `extras.pge` (its skeleton and own extras), serialized from borrowed views of
 //! the model. A skeleton (most of a tree's JSON: four numbers a node) is not serialized
 //! with the rest: its place holds a marker, and its text, formatted ahead of the export
-//! ([`SkeletonText`]) or in parallel pieces when the file is written, takes the marker's
-//! place in the file's JSON chunk ([`JsonText`]).
+//! ([`Prepared`], for skeletons written several times) or in parallel pieces when the file is
+//! written, takes the marker's place in the file's JSON chunk ([`JsonText`]).
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -14,8 +14,8 @@ use serde_json::Value as JsonValue;
 use serde_json::ser::{CompactFormatter, Formatter};
 use serde_json::value::RawValue;
 
-use super::glb::lod_extras::LodJson;
-use crate::geometry::{Mesh, MeshLod, Skeleton};
+use super::lod_extras::LodJson;
+use crate::geometry::{Mesh, MeshLod, Model, Skeleton};
 use crate::{Error, Result};
 
 /// Numbers of a skeleton's array a thread formats at a time (about 60 µs of floats).
@@ -254,22 +254,67 @@ impl Formatted {
     }
 }
 
-/// A skeleton's text in a mesh's `extras.pge`, formatted ahead of the export (see
-/// [`Model::skeleton_texts`](crate::geometry::Model::skeleton_texts)): a small tree's
-/// leaves' thread formats it while the bark is still being meshed. The export uses it for a
-/// skeleton of the same numbers, compared bit for bit (a thirtieth of the time of formatting
-/// them), and formats any other.
+/// What the glb writer formats of a model, formatted once ahead of the export and reused
+/// by every file that writes the same skeletons (the tiles of one run, which share their
+/// forest's variants): each mesh's skeleton as its `extras.pge` text. A writer given one
+/// uses a text for a skeleton of the same numbers, compared bit for bit (a thirtieth of the
+/// time of formatting them), and formats any other; the file is the same either way.
+#[derive(Clone, Debug, Default)]
+pub struct Prepared {
+    skeletons: Vec<Arc<SkeletonText>>,
+}
+
+impl Prepared {
+    /// The texts of every skeleton of `model`'s meshes.
+    pub fn new(model: &Model) -> Result<Prepared> {
+        let mut prepared = Prepared::default();
+        prepared.extend(model)?;
+        Ok(prepared)
+    }
+
+    /// Adds the texts of the skeletons of `model`'s meshes not held yet (side by side on
+    /// the rayon pool).
+    pub fn extend(&mut self, model: &Model) -> Result<()> {
+        let mut missing: Vec<&Arc<Skeleton>> = Vec::new();
+        for sk in model.meshes.iter().filter_map(|m| m.skeleton.as_ref()) {
+            let held = missing.iter().any(|m| Arc::ptr_eq(m, sk))
+                || self.skeletons.iter().any(|t| t.made_from(sk));
+            if !held {
+                missing.push(sk);
+            }
+        }
+        let texts = missing
+            .into_par_iter()
+            .map(|sk| SkeletonText::new(sk).map(Arc::new))
+            .collect::<Result<Vec<_>>>()?;
+        self.skeletons.extend(texts);
+        Ok(())
+    }
+
+    /// How many skeleton texts are held.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.skeletons.len()
+    }
+
+    /// Whether no text is held (a writer given this formats every skeleton).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.skeletons.is_empty()
+    }
+}
+
+/// A skeleton's text in a mesh's `extras.pge`, formatted ahead of the export ([`Prepared`]).
 #[derive(Debug)]
-pub struct SkeletonText {
+pub(super) struct SkeletonText {
     /// The skeleton's numbers it was formatted from (its leaves are not written).
     from: Skeleton,
     formatted: Formatted,
 }
 
 impl SkeletonText {
-    /// The text of `skeleton`, formatted on the calling thread (one with time to spare: the
-    /// pool's threads may be busy).
-    pub fn new(skeleton: &Skeleton) -> Result<SkeletonText> {
+    /// The text of `skeleton`, formatted on the calling thread.
+    pub(super) fn new(skeleton: &Skeleton) -> Result<SkeletonText> {
         let formatted =
             Formatted::new(skeleton, false).map_err(|e| Error::Export(e.to_string()))?;
         let from = Skeleton {
@@ -301,7 +346,7 @@ impl JsonText {
     pub(super) fn new(
         text: Vec<u8>,
         skeletons: &[Arc<Mesh>],
-        prepared: &[Arc<SkeletonText>],
+        prepared: &Prepared,
     ) -> Result<JsonText> {
         let bad = || Error::Export("a skeleton marker in the glTF JSON is damaged".into());
         // The markers, in order: skeleton k's is the k-th (the meshes are written in the
@@ -329,7 +374,7 @@ impl JsonText {
         // they are many numbers in all; a big one's pieces side by side too).
         let found: Vec<Option<Arc<SkeletonText>>> = sks
             .iter()
-            .map(|sk| prepared.iter().find(|t| t.made_from(sk)).cloned())
+            .map(|sk| prepared.skeletons.iter().find(|t| t.made_from(sk)).cloned())
             .collect();
         let missing: Vec<&Skeleton> = sks
             .iter()

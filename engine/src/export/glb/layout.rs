@@ -42,7 +42,7 @@ pub(super) enum Data {
     /// Little-endian floats (per-instance data).
     Floats(Vec<f32>),
     /// An embedded image (PNG or JPEG), as it is.
-    Png(Arc<Texture>),
+    Image(Arc<Texture>),
 }
 
 impl Data {
@@ -52,7 +52,7 @@ impl Data {
             Data::Mesh(_, Attribute::Positions | Attribute::Normals) => 12,
             Data::Mesh(_, Attribute::Uvs) => 8,
             Data::Mesh(_, Attribute::Colors | Attribute::Indices) | Data::Floats(_) => 4,
-            Data::Png(_) => 1,
+            Data::Image(_) => 1,
         }
     }
 
@@ -65,7 +65,7 @@ impl Data {
             Data::Mesh(m, Attribute::Colors) => m.colors.len(),
             Data::Mesh(m, Attribute::Indices) => m.indices.len(),
             Data::Floats(f) => f.len(),
-            Data::Png(t) => t.png.len(),
+            Data::Image(t) => t.encoded.len(),
         }
     }
 
@@ -101,7 +101,7 @@ impl Data {
             Data::Mesh(m, Attribute::Indices) => Some(cast_slice(&m.indices)),
             Data::Mesh(_, Attribute::Colors) => None,
             Data::Floats(f) => Some(cast_slice(f)),
-            Data::Png(t) => Some(&t.png),
+            Data::Image(t) => Some(&t.encoded),
         }
     }
 
@@ -110,7 +110,7 @@ impl Data {
     #[cfg(target_endian = "big")]
     fn as_bytes(&self) -> Option<&[u8]> {
         match self {
-            Data::Png(t) => Some(&t.png),
+            Data::Image(t) => Some(&t.encoded),
             _ => None,
         }
     }
@@ -136,7 +136,7 @@ impl Data {
                 }
             }
             Data::Floats(f) => floats(dst, &f[range], |&x| [x]),
-            Data::Png(t) => dst.copy_from_slice(&t.png[range]),
+            Data::Image(t) => dst.copy_from_slice(&t.encoded[range]),
         }
     }
 }
@@ -378,9 +378,9 @@ mod tests {
             name: "three bytes".into(),
             width: 1,
             height: 1,
-            png: vec![7, 8, 9],
+            encoded: vec![7, 8, 9],
         });
-        assert_eq!(layout.place(Data::Png(png)), (12, 3));
+        assert_eq!(layout.place(Data::Image(png)), (12, 3));
         let (offset, len) = layout.place(Data::Mesh(mesh.clone(), Attribute::Indices));
         assert_eq!((offset, len), (16, 800_000));
         let mut bin = vec![0xAA; layout.padded_len()];

@@ -1,8 +1,10 @@
 //! Tests of stages as scenes and of empty models.
 
+use super::extras::SkeletonText;
 use super::*;
-use crate::export::SkeletonText;
-use crate::geometry::Skeleton;
+use crate::export::{Instancing, Prepared, write_glb_with};
+use crate::geometry::{Mesh, Skeleton};
+use glam::{Mat4, Vec3};
 use serde_json::Map;
 
 #[test]
@@ -112,7 +114,12 @@ fn streamed_mesh_extras_match_a_value_tree() {
         let (_, pge) = b.primitive(&mesh).expect("primitive");
         let mut skeletons = Vec::new();
         let marked = pge.extras(&mut skeletons).expect("extras").expect("some");
-        let text = JsonText::new(marked.get().as_bytes().to_vec(), &skeletons, &[]).expect("text");
+        let text = JsonText::new(
+            marked.get().as_bytes().to_vec(),
+            &skeletons,
+            &Prepared::default(),
+        )
+        .expect("text");
         String::from_utf8(text.into_vec()).expect("utf-8")
     };
     assert_eq!(streamed(&mesh), expected(&mesh));
@@ -152,7 +159,8 @@ fn streamed_mesh_extras_match_a_value_tree() {
 }
 
 /// A skeleton's text prepared ahead of the export takes the place of its marker, one of
-/// other numbers (a zero of the other sign) is left aside: the file is the same either way.
+/// other numbers (a zero of the other sign) is left aside: the file is the same either way,
+/// and a model that shares the mesh (a second tile) reuses the text.
 #[test]
 fn prepared_skeleton_texts_give_the_same_file() {
     let mut s = Skeleton::new();
@@ -170,18 +178,38 @@ fn prepared_skeleton_texts_give_the_same_file() {
     let text = SkeletonText::new(&s).expect("formatted");
     assert!(text.made_from(&s));
     assert!(!text.made_from(&other));
-    for prepared in [&s, &other] {
-        let mut with_text = Model::new();
-        let mut inner = model.clone();
-        inner.prepare_skeleton_text(prepared);
-        // Kept by a model the tree is added to.
-        with_text.add_model(&inner, Mat4::IDENTITY);
-        assert_eq!(with_text.skeleton_texts.len(), 1);
-        let bytes = glb_bytes(&with_text, &ExportMeta::default()).expect("glb");
+    let write = |model: &Model, prepared: &Prepared| {
+        let meta = ExportMeta::default();
+        write_glb_with(
+            model,
+            prepared,
+            &meta,
+            Instancing::Gpu,
+            || Ok(()),
+            |(), f| f.to_vec(),
+        )
+        .expect("glb")
+    };
+    for from in [&s, &other] {
+        let mut mesh = (*model.meshes[0]).clone();
+        mesh.skeleton = Some(Arc::new(from.clone()));
+        let prepared = Prepared::new(&Model::from_mesh(mesh)).expect("prepared");
+        assert_eq!(prepared.len(), 1);
         assert!(
-            bytes == plain,
+            write(&model, &prepared) == plain,
             "prepared from another skeleton: {}",
-            prepared == &other
+            from == &other
         );
     }
+    // A second model placing the same mesh twice: nothing new to format.
+    let mut prepared = Prepared::new(&model).expect("prepared");
+    let mut twice = Model::new();
+    twice.add_model(&model, Mat4::IDENTITY);
+    twice.add_model(&model, Mat4::from_translation(Vec3::X));
+    prepared.extend(&twice).expect("extended");
+    assert_eq!(prepared.len(), 1);
+    assert_eq!(
+        write(&twice, &prepared),
+        glb_bytes(&twice, &ExportMeta::default()).expect("glb")
+    );
 }

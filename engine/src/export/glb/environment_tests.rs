@@ -1,7 +1,8 @@
 //! Tests of the environment image and the sky dome that carries it to clients.
 
 use super::*;
-use glam::Vec2;
+use crate::geometry::{Material, Mesh, Texture};
+use glam::{Mat4, Vec2, Vec3};
 
 #[test]
 fn the_environment_is_an_embedded_image_named_by_the_root_extras() {
@@ -39,7 +40,7 @@ fn the_environment_is_an_embedded_image_named_by_the_root_extras() {
     assert_eq!(mime_type, "image/png");
     let blob = gltf.blob.as_ref().expect("binary chunk");
     let png = &blob[view.offset()..view.offset() + view.length()];
-    assert_eq!(png, sky.png.as_slice());
+    assert_eq!(png, sky.encoded.as_slice());
     let decoded = image::load_from_memory(png).expect("png").to_rgba8();
     assert_eq!(decoded.dimensions(), (4, 2));
     assert_eq!(decoded.as_raw(), &rgba);

@@ -3,11 +3,12 @@
 
 use std::sync::PoisonError;
 
-use super::{Builder, ExportMeta, GlbFile, Instancing};
+use super::{Builder, ExportMeta, GlbFile, Instancing, Prepared};
 use crate::Error;
 use crate::geometry::Model;
 
-/// [`glb_file_with`](super::glb_file_with), handed to `write` as soon as it is built, with
+/// [`glb_file_with`](super::glb_file_with) (the skeletons' texts taken from `prepared` where
+/// it has them), handed to `write` as soon as it is built, with
 /// what `open` made beside the build (the temporary file it goes to), while the model is
 /// checked (a pass over every number and index) on the rayon pool. Building reads no index or
 /// number in a way that could fail on an invalid model, and the check's error comes first
@@ -22,6 +23,7 @@ use crate::geometry::Model;
 /// over nor waits to be woken after it.
 pub fn write_glb_with<F, T, E>(
     model: &Model,
+    prepared: &Prepared,
     meta: &ExportMeta,
     instancing: Instancing,
     open: impl FnOnce() -> std::result::Result<F, E> + Send,
@@ -35,7 +37,7 @@ where
         let mut b = Builder::new();
         b.instancing = instancing;
         b.root.scene = Some(b.scene(model, "pge")?);
-        b.file(model, meta, None)
+        b.file(model, prepared, meta, None)
     };
     if rayon::current_num_threads() == 1 {
         model.validate().map_err(Error::from)?;

@@ -1,9 +1,10 @@
 //! Tests of the glb writer: meshes, materials, extras, instancing.
 
+use super::layout::{BOUNDS_PIECE, vec3_bounds};
 use super::*;
-use crate::export::glb_layout::{BOUNDS_PIECE, vec3_bounds};
+use crate::geometry::{AlphaMode, InstanceGroup, Texture};
 use crate::geometry::{Material, Mesh, Skeleton};
-use glam::{Quat, Vec2};
+use glam::{Mat4, Quat, Vec2, Vec3};
 
 pub(super) fn textured_model() -> Model {
     let mut mesh =
@@ -300,6 +301,7 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
     let through = || {
         write_glb_with(
             &model,
+            &Prepared::default(),
             &meta,
             Instancing::Gpu,
             || Ok::<_, Error>(Trickle(Vec::new())),
@@ -438,6 +440,7 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
     // error returned.
     let written = write_glb_with(
         &model,
+        &Prepared::default(),
         &ExportMeta::default(),
         Instancing::Gpu,
         || Ok::<_, Error>(vec![1u8]),
@@ -456,6 +459,7 @@ fn an_invalid_model_gets_the_checks_error_and_no_file() {
     let written = one.install(|| {
         write_glb_with(
             &model,
+            &Prepared::default(),
             &ExportMeta::default(),
             Instancing::Gpu,
             || {
@@ -497,6 +501,7 @@ fn the_calling_thread_opens_the_file_when_the_pool_is_busy() {
     let opened_on = Mutex::new(Vec::new());
     let written = write_glb_with(
         &model,
+        &Prepared::default(),
         &meta,
         Instancing::Gpu,
         || {

@@ -6,8 +6,9 @@ use std::time::Instant;
 use indicatif::ProgressBar;
 use pge_engine::export::Instancing;
 
+use super::RunArgs;
+use crate::common::progress_bar;
 use crate::output::write_atomically;
-use crate::run::{RunArgs, progress_bar};
 
 /// `pge run --stages`: every stage a scene of one .glb, grown by the library's
 /// [`pge::Request::grow`].

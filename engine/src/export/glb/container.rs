@@ -3,8 +3,8 @@
 use std::borrow::Cow;
 use std::io::{IoSlice, Write};
 
-use super::glb_extras::JsonText;
-use super::glb_layout::Layout;
+use super::extras::JsonText;
+use super::layout::Layout;
 use crate::{Error, Result};
 
 /// The largest GLB file: its header stores lengths as 32-bit numbers.

@@ -1,7 +1,8 @@
 //! Tests of the leaf counts of instance groups in the node extras.
 
 use super::*;
-use crate::geometry::{InstanceTransform, PlacementLeaves};
+use crate::geometry::{InstanceGroup, InstanceTransform, PlacementLeaves};
+use glam::Vec3;
 
 /// A group of three placements of one triangle, drawing 9, 0 and 4 leaves of a tree whose
 /// coarsest level has 4.

@@ -14,7 +14,7 @@
 use serde_json::{Map, Value as JsonValue, json};
 
 use super::{
-    Builder, DIFFUSE_TRANSMISSION, ExportMeta, Instancing, JsonText, json as gltf, raw,
+    Builder, DIFFUSE_TRANSMISSION, ExportMeta, Instancing, JsonText, Prepared, json as gltf, raw,
     with_extensions,
 };
 use crate::geometry::{DiffuseTransmission, Model};
@@ -234,7 +234,7 @@ pub fn variants_files(
     } else {
         with_extensions(&mut b.root, &[], &b.unlit, &b.transmissive)?
     };
-    let text = JsonText::new(text, &b.skeletons, &variants.skeleton_texts)?.into_vec();
+    let text = JsonText::new(text, &b.skeletons, &Prepared::default())?.into_vec();
     let mut bin = vec![0; bin_len];
     b.layout.write(&mut bin);
     Ok((text, bin))
