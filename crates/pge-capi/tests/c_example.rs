@@ -19,9 +19,32 @@ fn library_dir() -> PathBuf {
         .to_path_buf()
 }
 
+/// Builds the shared library into the test's own target folder (`cargo test` makes the
+/// crate's rlib and staticlib for its tests, not the cdylib a C program links).
+fn build_shared_library(lib: &Path) {
+    let target_dir = lib.parent().expect("target/");
+    let profile = lib.file_name().expect("<profile>").to_string_lossy();
+    let mut cargo = Command::new(env!("CARGO"));
+    cargo
+        .args(["build", "--quiet", "-p", "pge-capi", "--lib"])
+        .arg("--target-dir")
+        .arg(target_dir)
+        .current_dir(root());
+    if profile == "release" {
+        cargo.arg("--release");
+    }
+    let out = cargo.output().expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "cargo build -p pge-capi: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// The example, compiled into `dir`.
 fn compile(dir: &Path) -> PathBuf {
     let lib = library_dir();
+    build_shared_library(&lib);
     assert!(
         lib.join("libpge_capi.so").exists(),
         "no {}",
