@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use pge_engine::ParamInfo;
-use pge_engine::export::{ExportMeta, Instancing, obj_files, write_glb_with};
+use pge_engine::export::{
+    ExportMeta, Instancing, UsdFiles, obj_files, usd_files, usdz_bytes, write_glb_with,
+};
 use pge_engine::geometry::Model;
 
 /// The metadata a `.glb` records: the seed and the parameters' values, in order.
@@ -122,7 +124,8 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 }
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
-/// folder (those first, the `.obj` last), anything else as `.glb` with `meta`.
+/// folder (those first, the `.obj` last), a `.usda` or `.usdz` as [`write_usd`] does, anything
+/// else as `.glb` with `meta`.
 pub fn write_model(
     model: &Model,
     meta: &ExportMeta,
@@ -133,7 +136,10 @@ pub fn write_model(
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if is_obj {
+    if usd_kind(output).is_some() {
+        let files = usd_files(model, meta, &usd_folder(output))?;
+        write_usd(&files, output)?;
+    } else if is_obj {
         let stem = output
             .file_stem()
             .unwrap_or_default()
@@ -166,6 +172,43 @@ pub fn write_model(
         file.finish()?;
     }
     Ok(())
+}
+
+/// `usda` or `usdz` when `path` ends so (any case).
+#[must_use]
+pub fn usd_kind(path: &Path) -> Option<&'static str> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    ["usda", "usdz"].into_iter().find(|k| *k == ext)
+}
+
+/// The folder of a USD layer's textures: its file name without the extension.
+#[must_use]
+pub fn usd_folder(output: &Path) -> String {
+    output
+        .file_stem()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .to_string()
+}
+
+/// Writes a USD export to `output`: a `.usdz` package with the textures inside, or a
+/// `.usda` with its textures in the folder beside it (those first, the layer last).
+pub fn write_usd(files: &UsdFiles, output: &Path) -> anyhow::Result<()> {
+    if usd_kind(output) == Some("usdz") {
+        let name = Path::new(&usd_folder(output)).with_extension("usda");
+        let bytes = usdz_bytes(&name.to_string_lossy(), files)?;
+        return write_atomically(output, &bytes);
+    }
+    let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
+    if !files.textures.is_empty() {
+        let folder = dir.join(usd_folder(output));
+        std::fs::create_dir_all(&folder)
+            .with_context(|| format!("cannot create {}", folder.display()))?;
+    }
+    for (path, texture) in &files.textures {
+        write_atomically(&dir.join(path), &texture.png)?;
+    }
+    write_atomically(output, files.layer.as_bytes())
 }
 
 #[cfg(test)]

@@ -4,11 +4,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use indicatif::ProgressBar;
-use pge_engine::export::glb_stages_bytes;
+use pge_engine::export::{glb_stages_bytes, usd_stages_files};
 use pge_engine::geometry::Model;
 use pge_engine::{Error, Location, Step};
 
-use crate::output::{export_meta, write_atomically};
+use crate::output::{export_meta, usd_folder, usd_kind, write_atomically, write_usd};
 use crate::run::{RunArgs, progress_bar};
 
 /// The most steps a stage may ask for.
@@ -92,7 +92,7 @@ fn generate_stages(args: &RunArgs, stages: &[u32], bar: &ProgressBar) -> anyhow:
     Ok((models, session.declared_params()))
 }
 
-/// `pge run --stages`: every stage a scene of one .glb.
+/// `pge run --stages`: every stage a scene of one .glb, or a variant of one USD layer.
 pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let bar = progress_bar(args.quiet).unwrap_or_else(ProgressBar::hidden);
@@ -106,7 +106,14 @@ pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Resu
             eprintln!("{w}");
         }
     }
-    write_atomically(output, &glb_stages_bytes(&models, &meta)?)?;
+    if usd_kind(output).is_some() {
+        write_usd(
+            &usd_stages_files(&models, &meta, &usd_folder(output))?,
+            output,
+        )?;
+    } else {
+        write_atomically(output, &glb_stages_bytes(&models, &meta)?)?;
+    }
     if args.stats {
         let list: Vec<serde_json::Value> = models
             .iter()

@@ -1,4 +1,5 @@
-//! Writing models: glTF 2.0 binary (`.glb`) and Wavefront `.obj` + `.mtl`.
+//! Writing models: glTF 2.0 binary (`.glb`), Wavefront `.obj` + `.mtl`, and USD (`.usda`,
+//! `.usdz`).
 
 mod glb;
 mod glb_container;
@@ -6,6 +7,7 @@ mod glb_extras;
 mod glb_layout;
 mod glb_sky;
 mod obj;
+mod usd;
 
 pub use glb::shared::{
     SharedGroup, SharedVariants, VARIANTS_FORMAT, glb_bytes_shared, variants_files,
@@ -16,3 +18,4 @@ pub use glb::{
 };
 pub use glb_extras::SkeletonText;
 pub use obj::{ObjFiles, obj_files};
+pub use usd::{USD_ROOT, UsdFiles, usd_files, usd_stages_files, usdz_bytes};
