@@ -1,7 +1,7 @@
 """Checks PGE's USD exports with usd-core: the UsdValidation validators (what usdchecker
 runs) report no error, and the mesh prims, points and instances equal the glb's.
 
-usage: usd_check.py FILE.usda|FILE.usdz [FILE.glb]
+usage: .ci/usd_check.py FILE.usda|FILE.usdz [FILE.glb]
 """
 
 import json
