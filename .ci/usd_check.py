@@ -22,15 +22,30 @@ def validate(stage):
 
 
 def usd_counts(stage):
-    """Mesh prims, their points and the point instancers' instances (each prototype once)."""
+    """Mesh prims, their points and the point instancers' instances (each prototype once);
+    problems: a prototype that is not a prim under its instancer, an index out of range,
+    arrays of unequal lengths."""
     meshes = points = instances = 0
+    problems = []
     for prim in stage.Traverse():
         if prim.IsA(UsdGeom.Mesh):
             meshes += 1
             points += len(UsdGeom.Mesh(prim).GetPointsAttr().Get() or [])
         elif prim.IsA(UsdGeom.PointInstancer):
-            instances += len(UsdGeom.PointInstancer(prim).GetProtoIndicesAttr().Get() or [])
-    return meshes, points, instances
+            pi = UsdGeom.PointInstancer(prim)
+            indices = pi.GetProtoIndicesAttr().Get() or []
+            instances += len(indices)
+            targets = pi.GetPrototypesRel().GetTargets()
+            for t in targets:
+                if not stage.GetPrimAtPath(t) or not t.HasPrefix(prim.GetPath()):
+                    problems.append(f"{prim.GetPath()}: prototype {t} is not a prim under it")
+            if indices and max(indices) >= len(targets):
+                problems.append(f"{prim.GetPath()}: a proto index beyond its prototypes")
+            lengths = {len(a.Get() or []) for a in (pi.GetPositionsAttr(),
+                       pi.GetOrientationsAttr(), pi.GetScalesAttr())} | {len(indices)}
+            if len(lengths) != 1:
+                problems.append(f"{prim.GetPath()}: arrays of lengths {sorted(lengths)}")
+    return (meshes, points, instances), problems
 
 
 def glb_counts(path):
@@ -68,10 +83,12 @@ def main():
         print(f"{usd}: error: {e.GetMessage()}")
     for w in warnings:
         print(f"{usd}: warning: {w.GetMessage()}")
-    counts = usd_counts(stage)
+    counts, problems = usd_counts(stage)
+    for p in problems:
+        print(f"{usd}: error: {p}")
     print(f"{usd}: {len(errors)} errors, {len(warnings)} warnings; "
           f"meshes {counts[0]}, points {counts[1]}, instances {counts[2]}")
-    failed = bool(errors)
+    failed = bool(errors or problems)
     if len(sys.argv) > 2:
         want = glb_counts(sys.argv[2])
         if counts != want:

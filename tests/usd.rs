@@ -162,6 +162,21 @@ fn a_forest_is_instanced_as_in_the_glb_and_the_same_for_any_thread_count() {
     );
     assert!(counts.2 > 10, "{counts:?}");
     assert!(text.contains("def PointInstancer "));
+    // Every prototype is a prim of the layer under its instancer.
+    for line in text.lines().map(str::trim_start) {
+        let Some(targets) = line.strip_prefix("rel prototypes = [") else {
+            continue;
+        };
+        for target in targets.trim_end_matches(']').split(", ") {
+            let path = target.trim_matches(|c| c == '<' || c == '>');
+            let (instancer, prototype) = path.rsplit_once("/Prototypes/").expect("a prototype");
+            assert!(instancer.starts_with("/PGE/"), "{path}");
+            assert!(
+                text.contains(&format!("def Xform \"{prototype}\"")),
+                "{path}"
+            );
+        }
+    }
     // The package: the layer first, every file stored and 64-byte aligned, the same layer
     // and textures as the folder's.
     let zip = std::fs::read(p("mixed.usdz")).expect("usdz");
@@ -201,4 +216,44 @@ fn a_bad_extension_is_a_usage_error() {
     let o = pge(&["run", "scripts/species/oak.lua", "-o", "oak.usdc"]);
     assert_eq!(o.status.code(), Some(2), "a usage error");
     assert!(String::from_utf8_lossy(&o.stderr).contains(".usda or .usdz"));
+}
+
+#[test]
+fn a_merged_world_has_the_merged_glbs_meshes_and_instances() {
+    // A world of tiles sharing their variants, as `pge-world` writes it.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let w = dir.path().join("world");
+    let d = w.to_string_lossy().to_string();
+    let script = common::ray_forest();
+    let tiles: serde_json::Value =
+        serde_json::from_slice(&common::pge_ok(&["tiles", &script])).expect("json");
+    run_ok(&["world", "init", &script, "--out", &d]);
+    std::fs::create_dir_all(w.join("tiles")).expect("tiles folder");
+    run_ok(&["run", &script, "--variants-out", &d, "-q"]);
+    run_ok(&["world", "variants", &d]);
+    for t in tiles.as_array().expect("tiles") {
+        let tile = format!("{},{}", t["i"], t["j"]);
+        let out = w.join(format!("tiles/{}_{}.glb", t["i"], t["j"]));
+        let o = out.to_string_lossy().to_string();
+        run_ok(&[
+            "run",
+            &script,
+            "--tile",
+            &tile,
+            "-o",
+            &o,
+            "-q",
+            "--variants",
+            &d,
+        ]);
+        run_ok(&["world", "add", &d, &tile]);
+    }
+    run_ok(&["world", "finish", &d]);
+    let (usda, glb) = (dir.path().join("world.usda"), dir.path().join("world.glb"));
+    run_ok(&["merge", &d, "-o", &usda.to_string_lossy()]);
+    run_ok(&["merge", &d, "-o", &glb.to_string_lossy()]);
+    let text = std::fs::read_to_string(&usda).expect("the layer");
+    let counts = usda_counts(&text);
+    assert_eq!(counts, glb_counts(&std::fs::read(&glb).expect("glb")));
+    assert!(counts.2 > 0, "{counts:?}");
 }

@@ -433,25 +433,47 @@ impl Writer {
 
     /// A `PointInstancer` named `name` (a child of the root or a stage) of `groups`.
     fn instancer(&mut self, model: &Model, name: &str, groups: &[&InstanceGroup]) {
+        // One prototype per variant: groups of the same meshes (a merged world's tiles place
+        // the same shared variants) share one, named after the first.
         let mut protos = Names::default();
-        let proto_names: Vec<String> = groups.iter().map(|g| protos.unique(&g.name)).collect();
+        let mut prototypes: Vec<(&InstanceGroup, String)> = Vec::new();
+        let mut proto_of = Vec::with_capacity(groups.len());
+        for g in groups {
+            match prototypes.iter().position(|(p, _)| p.meshes == g.meshes) {
+                Some(k) => proto_of.push(k),
+                None => {
+                    proto_of.push(prototypes.len());
+                    prototypes.push((g, protos.unique(&g.name)));
+                }
+            }
+        }
         let count: usize = groups.iter().map(|g| g.transforms.len()).sum();
         let t = &mut self.text;
         t.open(&format!("def PointInstancer \"{name}\""), "(");
         t.put("customData = {");
         t.depth_in();
         t.json_entry("instances", &json!(count));
-        for (g, p) in groups.iter().zip(&proto_names) {
-            if let Some(leaves) = &g.leaves {
-                t.line().push_str("dictionary ");
-                quote(&mut t.out, p);
-                t.out.push_str(" = {");
-                t.depth_in();
-                t.json_entry("roots", &json!(leaves.roots));
-                t.line().push_str("int64[] \"leaves\" = ");
-                t.array(&leaves.counts, |t, c| t.int(*c));
-                t.close("}");
+        if groups.iter().all(|g| g.leaves.is_some()) {
+            // The leaves each instance draws, and each prototype's coarsest level.
+            t.put("dictionary \"lod\" = {");
+            t.depth_in();
+            t.line().push_str("int64[] \"leaves\" = [");
+            let mut first = true;
+            for g in groups {
+                for c in g.leaves.iter().flat_map(|l| l.counts.iter()) {
+                    if !first {
+                        t.out.push_str(", ");
+                    }
+                    first = false;
+                    t.int(*c);
+                }
             }
+            t.out.push(']');
+            t.line().push_str("int64[] \"roots\" = ");
+            t.array(&prototypes, |t, (g, _)| {
+                t.int(g.leaves.as_ref().map_or(0, |l| l.roots));
+            });
+            t.close("}");
         }
         t.close("}");
         t.close(")");
@@ -476,7 +498,7 @@ impl Writer {
         t.out.push(']');
         t.line().push_str("int[] protoIndices = [");
         let mut first = true;
-        for (p, g) in groups.iter().enumerate() {
+        for (&p, g) in proto_of.iter().zip(groups) {
             for _ in &g.transforms {
                 if !first {
                     t.out.push_str(", ");
@@ -488,11 +510,11 @@ impl Writer {
         t.out.push(']');
         let l = t.line();
         l.push_str("rel prototypes = [");
-        for (k, p) in proto_names.iter().enumerate() {
+        for (k, (_, p)) in prototypes.iter().enumerate() {
             if k > 0 {
                 l.push_str(", ");
             }
-            l.push_str(&format!("<{name}/Prototypes/{p}>"));
+            l.push_str(&format!("</{USD_ROOT}/{name}/Prototypes/{p}>"));
         }
         l.push(']');
         t.line().push_str("float3[] scales = [");
@@ -504,7 +526,7 @@ impl Writer {
         }
         t.out.push(']');
         t.open("def Scope \"Prototypes\"", "{");
-        for (g, p) in groups.iter().zip(&proto_names) {
+        for (g, p) in &prototypes {
             self.text.open(&format!("def Xform \"{p}\""), "(");
             self.text.line().push_str("customData = {");
             self.text.depth_in();

@@ -94,17 +94,21 @@ fn colours_transforms_and_textures_are_written() {
 #[test]
 fn a_forest_is_a_point_instancer_per_species() {
     let mut model = Model::new();
-    model.meshes.push(Arc::new(triangle()));
-    let bark = 0;
+    for _ in 0..3 {
+        model.meshes.push(Arc::new(triangle()));
+    }
     let at = |x: f32| InstanceTransform {
         translation: [x, 0.0, 0.0],
         rotation: [0.0, 0.0, 0.0, 1.0],
         scale: 2.0,
     };
-    for (name, n) in [("oak/0", 2), ("oak/1", 1), ("pine/0", 3)] {
+    for (k, (name, n)) in [("oak/0", 2), ("oak/1", 1), ("pine/0", 3)]
+        .into_iter()
+        .enumerate()
+    {
         model.groups.push(InstanceGroup {
             name: name.into(),
-            meshes: vec![bark],
+            meshes: vec![k],
             transforms: (0..n).map(|k| at(k as f32)).collect(),
             leaves: None,
         });
@@ -113,7 +117,9 @@ fn a_forest_is_a_point_instancer_per_species() {
     assert_eq!(count(&l, "def PointInstancer "), 2);
     assert!(l.contains("int[] protoIndices = [0, 0, 1]"), "{l}");
     assert!(l.contains("int[] protoIndices = [0, 0, 0]"));
-    assert!(l.contains("rel prototypes = [<oak/Prototypes/oak_0>, <oak/Prototypes/oak_1>]"));
+    assert!(
+        l.contains("rel prototypes = [</PGE/oak/Prototypes/oak_0>, </PGE/oak/Prototypes/oak_1>]")
+    );
     assert!(l.contains("quath[] orientations = [(1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)"));
     assert!(l.contains("float3[] scales = [(2.0, 2.0, 2.0)"));
     assert_eq!(
