@@ -14,6 +14,7 @@ mod usdz;
 use std::sync::Arc;
 
 use glam::Mat4;
+use rayon::prelude::*;
 use serde_json::{Value as JsonValue, json};
 
 use super::ExportMeta;
@@ -105,8 +106,11 @@ pub fn usd_stages_files(
 }
 
 /// The layer being written: its text, the materials and textures of the models.
-struct Writer {
+struct Writer<'m> {
+    /// The text after the last piece.
     text: Text,
+    /// The layer so far: text, and meshes formatted in parallel when the layer is finished.
+    pieces: Vec<Piece<'m>>,
     folder: String,
     /// Distinct materials with their prim names.
     materials: Vec<(Arc<Material>, String)>,
@@ -114,18 +118,27 @@ struct Writer {
     textures: Vec<(Arc<Texture>, String)>,
 }
 
-impl Writer {
-    fn new(models: &[Model], folder: &str) -> Writer {
-        let bytes: usize = models
-            .iter()
-            .map(|m| {
-                let vertices: usize = m.meshes.iter().map(|x| x.positions.len()).sum();
-                let placements: usize = m.groups.iter().map(|g| g.transforms.len()).sum();
-                80 * vertices + 120 * placements
-            })
-            .sum();
+/// A piece of the layer: text written in order, or a mesh prim to format.
+enum Piece<'m> {
+    Text(String),
+    Mesh(MeshJob<'m>),
+}
+
+/// A mesh prim to format: the mesh, its prim name, its transform, its material's path and the
+/// indentation of its `def` line.
+struct MeshJob<'m> {
+    mesh: &'m Mesh,
+    name: String,
+    transform: Option<Mat4>,
+    material: String,
+    depth: usize,
+}
+
+impl<'m> Writer<'m> {
+    fn new(models: &'m [Model], folder: &str) -> Writer<'m> {
         let mut w = Writer {
-            text: Text::with_capacity(bytes + 4096),
+            text: Text::with_capacity(4096),
+            pieces: Vec::new(),
             folder: folder.to_string(),
             materials: Vec::new(),
             textures: Vec::new(),
@@ -184,9 +197,23 @@ impl Writer {
             .map_or("", |(_, p)| p.as_str())
     }
 
-    fn finish(self) -> UsdFiles {
-        let mut layer = self.text.out;
-        layer.push('\n');
+    /// The layer: the pieces in order, the meshes formatted on the rayon pool.
+    fn finish(mut self) -> UsdFiles {
+        self.text.out.push('\n');
+        self.pieces
+            .push(Piece::Text(std::mem::take(&mut self.text.out)));
+        let texts: Vec<std::borrow::Cow<str>> = self
+            .pieces
+            .par_iter()
+            .map(|piece| match piece {
+                Piece::Text(text) => std::borrow::Cow::Borrowed(text.as_str()),
+                Piece::Mesh(job) => std::borrow::Cow::Owned(mesh_text(job)),
+            })
+            .collect();
+        let mut layer = String::with_capacity(texts.iter().map(|t| t.len()).sum());
+        for text in &texts {
+            layer.push_str(text);
+        }
         UsdFiles {
             layer,
             textures: self.textures.into_iter().map(|(t, p)| (p, t)).collect(),
@@ -409,7 +436,7 @@ impl Writer {
     }
 
     /// A model's placed meshes and its forest, as children of the current prim.
-    fn body(&mut self, model: &Model) {
+    fn body(&mut self, model: &'m Model) {
         let mut names = Names::default();
         for inst in &model.instances {
             let mesh = &model.meshes[inst.mesh];
@@ -432,7 +459,7 @@ impl Writer {
     }
 
     /// A `PointInstancer` named `name` (a child of the root or a stage) of `groups`.
-    fn instancer(&mut self, model: &Model, name: &str, groups: &[&InstanceGroup]) {
+    fn instancer(&mut self, model: &'m Model, name: &str, groups: &[&InstanceGroup]) {
         // One prototype per variant: groups of the same meshes (a merged world's tiles place
         // the same shared variants) share one, named after the first.
         let mut protos = Names::default();
@@ -546,139 +573,165 @@ impl Writer {
         self.text.close("}");
     }
 
-    /// One mesh as a `Mesh` (triangles) or `BasisCurves` (lines) prim named `name`.
-    fn mesh(&mut self, mesh: &Mesh, name: &str, transform: Option<&Mat4>) {
+    /// One mesh as a `Mesh` (triangles) or `BasisCurves` (lines) prim named `name`, formatted
+    /// when the layer is finished ([`mesh_text`]).
+    fn mesh(&mut self, mesh: &'m Mesh, name: &str, transform: Option<&Mat4>) {
         let material = format!(
             "/{USD_ROOT}/Materials/{}",
             self.material_name(&mesh.material)
         );
-        let t = &mut self.text;
-        let kind = match mesh.primitive {
-            Primitive::Triangles => "Mesh",
-            Primitive::Lines => "BasisCurves",
-        };
-        t.open(&format!("def {kind} \"{name}\""), "(");
-        t.put("prepend apiSchemas = [\"MaterialBindingAPI\"]");
-        let has_data = mesh.skeleton.is_some() || mesh.lod.is_some() || !mesh.extras.is_empty();
-        if has_data {
-            t.line().push_str("customData = {");
+        self.pieces
+            .push(Piece::Text(std::mem::take(&mut self.text.out)));
+        self.pieces.push(Piece::Mesh(MeshJob {
+            mesh,
+            name: name.to_string(),
+            transform: transform.copied(),
+            material,
+            depth: self.text.depth(),
+        }));
+    }
+}
+
+/// The text of a mesh prim.
+fn mesh_text(job: &MeshJob) -> String {
+    let MeshJob {
+        mesh,
+        name,
+        transform,
+        material,
+        depth,
+    } = job;
+    let mesh: &Mesh = mesh;
+    let bytes = 16 * 3 * (mesh.positions.len() + mesh.normals.len()) + 8 * mesh.indices.len();
+    let mut text = Text::with_capacity(bytes + 1024);
+    text.set_depth(*depth);
+    let t = &mut text;
+    let kind = match mesh.primitive {
+        Primitive::Triangles => "Mesh",
+        Primitive::Lines => "BasisCurves",
+    };
+    t.open(&format!("def {kind} \"{name}\""), "(");
+    t.put("prepend apiSchemas = [\"MaterialBindingAPI\"]");
+    let has_data = mesh.skeleton.is_some() || mesh.lod.is_some() || !mesh.extras.is_empty();
+    if has_data {
+        t.line().push_str("customData = {");
+        t.depth_in();
+        t.line().push_str("dictionary pge = {");
+        t.depth_in();
+        if let Some(sk) = &mesh.skeleton {
+            skeleton(t, sk);
+        }
+        if let Some(lod) = &mesh.lod {
+            t.line().push_str("dictionary lod = {");
             t.depth_in();
-            t.line().push_str("dictionary pge = {");
-            t.depth_in();
-            if let Some(sk) = &mesh.skeleton {
-                skeleton(t, sk);
-            }
-            if let Some(lod) = &mesh.lod {
-                t.line().push_str("dictionary lod = {");
-                t.depth_in();
-                lod_entries(t, lod);
-                t.close("}");
-            }
-            t.json_entries(&mesh.extras);
+            lod_entries(t, lod);
             t.close("}");
-            t.close("}");
         }
-        t.close(")");
-        t.open("", "{");
-        if mesh.material.double_sided {
-            t.put("uniform bool doubleSided = 1");
-        }
-        if let Some((lo, hi)) = mesh.bounds() {
-            t.line().push_str("float3[] extent = [");
-            t.tuple(&lo.to_array());
-            t.out.push_str(", ");
-            t.tuple(&hi.to_array());
-            t.out.push(']');
-        }
-        match mesh.primitive {
-            Primitive::Triangles => {
-                t.line().push_str("int[] faceVertexCounts = [");
-                for k in 0..mesh.indices.len() / 3 {
-                    t.out.push_str(if k > 0 { ", 3" } else { "3" });
-                }
-                t.out.push(']');
-                t.line().push_str("int[] faceVertexIndices = ");
-                t.array(&mesh.indices, |t, &i| t.int(i));
-                t.put(&format!("rel material:binding = <{material}>"));
-                if !mesh.normals.is_empty() {
-                    t.line().push_str("normal3f[] normals = ");
-                    t.array(&mesh.normals, |t, n| t.tuple(&n.to_array()));
-                    t.out.push_str(" (");
-                    t.depth_in();
-                    t.put("interpolation = \"vertex\"");
-                    t.close(")");
-                }
-                t.line().push_str("point3f[] points = ");
-                t.array(&mesh.positions, |t, p| t.tuple(&p.to_array()));
-            }
-            Primitive::Lines => {
-                t.line().push_str("int[] curveVertexCounts = [");
-                for k in 0..mesh.indices.len() / 2 {
-                    t.out.push_str(if k > 0 { ", 2" } else { "2" });
-                }
-                t.out.push(']');
-                t.put(&format!("rel material:binding = <{material}>"));
-                t.line().push_str("point3f[] points = ");
-                t.array(&mesh.indices, |t, &i| {
-                    t.tuple(&mesh.positions[i as usize].to_array());
-                });
-                t.put("uniform token type = \"linear\"");
-            }
-        }
-        if !mesh.colors.is_empty() {
-            let corners = |t: &mut Text, f: &dyn Fn(&mut Text, usize)| match mesh.primitive {
-                Primitive::Triangles => {
-                    t.out.push('[');
-                    for k in 0..mesh.colors.len() {
-                        if k > 0 {
-                            t.out.push_str(", ");
-                        }
-                        f(t, k);
-                    }
-                    t.out.push(']');
-                }
-                Primitive::Lines => t.array(&mesh.indices, |t, &i| f(t, i as usize)),
-            };
-            t.line().push_str("color3f[] primvars:displayColor = ");
-            corners(t, &|t, k| t.tuple(&mesh.colors[k].truncate().to_array()));
-            t.out.push_str(" (");
-            t.depth_in();
-            t.put("interpolation = \"vertex\"");
-            t.close(")");
-            t.line().push_str("float[] primvars:displayOpacity = ");
-            corners(t, &|t, k| t.float(mesh.colors[k].w));
-            t.out.push_str(" (");
-            t.depth_in();
-            t.put("interpolation = \"vertex\"");
-            t.close(")");
-        }
-        if !mesh.uvs.is_empty() && mesh.primitive == Primitive::Triangles {
-            // glTF's v runs down the image, USD's t up.
-            t.line().push_str("texCoord2f[] primvars:st = ");
-            t.array(&mesh.uvs, |t, uv| t.tuple(&[uv.x, 1.0 - uv.y]));
-            t.out.push_str(" (");
-            t.depth_in();
-            t.put("interpolation = \"vertex\"");
-            t.close(")");
-        }
-        if mesh.primitive == Primitive::Triangles {
-            t.put("uniform token subdivisionScheme = \"none\"");
-        }
-        if let Some(m) = transform.filter(|m| **m != Mat4::IDENTITY) {
-            t.line().push_str("matrix4d xformOp:transform = (");
-            for (k, col) in m.to_cols_array_2d().iter().enumerate() {
-                if k > 0 {
-                    t.out.push_str(", ");
-                }
-                // USD's matrices are row-major with the translation in the last row: the
-                // rows are glam's columns.
-                t.tuple(col);
-            }
-            t.out.push(')');
-            t.put("uniform token[] xformOpOrder = [\"xformOp:transform\"]");
-        }
+        t.json_entries(&mesh.extras);
+        t.close("}");
         t.close("}");
     }
+    t.close(")");
+    t.open("", "{");
+    if mesh.material.double_sided {
+        t.put("uniform bool doubleSided = 1");
+    }
+    if let Some((lo, hi)) = mesh.bounds() {
+        t.line().push_str("float3[] extent = [");
+        t.tuple(&lo.to_array());
+        t.out.push_str(", ");
+        t.tuple(&hi.to_array());
+        t.out.push(']');
+    }
+    match mesh.primitive {
+        Primitive::Triangles => {
+            t.line().push_str("int[] faceVertexCounts = [");
+            for k in 0..mesh.indices.len() / 3 {
+                t.out.push_str(if k > 0 { ", 3" } else { "3" });
+            }
+            t.out.push(']');
+            t.line().push_str("int[] faceVertexIndices = ");
+            t.array(&mesh.indices, |t, &i| t.int(i));
+            t.put(&format!("rel material:binding = <{material}>"));
+            if !mesh.normals.is_empty() {
+                t.line().push_str("normal3f[] normals = ");
+                t.array(&mesh.normals, |t, n| t.tuple(&n.to_array()));
+                t.out.push_str(" (");
+                t.depth_in();
+                t.put("interpolation = \"vertex\"");
+                t.close(")");
+            }
+            t.line().push_str("point3f[] points = ");
+            t.array(&mesh.positions, |t, p| t.tuple(&p.to_array()));
+        }
+        Primitive::Lines => {
+            t.line().push_str("int[] curveVertexCounts = [");
+            for k in 0..mesh.indices.len() / 2 {
+                t.out.push_str(if k > 0 { ", 2" } else { "2" });
+            }
+            t.out.push(']');
+            t.put(&format!("rel material:binding = <{material}>"));
+            t.line().push_str("point3f[] points = ");
+            t.array(&mesh.indices, |t, &i| {
+                t.tuple(&mesh.positions[i as usize].to_array());
+            });
+            t.put("uniform token type = \"linear\"");
+        }
+    }
+    if !mesh.colors.is_empty() {
+        let corners = |t: &mut Text, f: &dyn Fn(&mut Text, usize)| match mesh.primitive {
+            Primitive::Triangles => {
+                t.out.push('[');
+                for k in 0..mesh.colors.len() {
+                    if k > 0 {
+                        t.out.push_str(", ");
+                    }
+                    f(t, k);
+                }
+                t.out.push(']');
+            }
+            Primitive::Lines => t.array(&mesh.indices, |t, &i| f(t, i as usize)),
+        };
+        t.line().push_str("color3f[] primvars:displayColor = ");
+        corners(t, &|t, k| t.tuple(&mesh.colors[k].truncate().to_array()));
+        t.out.push_str(" (");
+        t.depth_in();
+        t.put("interpolation = \"vertex\"");
+        t.close(")");
+        t.line().push_str("float[] primvars:displayOpacity = ");
+        corners(t, &|t, k| t.float(mesh.colors[k].w));
+        t.out.push_str(" (");
+        t.depth_in();
+        t.put("interpolation = \"vertex\"");
+        t.close(")");
+    }
+    if !mesh.uvs.is_empty() && mesh.primitive == Primitive::Triangles {
+        // glTF's v runs down the image, USD's t up.
+        t.line().push_str("texCoord2f[] primvars:st = ");
+        t.array(&mesh.uvs, |t, uv| t.tuple(&[uv.x, 1.0 - uv.y]));
+        t.out.push_str(" (");
+        t.depth_in();
+        t.put("interpolation = \"vertex\"");
+        t.close(")");
+    }
+    if mesh.primitive == Primitive::Triangles {
+        t.put("uniform token subdivisionScheme = \"none\"");
+    }
+    if let Some(m) = transform.filter(|m| *m != Mat4::IDENTITY) {
+        t.line().push_str("matrix4d xformOp:transform = (");
+        for (k, col) in m.to_cols_array_2d().iter().enumerate() {
+            if k > 0 {
+                t.out.push_str(", ");
+            }
+            // USD's matrices are row-major with the translation in the last row: the
+            // rows are glam's columns.
+            t.tuple(col);
+        }
+        t.out.push(')');
+        t.put("uniform token[] xformOpOrder = [\"xformOp:transform\"]");
+    }
+    t.close("}");
+    text.out
 }
 
 /// A skeleton as `dictionary skeleton = {parents, positions, radii, orders}`, the arrays of

@@ -59,12 +59,13 @@ fn colours_transforms_and_textures_are_written() {
     let mut mesh = triangle();
     mesh.colors = vec![Vec4::new(1.0, 0.5, 0.25, 1.0); 3];
     let texture = Arc::new(Texture::from_rgba("leaf", 1, 1, &[0, 255, 0, 128]).expect("png"));
-    let mut material = Material::default();
-    material.name = "leaf".into();
-    material.texture = Some(texture.clone());
-    material.normal_texture = Some(texture);
-    material.alpha = AlphaMode::Mask(0.5);
-    mesh.material = Arc::new(material);
+    mesh.material = Arc::new(Material {
+        name: "leaf".into(),
+        texture: Some(texture.clone()),
+        normal_texture: Some(texture),
+        alpha: AlphaMode::Mask(0.5),
+        ..Material::default()
+    });
     let mut model = Model::new();
     model.add_mesh(
         mesh.clone(),

@@ -38,6 +38,16 @@ impl Text {
         self.line().push_str(text);
     }
 
+    /// The current indentation.
+    pub(super) fn depth(&self) -> usize {
+        self.depth
+    }
+
+    /// Sets the indentation (a piece formatted on its own).
+    pub(super) fn set_depth(&mut self, depth: usize) {
+        self.depth = depth;
+    }
+
     /// One level deeper (after a line that opens a scope).
     pub(super) fn depth_in(&mut self) {
         self.depth += 1;
