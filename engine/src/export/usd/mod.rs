@@ -122,6 +122,39 @@ struct Writer<'m> {
 enum Piece<'m> {
     Text(String),
     Mesh(MeshJob<'m>),
+    Placements(Vec<&'m InstanceGroup>, Placements),
+}
+
+/// An array of a point instancer.
+#[derive(Clone, Copy)]
+enum Placements {
+    /// `quath` rotations, real part first.
+    Orientations,
+    Positions,
+    /// The uniform scale on each axis.
+    Scales,
+}
+
+/// The text of a point instancer's array: `[(...), ...]`.
+fn placements_text(groups: &[&InstanceGroup], array: Placements) -> String {
+    let count: usize = groups.iter().map(|g| g.transforms.len()).sum();
+    let mut t = Text::with_capacity(40 * count + 2);
+    t.out.push('[');
+    for (k, tr) in groups.iter().flat_map(|g| g.transforms.iter()).enumerate() {
+        if k > 0 {
+            t.out.push_str(", ");
+        }
+        match array {
+            Placements::Orientations => {
+                let [x, y, z, w] = tr.rotation;
+                t.tuple(&[w, x, y, z]);
+            }
+            Placements::Positions => t.tuple(&tr.translation),
+            Placements::Scales => t.tuple(&[tr.scale; 3]),
+        }
+    }
+    t.out.push(']');
+    t.out
 }
 
 /// A mesh prim to format: the mesh, its prim name, its transform, its material's path and the
@@ -208,6 +241,9 @@ impl<'m> Writer<'m> {
             .map(|piece| match piece {
                 Piece::Text(text) => std::borrow::Cow::Borrowed(text.as_str()),
                 Piece::Mesh(job) => std::borrow::Cow::Owned(mesh_text(job)),
+                Piece::Placements(groups, array) => {
+                    std::borrow::Cow::Owned(placements_text(groups, *array))
+                }
             })
             .collect();
         let mut layer = String::with_capacity(texts.iter().map(|t| t.len()).sum());
@@ -459,7 +495,7 @@ impl<'m> Writer<'m> {
     }
 
     /// A `PointInstancer` named `name` (a child of the root or a stage) of `groups`.
-    fn instancer(&mut self, model: &'m Model, name: &str, groups: &[&InstanceGroup]) {
+    fn instancer(&mut self, model: &'m Model, name: &str, groups: &[&'m InstanceGroup]) {
         // One prototype per variant: groups of the same meshes (a merged world's tiles place
         // the same shared variants) share one, named after the first.
         let mut protos = Names::default();
@@ -505,24 +541,12 @@ impl<'m> Writer<'m> {
         t.close("}");
         t.close(")");
         t.open("", "{");
-        let transforms = || groups.iter().flat_map(|g| g.transforms.iter());
-        t.line().push_str("quath[] orientations = [");
-        for (k, tr) in transforms().enumerate() {
-            if k > 0 {
-                t.out.push_str(", ");
-            }
-            let [x, y, z, w] = tr.rotation;
-            t.tuple(&[w, x, y, z]);
-        }
-        t.out.push(']');
-        t.line().push_str("point3f[] positions = [");
-        for (k, tr) in transforms().enumerate() {
-            if k > 0 {
-                t.out.push_str(", ");
-            }
-            t.tuple(&tr.translation);
-        }
-        t.out.push(']');
+        t.line().push_str("quath[] orientations = ");
+        self.placements(groups, Placements::Orientations);
+        let t = &mut self.text;
+        t.line().push_str("point3f[] positions = ");
+        self.placements(groups, Placements::Positions);
+        let t = &mut self.text;
         t.line().push_str("int[] protoIndices = [");
         let mut first = true;
         for (&p, g) in proto_of.iter().zip(groups) {
@@ -544,14 +568,9 @@ impl<'m> Writer<'m> {
             l.push_str(&format!("</{USD_ROOT}/{name}/Prototypes/{p}>"));
         }
         l.push(']');
-        t.line().push_str("float3[] scales = [");
-        for (k, tr) in transforms().enumerate() {
-            if k > 0 {
-                t.out.push_str(", ");
-            }
-            t.tuple(&[tr.scale; 3]);
-        }
-        t.out.push(']');
+        t.line().push_str("float3[] scales = ");
+        self.placements(groups, Placements::Scales);
+        let t = &mut self.text;
         t.open("def Scope \"Prototypes\"", "{");
         for (g, p) in &prototypes {
             self.text.open(&format!("def Xform \"{p}\""), "(");
@@ -571,6 +590,13 @@ impl<'m> Writer<'m> {
         }
         self.text.close("}");
         self.text.close("}");
+    }
+
+    /// An array of the placements of `groups`, formatted when the layer is finished.
+    fn placements(&mut self, groups: &[&'m InstanceGroup], array: Placements) {
+        self.pieces
+            .push(Piece::Text(std::mem::take(&mut self.text.out)));
+        self.pieces.push(Piece::Placements(groups.to_vec(), array));
     }
 
     /// One mesh as a `Mesh` (triangles) or `BasisCurves` (lines) prim named `name`, formatted
