@@ -257,3 +257,17 @@ fn a_merged_world_has_the_merged_glbs_meshes_and_instances() {
     assert_eq!(counts, glb_counts(&std::fs::read(&glb).expect("glb")));
     assert!(counts.2 > 0, "{counts:?}");
 }
+
+#[test]
+fn a_tile_has_the_tiles_glb_meshes_and_instances() {
+    // Tile 0,0 has a layer that places nothing there: like the glb, the layer leaves it out.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let script = common::ray_forest();
+    let (usda, glb) = (dir.path().join("tile.usda"), dir.path().join("tile.glb"));
+    run(&script, &usda, &["--tile", "0,0"]);
+    run(&script, &glb, &["--tile", "0,0"]);
+    let text = std::fs::read_to_string(&usda).expect("the layer");
+    let counts = usda_counts(&text);
+    assert_eq!(counts, glb_counts(&std::fs::read(&glb).expect("glb")));
+    assert!(!text.contains("int[] protoIndices = []"));
+}

@@ -481,7 +481,8 @@ impl<'m> Writer<'m> {
         }
         // One point instancer per species (`SPECIES/VARIANT`), a prototype per variant.
         let mut species: Vec<(&str, Vec<&InstanceGroup>)> = Vec::new();
-        for group in &model.groups {
+        // A group that places nothing is not written (as in the glb).
+        for group in model.groups.iter().filter(|g| !g.transforms.is_empty()) {
             let name = group.name.split('/').next().unwrap_or("");
             match species.iter_mut().find(|(s, _)| *s == name) {
                 Some((_, groups)) => groups.push(group),
