@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 pub use pge::embed::export_meta;
-use pge_engine::export::{ExportMeta, Instancing, Prepared, obj_files, write_glb_with};
+use pge_engine::export::{
+    ExportMeta, Instancing, Prepared, UsdFiles, obj_files, usd_files, usdz_bytes, write_glb_with,
+};
 use pge_engine::geometry::Model;
 
 /// Writes `bytes` to `path` atomically, as [`write_atomically_with`] does.
@@ -232,8 +234,9 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 }
 
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
-/// folder (all written before any takes its place, the `.obj` last), anything else as
-/// `.glb` with `meta` (the skeletons' texts taken from `prepared` where it has them).
+/// folder (all written before any takes its place, the `.obj` last), a `.usda` or `.usdz` as
+/// [`write_usd`] does, anything else as `.glb` with `meta` (the skeletons' texts taken from
+/// `prepared` where it has them).
 pub fn write_model(
     model: &Model,
     prepared: &Prepared,
@@ -245,7 +248,10 @@ pub fn write_model(
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if is_obj {
+    if usd_kind(output).is_some() {
+        let files = usd_files(model, meta, &usd_folder(output))?;
+        write_usd(&files, output)?;
+    } else if is_obj {
         let stem = output
             .file_stem()
             .unwrap_or_default()
@@ -282,6 +288,47 @@ pub fn write_model(
         file.finish()?;
     }
     Ok(())
+}
+
+/// `usda` or `usdz` when `path` ends so (any case).
+#[must_use]
+pub fn usd_kind(path: &Path) -> Option<&'static str> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    ["usda", "usdz"].into_iter().find(|k| *k == ext)
+}
+
+/// The folder of a USD layer's textures: its file name without the extension.
+#[must_use]
+pub fn usd_folder(output: &Path) -> String {
+    output
+        .file_stem()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .to_string()
+}
+
+/// Writes a USD export to `output`: a `.usdz` package with the textures inside, or a
+/// `.usda` with its textures in the folder beside it, the whole set put in place together
+/// ([`write_set`]).
+pub fn write_usd(files: &UsdFiles, output: &Path) -> anyhow::Result<()> {
+    if usd_kind(output) == Some("usdz") {
+        let name = Path::new(&usd_folder(output)).with_extension("usda");
+        let bytes = usdz_bytes(&name.to_string_lossy(), files)?;
+        return write_atomically(output, &bytes);
+    }
+    let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
+    if !files.textures.is_empty() {
+        let folder = dir.join(usd_folder(output));
+        std::fs::create_dir_all(&folder)
+            .with_context(|| format!("cannot create {}", folder.display()))?;
+    }
+    let mut set: Vec<(PathBuf, &[u8])> = files
+        .textures
+        .iter()
+        .map(|(path, texture)| (dir.join(path), texture.encoded.as_slice()))
+        .collect();
+    set.push((output.to_path_buf(), files.layer.as_bytes()));
+    write_set(&set)
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ use report::Report;
 pub struct RunArgs {
     #[command(flatten)]
     pub script: ScriptArgs,
-    /// Output file: .glb (default: the script's name with .glb) or .obj.
+    /// Output file: .glb (default: the script's name with .glb), .obj, .usda or .usdz.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Run this many steps instead of the algorithm's own count.

@@ -24,7 +24,7 @@ use world::World;
 pub struct MergeArgs {
     /// The world directory: `DIR/world.json` and `DIR/tiles/I_J.glb`.
     pub dir: PathBuf,
-    /// The .glb to write (default: DIR/world.glb).
+    /// The .glb to write (default: DIR/world.glb), or a .usda or .usdz.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Only the tiles of this rectangle, corners included: I0,J0 to I1,J1.
@@ -144,6 +144,11 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| args.dir.join("world.glb"));
     let instancing: Instancing = args.instancing.into();
     let meta = ExportMeta { seed, params };
+    if crate::output::usd_kind(&output).is_some() {
+        let folder = crate::output::usd_folder(&output);
+        let files = pge_engine::export::usd_files(&model, &meta, &folder)?;
+        return crate::output::write_usd(&files, &output);
+    }
     let bytes = pge_engine::export::glb_bytes_with(&model, &meta, instancing)?;
     write_atomically(&output, &bytes)
 }

@@ -29,7 +29,7 @@ pub(crate) enum Plan {
 
 /// What each run of a [`Plan::Runs`] writes.
 pub(crate) enum Product {
-    /// The model: a .glb or an .obj.
+    /// The model: a .glb, an .obj, a .usda or a .usdz.
     Model,
     /// The variants of the forest's layers of a few variants, once (`--variants-out DIR`).
     SharedVariants(PathBuf),
@@ -126,13 +126,17 @@ impl Plan {
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        if !matches!(ext.as_deref(), Some("glb" | "obj")) {
-            usage!("{}: the output must end in .glb or .obj", output.display());
+        if !matches!(ext.as_deref(), Some("glb" | "obj" | "usda" | "usdz")) {
+            usage!(
+                "{}: the output must end in .glb, .obj, .usda or .usdz",
+                output.display()
+            );
         }
         if let Some(stages) = &args.stages {
-            if ext.as_deref() != Some("glb") {
+            if !matches!(ext.as_deref(), Some("glb" | "usda" | "usdz")) {
                 usage!(
-                    "{}: --stages writes one scene per stage, which needs a .glb output",
+                    "{}: --stages writes one scene per stage, which needs a .glb, .usda or \
+                     .usdz output",
                     output.display()
                 );
             }
@@ -192,7 +196,7 @@ mod tests {
     }
 
     #[test]
-    fn the_output_defaults_to_the_script_stem_and_must_be_glb_or_obj() {
+    fn the_output_defaults_to_the_script_stem_and_must_be_glb_obj_or_usd() {
         let Plan::Runs {
             product: Product::Model,
             targets: Targets::One(t),
@@ -201,6 +205,8 @@ mod tests {
             panic!("one model");
         };
         assert_eq!((t.tile, t.output), (None, PathBuf::from("oak.glb")));
+        assert!(plan(&["a.lua", "-o", "a.usda"]).is_ok());
+        assert!(plan(&["a.lua", "-o", "a.usdz"]).is_ok());
         let e = plan(&["a.lua", "-o", "a.png"]).err().expect("usage");
         assert!(e.downcast_ref::<crate::common::Usage>().is_some(), "{e}");
     }
@@ -212,6 +218,12 @@ mod tests {
             Plan::Stages { ref stages, .. } if stages == &[1, 2]
         ));
         assert!(plan(&["a.lua", "--stages", "1,2", "-o", "a.obj"]).is_err());
+        for usd in ["a.usda", "a.USDZ"] {
+            assert!(matches!(
+                plan(&["a.lua", "--stages", "1,2", "-o", usd]).expect("plan"),
+                Plan::Stages { .. }
+            ));
+        }
         assert!(plan(&["a.lua", "--tile", "0,0", "--tile", "0,1"]).is_err());
         let Plan::Runs { targets, product } =
             plan(&["a.lua", "--tile", "0,0", "--tile", "2,1", "--out-dir", "d"]).expect("plan")

@@ -1,16 +1,18 @@
-//! `pge run --stages`: one individual at several growth stages, each a scene of one glb.
+//! `pge run --stages`: one individual at several growth stages, each a scene of one glb or a
+//! variant of one USD layer.
 
 use std::path::Path;
 use std::time::Instant;
 
 use indicatif::ProgressBar;
-use pge_engine::export::Instancing;
+use pge::embed::Models;
+use pge_engine::export::{Instancing, usd_stages_files};
 
 use super::RunArgs;
 use crate::common::progress_bar;
-use crate::output::write_atomically;
+use crate::output::{usd_folder, usd_kind, write_atomically, write_usd};
 
-/// `pge run --stages`: every stage a scene of one .glb, grown by the library's
+/// `pge run --stages`: every stage a scene of one .glb (or a variant of one USD layer), grown by the library's
 /// [`pge::Request::grow`].
 pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Result<()> {
     let t0 = Instant::now();
@@ -32,7 +34,13 @@ pub fn run_stages(args: &RunArgs, stages: &[u32], output: &Path) -> anyhow::Resu
     for w in grown.warnings() {
         eprintln!("{w}");
     }
-    write_atomically(output, &grown.glb(Instancing::Gpu)?)?;
+    match &grown.models {
+        Models::Stages(models) if usd_kind(output).is_some() => write_usd(
+            &usd_stages_files(models, &grown.meta, &usd_folder(output))?,
+            output,
+        )?,
+        _ => write_atomically(output, &grown.glb(Instancing::Gpu)?)?,
+    }
     if args.stats {
         let mut stats = grown.stats(t0.elapsed().as_secs_f64());
         stats["output"] = output.display().to_string().into();

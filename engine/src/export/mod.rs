@@ -1,7 +1,9 @@
-//! Writing models: glTF 2.0 binary (`.glb`) and Wavefront `.obj` + `.mtl`.
+//! Writing models: glTF 2.0 binary (`.glb`), Wavefront `.obj` + `.mtl`, and USD (`.usda`,
+//! `.usdz`).
 
 mod glb;
 mod obj;
+mod usd;
 
 pub use glb::shared::{
     SharedGroup, SharedVariants, VARIANTS_FORMAT, glb_bytes_shared, variants_files,
@@ -11,3 +13,4 @@ pub use glb::{
     glb_bytes_with, glb_container, glb_file_with, glb_stages_bytes, lod_from_json, write_glb_with,
 };
 pub use obj::{ObjFiles, obj_files};
+pub use usd::{USD_ROOT, UsdFiles, usd_files, usd_stages_files, usdz_bytes};
