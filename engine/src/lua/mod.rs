@@ -21,6 +21,7 @@ pub(crate) mod random;
 mod sandbox;
 pub mod services;
 mod skeleton;
+mod std_math;
 pub(crate) mod state;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
@@ -139,6 +140,7 @@ pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Resu
     params::register(lua, pge)?;
     random::register(lua, pge)?;
     math::register(lua, pge)?;
+    std_math::register(lua)?;
     noise::register(lua, pge)?;
     model::register(lua, pge)?;
     algorithm::register(lua, pge)?;
