@@ -21,8 +21,8 @@ pub(crate) mod random;
 mod sandbox;
 pub mod services;
 mod skeleton;
-mod std_math;
 pub(crate) mod state;
+mod std_math;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
 pub use args::{conversion_message, finite_f32, finite_number, no_new_fields, vec3_arg};

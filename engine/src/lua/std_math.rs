@@ -12,10 +12,12 @@ use mlua::{Lua, Table};
 
 use crate::math;
 
+type Unary = fn(f64) -> f64;
+
 /// Replaces the transcendental functions of the sandbox's `math` table.
 pub(crate) fn register(lua: &Lua) -> mlua::Result<()> {
     let table: Table = lua.globals().get("math")?;
-    let unary: [(&str, fn(f64) -> f64); 6] = [
+    let unary: [(&str, Unary); 6] = [
         ("sin", math::sin),
         ("cos", math::cos),
         ("tan", math::tan),
@@ -45,6 +47,7 @@ pub(crate) fn register(lua: &Lua) -> mlua::Result<()> {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use mlua::{Lua, LuaOptions, StdLib};
 
@@ -58,14 +61,35 @@ mod tests {
     fn results_are_the_engine_functions() {
         let lua = lua();
         let f = |src: &str| lua.load(src).eval::<f64>().unwrap().to_bits();
-        assert_eq!(f("return math.sin(0.7)"), crate::math::sin(0.7f64).to_bits());
+        assert_eq!(
+            f("return math.sin(0.7)"),
+            crate::math::sin(0.7f64).to_bits()
+        );
         assert_eq!(f("return math.cos(3)"), crate::math::cos(3.0f64).to_bits());
-        assert_eq!(f("return math.tan('0.25')"), crate::math::tan(0.25f64).to_bits());
-        assert_eq!(f("return math.asin(0.3)"), crate::math::asin(0.3f64).to_bits());
-        assert_eq!(f("return math.acos(-0.3)"), crate::math::acos(-0.3f64).to_bits());
-        assert_eq!(f("return math.exp(1.5)"), crate::math::exp(1.5f64).to_bits());
-        assert_eq!(f("return math.atan(2)"), crate::math::atan(2.0f64).to_bits());
-        assert_eq!(f("return math.atan(-1, -2)"), crate::math::atan2(-1.0f64, -2.0).to_bits());
+        assert_eq!(
+            f("return math.tan('0.25')"),
+            crate::math::tan(0.25f64).to_bits()
+        );
+        assert_eq!(
+            f("return math.asin(0.3)"),
+            crate::math::asin(0.3f64).to_bits()
+        );
+        assert_eq!(
+            f("return math.acos(-0.3)"),
+            crate::math::acos(-0.3f64).to_bits()
+        );
+        assert_eq!(
+            f("return math.exp(1.5)"),
+            crate::math::exp(1.5f64).to_bits()
+        );
+        assert_eq!(
+            f("return math.atan(2)"),
+            crate::math::atan(2.0f64).to_bits()
+        );
+        assert_eq!(
+            f("return math.atan(-1, -2)"),
+            crate::math::atan2(-1.0f64, -2.0).to_bits()
+        );
         assert_eq!(f("return math.log(5)"), crate::math::ln(5.0f64).to_bits());
         assert_eq!(f("return math.log(8, 2)"), 3.0f64.to_bits());
         assert_eq!(f("return math.log(1000, 10)"), 3.0f64.to_bits());
@@ -78,8 +102,14 @@ mod tests {
     #[test]
     fn a_wrong_argument_is_a_lua_error() {
         let lua = lua();
-        let err = lua.load("return math.sin('leaf')").eval::<f64>().unwrap_err();
-        assert!(err.to_string().contains("sin") || err.to_string().contains("number"), "{err}");
+        let err = lua
+            .load("return math.sin('leaf')")
+            .eval::<f64>()
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("sin") || err.to_string().contains("number"),
+            "{err}"
+        );
         assert!(lua.load("return math.sin()").eval::<f64>().is_err());
     }
 }
