@@ -5,6 +5,7 @@
 //!
 //! Run with `cargo run --example forest_host [OUT.glb]`. `tests/forest.rs` runs [`run`].
 
+use pge_engine::math;
 use std::path::Path;
 
 use glam::Vec3;
@@ -22,7 +23,7 @@ fn cone(height: f32, radius: f32) -> Result<Mesh, Box<dyn std::error::Error>> {
     let mut positions = vec![Vec3::new(0.0, height, 0.0)];
     for k in 0..sides {
         let a = k as f32 * std::f32::consts::TAU / sides as f32;
-        positions.push(Vec3::new(radius * a.cos(), 0.0, radius * a.sin()));
+        positions.push(Vec3::new(radius * math::cos(a), 0.0, radius * math::sin(a)));
     }
     let mut indices = Vec::new();
     for k in 0..sides {
@@ -42,9 +43,9 @@ fn crown(n: u32, centre: Vec3, radius: f32) -> Result<Mesh, Box<dyn std::error::
         let y = 1.0 - 2.0 * (k as f32 + 0.5) / n as f32;
         let a = k as f32 * 2.399_963;
         let out = Vec3::new(
-            (1.0 - y * y).sqrt() * a.cos(),
+            (1.0 - y * y).sqrt() * math::cos(a),
             y,
-            (1.0 - y * y).sqrt() * a.sin(),
+            (1.0 - y * y).sqrt() * math::sin(a),
         );
         let (u, v) = out.any_orthonormal_pair();
         let c = centre + out * radius;

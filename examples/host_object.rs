@@ -7,6 +7,7 @@
 //! cargo run --example host_object
 //! ```
 
+use pge_engine::math;
 use std::sync::{Arc, Mutex};
 
 use mlua::{Lua, Table, UserData, UserDataMethods};
@@ -25,7 +26,7 @@ impl Heightfield {
         for j in 0..size {
             for i in 0..size {
                 let (x, z) = (i as f32 * cell, j as f32 * cell);
-                heights.push((x * 0.3).sin() * 1.5 + (z * 0.2).cos());
+                heights.push(math::sin(x * 0.3) * 1.5 + math::cos(z * 0.2));
             }
         }
         Heightfield {

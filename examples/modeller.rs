@@ -6,6 +6,7 @@
 //! cargo run --example modeller -- scripts/modellers/tower.lua /tmp/tower [--set k=v] [--steps n]
 //! ```
 
+use pge_engine::math;
 use std::collections::HashMap;
 use std::error::Error;
 use std::path::PathBuf;
@@ -201,7 +202,7 @@ fn lin(c: u8) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
-        ((c + 0.055) / 1.055).powf(2.4)
+        math::powf((c + 0.055) / 1.055, 2.4)
     }
 }
 
@@ -211,7 +212,7 @@ fn pixel(linear: Vec3) -> image::Rgb<u8> {
         let v = if c <= 0.003_130_8 {
             c * 12.92
         } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
+            1.055 * math::powf(c, 1.0 / 2.4) - 0.055
         };
         (v * 255.0).round() as u8
     };

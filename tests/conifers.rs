@@ -3,6 +3,7 @@
 //! a straight leader, first-order branches in whorls, thin joints. Also the generator's
 //! stages and its located errors.
 
+use pge_engine::math;
 mod common;
 
 use common::{pge, run_with_stats as run};
@@ -98,7 +99,7 @@ fn metrics(s: &Skeleton) -> Metrics {
     let mut deviation: f64 = 0.0;
     for &t in &trunk {
         let p = s.positions[t];
-        deviation = deviation.max((p[0] - root[0]).hypot(p[2] - root[2]));
+        deviation = deviation.max(math::hypot(p[0] - root[0], p[2] - root[2]));
         for &c in &children[t] {
             if Some(c) != next_on_trunk[t] {
                 origins.push(p[1] - root[1]);

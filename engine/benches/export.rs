@@ -4,6 +4,7 @@
 //! limit, one copy of the same number of bytes, on every core and on one thread; and a
 //! script run end to end.
 
+use pge_engine::math;
 use std::io::{Seek, Write};
 use std::sync::Arc;
 
@@ -18,7 +19,7 @@ fn grid(n: u32) -> Mesh {
     let mut uvs = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
-            positions.push(Vec3::new(i as f32, ((i * j) as f32).sin(), j as f32));
+            positions.push(Vec3::new(i as f32, math::sin((i * j) as f32), j as f32));
             uvs.push(Vec2::new(i as f32 / n as f32, j as f32 / n as f32));
         }
     }
@@ -41,7 +42,7 @@ fn tree_like(n: u32) -> Mesh {
     mesh.normals = mesh
         .positions
         .iter()
-        .map(|p| Vec3::new(p.y.cos(), 1.0, p.x.sin()).normalize())
+        .map(|p| Vec3::new(math::cos(p.y), 1.0, math::sin(p.x)).normalize())
         .collect();
     mesh.colors = mesh
         .positions
@@ -53,7 +54,7 @@ fn tree_like(n: u32) -> Mesh {
     for k in 0..nodes {
         let parent = (k > 0).then(|| ((k - 1) / 2) as u32);
         let t = k as f32 * 0.001;
-        let position = Vec3::new(t.sin(), t * 0.37, t.cos());
+        let position = Vec3::new(math::sin(t), t * 0.37, math::cos(t));
         skeleton.push(position, parent, 0.3 / (1.0 + t), (k % 7) as u32);
     }
     mesh.skeleton = Some(Arc::new(skeleton));

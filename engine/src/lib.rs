@@ -33,6 +33,7 @@ pub mod geometry;
 pub mod import;
 #[cfg(feature = "lua")]
 pub mod lua;
+pub mod math;
 #[cfg(feature = "lua")]
 mod plugin;
 pub mod random;

@@ -12,6 +12,7 @@
 //! assert_eq!(uniform(&mut a), uniform(&mut b));
 //! ```
 
+use crate::math;
 use rand_mt::{Mt, Mt64};
 
 /// The golden-ratio increment of splitmix64 (2^64 / φ, odd): also a good multiplier for
@@ -138,7 +139,7 @@ pub fn int_in(rng: &mut Mt, a: i64, b: i64) -> i64 {
 pub fn normal(rng: &mut Mt, mu: f64, sigma: f64) -> f64 {
     let u1 = 1.0 - uniform(rng);
     let u2 = uniform(rng);
-    mu + sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    mu + sigma * (-2.0 * math::ln(u1)).sqrt() * math::cos(std::f64::consts::TAU * u2)
 }
 
 /// The MT19937 of a run seed (both halves of a 64-bit seed are used): the generator of

@@ -7,6 +7,7 @@
 //! leaves. The leaf's normal and metallic-roughness maps get atlases of their own, drawn with
 //! the same placements, so that the three line up.
 
+use pge_engine::math;
 use std::sync::Arc;
 
 use glam::Vec2;
@@ -181,11 +182,11 @@ impl Atlas {
         if count <= 1 || self.cells.len() < 2 {
             return &self.cells[0];
         }
-        let log = (count as f32).log2();
+        let log = math::log2(count as f32);
         let nearest_count = (0..CLUSTER_COUNTS.len())
             .min_by(|&a, &b| {
-                let da = ((CLUSTER_COUNTS[a] as f32).log2() - log).abs();
-                let db = ((CLUSTER_COUNTS[b] as f32).log2() - log).abs();
+                let da = (math::log2(CLUSTER_COUNTS[a] as f32) - log).abs();
+                let db = (math::log2(CLUSTER_COUNTS[b] as f32) - log).abs();
                 da.total_cmp(&db)
             })
             .unwrap_or(0);
@@ -359,7 +360,7 @@ fn draw(
             let pixel = (y0 + py) as usize * n + (x0 + px) as usize;
             let i = pixel * 4;
             for leaf in placements {
-                let (sin, cos) = leaf.angle.sin_cos();
+                let (sin, cos) = math::sin_cos(leaf.angle);
                 let d = p - leaf.center;
                 let local = Vec2::new(cos * d.x + sin * d.y, -sin * d.x + cos * d.y) / leaf.size
                     + Vec2::splat(0.5);

@@ -1,6 +1,7 @@
 //! A leaf mesh with levels of detail: its quads simplified (per sector), laid out in the
 //! order of V, with its LOD table ([`MeshLod`], written to the glTF extras).
 
+use pge_engine::math;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
@@ -130,7 +131,7 @@ pub fn leaves_of(mesh: &Mesh) -> Result<Vec<Leaf>, LodError> {
 /// The sector of a point: its angle around the axis, in `n` equal sectors.
 fn sector_of(axis: &Axis, basis: (Vec3, Vec3), p: Vec3, n: u32) -> usize {
     let d = p - axis.origin;
-    let angle = d.dot(basis.1).atan2(d.dot(basis.0)); // -pi..=pi
+    let angle = math::atan2(d.dot(basis.1), d.dot(basis.0)); // -pi..=pi
     let t = (angle + std::f32::consts::PI) / std::f32::consts::TAU;
     ((t * n as f32) as u32).min(n - 1) as usize
 }
@@ -354,7 +355,7 @@ mod tests {
         let mut mesh = Mesh::default();
         for i in 0..n {
             let t = i as f32 / n as f32 * std::f32::consts::TAU;
-            let normal = Vec3::new(t.cos(), 0.0, t.sin());
+            let normal = Vec3::new(math::cos(t), 0.0, math::sin(t));
             let leaf = Leaf {
                 center: normal * 3.0 + Vec3::Y * (2.0 + (i % 3) as f32 * 0.1),
                 normal,
@@ -441,7 +442,7 @@ mod tests {
                 .collect();
             let mean = dirs.iter().sum::<Vec3>().normalize();
             for d in &dirs {
-                assert!(d.dot(mean) > (std::f32::consts::FRAC_PI_4 + 0.1).cos());
+                assert!(d.dot(mean) > math::cos(std::f32::consts::FRAC_PI_4 + 0.1));
             }
         }
         assert_eq!(

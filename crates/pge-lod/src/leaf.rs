@@ -264,6 +264,7 @@ impl Leaf {
 mod tests {
     use super::*;
     use pge_engine::assert_approx_eq;
+    use pge_engine::math;
 
     fn square(center: Vec3, normal: Vec3, axis: Vec3, half: f32) -> Leaf {
         Leaf {
@@ -419,7 +420,7 @@ mod tests {
         let (mut tested, mut refused) = (0, 0);
         for i in 0..20_000 {
             // Sizes from a millimetre to ten metres, far from the origin or near it.
-            let scale = 10f32.powf(4.0 * (u() + 0.5) - 3.0);
+            let scale = math::powf(10f32, 4.0 * (u() + 0.5) - 3.0);
             let offset = Vec3::new(u(), u(), u()) * if i % 2 == 0 { 2000.0 } else { 2.0 };
             let leaf = |u: &mut dyn FnMut() -> f32, normal: Vec3, center: Vec3| {
                 let axis = normal

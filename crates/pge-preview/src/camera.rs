@@ -1,6 +1,7 @@
 //! The orbit camera: a target point, a distance, yaw and pitch; Y is up.
 
 use glam::{Mat4, Vec3};
+use pge_engine::math;
 
 /// Vertical field of view in radians.
 const FOV_Y: f32 = 0.8;
@@ -33,8 +34,8 @@ impl OrbitCamera {
     /// The eye position.
     #[must_use]
     pub fn eye(&self) -> Vec3 {
-        let (sy, cy) = self.yaw.sin_cos();
-        let (sp, cp) = self.pitch.sin_cos();
+        let (sy, cy) = math::sin_cos(self.yaw);
+        let (sp, cp) = math::sin_cos(self.pitch);
         self.target + self.distance * Vec3::new(cp * sy, sp, cp * cy)
     }
 
@@ -50,13 +51,13 @@ impl OrbitCamera {
         let view = Mat4::look_at_rh(self.eye(), self.target, Vec3::Y).inverse();
         let right = view.x_axis.truncate();
         let up = view.y_axis.truncate();
-        let per_point = 2.0 * self.distance * (FOV_Y / 2.0).tan() / height.max(1.0);
+        let per_point = 2.0 * self.distance * math::tan(FOV_Y / 2.0) / height.max(1.0);
         self.target += (-dx * right + dy * up) * per_point;
     }
 
     /// Zooms by `steps` (positive: closer), each step 10 %.
     pub fn zoom(&mut self, steps: f32) {
-        self.distance = (self.distance * 0.9f32.powf(steps)).clamp(1e-3, 1e6);
+        self.distance = (self.distance * math::powf(0.9f32, steps)).clamp(1e-3, 1e6);
     }
 
     /// Looks at the centre of `bounds` from a distance where all of it fits.
@@ -64,7 +65,7 @@ impl OrbitCamera {
         let (lo, hi) = bounds;
         let radius = ((hi - lo).length() * 0.5).max(1e-3);
         self.target = (lo + hi) * 0.5;
-        self.distance = radius / (FOV_Y / 2.0).sin() * 1.05;
+        self.distance = radius / math::sin(FOV_Y / 2.0) * 1.05;
     }
 
     /// Places the eye `distance` metres from `target` (the current target when `None`)
@@ -75,7 +76,7 @@ impl OrbitCamera {
         }
         let rise = height - self.target.y;
         self.distance = (distance * distance + rise * rise).sqrt().max(1e-3);
-        self.pitch = rise.atan2(distance).clamp(-1.55, 1.55);
+        self.pitch = math::atan2(rise, distance).clamp(-1.55, 1.55);
     }
 
     /// Projection times view for a viewport of the given aspect ratio, with depth in [0, 1].

@@ -13,6 +13,7 @@
 //! the buffers of a newer scene. Within an epoch, each plan says which instances changed
 //! since the previous one ([`Planned::changed`]), so only those are written to the GPU.
 
+use pge_engine::math;
 use std::ops::Range;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -92,7 +93,7 @@ impl Request {
         let (a, b) = (forward(self), forward(other));
         self.budget == other.budget
             && a != glam::Vec3::ZERO
-            && a.dot(b) >= MOVING_REUSE.cos()
+            && a.dot(b) >= math::cos(MOVING_REUSE)
             && self.view.eye.distance(other.view.eye) <= MOVING_REUSE * distance
     }
 }
@@ -491,7 +492,7 @@ mod tests {
         // Orbiting a target 100 m away by `angle` radians.
         let orbit = |angle: f32, budget| {
             let target = Vec3::new(0.0, 0.0, -100.0);
-            let eye = target + 100.0 * Vec3::new(angle.sin(), 0.0, angle.cos());
+            let eye = target + 100.0 * Vec3::new(math::sin(angle), 0.0, math::cos(angle));
             Request {
                 view: View {
                     eye,

@@ -3,6 +3,7 @@
 //!
 //! Built on the worker thread right after generation, so the window only uploads buffers.
 
+use pge_engine::math;
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
@@ -517,7 +518,7 @@ fn downsample_data(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
 
 /// The average linear RGB of sRGB-encoded RGBA8 pixels (alpha ignored).
 fn average_linear(rgba: &[u8]) -> [f32; 3] {
-    let to_linear = |c: u8| (c as f32 / 255.0).powf(2.2);
+    let to_linear = |c: u8| math::powf(c as f32 / 255.0, 2.2);
     let mut acc = [0.0f64; 3];
     let mut n = 0usize;
     for p in rgba.chunks_exact(4) {
@@ -531,8 +532,12 @@ fn average_linear(rgba: &[u8]) -> [f32; 3] {
 }
 
 fn downsample(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
-    let to_linear = |c: u8| (c as f32 / 255.0).powf(2.2);
-    let to_srgb = |c: f32| (c.max(0.0).powf(1.0 / 2.2) * 255.0).round().min(255.0) as u8;
+    let to_linear = |c: u8| math::powf(c as f32 / 255.0, 2.2);
+    let to_srgb = |c: f32| {
+        (math::powf(c.max(0.0), 1.0 / 2.2) * 255.0)
+            .round()
+            .min(255.0) as u8
+    };
     let mut out = Vec::with_capacity((nw * nh * 4) as usize);
     for y in 0..nh {
         for x in 0..nw {

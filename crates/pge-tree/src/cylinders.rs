@@ -15,6 +15,7 @@
 //! of its own radius at the fork node, inside its parent. Tips (and the base of each root)
 //! get a flat cap.
 
+use pge_engine::math;
 mod flare;
 mod frames;
 mod rings;
@@ -66,7 +67,7 @@ fn append_checked_bark(
                 (1.0, 0.0)
             } else {
                 let a = TAU * k as f32 / sides as f32;
-                (a.cos(), a.sin())
+                (math::cos(a), math::sin(a))
             }
         })
         .collect();
@@ -475,7 +476,8 @@ mod tests {
         for i in 1..n {
             let parent = if i % 5 == 0 { i / 3 } else { i - 1 };
             let t = i as f32 * 0.37;
-            let p = s.positions[parent as usize] + Vec3::new(t.sin() * 0.2, 0.3, t.cos() * 0.2);
+            let p = s.positions[parent as usize]
+                + Vec3::new(math::sin(t) * 0.2, 0.3, math::cos(t) * 0.2);
             s.push(p, Some(parent), 0.0, u32::from(i % 5 == 0));
         }
         crate::pipe_radii(&mut s, 0.01, 2.3);

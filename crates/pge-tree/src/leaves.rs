@@ -4,6 +4,7 @@
 
 use glam::{Quat, Vec2, Vec3, Vec4};
 use pge_engine::geometry::{LeafPoint, Mesh, Skeleton};
+use pge_engine::math;
 use rand_mt::Mt64;
 use rayon::prelude::*;
 
@@ -226,9 +227,9 @@ fn on_segment(
     let branch = (b - a).try_normalize().unwrap_or(Vec3::Y);
     let (e1, e2) = branch.any_orthonormal_pair();
     let azimuth = std::f32::consts::TAU * uniform();
-    let out_dir = e1 * azimuth.cos() + e2 * azimuth.sin();
+    let out_dir = e1 * math::cos(azimuth) + e2 * math::sin(azimuth);
     let tilt = (35.0 + 40.0 * uniform()).to_radians();
-    let direction = (branch * tilt.cos() + out_dir * tilt.sin()).normalize();
+    let direction = (branch * math::cos(tilt) + out_dir * math::sin(tilt)).normalize();
     let roll = (uniform() - 0.5) * 80f32.to_radians();
     let side0 = direction
         .cross(out_dir.cross(branch))
@@ -469,7 +470,7 @@ mod tests {
         for i in 1..n {
             let parent = if i % 3 == 0 { i / 2 } else { i - 1 };
             let t = i as f32 * 0.7;
-            let p = s.positions[parent as usize] + Vec3::new(t.sin(), 0.5, t.cos()) * 0.3;
+            let p = s.positions[parent as usize] + Vec3::new(math::sin(t), 0.5, math::cos(t)) * 0.3;
             s.push(p, Some(parent), 0.05, 1);
         }
         s

@@ -1,6 +1,7 @@
 //! Merging of straight non-branching chains (seed 002).
 
 use pge_engine::geometry::Skeleton;
+use pge_engine::math;
 
 /// Removes nodes with exactly one child where the branch runs straight: a node is dropped
 /// when the direction from the last kept node to it and the direction from it to its child
@@ -48,7 +49,7 @@ fn merge_by(
     max_angle_degrees: f32,
 ) -> Skeleton {
     let n = skeleton.len();
-    let cos_max = max_angle_degrees.clamp(0.0, 180.0).to_radians().cos();
+    let cos_max = math::cos(max_angle_degrees.clamp(0.0, 180.0).to_radians());
     let mut child_count = vec![0u32; n];
     let mut only_child = vec![u32::MAX; n];
     for (i, p) in skeleton.parents.iter().enumerate() {

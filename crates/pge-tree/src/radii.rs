@@ -1,6 +1,7 @@
 //! Branch radii by the pipe model and branch orders.
 
 use pge_engine::geometry::Skeleton;
+use pge_engine::math;
 
 /// Sets every radius by the pipe model: tips get `tip_radius`, and a node with children gets
 /// `r = (r1^n + r2^n + ...)^(1/n)` over its children (`n = exponent`, 2.3 in seed 002). A
@@ -18,7 +19,7 @@ pub fn pipe_radii(skeleton: &mut Skeleton, tip_radius: f32, exponent: f32) {
     let mut children = vec![0u8; n];
     let e = f64::from(exponent);
     let inverse = 1.0 / e;
-    let tip_power = f64::from(tip_radius).powf(e);
+    let tip_power = math::powf(f64::from(tip_radius), e);
     let chains_exact = (1.0..=4.0).contains(&e);
     for i in (0..n).rev() {
         let (r, power) = match children[i] {
@@ -26,8 +27,8 @@ pub fn pipe_radii(skeleton: &mut Skeleton, tip_radius: f32, exponent: f32) {
             // `radii[i]` holds the only child's radius (set below), `sums[i]` its `r^n`.
             1 if chains_exact && sums[i].is_normal() => (skeleton.radii[i], sums[i]),
             _ => {
-                let r = sums[i].powf(inverse) as f32;
-                (r, f64::from(r).powf(e))
+                let r = math::powf(sums[i], inverse) as f32;
+                (r, math::powf(f64::from(r), e))
             }
         };
         skeleton.radii[i] = r;
@@ -182,8 +183,11 @@ mod tests {
             if kids.is_empty() {
                 assert_eq!(s.radii[i], 0.1);
             } else {
-                let sum: f32 = kids.iter().map(|c| s.radii[*c as usize].powf(2.3)).sum();
-                assert!((s.radii[i].powf(2.3) - sum).abs() < 1e-6, "node {i}");
+                let sum: f32 = kids
+                    .iter()
+                    .map(|c| math::powf(s.radii[*c as usize], 2.3))
+                    .sum();
+                assert!((math::powf(s.radii[i], 2.3) - sum).abs() < 1e-6, "node {i}");
             }
         }
         assert_eq!(s.radii[0], s.radii[1]);
@@ -200,13 +204,13 @@ mod tests {
         let e = f64::from(exponent);
         for i in (0..n).rev() {
             let r = if has_child[i] {
-                sums[i].powf(1.0 / e) as f32
+                math::powf(sums[i], 1.0 / e) as f32
             } else {
                 tip_radius
             };
             skeleton.radii[i] = r;
             if let Some(p) = skeleton.parents[i] {
-                sums[p as usize] += f64::from(r).powf(e);
+                sums[p as usize] += math::powf(f64::from(r), e);
                 has_child[p as usize] = true;
             }
         }

@@ -1,5 +1,6 @@
 //! Wavefront `.obj` + `.mtl` export (for tools without glTF).
 
+use crate::math;
 use std::fmt::Write;
 
 use crate::geometry::{Model, Primitive};
@@ -21,7 +22,7 @@ fn srgb(c: f32) -> f32 {
     if c <= 0.0031308 {
         c * 12.92
     } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
+        1.055 * math::powf(c, 1.0 / 2.4) - 0.055
     }
 }
 

@@ -1,3 +1,4 @@
+use crate::math;
 use glam::Vec3;
 
 /// A point where a leaf (or another organ) hangs on the skeleton.
@@ -122,7 +123,7 @@ impl Skeleton {
     pub fn append(&mut self, other: &Skeleton, transform: &glam::Mat4) -> u32 {
         let offset = self.len() as u32;
         let scale = transform.to_scale_rotation_translation().0;
-        let radius_scale = (scale.x.abs() * scale.y.abs() * scale.z.abs()).cbrt();
+        let radius_scale = math::cbrt(scale.x.abs() * scale.y.abs() * scale.z.abs());
         for i in 0..other.len() {
             self.positions
                 .push(transform.transform_point3(other.positions[i]));

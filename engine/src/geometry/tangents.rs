@@ -170,7 +170,22 @@ impl Space<'_> {
     }
 }
 
-impl bevy_mikktspace::Geometry for Space<'_> {
+/// MikkTSpace's two scalar operations over [`crate::math`]: its default (`StdOps`) calls the
+/// platform's `acos`, whose last bit differs between C libraries.
+struct Ops;
+
+impl bevy_mikktspace::Ops for Ops {
+    fn sqrt(x: f32) -> f32 {
+        x.sqrt()
+    }
+
+    fn acos(x: f32) -> f32 {
+        // In f64 like the reference implementation (and `StdOps`).
+        crate::math::acos(f64::from(x)) as f32
+    }
+}
+
+impl bevy_mikktspace::Geometry<Ops> for Space<'_> {
     fn num_faces(&self) -> usize {
         self.triangles.len()
     }

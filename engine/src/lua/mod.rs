@@ -22,6 +22,7 @@ mod sandbox;
 pub mod services;
 mod skeleton;
 pub(crate) mod state;
+mod std_math;
 
 pub use algorithm::{AlgorithmHandle, ScriptAlgorithm, algorithm_from};
 pub use args::{conversion_message, finite_f32, finite_number, no_new_fields, vec3_arg};
@@ -139,6 +140,7 @@ pub(crate) fn register_support(lua: &mlua::Lua, pge: &mlua::Table) -> mlua::Resu
     params::register(lua, pge)?;
     random::register(lua, pge)?;
     math::register(lua, pge)?;
+    std_math::register(lua)?;
     noise::register(lua, pge)?;
     model::register(lua, pge)?;
     algorithm::register(lua, pge)?;

@@ -1,5 +1,6 @@
 //! The Lua side: `pge.Lines{...}` and `pge.Image.new` / `pge.Image.load`.
 
+use pge_engine::math;
 use std::cell::RefCell;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -68,7 +69,7 @@ fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
-        ((c + 0.055) / 1.055).powf(2.4)
+        math::powf((c + 0.055) / 1.055, 2.4)
     }
 }
 

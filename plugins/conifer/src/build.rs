@@ -9,6 +9,7 @@
 
 use glam::{Vec2, Vec3};
 use pge_engine::geometry::Skeleton;
+use pge_engine::math;
 
 use crate::params::{ConiferParams, MAX_SEGMENTS, SprayPattern};
 
@@ -156,13 +157,13 @@ struct Builder<'a> {
 /// A unit direction of azimuth `h` (horizontal unit vector) raised `elevation` degrees.
 fn raised(h: Vec3, elevation: f32) -> Vec3 {
     let e = elevation.to_radians();
-    h * e.cos() + Vec3::Y * e.sin()
+    h * math::cos(e) + Vec3::Y * math::sin(e)
 }
 
 /// The horizontal unit vector and the elevation (degrees) of a direction.
 fn split(v: Vec3, fallback: Vec3) -> (Vec3, f32) {
     let h = Vec3::new(v.x, 0.0, v.z).try_normalize().unwrap_or(fallback);
-    (h, v.y.clamp(-1.0, 1.0).asin().to_degrees())
+    (h, math::asin(v.y.clamp(-1.0, 1.0)).to_degrees())
 }
 
 /// The lowest elevation a bending branch reaches, degrees.
@@ -244,7 +245,7 @@ impl Builder<'_> {
                 }
                 let (h, _) = split(tangent, Vec3::X);
                 let across = Vec3::new(h.z, 0.0, -h.x) * side;
-                let start = tangent * a.cos() + across * a.sin();
+                let start = tangent * math::cos(a) + across * math::sin(a);
                 let (sh, elevation) = split(start, h);
                 let droop = p.spray_droop;
                 let axis = self.axis(node, sh, elevation, droop, l, order)?;
@@ -310,7 +311,7 @@ pub fn build(params: &ConiferParams, whorls: &[Whorl], seed: u64) -> Result<Buil
         }
         let angle = (p.angle.0 + (p.angle.1 - p.angle.0) * t + bud.angle).clamp(0.0, 180.0);
         let az = bud.azimuth.to_radians();
-        let heading = Vec3::new(az.cos(), 0.0, az.sin());
+        let heading = Vec3::new(math::cos(az), 0.0, math::sin(az));
         let droop = p.droop * (length / p.crown_radius.max(f32::MIN_POSITIVE)).min(1.5);
         let start = b.s.len() as u32;
         let axis = b.axis(node, heading, 90.0 - angle, droop, length, 1)?;

@@ -2,6 +2,7 @@
 //! their ranges.
 
 use glam::Vec3;
+use pge_engine::math;
 use pge_tree::{MeshOptions, RadiiMode, TreeOptions};
 
 /// The most years (whorls, steps) a conifer grows: `years` and `--steps` above it are errors.
@@ -62,7 +63,7 @@ impl Crown {
         let t = t.clamp(0.0, 1.0);
         match self {
             Crown::Conic => t,
-            Crown::Ogive => (t * std::f32::consts::FRAC_PI_2).sin(),
+            Crown::Ogive => math::sin(t * std::f32::consts::FRAC_PI_2),
             Crown::Columnar => (3.0 * t).min(1.0),
             Crown::Profile(values) => match values.len() {
                 0 => 0.0,

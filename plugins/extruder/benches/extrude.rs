@@ -3,6 +3,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
+use pge_engine::math;
 use pge_extruder::{Extruder, ExtruderOptions};
 
 fn tubes(smooth: bool) -> Extruder {
@@ -36,7 +37,7 @@ fn prisms(e: &mut Extruder, level: u32) {
             e.push().expect("within depth");
             let a = (90.0 + 120.0 * k as f32).to_radians();
             e.path_mut()
-                .translate(Vec3::new(0.5 * a.cos(), 0.0, -0.5 * a.sin()))
+                .translate(Vec3::new(0.5 * math::cos(a), 0.0, -0.5 * math::sin(a)))
                 .expect("finite");
             e.path_mut().scale(Vec3::splat(0.5)).expect("finite");
             prisms(e, level - 1);

@@ -2,6 +2,7 @@
 //! is the modeller's state (shape, matrices, open pieces, the push/pop stack); `tube.rs`
 //! meshes the rings it placed.
 
+use pge_engine::math;
 use std::sync::Arc;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -201,7 +202,7 @@ impl Extruder {
         self.shape = (0..sides)
             .map(|i| {
                 let a = std::f32::consts::TAU * i as f32 / sides as f32;
-                Vec3::new(radius * a.cos(), 0.0, -radius * a.sin())
+                Vec3::new(radius * math::cos(a), 0.0, -radius * math::sin(a))
             })
             .collect();
         Ok(())

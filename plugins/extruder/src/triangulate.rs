@@ -70,6 +70,7 @@ pub fn triangulate(points: &[Vec2]) -> Vec<[usize; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::math;
 
     fn area(points: &[Vec2], tris: &[[usize; 3]]) -> f32 {
         tris.iter()
@@ -93,7 +94,7 @@ mod tests {
             .map(|i| {
                 let a = std::f32::consts::TAU * i as f32 / 10.0;
                 let r = if i % 2 == 0 { 1.0 } else { 0.4 };
-                Vec2::new(r * a.cos(), r * a.sin())
+                Vec2::new(r * math::cos(a), r * math::sin(a))
             })
             .collect();
         let t = triangulate(&star);
@@ -127,7 +128,7 @@ mod tests {
         let circle: Vec<Vec2> = (0..1000)
             .map(|i| {
                 let a = std::f32::consts::TAU * i as f32 / 1000.0;
-                Vec2::new(a.cos(), a.sin())
+                Vec2::new(math::cos(a), math::sin(a))
             })
             .collect();
         let t = triangulate(&circle);

@@ -1,5 +1,6 @@
 //! Assembly: the terrain patch and every variant's meshes, instanced by the layout.
 
+use pge_engine::math;
 use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Quat, Vec3};
@@ -254,7 +255,7 @@ pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize
     let mut positions = vec![Vec3::new(0.0, 6.0, 0.0)];
     for k in 0..sides {
         let a = k as f32 * std::f32::consts::TAU / sides as f32;
-        positions.push(Vec3::new(0.5 * a.cos(), 0.0, 0.5 * a.sin()));
+        positions.push(Vec3::new(0.5 * math::cos(a), 0.0, 0.5 * math::sin(a)));
     }
     let mut indices = Vec::new();
     for k in 0..sides {

@@ -444,6 +444,7 @@ pub fn unique_seed(forest_seed: u64, inst: &Instance) -> u64 {
 mod tests {
     use super::*;
     use crate::terrain::FbmOptions;
+    use pge_engine::math;
 
     fn forest(tile: Option<f64>) -> Forest {
         let mut f = Forest::new([120.0, 90.0], 11, tile).expect("forest");
@@ -472,8 +473,10 @@ mod tests {
         let mut best = f64::INFINITY;
         for (k, a) in v.iter().enumerate() {
             for b in &v[k + 1..] {
-                let d =
-                    f64::from((a.position[0] - b.position[0]).hypot(a.position[2] - b.position[2]));
+                let d = f64::from(math::hypot(
+                    a.position[0] - b.position[0],
+                    a.position[2] - b.position[2],
+                ));
                 best = best.min(d);
             }
         }
@@ -496,7 +499,7 @@ mod tests {
             assert!((0.8..=1.2).contains(&i.scale));
             // Later layers keep their own distance from earlier trunks.
             for e in layout.instances.iter().filter(|e| e.layer < i.layer) {
-                let d = (e.position[0] - i.position[0]).hypot(e.position[2] - i.position[2]);
+                let d = math::hypot(e.position[0] - i.position[0], e.position[2] - i.position[2]);
                 let r = f.layers[i.layer as usize].min_distance as f32;
                 assert!(d >= r - 1e-3, "{d} < {r}");
             }

@@ -251,6 +251,7 @@ fn budget(layout: &Layout, lods: &[Vec<Option<VariantLod>>], camera: &Camera) ->
 mod tests {
     use super::*;
     use crate::layer::Layer;
+    use pge_engine::math;
 
     fn camera(total: u64) -> Camera {
         Camera {
@@ -394,12 +395,12 @@ mod tests {
         for k in 1..12 {
             let t = k as f32;
             let p = Vec3::new(
-                (t * 1.3).sin() * 0.1 * t,
+                math::sin(t * 1.3) * 0.1 * t,
                 t * 0.4,
-                (t * 0.7).cos() * 0.1 * t,
+                math::cos(t * 0.7) * 0.1 * t,
             );
             parent = skeleton.push(p, Some(parent), 0.0, 0);
-            let side = Vec3::new((t * 2.1).cos(), 0.3, (t * 2.1).sin());
+            let side = Vec3::new(math::cos(t * 2.1), 0.3, math::sin(t * 2.1));
             skeleton.push(p + side, Some(parent), 0.0, 1);
         }
         let options = pge_tree::TreeOptions {

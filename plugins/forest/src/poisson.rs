@@ -17,6 +17,7 @@
 //! block works on a copy of its `9 x 9` cells neighbourhood, so a neighbour test reads 25
 //! cells of one small array.
 
+use pge_engine::math;
 use rayon::prelude::*;
 
 use pge_engine::random::{SplitMix64, hash_words};
@@ -289,7 +290,7 @@ impl Grid {
             per_cell: CELLS as f64 / b,
             directions: (0..256)
                 .map(|k| {
-                    let (s, c) = (f64::from(k) * std::f64::consts::TAU / 256.0).sin_cos();
+                    let (s, c) = math::sin_cos(f64::from(k) * std::f64::consts::TAU / 256.0);
                     (c, s)
                 })
                 .collect(),
@@ -355,7 +356,7 @@ impl Grid {
         let cell = [bx as u32, bz as u32];
         let mut samples: Vec<Sample> = Vec::new();
         let mut active: Vec<(f64, f64)> = Vec::new();
-        let (step_sin, step_cos) = (std::f64::consts::TAU / CANDIDATES as f64).sin_cos();
+        let (step_sin, step_cos) = math::sin_cos(std::f64::consts::TAU / CANDIDATES as f64);
         let radius = self.r * RADIUS;
         let fits = |window: &Window, x: f64, z: f64| {
             rect.contains(x, z) && {

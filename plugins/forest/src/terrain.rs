@@ -7,6 +7,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use pge_engine::geometry::{Material, Mesh};
+use pge_engine::math;
 
 use crate::ForestError;
 
@@ -222,9 +223,7 @@ impl Terrain {
     /// The slope at `(x, z)` in degrees (0 = flat).
     #[must_use]
     pub fn slope_degrees(&self, x: f64, z: f64) -> f64 {
-        f64::from(self.normal(x, z).y.clamp(-1.0, 1.0))
-            .acos()
-            .to_degrees()
+        math::acos(f64::from(self.normal(x, z).y.clamp(-1.0, 1.0))).to_degrees()
     }
 
     /// The vertex grid; with `tile`, the step divides the tile exactly.

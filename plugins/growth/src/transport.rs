@@ -40,6 +40,7 @@
 
 use glam::DVec3;
 use pge_engine::OptionError;
+use pge_engine::math;
 use rand_mt::Mt;
 
 /// "No branch".
@@ -230,7 +231,7 @@ impl TransportTree {
             let d = self.split_length.len() as f64;
             let p = &self.params;
             self.split_length
-                .push(p.splitsize * (-p.splitdecay * d).exp());
+                .push(p.splitsize * math::exp(-p.splitdecay * d));
         }
         b
     }
@@ -458,7 +459,7 @@ impl TransportTree {
 /// result is the correctly rounded cube root, as the standard library's.
 fn cbrt(x: f64) -> f64 {
     if !(1e-200..=1e200).contains(&x) {
-        return x.cbrt();
+        return math::cbrt(x);
     }
     // Bits of x / 3 plus a third of the exponent bias: within 6%.
     let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
@@ -483,7 +484,7 @@ fn cbrt(x: f64) -> f64 {
     if lost.abs() + half * 2f64.powi(-30) < half {
         s
     } else {
-        x.cbrt()
+        math::cbrt(x)
     }
 }
 

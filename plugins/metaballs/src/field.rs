@@ -216,6 +216,7 @@ impl Metaballs {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::math;
 
     #[test]
     fn value_and_gradient_agree_with_finite_differences() {
@@ -248,7 +249,7 @@ mod tests {
     fn lone_particle_surface_radius() {
         let mut m = Metaballs::new(2.0);
         m.add_particle(Vec3::ONE, 1.0, None).expect("ok");
-        let s = 2.0 * (1.0f32 - 0.5f32.cbrt()).sqrt();
+        let s = 2.0 * (1.0f32 - math::cbrt(0.5f32)).sqrt();
         assert!((m.value(Vec3::ONE + Vec3::X * s) - 0.5).abs() < 1e-6);
         let (lo, hi) = m.bounds().expect("one particle");
         assert_eq!(lo, Vec3::splat(-1.0));

@@ -550,6 +550,7 @@ fn fix_degenerate_normals(mesh: &mut Mesh) {
 
 #[cfg(test)]
 mod tests {
+    use pge_engine::math;
     use std::collections::HashMap;
 
     use super::*;
@@ -603,7 +604,7 @@ mod tests {
         let (mesh, stats) = extract(&field, 96);
         mesh.validate().expect("valid");
         assert_closed(&mesh);
-        let s = (1.0f64 - 0.5f64.cbrt()).sqrt();
+        let s = (1.0f64 - math::cbrt(0.5f64)).sqrt();
         let analytic = 4.0 / 3.0 * std::f64::consts::PI * s * s * s;
         let v = volume(&mesh);
         assert!(

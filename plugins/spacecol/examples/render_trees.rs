@@ -7,6 +7,7 @@
 //! cargo run --release -p pge-spacecol --example render_trees -- OUT_DIR scripts/species/*.lua
 //! ```
 
+use pge_engine::math;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -30,7 +31,7 @@ fn sample(tex: &image::RgbaImage, uv: Vec2) -> Vec4 {
     let x = (uv.x.rem_euclid(1.0) * w as f32) as u32 % w;
     let y = (uv.y.rem_euclid(1.0) * h as f32) as u32 % h;
     let p = tex.get_pixel(x, y);
-    let lin = |c: u8| (c as f32 / 255.0).powf(2.2);
+    let lin = |c: u8| math::powf(c as f32 / 255.0, 2.2);
     Vec4::new(lin(p[0]), lin(p[1]), lin(p[2]), p[3] as f32 / 255.0)
 }
 
@@ -38,7 +39,7 @@ fn render(model: &Model, yaw: f32) -> Image {
     let (lo, hi) = model.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
     let centre = (lo + hi) * 0.5;
     let radius = (hi - lo).length() * 0.5;
-    let eye = centre + Vec3::new(yaw.sin(), 0.25, yaw.cos()).normalize() * radius * 2.6;
+    let eye = centre + Vec3::new(math::sin(yaw), 0.25, math::cos(yaw)).normalize() * radius * 2.6;
     let view = Mat4::look_at_rh(eye, centre, Vec3::Y);
     let proj = Mat4::perspective_rh(40f32.to_radians(), 1.0, radius * 0.1, radius * 10.0);
     let vp = proj * view;
@@ -146,7 +147,7 @@ fn render(model: &Model, yaw: f32) -> Image {
 fn save(img: &Image, path: &Path) {
     let mut out = image::RgbImage::new(SIZE as u32, SIZE as u32);
     for (i, px) in img.rgb.iter().enumerate() {
-        let s = |c: f32| (c.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8;
+        let s = |c: f32| (math::powf(c.clamp(0.0, 1.0), 1.0 / 2.2) * 255.0) as u8;
         out.put_pixel(
             (i % SIZE) as u32,
             (i / SIZE) as u32,

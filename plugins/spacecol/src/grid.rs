@@ -1,6 +1,7 @@
 //! The uniform grid over the attraction points: which live points lie within a radius of a
 //! node, and which of them a new node changes.
 
+use pge_engine::math;
 use std::ops::Range;
 
 use glam::{Vec3, Vec4};
@@ -175,7 +176,7 @@ impl PointGrid {
         let cells = dims[0] * dims[1] * dims[2];
         let kept = keep.iter().filter(|k| **k).count();
         let per_cell = kept as f32 / cells as f32;
-        let mut split = ((per_cell / POINTS_PER_SUB_CELL).cbrt().round() as usize).clamp(1, 8);
+        let mut split = (math::cbrt(per_cell / POINTS_PER_SUB_CELL).round() as usize).clamp(1, 8);
         while split > 1 && cells * split.pow(3) > MAX_SUB_CELLS {
             split -= 1;
         }

@@ -424,6 +424,7 @@ fn build_bvh(boxes: &[Aabb], config: BvhBuildParams) -> Bvh2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::math;
 
     /// A unit cube from 0 to 1 as an .obj with quads (vertices repeated per face would weld).
     pub(crate) const CUBE_OBJ: &str = "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
@@ -502,12 +503,12 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
             let theta = std::f32::consts::PI * i as f32 / n as f32;
             for j in 0..2 * n {
                 let phi = std::f32::consts::PI * j as f32 / n as f32;
-                let r = 1.0 + 0.3 * (3.0 * phi).sin() * (2.0 * theta).sin();
+                let r = 1.0 + 0.3 * math::sin(3.0 * phi) * math::sin(2.0 * theta);
                 p.push(
                     r * Vec3::new(
-                        theta.sin() * phi.cos(),
-                        -theta.cos(),
-                        theta.sin() * phi.sin(),
+                        math::sin(theta) * math::cos(phi),
+                        -math::cos(theta),
+                        math::sin(theta) * math::sin(phi),
                     ),
                 );
             }

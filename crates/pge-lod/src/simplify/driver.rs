@@ -2,6 +2,7 @@
 //! that collapse the allowed pairs, cheapest first.
 
 use glam::Vec3;
+use pge_engine::math;
 
 use super::grid::Grid;
 use super::{Axis, NEAREST, SWEEP, Selection, Weights};
@@ -64,13 +65,7 @@ impl Simplifier {
             max_growth: selection.bounds.max_growth,
             min_density: selection.bounds.min_density,
             max_overhang: selection.bounds.max_overhang,
-            min_cos: selection
-                .bounds
-                .max_angle
-                .clamp(0.0, 90.0)
-                .to_radians()
-                .cos()
-                - 1e-6,
+            min_cos: math::cos(selection.bounds.max_angle.clamp(0.0, 90.0).to_radians()) - 1e-6,
             axis,
             inv_crown: if crown > 0.0 { 1.0 / crown } else { 0.0 },
             deadline: selection.deadline,

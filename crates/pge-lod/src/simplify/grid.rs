@@ -1,5 +1,6 @@
 //! The dense uniform grid of living leaves that the searches read.
 
+use pge_engine::math;
 use std::ops::Range;
 
 use glam::Vec3;
@@ -119,7 +120,7 @@ impl Grid {
         };
         let cells = count(cell);
         if cells > most {
-            cell *= (cells / most).cbrt().max(1.0) * 1.01;
+            cell *= math::cbrt(cells / most).max(1.0) * 1.01;
             while count(cell) > most {
                 cell *= 1.26;
             }

@@ -229,6 +229,7 @@ pub fn simplify(leaves: &[Leaf], selection: &Selection) -> Chain {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pge_engine::math;
 
     fn leaf(center: Vec3, normal: Vec3) -> Leaf {
         Leaf {
@@ -307,8 +308,12 @@ mod tests {
             .map(|i| {
                 let t = i as f32 * 0.37;
                 leaf(
-                    Vec3::new(t.sin() * 3.0, (i % 17) as f32 * 0.3, t.cos() * 3.0),
-                    Vec3::new(t.cos(), 0.3, t.sin()).normalize(),
+                    Vec3::new(
+                        math::sin(t) * 3.0,
+                        (i % 17) as f32 * 0.3,
+                        math::cos(t) * 3.0,
+                    ),
+                    Vec3::new(math::cos(t), 0.3, math::sin(t)).normalize(),
                 )
             })
             .collect();

@@ -1,6 +1,7 @@
 //! Lines drawn over or instead of the meshes: the ground grid and wireframe edges.
 
 use glam::Vec3;
+use pge_engine::math;
 
 /// The three edges of every triangle as line pairs (shared edges are drawn twice, which
 /// costs less than finding them).
@@ -20,7 +21,7 @@ pub fn triangle_edges(indices: &[u32]) -> Vec<u32> {
 pub fn grid_lines(bounds: Option<(Vec3, Vec3)>) -> Vec<f32> {
     let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
     let half = ((hi - lo).length() * 0.75).max(1.0);
-    let spacing = 10f32.powf((half / 2.0).log10().floor());
+    let spacing = math::powf(10f32, math::log10(half / 2.0).floor());
     let centre = (lo + hi) * 0.5;
     let n = (half / spacing).ceil() as i64;
     let (cx, cz) = (

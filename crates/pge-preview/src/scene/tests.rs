@@ -1,4 +1,5 @@
 use pge_engine::geometry::{Material, Skeleton};
+use pge_engine::math;
 
 use super::*;
 
@@ -203,8 +204,8 @@ fn a_forests_leaves_get_levels_and_its_meshes_are_marked() {
     for i in 0..40u32 {
         let t = i as f32 / 40.0 * std::f32::consts::TAU;
         let (c, n) = (
-            Vec3::new(t.cos(), 2.0 + 0.1 * (i % 3) as f32, t.sin()),
-            Vec3::new(t.cos(), 0.0, t.sin()),
+            Vec3::new(math::cos(t), 2.0 + 0.1 * (i % 3) as f32, math::sin(t)),
+            Vec3::new(math::cos(t), 0.0, math::sin(t)),
         );
         let side = n.cross(Vec3::Y) * 0.2;
         let up = Vec3::Y * 0.2;

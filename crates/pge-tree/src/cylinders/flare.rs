@@ -1,5 +1,6 @@
 //! The trunk flare: extra rings over a root tube's first metres, widened into buttresses.
 
+use pge_engine::math;
 use std::f32::consts::TAU;
 
 use glam::Vec3;
@@ -52,12 +53,12 @@ pub(super) fn flared(
     dir: Vec3,
 ) -> (f32, Vec3) {
     let h = (1.0 - travelled / f.height).clamp(0.0, 1.0);
-    let fade = f.spread * h.powf(2.5);
-    let dfade = -2.5 * f.spread / f.height * h.powf(1.5);
+    let fade = f.spread * math::powf(h, 2.5);
+    let dfade = -2.5 * f.spread / f.height * math::powf(h, 1.5);
     let n = f.roots as f32;
-    let wave = 0.5 + 0.5 * (TAU * n * turn).cos();
+    let wave = 0.5 + 0.5 * math::cos(TAU * n * turn);
     let lobe = 0.2 + 0.8 * wave * wave;
-    let dlobe = 0.8 * 2.0 * wave * (-0.5 * n * (TAU * n * turn).sin());
+    let dlobe = 0.8 * 2.0 * wave * (-0.5 * n * math::sin(TAU * n * turn));
     let widen = 1.0 + fade * lobe;
     // The surface r(theta, s) = radius * widen: its normal leans back against the growth of
     // r around the ring and up the trunk.

@@ -278,6 +278,7 @@ impl Shape<'_> {
 mod tests {
     use glam::Vec3;
     use pge_engine::geometry::{Mesh, Skeleton};
+    use pge_engine::math;
 
     use super::TAU;
     use crate::cylinders::bark_mesh;
@@ -331,7 +332,7 @@ mod tests {
         for i in 1..=24 {
             y += if i % 3 == 0 { 0.9 } else { 0.3 };
             let t = i as f32 / 24.0;
-            let p = Vec3::new(0.3 * (t * 3.0).sin(), y, 0.2 * t * t);
+            let p = Vec3::new(0.3 * math::sin(t * 3.0), y, 0.2 * t * t);
             prev = s.push(p, Some(prev), 0.4 * (1.0 - t) + 0.01 * t, 0);
         }
         let sides = 12;

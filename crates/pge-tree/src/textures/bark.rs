@@ -283,6 +283,7 @@ mod tests {
     use crate::textures::encode_maps;
     use crate::textures::test_support::{bark, decode};
     use pge_engine::geometry::ImageFormat;
+    use pge_engine::math;
 
     #[test]
     fn every_bark_style_has_relief_and_tiles() {
@@ -400,7 +401,7 @@ mod tests {
         for p in normal.chunks_exact(3) {
             let n = glam::Vec3::from_array([0, 1, 2].map(|i| f32::from(p[i]) / 255.0 * 2.0 - 1.0))
                 .normalize();
-            tilt += f64::from(n.z.clamp(-1.0, 1.0).acos().to_degrees());
+            tilt += f64::from(math::acos(n.z.clamp(-1.0, 1.0)).to_degrees());
             around += f64::from(n.x * n.x);
             along += f64::from(n.y * n.y);
         }
@@ -514,13 +515,7 @@ mod tests {
                 .normal
                 .chunks_exact(3)
                 .zip(normal.chunks_exact(3))
-                .map(|(a, b)| {
-                    decode(a)
-                        .dot(decode(b))
-                        .clamp(-1.0, 1.0)
-                        .acos()
-                        .to_degrees()
-                })
+                .map(|(a, b)| math::acos(decode(a).dot(decode(b)).clamp(-1.0, 1.0)).to_degrees())
                 .sum::<f32>()
                 / (256 * 256) as f32;
             println!("{style:?}: tilt {exact:.2} exact, {jpeg:.2} as JPEG, each off {error:.2}");

@@ -1,5 +1,6 @@
 //! Leaves: silhouettes per shape, veins in the colour and normal maps.
 
+use pge_engine::math;
 use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use rayon::prelude::*;
@@ -27,7 +28,7 @@ fn ovate(t: f32) -> f32 {
     if !(0.0..=1.0).contains(&t) {
         return 0.0;
     }
-    0.44 * (PI * t.powf(0.8)).sin().max(0.0).powf(0.85) * (1.0 - 0.25 * t)
+    0.44 * math::powf(math::sin(PI * math::powf(t, 0.8)).max(0.0), 0.85) * (1.0 - 0.25 * t)
 }
 
 /// Half-width of a blade of `shape` at `t` along it, for the shapes with a midrib.
@@ -38,11 +39,15 @@ pub(super) fn blade_half_width(shape: LeafShape, t: f32) -> f32 {
     match shape {
         LeafShape::Lobed => {
             // Oak: four to five rounded lobes a side, deep sinuses between them.
-            let outline = 0.42 * (PI * t.powf(0.85)).sin().max(0.0).powf(0.6) * (1.0 - 0.15 * t);
-            let lobes = 0.5 + 0.5 * (TAU * 4.5 * t - 0.6).cos();
+            let outline = 0.42
+                * math::powf(math::sin(PI * math::powf(t, 0.85)).max(0.0), 0.6)
+                * (1.0 - 0.15 * t);
+            let lobes = 0.5 + 0.5 * math::cos(TAU * 4.5 * t - 0.6);
             outline * (0.55 + 0.45 * lobes.sqrt())
         }
-        LeafShape::Lanceolate => 0.14 * (PI * t.powf(0.75)).sin().max(0.0).powf(0.9),
+        LeafShape::Lanceolate => {
+            0.14 * math::powf(math::sin(PI * math::powf(t, 0.75)).max(0.0), 0.9)
+        }
         _ => ovate(t),
     }
 }
@@ -84,8 +89,8 @@ pub(super) fn blade_pixel(shape: LeafShape, x: f32, v: f32, w: f32) -> LeafPixel
                 let off = angle_diff(phi, *axis).abs();
                 // Only the lobes within 0.62 rad reach this far round (the others are 0).
                 if off < 0.62 {
-                    let lobe = len * (1.0 - off / 0.62).powf(0.8);
-                    let teeth = 1.0 - 0.06 * (0.5 + 0.5 * (off * 28.0).cos());
+                    let lobe = len * math::powf(1.0 - off / 0.62, 0.8);
+                    let teeth = 1.0 - 0.06 * (0.5 + 0.5 * math::cos(off * 28.0));
                     reach = reach.max(lobe * teeth);
                 }
                 vein = vein.min(off * r);
@@ -394,7 +399,7 @@ mod tests {
                 let want = if (x, y) == (0.0, 0.0) {
                     0.0
                 } else {
-                    y.atan2(x)
+                    math::atan2(y, x)
                 };
                 assert!((atan2(y, x) - want).abs() < 1e-6, "{y} {x}");
             }

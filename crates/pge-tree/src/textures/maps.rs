@@ -1,6 +1,7 @@
 //! From pixels to textures: normal maps from height fields, linear colour to sRGB bytes,
 //! PNG encoding, and reading image files.
 
+use pge_engine::math;
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -275,7 +276,7 @@ impl Srgb {
                 let s = if c <= 0.003_130_8 {
                     c * 12.92
                 } else {
-                    1.055 * c.powf(1.0 / 2.4) - 0.055
+                    1.055 * math::powf(c, 1.0 / 2.4) - 0.055
                 };
                 (s * 255.0 + 0.5) as u8
             })

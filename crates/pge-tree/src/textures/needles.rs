@@ -7,6 +7,7 @@
 use super::leaves::LeafPixel;
 use super::noise::{hash, unit};
 use crate::options::card_share;
+use pge_engine::math;
 
 /// One layer of needles on one side of a shoot: the apparent angle from the shoot, the
 /// apparent length (card units) and the offset of the first needle along the shoot.
@@ -61,7 +62,7 @@ impl Needles {
             let angle = degrees.to_radians();
             Layer {
                 angle,
-                cot: angle.cos() / angle.sin(),
+                cot: math::cos(angle) / math::sin(angle),
                 length,
                 offset: offset * SPACING,
             }
@@ -82,7 +83,7 @@ impl Needles {
                 let v = 0.08 + 0.62 * t;
                 let angle = (50.0 - 12.0 * t + 8.0 * (unit(h) - 0.5)).to_radians();
                 let side = if i % 2 == 0 { 1.0 } else { -1.0 };
-                let dir = (side * angle.sin(), angle.cos());
+                let dir = (side * math::sin(angle), math::cos(angle));
                 let reach = needle * 0.7;
                 let fits = ((0.5 - reach) / dir.0.abs()).min((0.99 - reach - v) / dir.1);
                 let length = (f * (1.1 - 0.4 * t)).min(fits).max(0.05);
@@ -183,7 +184,7 @@ fn shoot(
                     let h = hash(i, side * 4 + k as u32, 0x9ee1);
                     let taper = 1.0 - 0.45 * (t0 / length);
                     let turn = (unit(h.rotate_left(7)) - 0.5) * 0.2;
-                    let (sin, cos) = (layer.angle + turn).sin_cos();
+                    let (sin, cos) = math::sin_cos(layer.angle + turn);
                     Needle {
                         sin,
                         cos,

@@ -9,6 +9,7 @@
 use super::leaves::{LeafPixel, blade_half_width, blade_pixel};
 use super::noise::{hash, unit};
 use crate::options::{LeafShape, card_share};
+use pge_engine::math;
 
 /// One leaf on the card: where its stalk starts, the unit direction up its blade, its
 /// length in card units, a shade and the box that holds it.
@@ -70,7 +71,7 @@ impl Twig {
             // Lower leaves spread wider: 70 degrees from the twig at the foot, 35 at the top.
             let angle = (70.0 - 35.0 * t + 8.0 * (unit(h) - 0.5)).to_radians();
             let side = if i % 2 == 0 { 1.0 } else { -1.0 };
-            let dir = (side * angle.sin(), angle.cos());
+            let dir = (side * math::sin(angle), math::cos(angle));
             // As long as the share allows, shortened to stay inside the card.
             let wanted = f * (0.9 + 0.2 * unit(h.rotate_left(11)));
             let half = half_width(shape);

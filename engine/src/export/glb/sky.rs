@@ -1,5 +1,6 @@
 //! The sky dome written around a model with an environment.
 
+use crate::math;
 use glam::Vec3;
 
 use crate::geometry::Mesh;
@@ -31,9 +32,9 @@ pub(super) fn sky_sphere(segments: u32, rings: u32) -> Mesh {
             let u = k as f32 / segments as f32;
             let azimuth = (u - 0.5) * TAU;
             let dir = Vec3::new(
-                polar.sin() * azimuth.sin(),
-                polar.cos(),
-                -polar.sin() * azimuth.cos(),
+                math::sin(polar) * math::sin(azimuth),
+                math::cos(polar),
+                -math::sin(polar) * math::cos(azimuth),
             );
             mesh.positions.push(dir);
             mesh.normals.push(-dir);

@@ -4,6 +4,7 @@ use super::layout::{BOUNDS_PIECE, vec3_bounds};
 use super::*;
 use crate::geometry::{AlphaMode, InstanceGroup, Texture};
 use crate::geometry::{Material, Mesh, Skeleton};
+use crate::math;
 use glam::{Mat4, Quat, Vec2, Vec3};
 
 pub(super) fn textured_model() -> Model {
@@ -237,7 +238,7 @@ fn a_streamed_file_has_the_bytes_of_the_assembled_one() {
     // in several: a strip of 70,000 vertices with normals, uvs, colours and a texture.
     let n = 35_000u32;
     let positions: Vec<Vec3> = (0..2 * n)
-        .map(|k| Vec3::new((k / 2) as f32 * 0.01, (k % 2) as f32, (k as f32).sin()))
+        .map(|k| Vec3::new((k / 2) as f32 * 0.01, (k % 2) as f32, math::sin(k as f32)))
         .collect();
     let indices = (0..n - 1)
         .flat_map(|i| [2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 2, 2 * i + 1, 2 * i + 3])
@@ -387,7 +388,7 @@ fn bounds_in_pieces_are_the_one_pass_fold_to_the_bit() {
         .map(|k| {
             let zero = if k % 3 == 0 { -0.0 } else { 0.0 };
             Vec3::new(
-                (k as f32 * 0.37).sin(),
+                math::sin(k as f32 * 0.37),
                 zero,
                 -(k as f32).abs() * 1e-3 + zero,
             )

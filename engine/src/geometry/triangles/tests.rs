@@ -1,6 +1,7 @@
 //! Tests of the unusable-triangle search: degenerate and repeated triangles, and meshes usable by construction.
 
 use super::*;
+use crate::math;
 
 /// Numbers in [0, 1) from a xorshift generator seeded with `state`: many triangles
 /// without a dependency.
@@ -123,7 +124,7 @@ fn triangles_distinct_by_construction_are_usable_unless_two_vertices_meet() {
         .map(|v| {
             let (row, k) = (v / columns, (v % columns) % (columns - 1));
             let a = std::f32::consts::TAU * k as f32 / (columns - 1) as f32;
-            Vec3::new(a.cos(), row as f32, a.sin())
+            Vec3::new(math::cos(a), row as f32, math::sin(a))
         })
         .collect();
     let mut indices = Vec::new();
@@ -224,7 +225,7 @@ fn strips_are_degenerate_as_their_triangles_one_at_a_time() {
             (0..5)
                 .map(|k| {
                     let a = k as f32 * 1.3 + next() * 0.01;
-                    origin + Vec3::new(a.cos(), lift, a.sin()) * (1.0 + next())
+                    origin + Vec3::new(math::cos(a), lift, math::sin(a)) * (1.0 + next())
                 })
                 .collect()
         };

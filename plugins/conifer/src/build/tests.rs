@@ -1,5 +1,6 @@
 use super::*;
 use crate::params::Crown;
+use pge_engine::math;
 
 fn grown(params: &ConiferParams, seed: u64, years: u32) -> Built {
     let whorls: Vec<Whorl> = (1..=years).map(|y| Whorl::draw(params, seed, y)).collect();
@@ -49,7 +50,7 @@ fn angles_grow_toward_the_base_and_branches_droop() {
         .map(|(r, j)| {
             let a = s.positions[*j as usize];
             let d = (s.positions[r.start as usize] - a).normalize();
-            (a.y, d.y.acos().to_degrees())
+            (a.y, math::acos(d.y).to_degrees())
         })
         .collect();
     angles.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -122,7 +123,7 @@ fn the_leader_is_straight_and_branches_are_thin_at_their_joint() {
     assert!((height - 12.0).abs() < 1e-3, "{height}");
     for &t in &b.trunk {
         let d = s.positions[t as usize] - root;
-        assert!(d.x.hypot(d.z) <= 0.02 * 0.6 * 1.5, "{d}");
+        assert!(math::hypot(d.x, d.z) <= 0.02 * 0.6 * 1.5, "{d}");
     }
     let mut next = std::collections::BTreeMap::new();
     for w in b.trunk.windows(2) {

@@ -2,19 +2,20 @@
 
 use super::compile::{Fn1, Fn2, MAX_DEPTH, Op, Repr};
 use super::{BinOp, Expr};
+use pge_engine::math;
 
 impl Fn1 {
     fn call(self, x: f64) -> f64 {
         match self {
-            Fn1::Sin => x.to_radians().sin(),
-            Fn1::Cos => x.to_radians().cos(),
-            Fn1::Tan => x.to_radians().tan(),
-            Fn1::Asin => x.asin().to_degrees(),
-            Fn1::Acos => x.acos().to_degrees(),
-            Fn1::Atan => x.atan().to_degrees(),
+            Fn1::Sin => math::sin(x.to_radians()),
+            Fn1::Cos => math::cos(x.to_radians()),
+            Fn1::Tan => math::tan(x.to_radians()),
+            Fn1::Asin => math::asin(x).to_degrees(),
+            Fn1::Acos => math::acos(x).to_degrees(),
+            Fn1::Atan => math::atan(x).to_degrees(),
             Fn1::Sqrt => x.sqrt(),
-            Fn1::Exp => x.exp(),
-            Fn1::Log => x.ln(),
+            Fn1::Exp => math::exp(x),
+            Fn1::Log => math::ln(x),
             Fn1::Abs => x.abs(),
             Fn1::Floor => x.floor(),
             Fn1::Ceil => x.ceil(),
@@ -25,7 +26,7 @@ impl Fn1 {
 impl Fn2 {
     fn call(self, a: f64, b: f64) -> f64 {
         match self {
-            Fn2::Atan2 => a.atan2(b).to_degrees(),
+            Fn2::Atan2 => math::atan2(a, b).to_degrees(),
             Fn2::Min => a.min(b),
             Fn2::Max => a.max(b),
         }
@@ -56,7 +57,7 @@ pub(super) fn binary(op: BinOp, a: f64, b: f64) -> f64 {
         BinOp::Mul => a * b,
         BinOp::Div => a / b,
         BinOp::Mod => a - (a / b).floor() * b,
-        BinOp::Pow => a.powf(b),
+        BinOp::Pow => math::powf(a, b),
         BinOp::Lt => t(a < b),
         BinOp::Le => t(a <= b),
         BinOp::Gt => t(a > b),

@@ -37,6 +37,7 @@
 //! that node are dropped as unreachable. Every iteration therefore adds a node or removes a
 //! point, and the iteration cap bounds the rest (with a warning).
 
+use pge_engine::math;
 mod ahead;
 mod params;
 mod state;
@@ -221,12 +222,12 @@ impl Algorithm for SpaceColonization {
 
         // Pulls: each live point adds its unit direction to its nearest node (a tip only
         // perceives the points within its angle of perception).
-        let perceive = (p.perception < 180.0).then(|| p.perception.to_radians().cos());
+        let perceive = (p.perception < 180.0).then(|| math::cos(p.perception.to_radians()));
         st.pull(iteration, perceive);
 
         // Growth directions, all from the state before this iteration's new nodes.
         st.touched.sort_unstable();
-        let max_turn = (p.max_turn < 180.0).then(|| p.max_turn.to_radians().sin_cos());
+        let max_turn = (p.max_turn < 180.0).then(|| math::sin_cos(p.max_turn.to_radians()));
         let mut growth: Vec<(u32, Option<Vec3>, Option<f32>)> =
             Vec::with_capacity(st.touched.len() + st.trunk_tips.len());
         for &n in &st.touched {

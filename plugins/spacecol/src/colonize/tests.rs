@@ -3,6 +3,7 @@
 use super::*;
 use crate::shape::Shape;
 use pge_engine::algorithm::run;
+use pge_engine::math;
 
 fn crown(points: u32) -> Params {
     let mut p = Params::new(Shape::Ellipsoid {
@@ -230,7 +231,7 @@ fn largest_turn(s: &Skeleton) -> f32 {
             start[q]
         };
         continued[q] = true;
-        worst = worst.max(d.dot(start[i]).clamp(-1.0, 1.0).acos().to_degrees());
+        worst = worst.max(math::acos(d.dot(start[i]).clamp(-1.0, 1.0)).to_degrees());
     }
     worst
 }
