@@ -230,6 +230,10 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
         !mesh.uvs.is_empty(),
         !mesh.colors.is_empty(),
     );
+    // The cards' own tangents, kept per quad (the atlas maps `u` and `v` each onto a cell
+    // without turning them), and a merged card's side where `u` grows, w = +1 (`cross(normal,
+    // side)` is its axis, where `v` grows).
+    let has_t = !mesh.positions.is_empty() && mesh.tangents.len() == mesh.positions.len();
     out.positions.reserve(total * 4);
     out.indices.reserve(total * 6);
     let mut result = Vec::with_capacity(sectors.len());
@@ -257,6 +261,9 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                 if has_n {
                     out.normals.extend_from_slice(&mesh.normals[v..v + 4]);
                 }
+                if has_t {
+                    out.tangents.extend_from_slice(&mesh.tangents[v..v + 4]);
+                }
                 if has_uv {
                     let uvs = &mesh.uvs[v..v + 4];
                     match &atlas {
@@ -272,6 +279,10 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                 out.positions.extend_from_slice(&leaf.corners());
                 if has_n {
                     out.normals.extend_from_slice(&[leaf.normal; 4]);
+                }
+                if has_t {
+                    let side = leaf.side().try_normalize().unwrap_or(leaf.axis);
+                    out.tangents.extend_from_slice(&[side.extend(1.0); 4]);
                 }
                 if has_uv {
                     let (min, max) = match &atlas {

@@ -62,6 +62,17 @@ pub(crate) fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
     for n in &mut out.normals {
         *n = (normal * *n).normalize_or(Vec3::Y);
     }
+    // Tangents turn with the surface; a mirror turns the bitangent's sign.
+    let linear = Mat3::from_mat4(*m);
+    let mirror = if linear.determinant() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    for t in &mut out.tangents {
+        let xyz = (linear * t.truncate()).normalize_or(Vec3::X);
+        *t = xyz.extend(t.w * mirror);
+    }
     out
 }
 
