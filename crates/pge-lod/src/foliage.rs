@@ -391,6 +391,36 @@ mod tests {
     }
 
     #[test]
+    fn cards_keep_their_tangents_and_merged_cards_run_along_their_side() {
+        let mut mesh = ring(120);
+        // Each card's side, where `u` grows (the ring's leaves: axis +Y, corners 0 to 1).
+        mesh.tangents = (0..mesh.positions.len())
+            .map(|v| {
+                let q = 4 * (v / 4);
+                (mesh.positions[q + 1] - mesh.positions[q])
+                    .normalize()
+                    .extend(1.0)
+            })
+            .collect();
+        let (out, _) = lod_mesh(&mesh, &LodOptions::default()).expect("lod");
+        out.validate().expect("valid");
+        assert_eq!(out.tangents.len(), out.positions.len());
+        for (v, t) in out.tangents.iter().enumerate() {
+            let q = 4 * (v / 4);
+            let side = (out.positions[q + 1] - out.positions[q]).normalize();
+            assert!(
+                (t.truncate() - side).length() < 1e-4,
+                "vertex {v}: {t} vs {side}"
+            );
+            assert_eq!(t.w, 1.0);
+            assert!(t.truncate().dot(out.normals[v]).abs() < 1e-4);
+        }
+        // Without tangents of its own, the mesh's are left to the export.
+        let (out, _) = lod_mesh(&ring(120), &LodOptions::default()).expect("lod");
+        assert!(out.tangents.is_empty());
+    }
+
+    #[test]
     fn the_mesh_is_written_in_the_order_of_v() {
         let mesh = ring(120);
         let (out, sectors) = lod_mesh(&mesh, &LodOptions::default()).expect("lod");
