@@ -113,8 +113,8 @@ pub struct Mesh {
     pub colors: Vec<Vec4>,
     /// The tangent space its generator knows, glTF's `TANGENT`: per vertex a unit `xyz`
     /// along the direction `u` grows in (across the normal) and in `w` the bitangent's sign
-    /// (±1), as [`Mesh::tangents`] describes. Empty for none; only one per vertex is used
-    /// (otherwise [`Mesh::tangents`] derives them with MikkTSpace), so code that adds
+    /// (±1), as [`Mesh::tangents()`] describes. Empty for none; only one per vertex is used
+    /// (otherwise [`Mesh::tangents()`] derives them with MikkTSpace), so code that adds
     /// vertices without tangents may leave it short.
     pub tangents: Vec<Vec4>,
     /// u32 indices into the vertex arrays.
@@ -270,7 +270,7 @@ impl Mesh {
     ///
     /// Attributes present in only one of the two are filled with defaults for the other
     /// (normal `+Y`, uv `0`, colour white) so the result stays valid. Tangents are kept
-    /// when both have one per vertex, and dropped otherwise (then [`Mesh::tangents`] derives
+    /// when both have one per vertex, and dropped otherwise (then [`Mesh::tangents()`] derives
     /// them).
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
