@@ -1,6 +1,5 @@
 //! Every script in the library writes a glb that the Khronos glTF validator accepts with no
-//! errors and no warning about tangents (every normal-mapped mesh carries MikkTSpace
-//! tangents). The validator (npm package `gltf-validator`) is installed into `target/` on
+//! errors and no warning about tangents (every normal-mapped mesh carries its tangents). The validator (npm package `gltf-validator`) is installed into `target/` on
 //! first use; this needs Node.js and npm.
 
 use std::path::{Path, PathBuf};

@@ -231,6 +231,10 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
         !mesh.uvs.is_empty(),
         !mesh.colors.is_empty(),
     );
+    // The cards' own tangents, kept per quad (the atlas maps `u` and `v` each onto a cell
+    // without turning them), and a merged card's side where `u` grows, w = +1 (`cross(normal,
+    // side)` is its axis, where `v` grows).
+    let has_t = !mesh.positions.is_empty() && mesh.tangents.len() == mesh.positions.len();
     out.positions.reserve(total * 4);
     out.indices.reserve(total * 6);
     let mut result = Vec::with_capacity(sectors.len());
@@ -258,6 +262,9 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                 if has_n {
                     out.normals.extend_from_slice(&mesh.normals[v..v + 4]);
                 }
+                if has_t {
+                    out.tangents.extend_from_slice(&mesh.tangents[v..v + 4]);
+                }
                 if has_uv {
                     let uvs = &mesh.uvs[v..v + 4];
                     match &atlas {
@@ -273,6 +280,10 @@ pub fn lod_mesh(mesh: &Mesh, options: &LodOptions) -> Result<(Mesh, Vec<Sector>)
                 out.positions.extend_from_slice(&leaf.corners());
                 if has_n {
                     out.normals.extend_from_slice(&[leaf.normal; 4]);
+                }
+                if has_t {
+                    let side = leaf.side().try_normalize().unwrap_or(leaf.axis);
+                    out.tangents.extend_from_slice(&[side.extend(1.0); 4]);
                 }
                 if has_uv {
                     let (min, max) = match &atlas {
@@ -378,6 +389,36 @@ mod tests {
                 .extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
         }
         mesh
+    }
+
+    #[test]
+    fn cards_keep_their_tangents_and_merged_cards_run_along_their_side() {
+        let mut mesh = ring(120);
+        // Each card's side, where `u` grows (the ring's leaves: axis +Y, corners 0 to 1).
+        mesh.tangents = (0..mesh.positions.len())
+            .map(|v| {
+                let q = 4 * (v / 4);
+                (mesh.positions[q + 1] - mesh.positions[q])
+                    .normalize()
+                    .extend(1.0)
+            })
+            .collect();
+        let (out, _) = lod_mesh(&mesh, &LodOptions::default()).expect("lod");
+        out.validate().expect("valid");
+        assert_eq!(out.tangents.len(), out.positions.len());
+        for (v, t) in out.tangents.iter().enumerate() {
+            let q = 4 * (v / 4);
+            let side = (out.positions[q + 1] - out.positions[q]).normalize();
+            assert!(
+                (t.truncate() - side).length() < 1e-4,
+                "vertex {v}: {t} vs {side}"
+            );
+            assert_eq!(t.w, 1.0);
+            assert!(t.truncate().dot(out.normals[v]).abs() < 1e-4);
+        }
+        // Without tangents of its own, the mesh's are left to the export.
+        let (out, _) = lod_mesh(&ring(120), &LodOptions::default()).expect("lod");
+        assert!(out.tangents.is_empty());
     }
 
     #[test]

@@ -52,7 +52,7 @@ use self::app::{AppOptions, PreviewApp};
 use self::reload::Settings;
 
 /// Floats per vertex: position (3), normal (3), uv (2), linear RGBA colour (4), tangent (4:
-/// the mesh's MikkTSpace tangent where its material has a normal map, as the glb's
+/// the mesh's tangent where its material has a normal map, as the glb's
 /// `TANGENT`; zero elsewhere).
 pub const VERTEX_FLOATS: usize = 16;
 

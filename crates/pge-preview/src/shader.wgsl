@@ -37,7 +37,7 @@ struct MeshIn {
     @location(5) m1: vec4<f32>,
     @location(6) m2: vec4<f32>,
     @location(7) m3: vec4<f32>,
-    // The glb's TANGENT (MikkTSpace) where a normal map reads it; zero elsewhere.
+    // The glb's TANGENT where a normal map reads it; zero elsewhere.
     @location(8) tangent: vec4<f32>,
 };
 

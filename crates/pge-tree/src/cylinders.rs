@@ -22,7 +22,7 @@ mod rings;
 
 use std::f32::consts::TAU;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use pge_engine::geometry::{Mesh, Skeleton};
 use rayon::prelude::*;
 
@@ -33,8 +33,9 @@ use flare::with_flare_rings;
 use frames::Wrap;
 use rings::{Appended, Checks, Scratch, Shape, Slices};
 
-/// Appends the bark tubes of `skeleton` to `mesh` (positions, normals, uvs, indices; the
-/// mesh's other attributes must be empty or are left short). Radii are used as they are.
+/// Appends the bark tubes of `skeleton` to `mesh` (positions, normals, uvs, indices, and
+/// tangents when the mesh's vertices all have one: around the ring, w = +1; the mesh's other
+/// attributes must be empty or are left short). Radii are used as they are.
 /// Of the options, `sides` (clamped to `3..=1024`), `caps`, `texture_scale`, `light` and
 /// `flare` are used.
 ///
@@ -150,10 +151,13 @@ fn append_checked_bark(
     if vertices < PARALLEL_FROM {
         // Appended: written once, not zero-filled first.
         let base = mesh.positions.len();
+        let tangents_before = mesh.tangents.len() == base;
         mesh.normals.resize(base, Vec3::ZERO);
         mesh.uvs.resize(base, Vec2::ZERO);
+        mesh.tangents.resize(base, Vec4::ZERO);
         mesh.positions.reserve(vertices);
         mesh.normals.reserve(vertices);
+        mesh.tangents.reserve(vertices);
         mesh.uvs.reserve(vertices);
         mesh.indices.reserve(indices);
         let mut out = Appended(mesh);
@@ -169,21 +173,30 @@ fn append_checked_bark(
                 checks.as_deref_mut(),
             );
         }
+        if !tangents_before {
+            // Vertices before these had none: the mesh's tangents are derived at export.
+            mesh.tangents.clear();
+        }
         return true;
     }
     // Fresh memory zeroed in parallel: its pages are touched by both threads.
     let base = mesh.positions.len();
+    let tangents_before = mesh.tangents.len() == base;
+    mesh.tangents.resize(base, Vec4::ZERO);
     let index_base = mesh.indices.len();
     let zeros = |n: usize| rayon::iter::repeat_n(0u8, n).with_min_len(1 << 14);
     mesh.positions
         .par_extend(zeros(vertices).map(|_| Vec3::ZERO));
     mesh.normals.par_extend(zeros(vertices).map(|_| Vec3::ZERO));
     mesh.uvs.par_extend(zeros(vertices).map(|_| Vec2::ZERO));
+    mesh.tangents
+        .par_extend(zeros(vertices).map(|_| Vec4::ZERO));
     mesh.indices.par_extend(zeros(indices).map(|_| 0));
     let mut sinks = Vec::with_capacity(tubes.len());
     let mut positions = &mut mesh.positions[base..];
     let mut normals = &mut mesh.normals[base..];
     let mut uvs = &mut mesh.uvs[base..];
+    let mut tangents = &mut mesh.tangents[base..];
     let mut index_slots = &mut mesh.indices[index_base..];
     let mut first = base as u32;
     for &(v, i) in &counts {
@@ -193,11 +206,14 @@ fn append_checked_bark(
         normals = rest;
         let (u, rest) = uvs.split_at_mut(v);
         uvs = rest;
+        let (t, rest) = tangents.split_at_mut(v);
+        tangents = rest;
         let (x, rest) = index_slots.split_at_mut(i);
         index_slots = rest;
         sinks.push(Slices {
             positions: p,
             normals: n,
+            tangents: t,
             uvs: u,
             indices: x,
             first,
@@ -214,6 +230,10 @@ fn append_checked_bark(
         .for_each_init(Scratch::default, |scratch, ((k, t), mut sink)| {
             shape.emit(t, rings(k), frames_of(k), scratch, &mut sink, None);
         });
+    if !tangents_before {
+        // Vertices before these had none: the mesh's tangents are derived at export.
+        mesh.tangents.clear();
+    }
     false
 }
 

@@ -247,7 +247,8 @@ fn on_segment(
 }
 
 /// Appends one quad per leaf point (a card) to `mesh` (positions, normals, uvs, colors,
-/// indices): the middle of the quad's stalk edge at the point, the quad extending the card's
+/// indices, and tangents when the mesh's vertices all have one: the card's side, where `u`
+/// grows, w = +1): the middle of the quad's stalk edge at the point, the quad extending the card's
 /// length ([`LeafOptions::card_length`] of the leaf's `size`: `size` itself for one leaf a
 /// card) along its direction and that times `options.width` wide along its side; `v` runs from 0 at the stalk to 1 at the tip.
 /// Each leaf's colour is drawn between `options.colors`. A leaf of size 0 or less takes
@@ -269,6 +270,7 @@ pub fn append_leaf_quads(
         let v = base + 4 * k as u32;
         [v, v + 1, v + 2, v, v + 2, v + 3]
     };
+    let tangents = mesh.tangents.len() == mesh.positions.len();
     if leaves.len() < PARALLEL_FROM || rayon::current_num_threads() == 1 {
         let n = leaves.len();
         mesh.positions.reserve(4 * n);
@@ -280,6 +282,9 @@ pub fn append_leaf_quads(
             let q = quad_of(k);
             mesh.positions.extend_from_slice(&q.positions);
             mesh.normals.extend_from_slice(&[q.normal; 4]);
+            if tangents {
+                mesh.tangents.extend_from_slice(&[q.tangent; 4]);
+            }
             mesh.uvs.extend_from_slice(&QUAD_UVS);
             mesh.colors.extend_from_slice(&[q.color; 4]);
             mesh.indices.extend_from_slice(&indices(k));
@@ -306,6 +311,14 @@ pub fn append_leaf_quads(
                 .with_min_len(4096)
                 .map(|i| corner(i).0.normal),
         );
+        if tangents {
+            mesh.tangents.par_extend(
+                (0..n)
+                    .into_par_iter()
+                    .with_min_len(4096)
+                    .map(|i| corner(i).0.tangent),
+            );
+        }
         mesh.uvs.par_extend(
             (0..n)
                 .into_par_iter()
@@ -335,10 +348,11 @@ const QUAD_UVS: [Vec2; 4] = [
     Vec2::new(0.0, 1.0),
 ];
 
-/// One leaf's quad: its corners, normal and colour.
+/// One leaf's quad: its corners, normal, tangent and colour.
 struct Quad {
     positions: [Vec3; 4],
     normal: Vec3,
+    tangent: Vec4,
     color: Vec4,
 }
 
@@ -360,6 +374,8 @@ fn quad(leaf: &LeafPoint, options: &LeafOptions, mix: f32) -> Quad {
     Quad {
         positions: [p - s, p + s, p + s + l, p - s + l],
         normal: side.cross(axis),
+        // `u` grows along `side`, `v` along `axis`, which `cross(normal, side)` is: w = +1.
+        tangent: side.extend(1.0),
         color: c0.lerp(c1, mix),
     }
 }

@@ -39,6 +39,8 @@ mod merge;
 mod options;
 mod radii;
 mod smooth;
+#[cfg(test)]
+mod tangent_tests;
 mod textures;
 #[cfg(feature = "lua")]
 mod tree_lua;

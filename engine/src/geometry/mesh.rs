@@ -93,7 +93,8 @@ impl Primitive {
 
 /// An indexed mesh with per-vertex attributes.
 ///
-/// `normals`, `uvs` and `colors` are either empty (absent) or have one entry per position.
+/// `normals`, `uvs` and `colors` are either empty (absent) or have one entry per position;
+/// `tangents` too, or any other length, which leaves them out.
 /// Builders fill the fields directly; [`Mesh::validate`] checks the invariants and the
 /// exporters refuse a mesh that fails it.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -110,6 +111,12 @@ pub struct Mesh {
     pub uvs: Vec<Vec2>,
     /// Linear RGBA vertex colours (empty for none).
     pub colors: Vec<Vec4>,
+    /// The tangent space its generator knows, glTF's `TANGENT`: per vertex a unit `xyz`
+    /// along the direction `u` grows in (across the normal) and in `w` the bitangent's sign
+    /// (±1), as [`Mesh::tangents()`] describes. Empty for none; only one per vertex is used
+    /// (otherwise [`Mesh::tangents()`] derives them with MikkTSpace), so code that adds
+    /// vertices without tangents may leave it short.
+    pub tangents: Vec<Vec4>,
     /// u32 indices into the vertex arrays.
     pub indices: Vec<u32>,
     /// The material, shared between meshes that use the same one.
@@ -232,6 +239,9 @@ impl Mesh {
         check("normals", &self.normals)?;
         check("uvs", &self.uvs)?;
         check("colors", &self.colors)?;
+        if self.tangents.len() == n {
+            check("tangents", &self.tangents)?;
+        }
         Ok(())
     }
 
@@ -259,10 +269,17 @@ impl Mesh {
     /// Appends another mesh's geometry (its material and skeleton are ignored).
     ///
     /// Attributes present in only one of the two are filled with defaults for the other
-    /// (normal `+Y`, uv `0`, colour white) so the result stays valid.
+    /// (normal `+Y`, uv `0`, colour white) so the result stays valid. Tangents are kept
+    /// when both have one per vertex, and dropped otherwise (then [`Mesh::tangents()`] derives
+    /// them).
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
         let (n_self, n_other) = (self.positions.len(), other.positions.len());
+        if self.tangents.len() == n_self && other.tangents.len() == n_other {
+            self.tangents.extend_from_slice(&other.tangents);
+        } else {
+            self.tangents.clear();
+        }
         fill_attribute(&mut self.normals, &other.normals, n_self, n_other, Vec3::Y);
         fill_attribute(&mut self.uvs, &other.uvs, n_self, n_other, Vec2::ZERO);
         fill_attribute(&mut self.colors, &other.colors, n_self, n_other, Vec4::ONE);

@@ -21,10 +21,13 @@ impl Mesh {
             && self.indices.len() >= 3
     }
 
-    /// The MikkTSpace tangent of every vertex, glTF's `TANGENT`: a unit `xyz` along the
-    /// direction `u` grows in, and in `w` the sign (+1 or -1) of the bitangent
-    /// (`cross(normal, tangent) * w` points where `v` grows). `None` when the mesh does not
-    /// need one ([`Mesh::needs_tangents`]).
+    /// The tangent of every vertex, glTF's `TANGENT`: a unit `xyz` along the direction `u`
+    /// grows in, and in `w` the sign (+1 or -1) of the bitangent (`cross(normal, tangent) *
+    /// w` points where `v` grows). `None` when the mesh does not need one
+    /// ([`Mesh::needs_tangents`]). The mesh's own [`Mesh::tangents`](Mesh#structfield.tangents)
+    /// when it has one per vertex (its generator knows the surface, as the tree mesher's bark
+    /// and leaf cards do: no triangle needs to be read), made unit with `w` exactly ±1;
+    /// otherwise MikkTSpace's:
     ///
     /// The mesh is cut into its connected pieces (triangles sharing vertices), gathered in
     /// order into batches of at least [`TANGENT_BATCH`] triangles, and each batch is given
@@ -40,6 +43,15 @@ impl Mesh {
             return None;
         }
         let vertices = self.positions.len();
+        if self.tangents.len() == vertices {
+            return Some(
+                self.tangents
+                    .iter()
+                    .zip(&self.normals)
+                    .map(|(t, n)| usable(*t, *n))
+                    .collect(),
+            );
+        }
         // Triangles with an index past the vertices (an invalid mesh, refused at export) are
         // left out, so nothing here reads out of bounds.
         let triangles: Vec<[u32; 3]> = self
@@ -326,6 +338,31 @@ mod tests {
             let alone = piece.tangents().expect("normal-mapped");
             assert_eq!(one[4 * k..4 * k + 4], alone[..], "piece {k}");
         }
+    }
+
+    #[test]
+    fn a_mesh_s_own_tangents_are_used_when_it_has_one_per_vertex() {
+        let mut m = quad(Vec3::X, false);
+        let own = Vec4::new(0.0, 2.0, 0.0, -3.0);
+        m.tangents = vec![own; 4];
+        m.validate().expect("valid");
+        let t = m.tangents().expect("normal-mapped");
+        assert_eq!(t, vec![Vec4::new(0.0, 1.0, 0.0, -1.0); 4], "unit, w = -1");
+        // One short: MikkTSpace's.
+        m.tangents.pop();
+        m.validate().expect("left out, still valid");
+        assert_eq!(m.tangents(), quad(Vec3::X, false).tangents());
+        // Appended: kept when both sides have theirs, dropped otherwise.
+        let mut a = quad(Vec3::X, false);
+        a.tangents = vec![own; 4];
+        let b = a.clone();
+        a.append(&b);
+        assert_eq!(a.tangents, vec![own; 8]);
+        a.append(&quad(Vec3::X, false));
+        assert!(a.tangents.is_empty());
+        let mut nan = quad(Vec3::X, false);
+        nan.tangents = vec![Vec4::NAN; 4];
+        assert!(nan.validate().is_err());
     }
 
     #[test]

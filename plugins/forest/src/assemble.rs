@@ -63,6 +63,17 @@ pub(crate) fn baked(mesh: &Mesh, m: &Mat4) -> Mesh {
     for n in &mut out.normals {
         *n = (normal * *n).normalize_or(Vec3::Y);
     }
+    // Tangents turn with the surface; a mirror turns the bitangent's sign.
+    let linear = Mat3::from_mat4(*m);
+    let mirror = if linear.determinant() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    for t in &mut out.tangents {
+        let xyz = (linear * t.truncate()).normalize_or(Vec3::X);
+        *t = xyz.extend(t.w * mirror);
+    }
     out
 }
 
@@ -293,6 +304,32 @@ pub(crate) mod tests {
     use super::*;
     use crate::layer::Layer;
     use pge_engine::geometry::{LodLevel, LodSector, LodTable, MeshLod};
+
+    #[test]
+    fn baked_tangents_turn_with_the_mesh_and_a_mirror_flips_their_sign() {
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO; 2],
+            normals: vec![Vec3::Y; 2],
+            tangents: vec![glam::Vec4::new(1.0, 0.0, 0.0, 1.0); 2],
+            ..Mesh::default()
+        };
+        let turn = Mat4::from_scale_rotation_translation(
+            Vec3::splat(2.0),
+            Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+            Vec3::X,
+        );
+        let t = baked(&mesh, &turn).tangents[0];
+        assert!(
+            (t - glam::Vec4::new(0.0, 0.0, -1.0, 1.0))
+                .abs()
+                .max_element()
+                < 1e-6,
+            "{t}"
+        );
+        let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let t = baked(&mesh, &mirror).tangents[1];
+        assert_eq!(t, glam::Vec4::new(-1.0, 0.0, 0.0, -1.0));
+    }
 
     /// The levels of one leaf: one level, drawing it.
     pub(crate) fn one_leaf_lod() -> MeshLod {

@@ -20,7 +20,7 @@ use pge_engine::geometry::{Model, binary};
 use pge_engine::random::{GOLDEN_GAMMA, splitmix64};
 
 /// The first bytes of every entry; the last byte is the format's version.
-const MAGIC: &[u8; 8] = b"PGEVAR\x00\x06";
+const MAGIC: &[u8; 8] = b"PGEVAR\x00\x07";
 
 /// Appends the numbers and strings of a key or an entry's head.
 #[derive(Default)]

@@ -4,7 +4,7 @@
 
 use std::f32::consts::TAU;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use pge_engine::geometry::{DegenerateTest, Mesh};
 
 use super::TubeSpec;
@@ -17,7 +17,8 @@ pub(super) trait Sink {
     /// The mesh index of the next vertex.
     fn next_index(&self) -> u32;
 
-    fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2);
+    /// Writes a vertex; `tangent` as glTF's `TANGENT` (see `Mesh::tangents`).
+    fn vertex(&mut self, position: Vec3, normal: Vec3, tangent: Vec4, uv: Vec2);
 
     /// Writes triangles (three indices each).
     fn triangles<const N: usize>(&mut self, indices: [u32; N]);
@@ -32,9 +33,10 @@ impl Sink for Appended<'_> {
     }
 
     #[inline]
-    fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2) {
+    fn vertex(&mut self, position: Vec3, normal: Vec3, tangent: Vec4, uv: Vec2) {
         self.0.positions.push(position);
         self.0.normals.push(normal);
+        self.0.tangents.push(tangent);
         self.0.uvs.push(uv);
     }
 
@@ -48,6 +50,7 @@ impl Sink for Appended<'_> {
 pub(super) struct Slices<'a> {
     pub(super) positions: &'a mut [Vec3],
     pub(super) normals: &'a mut [Vec3],
+    pub(super) tangents: &'a mut [Vec4],
     pub(super) uvs: &'a mut [Vec2],
     pub(super) indices: &'a mut [u32],
     /// The mesh index of the slices' first vertex.
@@ -62,9 +65,10 @@ impl Sink for Slices<'_> {
     }
 
     #[inline]
-    fn vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2) {
+    fn vertex(&mut self, position: Vec3, normal: Vec3, tangent: Vec4, uv: Vec2) {
         self.positions[self.vertices] = position;
         self.normals[self.vertices] = normal;
+        self.tangents[self.vertices] = tangent;
         self.uvs[self.vertices] = uv;
         self.vertices += 1;
     }
@@ -88,13 +92,15 @@ pub(super) struct Checks {
 }
 
 /// A tube's scratch space: its segments' directions, the last two rings' positions by
-/// coordinate (for [`DegenerateTest::strip`]) and a cap's ring.
+/// coordinate (for [`DegenerateTest::strip`]), a ring's vertices and a cap's ring.
 #[derive(Default)]
 pub(super) struct Scratch {
     seg: Vec<Vec3>,
     below: [Vec<f32>; 3],
     above: [Vec<f32>; 3],
     cap: Vec<Vec3>,
+    /// A ring's positions and normals.
+    ring: Vec<(Vec3, Vec3)>,
 }
 
 /// What every tube shares: the ring's cosines and sines and how the texture wraps.
@@ -127,6 +133,7 @@ impl Shape<'_> {
             below,
             above,
             cap: cap_ring,
+            ring,
         } = scratch;
         segments(pts, tube.fallback, seg);
         let stride = (self.sides + 1) as u32;
@@ -161,6 +168,8 @@ impl Shape<'_> {
             };
             std::mem::swap(below, above);
             above.iter_mut().for_each(Vec::clear);
+            // The ring first, then its vertices: a vertex's tangent reads its neighbours.
+            ring.clear();
             for (k, &(c, s)) in self.trig.iter().enumerate() {
                 let offset = side * c + binormal * s;
                 let shape = offset + bend * (stretch * offset.dot(bend));
@@ -176,10 +185,26 @@ impl Shape<'_> {
                     ),
                     _ => (1.0, offset),
                 };
-                let position = centre + shape * radius * widen;
+                ring.push((centre + shape * radius * widen, normal));
+            }
+            for (k, &(position, normal)) in ring.iter().enumerate() {
+                // The tangent: along the ring (where `u` grows; `v` is the ring's own), the
+                // mean of the directions of its two chords at the vertex (those on either
+                // side of the seam for the seam's two copies, so the seam does not show),
+                // across the normal. `v` grows along `dir`, which `cross(normal, tangent)`
+                // points along: w = +1.
+                let before = ring[if k == 0 { self.sides - 1 } else { k - 1 }].0;
+                let after = ring[if k == self.sides { 1 } else { k + 1 }].0;
+                let along = (position - before).normalize_or_zero()
+                    + (after - position).normalize_or_zero();
+                let (c, s) = self.trig[k];
+                let tangent = (along - normal * along.dot(normal))
+                    .try_normalize()
+                    .unwrap_or(binormal * c - side * s);
                 out.vertex(
                     position,
                     normal,
+                    tangent.extend(1.0),
                     Vec2::new(self.tiles * k as f32 / self.sides as f32, v),
                 );
                 if checks.is_some() {
@@ -243,11 +268,14 @@ impl Shape<'_> {
         let base = out.next_index();
         // The ring's texel size: its circumference over the tiles.
         let r = self.tiles / TAU;
-        out.vertex(centre, normal, Vec2::new(0.5, v));
+        // `u` grows along `side` and `v` along `binormal`: `cross(normal, side)` is
+        // `sign * binormal`, so w = sign.
+        let tangent = side.extend(sign);
+        out.vertex(centre, normal, tangent, Vec2::new(0.5, v));
         positions.clear();
         for &(c, s) in &self.trig[..self.sides] {
             let position = centre + (side * c + binormal * s) * radius;
-            out.vertex(position, normal, Vec2::new(0.5 + r * c, v + r * s));
+            out.vertex(position, normal, tangent, Vec2::new(0.5 + r * c, v + r * s));
             positions.push(position);
         }
         let n = self.sides as u32;

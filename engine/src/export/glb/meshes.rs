@@ -90,7 +90,7 @@ impl Builder {
         if !mesh.colors.is_empty() {
             attributes.insert(Valid(Semantic::Colors(0)), self.colors(mesh));
         }
-        // MikkTSpace tangents where a normal map reads them.
+        // Tangents (the mesh's own, or MikkTSpace's) where a normal map reads them.
         if let Some(t) = mesh.tangents() {
             let data = Data::Floats(t.iter().flat_map(|t| t.to_array()).collect());
             let vertex = Some(json::buffer::Target::ArrayBuffer);
