@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pge_engine::geometry::{LeafPoint, Material, Mesh, Skeleton, Texture};
+use pge_engine::math::{cos, sin};
 use rand_mt::Mt64;
 
 use crate::cylinders::bark_mesh;
@@ -92,9 +93,9 @@ fn leaf_card_tangents_run_along_their_side_as_mikktspace_finds() {
             let t = k as f32 * 0.7;
             LeafPoint {
                 node: 0,
-                position: Vec3::new(t.cos(), 0.1 * t, t.sin()),
-                direction: Vec3::new(t.sin(), 0.5 - (k % 3) as f32 * 0.5, -t.cos()),
-                side: Vec3::new(1.0, t.cos(), 0.3 * t.sin()),
+                position: Vec3::new(cos(t), 0.1 * t, sin(t)),
+                direction: Vec3::new(sin(t), 0.5 - (k % 3) as f32 * 0.5, -cos(t)),
+                side: Vec3::new(1.0, cos(t), 0.3 * sin(t)),
                 size: 0.1 + 0.01 * k as f32,
             }
         })
