@@ -17,11 +17,11 @@ pub struct PreviewArgs {
     #[command(flatten)]
     pub script: ScriptArgs,
     /// Draws trees with levels of detail (`lod`) at this fraction of their leaves, 0.01 to 1.
-    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = pge_preview::lod::parse_fraction)]
+    #[arg(long, value_name = "FRACTION", default_value_t = 1.0, value_parser = pge_preview::args::parse_fraction)]
     pub lod_level: f64,
     /// A forest's leaf budget: the most leaves its trees draw in a frame at rest, nearer
     /// trees finer (as many triangles again go to bark and other meshes).
-    #[arg(long, value_name = "N", default_value_t = pge_preview::forest::DEFAULT_LEAF_BUDGET, value_parser = pge_preview::forest::parse_budget)]
+    #[arg(long, value_name = "N", default_value_t = pge_preview::forest::DEFAULT_LEAF_BUDGET, value_parser = pge_preview::args::parse_budget)]
     pub leaf_budget: u64,
     /// Writes the first complete frame to this PNG file and exits.
     #[arg(long, value_name = "PNG")]
@@ -29,7 +29,7 @@ pub struct PreviewArgs {
     /// Places the camera instead of framing the model: `D` metres from the target
     /// horizontally, the eye at height `H`, looking at `TX,TY,TZ` (default: the centre of the
     /// model's bounds).
-    #[arg(long, value_name = "D,H[,TX,TY,TZ]", value_parser = pge_preview::parse_camera, allow_hyphen_values = true)]
+    #[arg(long, value_name = "D,H[,TX,TY,TZ]", value_parser = pge_preview::args::parse_camera, allow_hyphen_values = true)]
     pub camera: Option<CameraSpec>,
     /// Measures the viewport: once the first model is on screen, turns the camera once
     /// around it in N frames drawn as while dragging, then rests; prints where each frame's

@@ -54,18 +54,6 @@ pub const MOVING_MARGIN: f32 = 1.25;
 /// The leaf budgets `--leaf-budget` and the side panel's slider allow.
 pub const LEAF_BUDGETS: std::ops::RangeInclusive<u64> = 100..=100_000_000;
 
-/// Parses `--leaf-budget`: a whole number of leaves in [`LEAF_BUDGETS`].
-pub fn parse_budget(text: &str) -> Result<u64, String> {
-    match text.trim().parse::<u64>() {
-        Ok(n) if LEAF_BUDGETS.contains(&n) => Ok(n),
-        _ => Err(format!(
-            "'{text}' is not a number of leaves between {} and {}",
-            LEAF_BUDGETS.start(),
-            LEAF_BUDGETS.end()
-        )),
-    }
-}
-
 /// One leaf count a leaf mesh is drawn at: the ranges of its sequential quads (six indices
 /// per leaf) and the leaves they draw.
 #[derive(Clone, Debug, PartialEq)]

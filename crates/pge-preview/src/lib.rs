@@ -27,6 +27,7 @@
 //! each frame's time went (a forest's plans are made off the window's thread: [`planner`]).
 
 mod app;
+pub mod args;
 pub mod camera;
 pub mod forest;
 pub mod live;
@@ -116,29 +117,6 @@ pub struct CameraSpec {
     pub target: Option<glam::Vec3>,
 }
 
-/// `--camera D,H[,TX,TY,TZ]`: numbers, `D > 0`.
-pub fn parse_camera(text: &str) -> Result<CameraSpec, String> {
-    let bad = || format!("'{text}' is not D,H or D,H,TX,TY,TZ (numbers, D > 0)");
-    let numbers = text
-        .split(',')
-        .map(|s| s.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
-        .collect::<Option<Vec<f32>>>()
-        .ok_or_else(bad)?;
-    let target = match numbers.len() {
-        2 => None,
-        5 => Some(glam::Vec3::new(numbers[2], numbers[3], numbers[4])),
-        _ => return Err(bad()),
-    };
-    if numbers[0] <= 0.0 {
-        return Err(bad());
-    }
-    Ok(CameraSpec {
-        distance: numbers[0],
-        height: numbers[1],
-        target,
-    })
-}
-
 /// Opens the preview window for `options.script`, generating with `engine` (its plugins and
 /// limits); returns when the window closes (with the screenshot's or the orbit's error,
 /// when one was asked for and failed).
@@ -219,28 +197,4 @@ pub fn preview(engine: Engine, options: PreviewOptions) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn camera_placements_are_parsed() {
-        assert_eq!(
-            parse_camera("2,1.5"),
-            Ok(CameraSpec {
-                distance: 2.0,
-                height: 1.5,
-                target: None
-            })
-        );
-        assert_eq!(
-            parse_camera("30, 8, 0, -1, 2.5").map(|c| c.target),
-            Ok(Some(glam::Vec3::new(0.0, -1.0, 2.5)))
-        );
-        for bad in ["2", "2,1,0", "0,1", "-1,2", "a,b", "2,NaN"] {
-            assert!(parse_camera(bad).is_err(), "{bad}");
-        }
-    }
 }

@@ -9,14 +9,6 @@ use pge_lod::{Row, first_levels};
 
 use crate::VERTEX_FLOATS;
 
-/// Parses `--lod-level`: a fraction of the leaves between 0.01 and 1.
-pub fn parse_fraction(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(f) if (0.01..=1.0).contains(&f) => Ok(f),
-        _ => Err(format!("'{text}' is not a fraction between 0.01 and 1")),
-    }
-}
-
 /// One sector's V: its leaves are `offset..` in the mesh (four vertices each) and its table
 /// rows `[a, b, c]` are relative to `offset`.
 #[derive(Clone, Debug, PartialEq)]

@@ -19,6 +19,7 @@ use eframe::egui;
 use eframe::egui_wgpu::{self, wgpu};
 use glam::{Mat4, Vec3};
 
+use self::forest::ForestGpu;
 use self::mesh::{GpuMesh, MeshPipelines, bind_material, buffer_init, material_group};
 use self::overlay::grid_lines;
 use super::forest::{MOVING_MARGIN, MOVING_SHARE, View};
@@ -97,7 +98,7 @@ pub struct Renderer {
     environment: Option<(wgpu::BindGroup, [f32; 3])>,
     overlay_depth: wgpu::RenderPipeline,
     overlay_top: wgpu::RenderPipeline,
-    meshes: Vec<GpuMesh>,
+    meshes: Vec<Uploaded>,
     grid: Option<(wgpu::Buffer, u32)>,
     skeleton: Option<(wgpu::Buffer, u32)>,
     target: Option<Target>,
@@ -121,6 +122,13 @@ pub struct Renderer {
     times: FrameTimes,
     /// Wait for the GPU after each frame, to measure its share ([`FrameTimes::gpu`]).
     measure_gpu: bool,
+}
+
+/// A mesh on the GPU and, for a mesh a forest places, its forest side (what it can draw,
+/// its instances in the order of the plan drawn, and that plan's draws).
+struct Uploaded {
+    mesh: GpuMesh,
+    forest: Option<ForestGpu>,
 }
 
 /// Where one frame's time went on the render thread (`--orbit-frames` prints them).
@@ -283,14 +291,19 @@ impl Renderer {
                 &self.sampler,
                 &normal,
             );
-            self.meshes
-                .push(GpuMesh::new(device, scene, index, material));
+            self.meshes.push(Uploaded {
+                mesh: GpuMesh::new(device, scene, index, material),
+                forest: mesh.forest.then(|| ForestGpu::new(device, mesh)),
+            });
         }
         let (forest_meshes, set): (Vec<usize>, Vec<_>) = self
             .meshes
             .iter()
             .enumerate()
-            .filter_map(|(k, m)| Some((k, (m.index_in_scene, m.forest.as_ref()?.detail.clone()))))
+            .filter_map(|(k, u)| {
+                let detail = u.forest.as_ref()?.detail.clone();
+                Some((k, (u.mesh.index_in_scene, detail)))
+            })
             .unzip();
         self.forest_meshes = forest_meshes;
         self.focus = scene.bounds.map(|(lo, hi)| (lo + hi) * 0.5);
@@ -335,7 +348,7 @@ impl Renderer {
             .zip(&planned.matrices)
             .zip(planned.changed);
         for (&k, ((p, matrices), changed)) in self.forest_meshes.iter().zip(parts) {
-            if let Some(f) = self.meshes.get_mut(k).and_then(|m| m.forest.as_mut()) {
+            if let Some(f) = self.meshes.get_mut(k).and_then(|u| u.forest.as_mut()) {
                 self.times.uploaded += changed.len();
                 f.take_plan(&self.queue, matrices, changed, p.draws);
             }
@@ -396,13 +409,13 @@ impl Renderer {
             }
         }
         if toggles.wireframe {
-            for mesh in &mut self.meshes {
-                mesh.build_edges(&self.device);
+            for u in &mut self.meshes {
+                u.mesh.build_edges(&self.device);
             }
         }
         if moving {
-            for mesh in &mut self.meshes {
-                mesh.pick_near(&self.queue, view_proj);
+            for u in &mut self.meshes {
+                u.mesh.pick_near(&self.queue, view_proj);
             }
         }
         let budget = if moving {
@@ -491,11 +504,13 @@ impl Renderer {
                 lines: &self.mesh_lines,
             };
             for leaves_pass in [false, true] {
-                for mesh in self.meshes.iter().filter(|m| m.is_leaf == leaves_pass) {
+                for Uploaded { mesh, forest } in
+                    self.meshes.iter().filter(|u| u.mesh.is_leaf == leaves_pass)
+                {
                     if mesh.is_leaf && !toggles.leaves {
                         continue;
                     }
-                    triangles += match &mesh.forest {
+                    triangles += match forest {
                         Some(f) if !mesh.lines => f.draw(&mut pass, mesh, pipelines, toggles),
                         _ => mesh.draw(&mut pass, pipelines, toggles, moving),
                     };

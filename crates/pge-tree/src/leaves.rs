@@ -615,7 +615,7 @@ mod tests {
         let mut mesh = Mesh::default();
         append_leaf_quads(&[leaf], &opts, &mut Mt64::new(1), &mut mesh);
         let length = mesh.positions[3].distance(mesh.positions[0]);
-        assert!((length - 0.1 / crate::options::card_share(9)).abs() < 1e-6);
+        assert!((length - 0.1 / crate::textures::card_share(9)).abs() < 1e-6);
         assert!(length > 0.15 && length < 0.25, "{length}");
     }
 

@@ -59,14 +59,14 @@ pub use material::{bark_material, leaf_material, leaf_material_with_warning, lea
 pub use memory::{MeshMemory, MeshSizes};
 pub use merge::merge_straight;
 pub use options::{
-    Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
-    TextureSource, TreeOptions, card_share,
+    Along, Flare, LeafOptions, MAX_PER_CARD, MeshOptions, RadiiMode, TextureSource, TreeOptions,
 };
 pub use radii::{assign_orders, main_children, pipe_radii};
 pub use smooth::smooth;
 pub use textures::{
-    BarkParams, LeafParams, Maps, TextureCache, TextureFormat, TextureSet, bark_maps, bark_set,
-    bark_textures, encode_maps, encode_maps_as, leaf_maps, leaf_set, leaf_textures, load_png,
+    BarkParams, BarkStyle, LeafParams, LeafShape, Maps, TextureCache, TextureFormat, TextureSet,
+    bark_maps, bark_set, bark_textures, card_share, encode_maps, encode_maps_as, leaf_maps,
+    leaf_set, leaf_textures, load_png,
 };
 #[cfg(feature = "lua")]
 pub use tree_lua::TreePlugin;

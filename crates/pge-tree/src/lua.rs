@@ -33,10 +33,9 @@ use pge_engine::lua::{
 
 use crate::TreeError;
 use crate::options::{
-    Along, BarkStyle, Flare, LeafOptions, LeafShape, MAX_PER_CARD, MeshOptions, RadiiMode,
-    TextureSource, TreeOptions,
+    Along, Flare, LeafOptions, MAX_PER_CARD, MeshOptions, RadiiMode, TextureSource, TreeOptions,
 };
-use crate::textures::{TextureFormat, decode_png};
+use crate::textures::{BarkStyle, LeafShape, TextureFormat, decode_png};
 
 /// [`tree_options`] for a generator that computes its own radii (growth, conifer): the
 /// mesher keeps them ([`RadiiMode::Keep`](crate::RadiiMode::Keep)) unless the script's

@@ -11,10 +11,8 @@
 //! the tree uses fresh memory as [`build_tree`](crate::build_tree) does; an array smaller
 //! than the mesh grows as a fresh one would.
 
-use std::sync::{Arc, Mutex, PoisonError};
-
 use glam::{Vec2, Vec3, Vec4};
-use pge_engine::geometry::{LeafPoint, SearchMemory, resident_vec};
+use pge_engine::geometry::{LeafPoint, ResidentArena, SearchMemory};
 
 use crate::TreeOptions;
 
@@ -83,10 +81,7 @@ pub(crate) struct LeafBuffers {
 /// [`build_tree_in`](crate::build_tree_in), which writes the same meshes into it. Cloning
 /// shares it: the first tree built takes what is ready, the others get fresh memory.
 #[derive(Clone, Default)]
-pub struct MeshMemory {
-    /// What the job has made so far; `None` once taken.
-    ready: Option<Arc<Mutex<Option<Buffers>>>>,
-}
+pub struct MeshMemory(ResidentArena<Buffers>);
 
 /// Bark vertices below which a tree's memory is made ahead (a few MB at most): bigger trees
 /// grow on the whole pool, and a wrong guess would waste more.
@@ -102,7 +97,7 @@ impl MeshMemory {
     /// Starts making memory of `sizes` resident on a pool thread, when the calling thread is
     /// not one of the pool's (so the pool is idle while it grows the tree), the pool has more
     /// than one thread and the tree is small (under 64 k bark vertices); [`none`](Self::none)
-    /// otherwise.
+    /// otherwise ([`ResidentArena::start`]).
     #[must_use]
     pub fn prepare(sizes: MeshSizes) -> MeshMemory {
         MeshMemory::prepare_after(sizes, || {})
@@ -112,53 +107,32 @@ impl MeshMemory {
     /// memory, needed sooner than the meshes'); `first` is not run when no job starts.
     #[must_use]
     pub fn prepare_after(sizes: MeshSizes, first: impl FnOnce() + Send + 'static) -> MeshMemory {
-        let idle_pool = rayon::current_thread_index().is_none() && rayon::current_num_threads() > 1;
-        if !idle_pool || sizes.bark_vertices >= AHEAD_BELOW {
+        if sizes.bark_vertices >= AHEAD_BELOW {
             return MeshMemory::none();
         }
-        let memory = MeshMemory::made_ahead();
-        let ready = memory.ready.clone();
-        rayon::spawn(move || {
+        MeshMemory(ResidentArena::start(move |arena| {
             first();
-            if let Some(ready) = ready {
-                make(&ready, sizes);
-            }
-        });
-        memory
+            make(arena, sizes);
+        }))
     }
 
     /// Memory made ahead on the calling thread (tests).
     #[cfg(test)]
     pub(crate) fn made_now(sizes: MeshSizes) -> MeshMemory {
-        let memory = MeshMemory::made_ahead();
-        if let Some(ready) = &memory.ready {
-            make(ready, sizes);
-        }
-        memory
-    }
-
-    fn made_ahead() -> MeshMemory {
-        MeshMemory {
-            ready: Some(Arc::new(Mutex::new(Some(Buffers::default())))),
-        }
+        let arena = ResidentArena::open();
+        make(&arena, sizes);
+        MeshMemory(arena)
     }
 
     /// The arrays made so far (empty ones for the rest); the job stops making more.
     pub(crate) fn take(&self) -> Buffers {
-        self.ready
-            .as_ref()
-            .and_then(|ready| lock(ready).take())
-            .unwrap_or_default()
+        self.0.take()
     }
 }
 
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(PoisonError::into_inner)
-}
-
-/// Makes each array in turn, the bark's first (the calling thread's), and puts it in
-/// `ready`, unless the arrays were taken meanwhile.
-fn make(ready: &Mutex<Option<Buffers>>, sizes: MeshSizes) {
+/// Makes each array in turn, the bark's first (the calling thread's), unless the arrays
+/// were taken meanwhile.
+fn make(arena: &ResidentArena<Buffers>, sizes: MeshSizes) {
     let origin = LeafPoint {
         node: 0,
         position: Vec3::ZERO,
@@ -167,61 +141,20 @@ fn make(ready: &Mutex<Option<Buffers>>, sizes: MeshSizes) {
         size: 0.0,
     };
     let (v, i, l) = (sizes.bark_vertices, sizes.bark_indices, sizes.leaves);
-    put(
-        ready,
-        || resident_vec(v, Vec3::ZERO),
-        |b| &mut b.bark.positions,
-    );
-    put(
-        ready,
-        || resident_vec(v, Vec3::ZERO),
-        |b| &mut b.bark.normals,
-    );
-    put(ready, || resident_vec(v, Vec2::ZERO), |b| &mut b.bark.uvs);
-    put(ready, || resident_vec(i, 0), |b| &mut b.bark.indices);
-    put(ready, || resident_vec(l, origin), |b| &mut b.leaves.tips);
-    put(
-        ready,
-        || resident_vec(4 * l, Vec3::ZERO),
-        |b| &mut b.leaves.positions,
-    );
-    put(
-        ready,
-        || resident_vec(4 * l, Vec3::ZERO),
-        |b| &mut b.leaves.normals,
-    );
-    put(
-        ready,
-        || resident_vec(4 * l, Vec2::ZERO),
-        |b| &mut b.leaves.uvs,
-    );
-    put(
-        ready,
-        || resident_vec(4 * l, Vec4::ZERO),
-        |b| &mut b.leaves.colors,
-    );
-    put(ready, || resident_vec(6 * l, 0), |b| &mut b.leaves.indices);
-    put(
-        ready,
+    arena.vec(v, Vec3::ZERO, |b| &mut b.bark.positions);
+    arena.vec(v, Vec3::ZERO, |b| &mut b.bark.normals);
+    arena.vec(v, Vec2::ZERO, |b| &mut b.bark.uvs);
+    arena.vec(i, 0, |b| &mut b.bark.indices);
+    arena.vec(l, origin, |b| &mut b.leaves.tips);
+    arena.vec(4 * l, Vec3::ZERO, |b| &mut b.leaves.positions);
+    arena.vec(4 * l, Vec3::ZERO, |b| &mut b.leaves.normals);
+    arena.vec(4 * l, Vec2::ZERO, |b| &mut b.leaves.uvs);
+    arena.vec(4 * l, Vec4::ZERO, |b| &mut b.leaves.colors);
+    arena.vec(6 * l, 0, |b| &mut b.leaves.indices);
+    arena.part(
         || SearchMemory::resident(4 * l, 2 * l),
         |b| &mut b.leaves.search,
     );
-}
-
-/// Makes one part (`make`) and puts it where `field` says in `ready`, unless the arrays were
-/// taken.
-fn put<T>(
-    ready: &Mutex<Option<Buffers>>,
-    make: impl FnOnce() -> T,
-    field: impl FnOnce(&mut Buffers) -> &mut T,
-) {
-    if lock(ready).is_none() {
-        return;
-    }
-    let part = make();
-    if let Some(buffers) = lock(ready).as_mut() {
-        *field(buffers) = part;
-    }
 }
 
 #[cfg(test)]
@@ -281,24 +214,12 @@ mod tests {
 
     #[test]
     fn a_big_tree_starts_no_job_and_runs_nothing_first() {
-        let ran = Arc::new(Mutex::new(false));
-        let flag = Arc::clone(&ran);
         let sizes = MeshSizes {
             bark_vertices: AHEAD_BELOW,
             bark_indices: 0,
             leaves: 0,
         };
-        let memory = MeshMemory::prepare_after(sizes, move || *lock(&flag) = true);
-        assert!(memory.ready.is_none());
-        assert!(!*lock(&ran));
-    }
-
-    #[test]
-    fn arrays_taken_before_they_are_made_are_not_made() {
-        let memory = MeshMemory::made_ahead();
-        let ready = memory.ready.clone().expect("made ahead");
-        drop(memory.take());
-        make(&ready, MeshSizes::of_nodes(10, &TreeOptions::default()));
-        assert!(lock(&ready).is_none());
+        let memory = MeshMemory::prepare_after(sizes, || panic!("run for a big tree"));
+        assert!(!memory.0.is_open());
     }
 }

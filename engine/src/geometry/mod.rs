@@ -22,6 +22,6 @@ pub use lod::{GroupLod, LodError, LodLevel, LodSector, LodTable, MeshLod, Primit
 pub use material::{AlphaMode, DiffuseTransmission, ImageFormat, Material, Texture};
 pub use mesh::{GeometryError, Mesh, Primitive};
 pub use model::{Instance, InstanceGroup, InstanceTransform, Model, PlacementLeaves, Stats};
-pub use resident::{SearchMemory, resident_vec};
+pub use resident::{ResidentArena, SearchMemory};
 pub use skeleton::{LeafPoint, Skeleton};
 pub use triangles::DegenerateTest;

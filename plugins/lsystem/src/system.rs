@@ -1,12 +1,15 @@
 //! An L-system's rules and how they are added; compilation ([`compile`]) makes the
-//! [`Prepared`] form that derives ([`prepared`]); context matching ([`context`]), the
-//! derivation step ([`derive`](mod@derive)), counting ([`count`]) and the depth-first
-//! pipeline ([`stream`]) live in their own files.
+//! [`Prepared`] form that derives ([`prepared`]): what each symbol turns into
+//! ([`dispatch`]) and, when every successor is fixed, the tables of a one-pass rewrite
+//! ([`fixed`]). Context matching ([`context`]), the derivation step
+//! ([`derive`](mod@derive)), counting ([`count`]) and the depth-first pipeline ([`stream`])
+//! live in their own files.
 
 mod compile;
 mod context;
 mod count;
 mod derive;
+mod dispatch;
 mod fixed;
 mod host;
 mod prepared;

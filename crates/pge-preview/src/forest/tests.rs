@@ -215,15 +215,6 @@ fn buffers_kept_from_earlier_plans_make_the_same_plans_as_new_ones() {
 }
 
 #[test]
-fn budgets_are_parsed() {
-    assert_eq!(parse_budget("2000000"), Ok(2_000_000));
-    assert_eq!(parse_budget(" 100 "), Ok(100));
-    for bad in ["99", "0", "-5", "1e6", "x", "100000001"] {
-        assert!(parse_budget(bad).is_err(), "{bad}");
-    }
-}
-
-#[test]
 fn meshes_get_their_needs_first_then_shares_of_the_rest() {
     // Needs 100 + 50 fit in 450: the remaining 300 go 4:1 as asked beyond the needs.
     assert_eq!(share(450, &[500, 150], &[100, 50]), vec![340, 110]);

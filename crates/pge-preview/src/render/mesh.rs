@@ -9,7 +9,6 @@ use wgpu::util::DeviceExt;
 use super::super::pipeline::material_uniform;
 use super::super::scene::{Scene, SceneMesh};
 use super::Toggles;
-use super::forest::ForestGpu;
 use super::overlay::triangle_edges;
 
 /// Leaves instanced at least this many times (a forest's) are drawn for near trees only
@@ -52,9 +51,6 @@ pub(super) struct GpuMesh {
     /// Sequential quads over all of V, the vertices coloured by level and the LOD tables,
     /// for a leaf mesh with levels.
     pub lod: Option<(wgpu::Buffer, wgpu::Buffer, super::super::lod::LeafLod)>,
-    /// For a mesh placed by a forest: what it can draw, its instances in the order of the
-    /// plan drawn, and that plan's draws.
-    pub forest: Option<ForestGpu>,
 }
 
 pub(super) fn buffer_init(
@@ -154,7 +150,6 @@ impl GpuMesh {
                         c.len() as u32,
                     )
                 }),
-            forest: mesh.forest.then(|| ForestGpu::new(device, mesh)),
             near: (mesh.is_leaf && !mesh.forest && mesh.instances.len() >= FAR_LEAVES_MIN).then(
                 || {
                     let buffer = device.create_buffer(&wgpu::BufferDescriptor {

@@ -2,11 +2,11 @@
 
 use rayon::prelude::*;
 
+use super::BarkStyle;
 use super::maps::{Maps, Srgb, Surface};
 use super::noise::{Cells, Fractal, Lattice, centre, floor, hash, smoothstep, unit, wrap};
 use super::{BarkParams, TextureSet};
 use crate::TreeError;
-use crate::options::BarkStyle;
 
 /// What one bark pixel is made of: height in `[0, 1]`, a colour factor and roughness.
 struct Sample {

@@ -118,8 +118,8 @@ pub fn leaf_textures(params: &LeafParams) -> Result<Arc<TextureSet>, TreeError> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::options::{BarkStyle, LeafShape};
     use crate::textures::test_support::bark;
+    use crate::textures::{BarkStyle, LeafShape};
     use rayon::prelude::*;
 
     #[test]

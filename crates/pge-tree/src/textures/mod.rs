@@ -13,6 +13,7 @@
 //! in `u` (around the branch) and `v` (along it).
 
 mod bark;
+mod blade;
 mod cache;
 mod leaves;
 mod maps;
@@ -24,12 +25,90 @@ use std::sync::Arc;
 
 use pge_engine::geometry::Texture;
 
-use crate::options::{BarkStyle, LeafShape};
-
 pub use bark::{bark_maps, bark_set};
 pub use cache::{TextureCache, bark_textures, leaf_textures};
 pub use leaves::{leaf_maps, leaf_set};
 pub use maps::{Maps, TextureFormat, decode_png, encode_maps, encode_maps_as, load_png};
+
+/// The pattern of the procedural bark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BarkStyle {
+    /// Deep vertical furrows between long ridges, from stretched cellular noise (oak; Lua
+    /// `"furrowed"`).
+    #[default]
+    Furrowed,
+    /// Irregular flat plates split by narrow cracks (pine; Lua `"plated"`).
+    Plated,
+    /// Smooth mottled bark with horizontal lenticels (beech, birch; Lua `"smooth"`).
+    Smooth,
+    /// Interlaced fibrous ridges (willow; Lua `"fibrous"`).
+    Fibrous,
+    /// Small thin scales, the plated pattern finer and flatter (spruce; Lua `"scaly"`).
+    Scaly,
+}
+
+impl BarkStyle {
+    /// The Lua names, in the order of the variants.
+    pub const NAMES: [&'static str; 5] = ["furrowed", "plated", "smooth", "fibrous", "scaly"];
+
+    /// The style of a Lua name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<BarkStyle> {
+        match name {
+            "furrowed" => Some(BarkStyle::Furrowed),
+            "plated" => Some(BarkStyle::Plated),
+            "smooth" => Some(BarkStyle::Smooth),
+            "fibrous" => Some(BarkStyle::Fibrous),
+            "scaly" => Some(BarkStyle::Scaly),
+            _ => None,
+        }
+    }
+}
+
+/// The silhouette of the procedural leaf texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LeafShape {
+    /// An egg-shaped blade with a midrib and side veins (Lua `"ovate"`).
+    #[default]
+    Ovate,
+    /// An oak leaf: rounded lobes and deep sinuses (Lua `"lobed"`).
+    Lobed,
+    /// A long narrow willow blade (Lua `"lanceolate"`).
+    Lanceolate,
+    /// A maple leaf: five pointed lobes with veins from the stalk (Lua `"palmate"`).
+    Palmate,
+    /// A conifer's needle spray: needles on both sides of a twig (Lua `"needles"`).
+    Needles,
+}
+
+impl LeafShape {
+    /// The Lua names, in the order of the variants.
+    pub const NAMES: [&'static str; 5] = ["ovate", "lobed", "lanceolate", "palmate", "needles"];
+
+    /// The shape of a Lua name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<LeafShape> {
+        match name {
+            "ovate" => Some(LeafShape::Ovate),
+            "lobed" => Some(LeafShape::Lobed),
+            "lanceolate" => Some(LeafShape::Lanceolate),
+            "palmate" => Some(LeafShape::Palmate),
+            "needles" => Some(LeafShape::Needles),
+            _ => None,
+        }
+    }
+}
+
+/// The length of one leaf of a twig card of `per_card` leaves as a share of the card's
+/// length: 1 for a single leaf, then less as the twig bears more (so the leaves cover about
+/// the same share of every card).
+#[must_use]
+pub fn card_share(per_card: u32) -> f32 {
+    match per_card {
+        0 | 1 => 1.0,
+        n => (1.6 / ((n + 1) as f32).sqrt()).min(0.7),
+    }
+}
 
 /// The parameters a bark texture set is made from: its cache key.
 #[derive(Clone, Copy, Debug, PartialEq)]

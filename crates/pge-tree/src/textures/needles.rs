@@ -4,9 +4,9 @@
 //! angles and lengths: each shoot draws three layers of needles on both sides, dense enough
 //! that the band around the shoot reads as a mass, as a spruce or fir shoot does.
 
-use super::leaves::LeafPixel;
+use super::blade::LeafPixel;
+use super::card_share;
 use super::noise::{hash, unit};
-use crate::options::card_share;
 use pge_engine::math;
 
 /// One layer of needles on one side of a shoot: the apparent angle from the shoot, the

@@ -6,9 +6,9 @@
 //! from the stalk end (0) to the far edge (1). The twig runs up the middle from the stalk
 //! end; leaves leave it alternately left and right, lower ones wider, and one ends it.
 
-use super::leaves::{LeafPixel, blade_half_width, blade_pixel};
+use super::blade::{LeafPixel, blade_half_width, blade_pixel};
 use super::noise::{hash, unit};
-use crate::options::{LeafShape, card_share};
+use super::{LeafShape, card_share};
 use pge_engine::math;
 
 /// One leaf on the card: where its stalk starts, the unit direction up its blade, its

@@ -1,7 +1,7 @@
 //! Evaluation of compiled expressions on `f64`s.
 
-use super::compile::{Fn1, Fn2, MAX_DEPTH, Op, Repr};
-use super::{BinOp, Expr};
+use super::BinOp;
+use super::code::{Expr, Fn1, Fn2, MAX_DEPTH, Op, Repr};
 use pge_engine::math;
 
 impl Fn1 {

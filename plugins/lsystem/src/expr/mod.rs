@@ -8,15 +8,16 @@
 
 //!
 //! `parse` reads text into an [`Ast`], `compile` turns an `Ast` into
-//! an [`Expr`] and `eval` evaluates it.
+//! an [`Expr`] (its bytecode and shapes in `code`) and `eval` evaluates it.
 
+mod code;
 mod compile;
 mod eval;
 mod parse;
 
 use std::fmt;
 
-pub use self::compile::Expr;
+pub use self::code::Expr;
 pub(crate) use self::eval::Arg;
 pub use self::parse::{MAX_NESTING, parse};
 /// A syntax tree, kept until names can be resolved (parameters, globals).

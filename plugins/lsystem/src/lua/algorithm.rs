@@ -16,9 +16,9 @@ use pge_engine::{Algorithm, Error, RunContext, Step};
 use rand_mt::Mt;
 
 use super::config::{Axiom, Config};
-use super::derive::{LastStep, StreamHost};
 use super::host::{HostError, LuaHost};
 use super::session_symbols;
+use super::stream::{LastStep, StreamHost};
 use super::symbols::tags;
 use crate::{DeriveOptions, Host, LsError, ModuleString, Output, Prepared, SymbolTable, System};
 

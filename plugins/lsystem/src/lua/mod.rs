@@ -8,6 +8,7 @@ mod derive;
 mod host;
 mod interpret;
 mod object;
+mod stream;
 mod symbols;
 
 use std::cell::RefCell;

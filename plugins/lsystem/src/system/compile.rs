@@ -1,6 +1,7 @@
 //! Compilation: rules to bytecode, stochastic groups and the per-symbol dispatch tables.
 
-use super::fixed::FixedTables;
+use super::dispatch::Dispatch;
+use super::fixed::{FixedRule, FixedTables};
 use super::rule::{Kind, RuleDef};
 use crate::error::LsError;
 use crate::expr::{Expr, Operand};
@@ -60,18 +61,6 @@ pub(super) struct Compiled {
     pub(super) fixed: Option<(u32, u32)>,
 }
 
-/// What a symbol turns into: itself, a fixed string of symbols (`plain_pool[start..]`), the
-/// first applicable of some rules (`rule_lists[start..]`), or the successor of its one
-/// classic rule without contexts or alternatives when the condition holds (`Direct`:
-/// applied without the general matching).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Dispatch {
-    Copy,
-    Plain { start: u32, len: u32 },
-    Rules { start: u32, len: u32 },
-    Direct { rule: u32 },
-}
-
 /// The compiled form of a system's rules, rebuilt by [`Tables::build`] after every change.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Tables {
@@ -94,23 +83,6 @@ pub(super) struct Tables {
     /// module's own parameters not included); empty when a rule function may apply (its
     /// successors are unbounded).
     pub(super) growth: Vec<(u32, u32)>,
-}
-
-/// A rule with a fixed successor, as the pass over a string without parameters reads it.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct FixedRule {
-    /// The one-symbol left context ([`FixedRule::ANY`]: none).
-    pub(super) left: u32,
-    /// The one-symbol right context ([`FixedRule::ANY`]: none).
-    pub(super) right: u32,
-    /// The successor: `plain_pool[start..start + len]`.
-    pub(super) start: u32,
-    pub(super) len: u32,
-}
-
-impl FixedRule {
-    /// No context on this side.
-    pub(super) const ANY: u32 = u32::MAX;
 }
 
 impl Tables {

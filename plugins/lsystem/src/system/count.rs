@@ -2,8 +2,9 @@
 //! with the errors it would raise (the same random draws, the same module cap); a system of
 //! fixed successors is counted a symbol at a time across all its steps.
 
-use super::compile::{CKind, Dispatch};
+use super::compile::CKind;
 use super::derive::{Deriver, Scratch, StepOptions};
+use super::dispatch::Dispatch;
 use super::host::Host;
 use crate::error::LsError;
 use crate::module_string::ModuleString;

@@ -1,7 +1,9 @@
 //! The derivation step: every module of a string rewritten by the first rule that applies.
 
-use super::compile::{CKind, Dispatch, Tables};
+use super::compile::{CKind, Tables};
 use super::context::{match_left, match_right};
+use super::dispatch::Dispatch;
+use super::fixed::{FixedTables, LeftCodes};
 use super::host::Host;
 use super::rule::RuleDef;
 use crate::error::LsError;
@@ -71,12 +73,8 @@ fn right_neighbour(ignored: &[bool], src: &ModuleString, matches: &[u32], i: usi
 pub(super) struct Scratch {
     pub(super) matched: Vec<usize>,
     pub(super) gathered: Vec<f64>,
-    /// The context code (see [`super::fixed::FixedTables`]) of the symbol a one-symbol left
-    /// context of the next module matches (0: none or no context's symbol), kept as the
-    /// modules go by rather than found by walking back.
-    pub(super) left: u32,
-    /// `left` as each enclosing `[` found it, restored at its `]`.
-    pub(super) left_stack: Vec<u32>,
+    /// The left context codes of the pass of [`super::fixed`].
+    pub(super) lefts: LeftCodes,
 }
 
 /// What context matching reads during a step: the bracket pairs (general loop; empty when
@@ -606,5 +604,51 @@ impl Deriver<'_> {
             return Err(self.arity_error(def, src, m, k));
         }
         Ok(())
+    }
+
+    /// [`Deriver::step_range`] for a string without parameters whose rules all have fixed
+    /// successors (see [`FixedTables`]), appending to `out` (without parameters too);
+    /// `rights` as [`FixedTables::right_codes`] gives them.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn step_fixed<H: Host>(
+        &self,
+        fixed: &FixedTables,
+        src: &ModuleString,
+        range: std::ops::Range<usize>,
+        rights: &[u8],
+        before: u64,
+        out: &mut ModuleString,
+        host: &mut H,
+        opts: &StepOptions,
+        scratch: &mut Scratch,
+    ) -> Result<(), H::Error> {
+        let max = (opts.max_modules as u64).saturating_sub(before);
+        // The output's symbols are moved out for the pass (their length stays in a
+        // register) and put back whatever happens.
+        let mut o = std::mem::take(out.flat_syms_mut());
+        let base = o.len();
+        let mut i = range.start;
+        let mut result = Ok(());
+        while i < range.end {
+            if let Err(e) = host.check() {
+                result = Err(e);
+                break;
+            }
+            let stop = range.end.min((i | 0xFFFF) + 1);
+            if !fixed.run(
+                src.raw_syms(),
+                rights,
+                i..stop,
+                &mut o,
+                base as u64 + max,
+                &mut scratch.lefts,
+            ) {
+                result = Err(self.too_many(opts, before + (o.len() - base) as u64).into());
+                break;
+            }
+            i = stop;
+        }
+        *out.flat_syms_mut() = o;
+        result
     }
 }

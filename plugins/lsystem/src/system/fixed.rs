@@ -4,9 +4,7 @@
 //! modules go by, the right ones from one backward pass) and a symbol with rules finds its
 //! successor in a table indexed by those two codes, without testing its rules one by one.
 
-use super::compile::{Dispatch, FixedRule};
-use super::derive::{Deriver, Scratch, StepOptions};
-use super::host::Host;
+use super::dispatch::Dispatch;
 use crate::module_string::ModuleString;
 use crate::symbol::Sym;
 
@@ -49,6 +47,33 @@ const MANY: u32 = 1 << 31;
 const BACK_PUSH: u8 = 0x10;
 const BACK_POP: u8 = 0x20;
 const BACK_IGNORED: u8 = 0x40;
+
+/// A rule with a fixed successor, as the pass over a string without parameters reads it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct FixedRule {
+    /// The one-symbol left context ([`FixedRule::ANY`]: none).
+    pub(super) left: u32,
+    /// The one-symbol right context ([`FixedRule::ANY`]: none).
+    pub(super) right: u32,
+    /// The successor: `plain_pool[start..start + len]`.
+    pub(super) start: u32,
+    pub(super) len: u32,
+}
+
+impl FixedRule {
+    /// No context on this side.
+    pub(super) const ANY: u32 = u32::MAX;
+}
+
+/// The left context codes the pass keeps as the modules go by: the code of the symbol a
+/// one-symbol left context of the next module matches (0: none or no context's symbol),
+/// rather than found by walking back, and that code as each enclosing `[` found it,
+/// restored at its `]`.
+#[derive(Debug, Default)]
+pub(super) struct LeftCodes {
+    left: u32,
+    stack: Vec<u32>,
+}
 
 /// The tables of the pass, built when every rule reached has a fixed successor.
 #[derive(Clone, Debug, Default)]
@@ -210,20 +235,20 @@ impl FixedTables {
 
     /// Rewrites the modules `range` of `syms`, appending to `o`; `rights` holds their right
     /// codes (see [`FixedTables::right_codes`]; empty when no rule has a right context) and
-    /// `scratch` the left code of the next module with those of the enclosing branches.
+    /// `lefts` the left code of the next module with those of the enclosing branches.
     /// Returns false as soon as `o` is longer than `limit`.
     #[inline]
-    fn run(
+    pub(super) fn run(
         &self,
         syms: &[u32],
         rights: &[u8],
         range: std::ops::Range<usize>,
         o: &mut Vec<u32>,
         limit: u64,
-        scratch: &mut Scratch,
+        lefts: &mut LeftCodes,
     ) -> bool {
-        let mut left = scratch.left as usize;
-        let stack = &mut scratch.left_stack;
+        let mut left = lefts.left as usize;
+        let stack = &mut lefts.stack;
         for (&s, k) in syms[range.clone()].iter().zip(range) {
             let e = self.entry(s);
             let kind = e.class & !IGNORED;
@@ -254,60 +279,12 @@ impl FixedTables {
                 }
             }
             if o.len() as u64 > limit {
-                scratch.left = left as u32;
+                lefts.left = left as u32;
                 return false;
             }
         }
-        scratch.left = left as u32;
+        lefts.left = left as u32;
         true
-    }
-}
-
-impl Deriver<'_> {
-    /// [`Deriver::step_range`] for a string without parameters whose rules all have fixed
-    /// successors (see [`FixedTables`]), appending to `out` (without parameters too);
-    /// `rights` as [`FixedTables::right_codes`] gives them.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn step_fixed<H: Host>(
-        &self,
-        fixed: &FixedTables,
-        src: &ModuleString,
-        range: std::ops::Range<usize>,
-        rights: &[u8],
-        before: u64,
-        out: &mut ModuleString,
-        host: &mut H,
-        opts: &StepOptions,
-        scratch: &mut Scratch,
-    ) -> Result<(), H::Error> {
-        let max = (opts.max_modules as u64).saturating_sub(before);
-        // The output's symbols are moved out for the pass (their length stays in a
-        // register) and put back whatever happens.
-        let mut o = std::mem::take(out.flat_syms_mut());
-        let base = o.len();
-        let mut i = range.start;
-        let mut result = Ok(());
-        while i < range.end {
-            if let Err(e) = host.check() {
-                result = Err(e);
-                break;
-            }
-            let stop = range.end.min((i | 0xFFFF) + 1);
-            if !fixed.run(
-                src.raw_syms(),
-                rights,
-                i..stop,
-                &mut o,
-                base as u64 + max,
-                scratch,
-            ) {
-                result = Err(self.too_many(opts, before + (o.len() - base) as u64).into());
-                break;
-            }
-            i = stop;
-        }
-        *out.flat_syms_mut() = o;
-        result
     }
 }
 

@@ -4,10 +4,8 @@
 //! each few hundred nodes on the calling thread. Only where the memory comes from changes:
 //! the state's arrays are moved into the room made ahead with the same contents.
 
-use std::sync::{Arc, Mutex, PoisonError};
-
 use glam::Vec3;
-use pge_engine::geometry::resident_vec;
+use pge_engine::geometry::ResidentArena;
 
 use super::state::{Pull, State};
 
@@ -23,36 +21,37 @@ struct Arrays {
     pulls: Vec<Pull>,
 }
 
-/// The per-node arrays being made ahead (shared by clones; the first to adopt them takes
-/// them).
-#[derive(Clone, Default)]
-pub(super) struct NodeMemory(Arc<Mutex<Option<Arrays>>>);
+/// The per-node arrays being made ahead (shared by clones; each array is adopted once).
+#[derive(Clone)]
+pub(super) struct NodeMemory(ResidentArena<Arrays>);
+
+impl Default for NodeMemory {
+    /// Memory its [`job`](NodeMemory::job) makes, if someone runs it.
+    fn default() -> Self {
+        NodeMemory(ResidentArena::open())
+    }
+}
 
 impl NodeMemory {
-    /// The job making room for `nodes` nodes; it puts the arrays here when done.
+    /// The job making room for `nodes` nodes, array by array.
     pub(super) fn job(&self, nodes: usize) -> impl FnOnce() + Send + 'static {
-        let slot = Arc::clone(&self.0);
+        let arena = self.0.clone();
         move || {
-            let arrays = Arrays {
-                nodes: resident_vec(nodes, Vec3::ZERO),
-                parents: resident_vec(nodes, None),
-                dirs: resident_vec(nodes, Vec3::ZERO),
-                headings: resident_vec(nodes, Vec3::ZERO),
-                has_child: resident_vec(nodes, false),
-                refused: resident_vec(nodes, 0),
-                pulls: resident_vec(nodes, Pull::NONE),
-            };
-            *slot.lock().unwrap_or_else(PoisonError::into_inner) = Some(arrays);
+            arena.vec(nodes, Vec3::ZERO, |a| &mut a.nodes);
+            arena.vec(nodes, None, |a| &mut a.parents);
+            arena.vec(nodes, Vec3::ZERO, |a| &mut a.dirs);
+            arena.vec(nodes, Vec3::ZERO, |a| &mut a.headings);
+            arena.vec(nodes, false, |a| &mut a.has_child);
+            arena.vec(nodes, 0, |a| &mut a.refused);
+            arena.vec(nodes, Pull::NONE, |a| &mut a.pulls);
         }
     }
 
-    /// Moves `st`'s per-node arrays into the room made ahead, if it is ready (once): each
-    /// array keeps its contents.
+    /// Moves `st`'s per-node arrays into the room made ahead since the last call (each
+    /// array once, as it is made): each keeps its contents; one not made yet stays as it
+    /// is, for a later call.
     pub(super) fn adopt(&self, st: &mut State) {
-        let ready = self.0.lock().unwrap_or_else(PoisonError::into_inner).take();
-        let Some(a) = ready else {
-            return;
-        };
+        let a = self.0.take_ready();
         move_into(&mut st.nodes, a.nodes);
         move_into(&mut st.parents, a.parents);
         move_into(&mut st.dirs, a.dirs);
@@ -79,7 +78,7 @@ mod tests {
     #[test]
     fn moved_arrays_keep_their_contents_in_the_larger_room() {
         let mut v = vec![1u32, 2, 3];
-        move_into(&mut v, resident_vec(1000, 7));
+        move_into(&mut v, Vec::with_capacity(1000));
         assert_eq!(v, [1, 2, 3]);
         assert!(v.capacity() >= 1000);
         // Too little room: left as it is.
@@ -105,6 +104,8 @@ mod tests {
         assert_eq!((st.nodes.clone(), st.parents.clone()), (nodes, parents));
         assert!(st.nodes.capacity() >= 500 && st.pulls.capacity() >= 500);
         assert_eq!(st.has_child, [true, false]);
-        assert!(memory.0.lock().expect("not poisoned").is_none());
+        // Adopted: nothing is given again.
+        let again = memory.0.take_ready();
+        assert_eq!(again.nodes.capacity() + again.pulls.capacity(), 0);
     }
 }
