@@ -28,7 +28,10 @@ use pge_engine::geometry::Texture;
 pub use bark::{bark_maps, bark_set};
 pub use cache::{TextureCache, bark_textures, leaf_textures};
 pub use leaves::{leaf_maps, leaf_set};
-pub use maps::{Maps, TextureFormat, decode_png, encode_maps, encode_maps_as, load_png};
+pub use maps::{Maps, TextureFormat, encode_maps, encode_maps_as, load_png};
+// The Lua adapter decodes a script's own PNG maps.
+#[cfg(feature = "lua")]
+pub use maps::decode_png;
 
 /// The pattern of the procedural bark.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
