@@ -384,5 +384,5 @@ async function start() {
 }
 
 // For the browser test and for poking at the page from the console.
-window.playground = { editor, state, scene, renderer, camera, model: () => model };
+window.playground = { editor, state, scene, renderer, camera, model: () => model, debounceMs: DEBOUNCE_MS };
 start();
