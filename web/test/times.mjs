@@ -60,7 +60,7 @@ const n = { best: best(all.map((x) => x.ms)), median: median(all.map((x) => x.ms
 const n1 = { best: best(one.map((x) => x.ms)), median: median(one.map((x) => x.ms)) };
 const bare = best(all.map((x) => x.withoutTexturesMs));
 const p = { first: page.oakFirstMs, best: best(regrow), median: median(regrow) };
-console.log(`web: the oak in the page: first ${f(p.first)} ms, regrowth best ${f(p.best)} / median ${f(p.median)} ms (of ${regrow.length})`);
+console.log(`web: the oak in the page: first generation (the page just opened) ${f(p.first)} ms, regrowth best ${f(p.best)} / median ${f(p.median)} ms (of ${regrow.length})`);
 console.log(`web: from the edit to the regrown oak in the page's view: median ${f(median(page.oakRegrowShownMs))} ms ` +
   `(the editor's ${page.debounceMs} ms pause, the generation, three.js reading the glb and its maps)`);
 console.log(`web: native release pge run: best ${f(n.best)} / median ${f(n.median)} ms (of ${RUNS}); one thread ${f(n1.best)} / ${f(n1.median)} ms; best without its textures ${f(bare)} ms`);
