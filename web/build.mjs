@@ -13,7 +13,7 @@ mkdirSync(dist, { recursive: true });
 for (const [from, to] of [['pge-web.js', 'pge-web.js'], ['pge_web.wasm', 'pge-web.wasm']]) {
   const file = join(wasmDir, from);
   if (!existsSync(file)) {
-    console.error(`build: ${file} is missing: build the engine first (see web/README.md)`);
+    console.error(`build: ${file} is missing: build the engine first (see the playground in README.md)`);
     process.exit(1);
   }
   copyFileSync(file, join(dist, to));

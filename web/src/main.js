@@ -79,11 +79,21 @@ function resize() {
     camera.updateProjectionMatrix();
   }
 }
-renderer.setAnimationLoop(() => {
-  resize();
-  controls.update();
-  renderer.render(scene, camera);
-});
+// Drawn when something changed (a model, the camera, the canvas's size), not at every frame:
+// a still view costs nothing, and the worker growing the next model has the processor to itself.
+let drawing = false;
+function draw() {
+  if (drawing) return;
+  drawing = true;
+  requestAnimationFrame(() => {
+    drawing = false;
+    resize();
+    controls.update(); // while the camera glides to a stop (damping) this asks for the next frame
+    renderer.render(scene, camera);
+  });
+}
+controls.addEventListener('change', draw);
+new ResizeObserver(draw).observe(canvas);
 
 function frame(object) {
   const box = new THREE.Box3();
@@ -107,8 +117,13 @@ async function show(glb) {
   const gltf = await new GLTFLoader().parseAsync(glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength), '');
   if (model) {
     scene.remove(model);
+    // Its buffers and textures leave the GPU with it (a regrowth makes new ones).
     model.traverse((o) => {
       if (o.geometry) o.geometry.dispose();
+      for (const material of [o.material ?? []].flat()) {
+        for (const value of Object.values(material)) if (value && value.isTexture) value.dispose();
+        material.dispose();
+      }
     });
   }
   model = gltf.scene;
@@ -117,6 +132,7 @@ async function show(glb) {
     frame(model);
     state.frameNext = false;
   }
+  draw();
 }
 
 // ---- the editor ---------------------------------------------------------------------------
@@ -368,5 +384,5 @@ async function start() {
 }
 
 // For the browser test and for poking at the page from the console.
-window.playground = { editor, state, scene, renderer, camera, model: () => model };
+window.playground = { editor, state, scene, renderer, camera, model: () => model, debounceMs: DEBOUNCE_MS };
 start();
