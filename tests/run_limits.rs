@@ -288,3 +288,48 @@ fn a_tile_of_a_100_km2_world_is_a_tile_like_any_other() {
     assert_eq!(small["meshes"], large["meshes"]);
     assert_eq!(small["tile"].as_array().map(Vec::len), Some(2));
 }
+
+/// A skeleton of 2000 nodes in one line: a tree model of it holds about 2 MiB of meshes.
+const SKELETON: &str = "local s = pge.Skeleton()\n\
+     local p = 0\n\
+     for i = 1, 2000 do p = s:add(p, {math.sin(i) * 0.1, i * 0.01, 0}, 0) end\n";
+
+#[test]
+fn models_a_script_keeps_are_charged_to_its_memory_limit() {
+    // 400 tree models kept in a table: about 800 MiB of meshes.
+    let case = Case::new(&format!(
+        "{SKELETON}local keep = {{}}\n\
+         for i = 1, 400 do keep[i] = pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }} end\n\
+         return keep[1]\n"
+    ));
+    let o = case.run(&["--memory-limit", "128"]);
+    limit(
+        &o,
+        "main.lua:5",
+        &[
+            "the meshes and textures of a model",
+            "memory limit of 128 MiB exceeded",
+        ],
+        &case.output(),
+    );
+    // Models that are dropped are given back.
+    let case = Case::new(&format!(
+        "{SKELETON}for i = 1, 100 do local t = pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }} end\n\
+         return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"
+    ));
+    let o = case.run(&["--memory-limit", "128"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Models that share one tree's meshes and textures are charged them once.
+    let case = Case::new(&format!(
+        "{SKELETON}local t = pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n\
+         local keep = {{}}\n\
+         for i = 1, 400 do\n\
+           keep[i] = pge.model()\n\
+           keep[i]:add(t)\n\
+           keep[400 + i] = t:model()\n\
+         end\n\
+         return keep[1]\n"
+    ));
+    let o = case.run(&["--memory-limit", "128"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
