@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 pub use pge::embed::export_meta;
 use pge_engine::export::{
-    ExportMeta, Instancing, Prepared, UsdFiles, obj_files, usd_files, usdz_bytes, write_glb_with,
+    ExportMeta, Instancing, Prepared, UsdFiles, obj_files_checked, usd_files, usdz_bytes,
+    write_glb_with,
 };
 use pge_engine::geometry::Model;
 
@@ -236,20 +237,25 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
 /// folder (all written before any takes its place, the `.obj` last), a `.usda` or `.usdz` as
 /// [`write_usd`] does, anything else as `.glb` with `meta` (the skeletons' texts taken from
-/// `prepared` where it has them).
+/// `prepared` where it has them). `check` (the run's deadline) is called before the export,
+/// between building the file and writing it, and inside the `.obj` writer's loop: its error
+/// stops the export with nothing written.
 pub fn write_model(
     model: &Model,
     prepared: &Prepared,
     meta: &ExportMeta,
     output: &Path,
     instancing: Instancing,
+    check: &mut dyn FnMut() -> pge_engine::Result<()>,
 ) -> anyhow::Result<()> {
+    check()?;
     let is_obj = output
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if usd_kind(output).is_some() {
         let files = usd_files(model, meta, &usd_folder(output))?;
+        check()?;
         write_usd(&files, output)?;
     } else if is_obj {
         let stem = output
@@ -258,7 +264,8 @@ pub fn write_model(
             .to_string_lossy()
             .to_string();
         let mtl = format!("{stem}.mtl");
-        let files = obj_files(model, &mtl, &stem)?;
+        let files = obj_files_checked(model, &mtl, &stem, check)?;
+        check()?;
         let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut set: Vec<(PathBuf, &[u8])> = files
             .textures
@@ -280,6 +287,7 @@ pub fn write_model(
             instancing,
             || AtomicFile::create(output),
             |mut file, glb| {
+                check()?;
                 glb.write_to(file.tmp.as_file_mut())
                     .with_context(|| format!("cannot write {}", output.display()))?;
                 Ok(file)

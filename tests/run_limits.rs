@@ -333,3 +333,38 @@ fn models_a_script_keeps_are_charged_to_its_memory_limit() {
     let o = case.run(&["--memory-limit", "128"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn an_export_stops_at_the_time_limit() {
+    // 1839 trees of 18,000 vertices each written out one by one as .obj text: 33 million
+    // vertices, minutes of export; the layout and the one variant take milliseconds.
+    let case = Case::new(
+        "local forest = pge.Forest{ size = {100, 100}, seed = 7 }\n\
+         forest:scatter{ species = \"tree.lua\", minDistance = 2, variants = 1 }\n\
+         return forest\n",
+    );
+    std::fs::write(
+        case.path().join("tree.lua"),
+        format!("{SKELETON}return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"),
+    )
+    .expect("species");
+    let o = case.pge(&[
+        "run",
+        "main.lua",
+        "-o",
+        "out/forest.obj",
+        "-q",
+        "--time-limit",
+        "1",
+    ]);
+    limit(
+        &o,
+        "main.lua:3",
+        &[TIME],
+        &case.path().join("out/forest.obj"),
+    );
+    let left: Vec<_> = std::fs::read_dir(case.path().join("out"))
+        .expect("out")
+        .collect();
+    assert!(left.is_empty(), "nothing written: {left:?}");
+}

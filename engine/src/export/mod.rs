@@ -12,5 +12,5 @@ pub use glb::{
     ExportMeta, GLB_LIMIT, GPU_INSTANCING, GlbFile, Instancing, Prepared, glb_bytes,
     glb_bytes_with, glb_container, glb_file_with, glb_stages_bytes, lod_from_json, write_glb_with,
 };
-pub use obj::{ObjFiles, obj_files};
+pub use obj::{ObjFiles, obj_files, obj_files_checked};
 pub use usd::{USD_ROOT, UsdFiles, usd_files, usd_stages_files, usdz_bytes};

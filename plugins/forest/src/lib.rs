@@ -44,7 +44,9 @@ mod spec;
 mod terrain;
 mod trunks;
 
-pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
+pub use assemble::{
+    CHECK_EVERY, Grown, assemble, assemble_budgeted, assemble_checked, layout_model, transform,
+};
 pub use cache::{GrownVariant, VariantCache, VariantKey};
 pub use grow::{ForestConfig, SpeciesGrower};
 pub use layer::{Density, Layer, Method, Variants};
