@@ -83,12 +83,43 @@ fn a_forest_layout_stops_at_the_time_limit() {
 
 #[test]
 fn a_forest_layout_past_the_memory_limit_is_refused_before_it_runs() {
+    // Placed at the layer whose options asked for the trees.
     let case = Case::new(BIG_FOREST);
     let o = case.run(&["--memory-limit", "64"]);
     limit(
         &o,
-        "main.lua:1",
+        "main.lua:2",
         &["the layout of about", "memory limit of 64 MiB exceeded"],
+        &case.output(),
+    );
+}
+
+#[test]
+fn a_layout_too_big_points_at_the_layer_that_makes_it_so() {
+    // A sparse layer, then a dense one: the dense one's line, for the memory limit and for
+    // the cap on instances alike.
+    let forest = |dense: &str| {
+        format!(
+            "local forest = pge.Forest{{ size = {{3000, 3000}}, seed = 7 }}\n\
+             forest:scatter{{ species = \"stick.lua\", minDistance = 20, variants = 1 }}\n\
+             forest:scatter{{ species = \"stick.lua\", minDistance = {dense}, variants = 1 }}\n\
+             return forest\n"
+        )
+    };
+    let case = Case::new(&forest("1.2"));
+    let o = case.run(&["--memory-limit", "64"]);
+    limit(
+        &o,
+        "main.lua:3",
+        &["the layout of about", "memory limit of 64 MiB exceeded"],
+        &case.output(),
+    );
+    let case = Case::new(&forest("0.5"));
+    let o = case.run(&[]);
+    limit(
+        &o,
+        "main.lua:3",
+        &["more than the limit of 10000000", "raise minDistance"],
         &case.output(),
     );
 }

@@ -91,6 +91,9 @@ pub enum ForestError {
     TooMany {
         /// How many it would hold.
         estimate: u64,
+        /// The layer whose options made it so many (the one that drew the most samples, or
+        /// was being laid out when the count passed the limit), when one did.
+        layer: Option<usize>,
     },
     /// A tile was asked of a forest without `tile`.
     #[error("--tile needs a forest with tile = T (metres)")]

@@ -174,7 +174,11 @@ impl ForestRun {
     /// [`ForestRun::layout`] within the run's limits ([`crate::Forest::layout_within`]).
     pub fn layout_within(&self, ctx: &RunContext) -> Result<Layout, ForestError> {
         let forest = self.spec.forest();
-        let mut layout = forest.layout_within(self.spec.tile(), ctx, &self.spec.origin())?;
+        let at = |layer: Option<usize>| match layer {
+            Some(l) => self.spec.layer_origin(l),
+            None => self.spec.origin(),
+        };
+        let mut layout = forest.layout_located(self.spec.tile(), ctx, &at)?;
         let empty = layout.counts.iter().enumerate().filter(|(_, c)| **c == 0);
         let located: Vec<String> = empty
             .zip(&layout.warnings)
@@ -305,6 +309,9 @@ impl ForestRun {
                 error: pge_lod::LodError::Limit(error),
                 ..
             } => *error,
+            e @ ForestError::TooMany {
+                layer: Some(layer), ..
+            } => Error::script(self.spec.layer_origin(layer), e.to_string()),
             e @ ForestError::Species { layer, .. } => Error::script(
                 self.spec.layer_origin(layer),
                 format!("forest:scatter: {e}"),
