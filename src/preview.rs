@@ -47,7 +47,7 @@ fn export(model: &Model, seed: u64, params: &[ParamInfo], path: &Path) -> anyhow
         &meta,
         path,
         Instancing::Gpu,
-        &mut || Ok(()),
+        &pge_engine::export::ExportLimit::default(),
     )
 }
 
