@@ -399,3 +399,31 @@ fn an_export_stops_at_the_time_limit() {
         .collect();
     assert!(left.is_empty(), "nothing written: {left:?}");
 }
+
+#[test]
+fn images_a_script_keeps_are_charged_to_its_memory_limit() {
+    // 400 copies of a 4 MiB image kept: 1.6 GiB of pixels.
+    let keep = |body: &str| {
+        Case::new(&format!(
+            "local img = pge.Image.new(1024, 1024)\n\
+             local keep = {{}}\n\
+             for i = 1, 400 do {body} end\n\
+             {STICK}"
+        ))
+    };
+    let case = keep("keep[i] = img:clone()");
+    let o = case.run(&["--memory-limit", "128"]);
+    limit(
+        &o,
+        "main.lua:3",
+        &[
+            "image:clone() holds 4 MiB",
+            "memory limit of 128 MiB exceeded",
+        ],
+        &case.output(),
+    );
+    // Copies that are dropped are given back.
+    let case = keep("local copy = img:clone()");
+    let o = case.run(&["--memory-limit", "128"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
