@@ -54,6 +54,13 @@ impl Script {
         }
     }
 
+    /// Where an error about the whole run points (an export past the time limit): the
+    /// script's last `return` line (the value that grows), or the script alone.
+    #[must_use]
+    pub fn return_location(&self) -> Location {
+        return_location(self)
+    }
+
     /// Runs the script as the main script of `session`.
     fn start<'s>(&self, session: &'s Session) -> pge_engine::Result<pge_engine::Started<'s>> {
         match self {

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 pub use pge::embed::export_meta;
 use pge_engine::export::{
-    ExportMeta, Instancing, Prepared, UsdFiles, obj_files, usd_files, usdz_bytes, write_glb_with,
+    ExportLimit, ExportMeta, Instancing, Prepared, UsdFiles, obj_files_checked, usd_files,
+    usdz_bytes, write_glb_checked,
 };
 use pge_engine::geometry::Model;
 
@@ -236,20 +237,25 @@ fn exchanged(_: &tempfile::NamedTempFile, _: &Path) -> Option<std::fs::File> {
 /// Writes `model` to `output`: a `.obj` (any case) with its `.mtl` and textures in the same
 /// folder (all written before any takes its place, the `.obj` last), a `.usda` or `.usdz` as
 /// [`write_usd`] does, anything else as `.glb` with `meta` (the skeletons' texts taken from
-/// `prepared` where it has them).
+/// `prepared` where it has them). The export keeps to `limit` (the run's deadline): checked
+/// before it, inside the glb's build and the `.obj` writer's loop, and before the files are
+/// written; its error stops the export with nothing written.
 pub fn write_model(
     model: &Model,
     prepared: &Prepared,
     meta: &ExportMeta,
     output: &Path,
     instancing: Instancing,
+    limit: &ExportLimit,
 ) -> anyhow::Result<()> {
+    limit.check()?;
     let is_obj = output
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if usd_kind(output).is_some() {
         let files = usd_files(model, meta, &usd_folder(output))?;
+        limit.check()?;
         write_usd(&files, output)?;
     } else if is_obj {
         let stem = output
@@ -258,7 +264,8 @@ pub fn write_model(
             .to_string_lossy()
             .to_string();
         let mtl = format!("{stem}.mtl");
-        let files = obj_files(model, &mtl, &stem)?;
+        let files = obj_files_checked(model, &mtl, &stem, &mut || limit.check())?;
+        limit.check()?;
         let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut set: Vec<(PathBuf, &[u8])> = files
             .textures
@@ -273,11 +280,12 @@ pub fn write_model(
         // the glb and writes it; the temporary file is created (a tenth of a millisecond on
         // ext4) and the model checked on the pool meanwhile; the file takes its place once
         // the check passed.
-        let file = write_glb_with(
+        let file = write_glb_checked(
             model,
             prepared,
             meta,
             instancing,
+            limit,
             || AtomicFile::create(output),
             |mut file, glb| {
                 glb.write_to(file.tmp.as_file_mut())

@@ -41,7 +41,14 @@ pub struct PreviewArgs {
 /// Writes the preview's model as `pge run` does.
 fn export(model: &Model, seed: u64, params: &[ParamInfo], path: &Path) -> anyhow::Result<()> {
     let meta = export_meta(seed, params);
-    write_model(model, &Prepared::default(), &meta, path, Instancing::Gpu)
+    write_model(
+        model,
+        &Prepared::default(),
+        &meta,
+        path,
+        Instancing::Gpu,
+        &pge_engine::export::ExportLimit::default(),
+    )
 }
 
 /// Opens the preview window for `args`.

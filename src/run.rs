@@ -206,6 +206,18 @@ fn run_one(
     prepared: Option<&mut Prepared>,
 ) -> anyhow::Result<()> {
     let Target { tile, output } = target;
+    // The run's deadline, which the export keeps to as well (at the line that returned
+    // what grew).
+    let limit = pge_engine::export::ExportLimit {
+        ctx: pge_engine::RunContext {
+            deadline: Some(
+                pge_engine::clock::Instant::now()
+                    + std::time::Duration::from_secs_f64(args.script.time_limit),
+            ),
+            ..pge_engine::RunContext::default()
+        },
+        at: pge::Script::File(args.script.script.clone()).return_location(),
+    };
     // Files a script writes (`img:save`) go beside the output.
     let folder = output.parent().unwrap_or(std::path::Path::new(""));
     let bar = progress_bar(args.quiet);
@@ -248,6 +260,7 @@ fn run_one(
     let mut summary = None;
     let written = match product {
         Product::SharedVariants(dir) => {
+            limit.check()?;
             let info = crate::shared::identity(script, &meta)?;
             crate::shared::write_variants(dir, &model, info)?;
             summary = Some(crate::shared::summary(&model));
@@ -255,8 +268,10 @@ fn run_one(
         }
         Product::Referring { dir, shared } => {
             let uri = crate::shared::relative_uri(dir, output)?;
+            limit.check()?;
             let bytes =
                 pge_engine::export::glb_bytes_shared(&model, &meta, instancing, shared, &uri)?;
+            limit.check()?;
             crate::output::write_atomically(output, &bytes)?;
             output.clone()
         }
@@ -269,7 +284,7 @@ fn run_one(
                 }
                 None => &none,
             };
-            write_model(&model, prepared, &meta, output, instancing)?;
+            write_model(&model, prepared, &meta, output, instancing, &limit)?;
             output.clone()
         }
     };

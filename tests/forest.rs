@@ -406,7 +406,8 @@ fn bad_input_is_a_file_line_error_with_no_output() {
     expect_error(
         "local f = pge.Forest{ size = 20000 }\nf:scatter{ species = \"stick.lua\", minDistance = 1 }\nreturn f\n",
         &[],
-        &["forest.lua:1:", "10000000", "minDistance"],
+        // At the layer whose minDistance makes the trees too many.
+        &["forest.lua:2:", "10000000", "minDistance"],
     );
     expect_error(
         "local f = pge.Forest{ size = 60, tile = 0 }\nreturn f\n",

@@ -780,3 +780,42 @@ fn the_slope_filter_keeps_trees_off_steep_ground() {
     let o = common::pge_in(&["run", "main.lua", "-o", "t.glb", "-q"], dir.path());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn a_layer_option_out_of_range_is_located_at_its_scatter() {
+    // The forest on line 1, the layer on line 3 (its options on line 4): every range error
+    // of a layer's options names the layer's line, not the forest's.
+    for (option, needles) in [
+        (
+            "density = 2",
+            &["density must be a number between 0 and 1", "got 2"][..],
+        ),
+        ("scale = {2, 1}", &["scale must have min <= max"][..]),
+        ("scale = {0, 1}", &["scale[1] must be a number > 0"][..]),
+        (
+            "variants = 0",
+            &["variants must be an integer between 1 and 10000"][..],
+        ),
+        (
+            "jitter = 5",
+            &["jitter must be a number between 0 and 0.49"][..],
+        ),
+        ("slope = {1, 0}", &["slope must have min <= max"][..]),
+        ("altitude = {5, 1}", &["altitude must have min <= max"][..]),
+        (
+            "minDistance = -1",
+            &["minDistance must be a number > 0"][..],
+        ),
+    ] {
+        let script = format!(
+            "local f = pge.Forest{{size = {{20, 20}}, seed = 1}}\n\
+             f:terrain{{height = 1}}\n\
+             f:scatter{{species = function() return {BUSH} end, variants = 1,\n\
+               minDistance = 4, {option}}}\n\
+             return f\n"
+        );
+        let mut needles = needles.to_vec();
+        needles.push("forest:scatter: ");
+        script_fails(&[("main.lua", &script)], &[], "main.lua:3: ", &needles);
+    }
+}

@@ -83,12 +83,43 @@ fn a_forest_layout_stops_at_the_time_limit() {
 
 #[test]
 fn a_forest_layout_past_the_memory_limit_is_refused_before_it_runs() {
+    // Placed at the layer whose options asked for the trees.
     let case = Case::new(BIG_FOREST);
     let o = case.run(&["--memory-limit", "64"]);
     limit(
         &o,
-        "main.lua:1",
+        "main.lua:2",
         &["the layout of about", "memory limit of 64 MiB exceeded"],
+        &case.output(),
+    );
+}
+
+#[test]
+fn a_layout_too_big_points_at_the_layer_that_makes_it_so() {
+    // A sparse layer, then a dense one: the dense one's line, for the memory limit and for
+    // the cap on instances alike.
+    let forest = |dense: &str| {
+        format!(
+            "local forest = pge.Forest{{ size = {{3000, 3000}}, seed = 7 }}\n\
+             forest:scatter{{ species = \"stick.lua\", minDistance = 20, variants = 1 }}\n\
+             forest:scatter{{ species = \"stick.lua\", minDistance = {dense}, variants = 1 }}\n\
+             return forest\n"
+        )
+    };
+    let case = Case::new(&forest("1.2"));
+    let o = case.run(&["--memory-limit", "64"]);
+    limit(
+        &o,
+        "main.lua:3",
+        &["the layout of about", "memory limit of 64 MiB exceeded"],
+        &case.output(),
+    );
+    let case = Case::new(&forest("0.5"));
+    let o = case.run(&[]);
+    limit(
+        &o,
+        "main.lua:3",
+        &["more than the limit of 10000000", "raise minDistance"],
         &case.output(),
     );
 }
@@ -287,4 +318,112 @@ fn a_tile_of_a_100_km2_world_is_a_tile_like_any_other() {
     assert!((a - b).abs() / a < 0.05, "{a} vs {b} instances");
     assert_eq!(small["meshes"], large["meshes"]);
     assert_eq!(small["tile"].as_array().map(Vec::len), Some(2));
+}
+
+/// A skeleton of 2000 nodes in one line: a tree model of it holds about 2 MiB of meshes.
+const SKELETON: &str = "local s = pge.Skeleton()\n\
+     local p = 0\n\
+     for i = 1, 2000 do p = s:add(p, {math.sin(i) * 0.1, i * 0.01, 0}, 0) end\n";
+
+#[test]
+fn models_a_script_keeps_are_charged_to_its_memory_limit() {
+    // 400 tree models kept in a table: about 800 MiB of meshes.
+    let case = Case::new(&format!(
+        "{SKELETON}local keep = {{}}\n\
+         for i = 1, 400 do keep[i] = pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }} end\n\
+         return keep[1]\n"
+    ));
+    let o = case.run(&["--memory-limit", "128"]);
+    limit(
+        &o,
+        "main.lua:5",
+        &[
+            "the meshes and textures of a model",
+            "memory limit of 128 MiB exceeded",
+        ],
+        &case.output(),
+    );
+    // Models that are dropped are given back.
+    let case = Case::new(&format!(
+        "{SKELETON}for i = 1, 100 do local t = pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }} end\n\
+         return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"
+    ));
+    let o = case.run(&["--memory-limit", "128"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Models that share one tree's meshes and textures are charged them once.
+    let case = Case::new(&format!(
+        "{SKELETON}local t = pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n\
+         local keep = {{}}\n\
+         for i = 1, 400 do\n\
+           keep[i] = pge.model()\n\
+           keep[i]:add(t)\n\
+           keep[400 + i] = t:model()\n\
+         end\n\
+         return keep[1]\n"
+    ));
+    let o = case.run(&["--memory-limit", "128"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn an_export_stops_at_the_time_limit() {
+    // 1839 trees of 18,000 vertices each written out one by one as .obj text: 33 million
+    // vertices, minutes of export; the layout and the one variant take milliseconds.
+    let case = Case::new(
+        "local forest = pge.Forest{ size = {100, 100}, seed = 7 }\n\
+         forest:scatter{ species = \"tree.lua\", minDistance = 2, variants = 1 }\n\
+         return forest\n",
+    );
+    std::fs::write(
+        case.path().join("tree.lua"),
+        format!("{SKELETON}return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"),
+    )
+    .expect("species");
+    let o = case.pge(&[
+        "run",
+        "main.lua",
+        "-o",
+        "out/forest.obj",
+        "-q",
+        "--time-limit",
+        "1",
+    ]);
+    limit(
+        &o,
+        "main.lua:3",
+        &[TIME],
+        &case.path().join("out/forest.obj"),
+    );
+    let left: Vec<_> = std::fs::read_dir(case.path().join("out"))
+        .expect("out")
+        .collect();
+    assert!(left.is_empty(), "nothing written: {left:?}");
+}
+
+#[test]
+fn images_a_script_keeps_are_charged_to_its_memory_limit() {
+    // 400 copies of a 4 MiB image kept: 1.6 GiB of pixels.
+    let keep = |body: &str| {
+        Case::new(&format!(
+            "local img = pge.Image.new(1024, 1024)\n\
+             local keep = {{}}\n\
+             for i = 1, 400 do {body} end\n\
+             {STICK}"
+        ))
+    };
+    let case = keep("keep[i] = img:clone()");
+    let o = case.run(&["--memory-limit", "128"]);
+    limit(
+        &o,
+        "main.lua:3",
+        &[
+            "image:clone() holds 4 MiB",
+            "memory limit of 128 MiB exceeded",
+        ],
+        &case.output(),
+    );
+    // Copies that are dropped are given back.
+    let case = keep("local copy = img:clone()");
+    let o = case.run(&["--memory-limit", "128"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

@@ -233,6 +233,18 @@ impl Charge {
         self.bytes = bytes;
     }
 
+    /// Moves `bytes` of this charge (all it holds at most) into a charge of their own, given
+    /// back apart: one charge taken at once for several buffers that are freed one by one.
+    #[must_use]
+    pub fn split(&mut self, bytes: usize) -> Charge {
+        let bytes = bytes.min(self.bytes);
+        self.bytes -= bytes;
+        Charge {
+            budget: self.budget.clone(),
+            bytes,
+        }
+    }
+
     /// The budget charged.
     #[must_use]
     pub fn budget(&self) -> &Budget {
@@ -277,6 +289,16 @@ mod tests {
         c.set(2000);
         assert_eq!(budget.available(), 0);
         c.resize(10, &here, String::new).expect("shrinks");
+        assert_eq!(budget.used(), 10);
+        let mut whole = budget.charge(300, &here, String::new).expect("fits");
+        let part = whole.split(100);
+        assert_eq!(
+            (whole.bytes(), part.bytes(), budget.used()),
+            (200, 100, 310)
+        );
+        drop(whole);
+        assert_eq!(budget.used(), 110);
+        drop(part);
         assert_eq!(budget.used(), 10);
     }
 

@@ -210,6 +210,50 @@ mod tests {
         pump_until(&mut live, "the saved model", |r| triangles_of(r) == Some(1));
     }
 
+    /// A plugin whose `pge.crash()` panics: a bug on the generator thread, which no script
+    /// can cause in PGE's own plugins.
+    struct Crash;
+
+    impl pge_engine::Plugin for Crash {
+        fn register(
+            &self,
+            lua: &pge_engine::mlua::Lua,
+            pge: &pge_engine::mlua::Table,
+        ) -> pge_engine::mlua::Result<()> {
+            pge.set(
+                "crash",
+                lua.create_function(|_, ()| -> pge_engine::mlua::Result<()> {
+                    panic!("a bug in a plugin")
+                })?,
+            )
+        }
+    }
+
+    #[test]
+    fn a_panic_on_the_generator_thread_is_the_run_s_error_and_the_next_save_runs() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let script = dir.path().join("main.lua");
+        write(&script, "local x = 1\npge.crash()\nreturn x\n");
+        let engine = Arc::new(Engine::builder().plugin(Crash).build().expect("engine"));
+        let mut live =
+            Live::start(engine, script.clone(), Settings::default(), || {}).expect("start");
+        // The window is told (it does not wait for ever): the panic is the run's error.
+        pump_until(&mut live, "the generator's failure", |r| {
+            matches!(r.status(), Status::Error(_))
+        });
+        let Status::Error(message) = live.reloader().status().clone() else {
+            unreachable!()
+        };
+        assert!(message.contains("a bug in a plugin"), "{message}");
+        assert!(message.contains("a bug in PGE"), "{message}");
+        // The generator thread lives on: a save regenerates.
+        write(
+            &script,
+            "return pge.mesh{ positions = {0,0,0, 1,0,0, 0,1,0}, indices = {0,1,2} }\n",
+        );
+        pump_until(&mut live, "the saved model", |r| triangles_of(r) == Some(1));
+    }
+
     #[test]
     fn slider_changes_regenerate_with_the_new_value() {
         let dir = tempfile::tempdir().expect("tempdir");

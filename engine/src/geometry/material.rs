@@ -42,6 +42,12 @@ pub enum ImageFormat {
 const JPEG_MAGIC: [u8; 3] = [0xFF, 0xD8, 0xFF];
 
 impl Texture {
+    /// The bytes it holds (its encoded image).
+    #[must_use]
+    pub fn heap_bytes(&self) -> usize {
+        self.encoded.len()
+    }
+
     /// How the bytes are encoded: JPEG when they start as a JPEG file does, PNG otherwise.
     #[must_use]
     pub fn format(&self) -> ImageFormat {

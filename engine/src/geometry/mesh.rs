@@ -147,6 +147,19 @@ impl Mesh {
         Ok(mesh)
     }
 
+    /// The bytes its vertex arrays and indices hold (what a script that keeps it is charged,
+    /// [`crate::Budget`]); its material's textures and its skeleton are counted apart.
+    #[must_use]
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.positions.as_slice())
+            + size_of_val(self.normals.as_slice())
+            + size_of_val(self.uvs.as_slice())
+            + size_of_val(self.colors.as_slice())
+            + size_of_val(self.tangents.as_slice())
+            + size_of_val(self.indices.as_slice())
+    }
+
     /// Number of vertices.
     #[must_use]
     pub fn vertex_count(&self) -> usize {

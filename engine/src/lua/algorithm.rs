@@ -192,9 +192,7 @@ pub fn algorithm_from(
     }
     let model_like = match &value {
         Value::UserData(ud) => {
-            ud.is::<LuaModel>()
-                || ud.is::<super::model::LuaMesh>()
-                || has_function(ud.get::<Value>("model"))
+            super::model::is_model_or_mesh(ud) || has_function(ud.get::<Value>("model"))
         }
         Value::Table(t) => has_function(t.get::<Value>("model")),
         _ => false,

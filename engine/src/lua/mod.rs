@@ -10,6 +10,7 @@ mod algorithm;
 mod args;
 mod chunks;
 mod errors;
+mod held;
 mod lazy;
 mod math;
 mod model;
@@ -30,7 +31,7 @@ pub use chunks::engine_chunk;
 pub use errors::{caller_location, engine_error_of, error_message, script_error, to_engine_error};
 pub(crate) use lazy::register_lazily;
 pub use math::{LuaMat4, LuaQuat, LuaVec3};
-pub use model::{LuaMesh, LuaModel, material_from_table, to_model, to_model_in};
+pub use model::{LuaMesh, LuaModel, is_model_or_mesh, material_from_table, to_model, to_model_in};
 pub use options::{Bounds, KeyStyle, Options};
 pub use order::{key_order, sorted_keys, sorted_pairs};
 pub use random::{LuaRng, current_uniform, swap_rng};
@@ -125,6 +126,33 @@ pub fn charge(
         }
     };
     value.set_user_value(Held { _charge: charge })
+}
+
+/// Holds `bytes` for `value` instead of what [`charge`] charged it (its buffers grew or
+/// shrank), with the same garbage collection and error when the budget is short.
+pub fn recharge(
+    lua: &mlua::Lua,
+    value: &mlua::AnyUserData,
+    bytes: usize,
+    what: &str,
+) -> mlua::Result<()> {
+    let held = match value.user_value::<Option<mlua::AnyUserData>>()? {
+        Some(held) if held.is::<Held>() => held,
+        _ => return charge(lua, value, bytes, what),
+    };
+    let attempt = || -> mlua::Result<crate::Result<()>> {
+        sync_lua_memory(lua);
+        let mut held = held.borrow_mut::<Held>()?;
+        Ok(held._charge.resize(bytes, &caller_location(lua), || {
+            format!("{what} holds {} MiB", bytes.div_ceil(1 << 20))
+        }))
+    };
+    if attempt()?.is_err() {
+        lua.gc_collect()?;
+        lua.gc_collect()?;
+        attempt()?.map_err(mlua::Error::external)?;
+    }
+    Ok(())
 }
 
 /// A [`crate::Charge`] kept as a value's user value.

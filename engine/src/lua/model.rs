@@ -3,23 +3,71 @@
 use std::sync::Arc;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
-use mlua::{AnyUserData, FromLua, Lua, ObjectLike, Table, UserData, UserDataMethods, Value};
+use mlua::{
+    AnyUserData, FromLua, IntoLua, Lua, ObjectLike, Table, UserData, UserDataMethods, Value,
+};
 
 use super::errors::script_error;
+use super::held;
 use super::math::LuaMat4;
 use super::sandbox::{read_file, resolve_path};
 use crate::RunContext;
 use crate::geometry::{AlphaMode, Material, Mesh, Model, Primitive, Texture};
 
-/// A mesh made by `pge.mesh` (or a plugin), shared by the models it is added to.
+/// A mesh made by `pge.mesh` (or a plugin), shared by the models it is added to. Given to a
+/// script (converted to a Lua value), its buffers are charged to the run's memory budget for
+/// as long as they live.
 #[derive(Clone, Debug)]
 pub struct LuaMesh(pub Arc<Mesh>);
 
-/// A model made by `pge.model()` or returned by a generator's `:model()`.
+/// A model made by `pge.model()` or returned by a generator's `:model()`. Given to a script
+/// (converted to a Lua value), its meshes, textures and placements are charged to the run's
+/// memory budget for as long as they live: a buffer shared by several values once.
 #[derive(Clone, Debug, Default)]
 pub struct LuaModel(pub Model);
 
-impl UserData for LuaMesh {
+/// The Lua value of a [`LuaMesh`].
+struct MeshValue(Arc<Mesh>);
+
+/// The Lua value of a [`LuaModel`].
+struct ModelValue(Model);
+
+impl IntoLua for LuaMesh {
+    fn into_lua(self, lua: &Lua) -> mlua::Result<Value> {
+        held::charge_mesh(lua, &self.0)?;
+        lua.create_userdata(MeshValue(self.0)).map(Value::UserData)
+    }
+}
+
+impl IntoLua for LuaModel {
+    fn into_lua(self, lua: &Lua) -> mlua::Result<Value> {
+        held::charge_model(lua, &self.0)?;
+        let placements = placement_bytes(&self.0);
+        let value = lua.create_userdata(ModelValue(self.0))?;
+        super::charge(lua, &value, placements, "the placements of a model")?;
+        Ok(Value::UserData(value))
+    }
+}
+
+/// The bytes of a model's own placements (its instances and its groups' transforms), which
+/// no other value shares.
+fn placement_bytes(model: &Model) -> usize {
+    std::mem::size_of_val(model.instances.as_slice())
+        + model
+            .groups
+            .iter()
+            .map(|g| std::mem::size_of_val(g.transforms.as_slice()))
+            .sum::<usize>()
+}
+
+/// Whether a script value is a model or a mesh (`pge.model()`, `pge.mesh{...}`, a
+/// generator's `:model()`).
+#[must_use]
+pub fn is_model_or_mesh(value: &AnyUserData) -> bool {
+    value.is::<ModelValue>() || value.is::<MeshValue>()
+}
+
+impl UserData for MeshValue {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
         m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
         m.add_method("triangleCount", |_, me, ()| Ok(me.0.triangle_count()));
@@ -29,19 +77,23 @@ impl UserData for LuaMesh {
     }
 }
 
-impl UserData for LuaModel {
+impl UserData for ModelValue {
     fn add_methods<M: UserDataMethods<Self>>(m: &mut M) {
-        m.add_method_mut(
+        m.add_function(
             "add",
-            |lua, me, (thing, transform): (Value, Option<LuaMat4>)| {
+            |lua, (ud, thing, transform): (AnyUserData, Value, Option<LuaMat4>)| {
                 let other = to_model(&thing).map_err(|e| match e {
                     mlua::Error::RuntimeError(_) => e,
                     // Already located where it happened (a modeller's own :model()).
                     e if super::errors::engine_error_of(&e).is_some() => e,
                     other => script_error(lua, format!("model:add: {other}")),
                 })?;
-                me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
-                Ok(())
+                let placements = {
+                    let mut me = ud.borrow_mut::<ModelValue>()?;
+                    me.0.add_model(&other, transform.map_or(Mat4::IDENTITY, |t| t.0));
+                    placement_bytes(&me.0)
+                };
+                super::recharge(lua, &ud, placements, "the placements of a model")
             },
         );
         m.add_method("vertexCount", |_, me, ()| Ok(me.0.vertex_count()));
@@ -53,7 +105,7 @@ impl UserData for LuaModel {
                 Arc::make_mut(&mut tex).name = "environment".into();
             }
             me.0.environment = Some(tex);
-            Ok(())
+            held::charge_model(lua, &me.0)
         });
         m.add_method("instanceCount", |_, me, ()| Ok(me.0.instances.len()));
         m.add_function("model", |_, me: AnyUserData| Ok(me));
@@ -90,10 +142,10 @@ fn to_model_depth(
     }
     let produced: Value = match value {
         Value::UserData(ud) => {
-            if let Ok(m) = ud.borrow::<LuaModel>() {
+            if let Ok(m) = ud.borrow::<ModelValue>() {
                 return Ok(m.0.clone());
             }
-            if let Ok(m) = ud.borrow::<LuaMesh>() {
+            if let Ok(m) = ud.borrow::<MeshValue>() {
                 return Ok(Model::from_mesh(m.0.clone()));
             }
             if let Some((lua, ctx)) = ctx

@@ -140,6 +140,15 @@ impl UserData for LuaTexture {
     }
 }
 
+/// `img` as a script value, its pixels charged to the run's memory budget for as long as the
+/// script keeps it (`what` names it in the error when the budget is short).
+fn image_value(lua: &Lua, img: Image, what: &str) -> mlua::Result<mlua::AnyUserData> {
+    let bytes = img.width() as usize * img.height() as usize * 4;
+    let value = lua.create_userdata(LuaImage(Rc::new(RefCell::new(img))))?;
+    pge_engine::lua::charge(lua, &value, bytes, what)?;
+    Ok(value)
+}
+
 /// A pixel coordinate: a whole number (range is checked by the image).
 fn coord(lua: &Lua, v: &Value, what: &str) -> mlua::Result<i64> {
     let x = finite_number(lua, v, what)?;
@@ -239,8 +248,9 @@ impl UserData for LuaImage {
             write_inside(lua, &p, &png)?;
             Ok(())
         });
-        m.add_method("clone", |_, me, ()| {
-            Ok(LuaImage(Rc::new(RefCell::new(me.0.borrow().clone()))))
+        m.add_method("clone", |lua, me, ()| {
+            let copy = me.0.borrow().clone();
+            image_value(lua, copy, "image:clone()")
         });
         m.add_method("texture", |lua, me, ()| {
             let t =
@@ -353,7 +363,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
             check_image_budget(lua, u64::from(w), u64::from(h), "pge.Image.new")?;
             let img = Image::new(w, h, fill)
                 .map_err(|e| script_error(lua, format!("pge.Image.new: {e}")))?;
-            Ok(LuaImage(Rc::new(RefCell::new(img))))
+            image_value(lua, img, "pge.Image.new")
         })?,
     )?;
     image.set(
@@ -377,7 +387,7 @@ pub(crate) fn register(lua: &Lua, pge: &Table) -> mlua::Result<()> {
                 u64::from(img.height()),
                 "pge.Image.load",
             )?;
-            Ok(LuaImage(Rc::new(RefCell::new(img))))
+            image_value(lua, img, "pge.Image.load")
         })?,
     )?;
     pge.set("Image", image)?;

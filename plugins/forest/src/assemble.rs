@@ -103,16 +103,37 @@ pub fn assemble_budgeted(
     tile: Option<(usize, usize)>,
     leaves: Option<&[Option<u32>]>,
 ) -> Model {
+    let never = &mut || Ok::<(), std::convert::Infallible>(());
+    match assemble_checked(forest, layout, grown, tile, leaves, never) {
+        Ok(model) => model,
+        Err(never) => match never {},
+    }
+}
+
+/// Placements assembled between two calls of [`assemble_checked`]'s `check`.
+pub const CHECK_EVERY: usize = 1 << 16;
+
+/// [`assemble_budgeted`], calling `check` (a run's deadline) before each variant's meshes
+/// and every [`CHECK_EVERY`] placements: its error stops the assembly.
+pub fn assemble_checked<E>(
+    forest: &Forest,
+    layout: &Layout,
+    grown: &[Grown],
+    tile: Option<(usize, usize)>,
+    leaves: Option<&[Option<u32>]>,
+    check: &mut dyn FnMut() -> Result<(), E>,
+) -> Result<Model, E> {
     let unique: Vec<bool> = forest
         .layers
         .iter()
         .map(|l| l.variants == Variants::Unique)
         .collect();
-    let mut model = build(forest, layout, grown, tile, &unique);
+    let mut model = build(forest, layout, grown, tile, &unique, check)?;
     if let Some(leaves) = leaves {
+        check()?;
         place_leaves(&mut model, layout, grown, leaves, &unique);
     }
-    model
+    Ok(model)
 }
 
 /// Gives every group of a variant with levels the leaf counts of its placements, in the
@@ -163,13 +184,14 @@ fn place_leaves(
 /// [`assemble`], with the layers whose trees are grown one per instance (`unique[l]`): their
 /// k-th instance is placed by their k-th grown tree, and the group is named after the
 /// instance's variant (its identity, the same in every tile).
-fn build(
+fn build<E>(
     forest: &Forest,
     layout: &Layout,
     grown: &[Grown],
     tile: Option<(usize, usize)>,
     unique: &[bool],
-) -> Model {
+    check: &mut dyn FnMut() -> Result<(), E>,
+) -> Result<Model, E> {
     let by_rank = |l: usize| unique.get(l).copied().unwrap_or(false);
     let mut model = Model::new();
     let grid = forest.terrain.grid(forest.tile);
@@ -190,6 +212,7 @@ fn build(
             Vec::new()
         };
         for (v, variant) in g.variants.iter().enumerate() {
+            check()?;
             let meshes = push_variant_meshes(&mut model, variant);
             model.groups.push(InstanceGroup {
                 name: format!("{name}/{}", ids.get(v).copied().unwrap_or(v as u32)),
@@ -204,7 +227,10 @@ fn build(
         }
     }
     let mut rank = vec![0usize; grown.len()];
-    for inst in &layout.instances {
+    for (k, inst) in layout.instances.iter().enumerate() {
+        if k % CHECK_EVERY == 0 {
+            check()?;
+        }
         let l = inst.layer as usize;
         let Some(&first) = first_group.get(l) else {
             continue;
@@ -255,7 +281,7 @@ fn build(
         instances: layout.instances.len() as u64,
         species,
     });
-    model
+    Ok(model)
 }
 
 /// A marker for the layout step: a slim cone 1 m wide and 6 m tall, one group per layer, so
@@ -296,7 +322,11 @@ pub fn layout_model(forest: &Forest, layout: &Layout, tile: Option<(usize, usize
             i.variant = 0;
         }
     }
-    build(forest, &unique, &grown, tile, &[])
+    let never = &mut || Ok::<(), std::convert::Infallible>(());
+    match build(forest, &unique, &grown, tile, &[], never) {
+        Ok(model) => model,
+        Err(never) => match never {},
+    }
 }
 
 #[cfg(test)]
@@ -378,6 +408,40 @@ pub(crate) mod tests {
         let plain = assemble(&f, &layout, &grown, None);
         assert!(plain.groups.iter().all(|g| g.leaves.is_none()));
         assert_eq!(plain.meshes[plain.groups[0].meshes[1]].lod.as_deref(), lod);
+    }
+
+    #[test]
+    fn the_assembly_checks_between_variants_and_placements_and_stops_on_an_error() {
+        let mut f = Forest::new([60.0, 60.0], 5, None).expect("forest");
+        let mut l = Layer::new("oak", 5.0);
+        l.variants = Variants::Count(2);
+        f.layers.push(l);
+        let layout = f.layout(None).expect("layout");
+        assert!(layout.instances.len() < CHECK_EVERY);
+        let tri =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let grown = vec![Grown {
+            variants: vec![Model::from_mesh(tri.clone()), Model::from_mesh(tri)],
+        }];
+        let mut calls = 0;
+        let model = assemble_checked(&f, &layout, &grown, None, None, &mut || {
+            calls += 1;
+            Ok::<(), &str>(())
+        })
+        .expect("assembled");
+        assert_eq!(calls, 3, "two variants, then the placements");
+        assert_eq!(model.groups.len(), 2);
+        // The deadline passing at the placements stops the assembly with its error.
+        let mut calls = 0;
+        let stopped = assemble_checked(&f, &layout, &grown, None, None, &mut || {
+            calls += 1;
+            if calls == 3 {
+                Err("time limit")
+            } else {
+                Ok(())
+            }
+        });
+        assert_eq!(stopped.err(), Some("time limit"));
     }
 
     #[test]

@@ -195,12 +195,17 @@ impl Forest {
     /// the margins its layers read): what the layout's time and memory grow with.
     #[must_use]
     pub fn estimate(&self, target: Rect) -> f64 {
+        self.estimates(target).iter().sum()
+    }
+
+    /// [`Forest::estimate`] of each layer.
+    fn estimates(&self, target: Rect) -> Vec<f64> {
         let world = self.world();
         self.layers
             .iter()
             .zip(self.regions(target))
             .map(|(l, region)| l.estimate(region.intersection(&world).area()))
-            .sum()
+            .collect()
     }
 
     /// [`Forest::layout`] within a run's limits: sizes checked against `ctx.budget` before
@@ -214,6 +219,18 @@ impl Forest {
         ctx: &RunContext,
         at: &Location,
     ) -> Result<Layout, ForestError> {
+        self.layout_located(tile, ctx, &|_| at.clone())
+    }
+
+    /// [`Forest::layout_within`], its limits placed by `at`: `at(Some(l))` where layer `l`
+    /// was described (a size past the memory budget, at the layer that draws the most
+    /// samples), `at(None)` where the forest was (the deadline).
+    pub fn layout_located(
+        &self,
+        tile: Option<(usize, usize)>,
+        ctx: &RunContext,
+        at: &dyn Fn(Option<usize>) -> Location,
+    ) -> Result<Layout, ForestError> {
         for l in &self.layers {
             l.check()?;
         }
@@ -222,14 +239,21 @@ impl Forest {
             Some((i, j)) => self.tile_rect(i, j)?,
             None => world,
         };
-        let estimate = self.estimate(target);
+        let estimates = self.estimates(target);
+        let estimate: f64 = estimates.iter().sum();
+        let densest = estimates
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(l, _)| l);
         if estimate > MAX_INSTANCES as f64 {
             return Err(ForestError::TooMany {
                 estimate: estimate as u64,
+                layer: densest,
             });
         }
         ctx.budget
-            .check((estimate * LAYOUT_BYTES) as u64, at, || {
+            .check((estimate * LAYOUT_BYTES) as u64, &at(densest), || {
                 format!(
                     "the layout of about {} trees needs {} MiB (raise minDistance, lower density or lay out a tile)",
                     estimate as u64,
@@ -237,8 +261,9 @@ impl Forest {
                 )
             })
             .map_err(ForestError::Script)?;
-        let check = || ctx.check_deadline(at).map_err(ForestError::Script);
-        let stopped = || ctx.check_deadline(at).is_err();
+        let at = at(None);
+        let check = || ctx.check_deadline(&at).map_err(ForestError::Script);
+        let stopped = || ctx.check_deadline(&at).is_err();
         let regions = self.regions(target);
         let mut layout = Layout::default();
         let mut trunks = Trunks::default();
@@ -256,6 +281,7 @@ impl Forest {
                     check()?;
                     samples.map_err(|_| ForestError::TooMany {
                         estimate: MAX_INSTANCES as u64 + 1,
+                        layer: Some(l),
                     })?
                 }
                 Method::Jittered { jitter } => {
@@ -311,13 +337,14 @@ impl Forest {
                 if target.contains(s.x, s.z) {
                     let variant = match layer.variants {
                         Variants::Count(_) => inst.variant,
-                        Variants::Unique => unique_id(&s, across)?,
+                        Variants::Unique => unique_id(&s, across, l)?,
                     };
                     layout.instances.push(Instance { variant, ..inst });
                     count += 1;
                     if layout.instances.len() > MAX_INSTANCES {
                         return Err(ForestError::TooMany {
                             estimate: layout.instances.len() as u64,
+                            layer: Some(l),
                         });
                     }
                 }
@@ -414,10 +441,11 @@ impl Site<'_> {
 /// The identity of a `"unique"` tree: its cell's index in the world (z, then x) and its
 /// rank in the cell (a Poisson block holds 25 samples at most, one per background cell), the
 /// same in a tile as in the whole forest.
-fn unique_id(s: &Sample, across: u64) -> Result<u32, ForestError> {
+fn unique_id(s: &Sample, across: u64, layer: usize) -> Result<u32, ForestError> {
     let cell = u64::from(s.cell[1]) * across + u64::from(s.cell[0]);
     u32::try_from(cell * 32 + u64::from(s.index)).map_err(|_| ForestError::TooMany {
         estimate: cell.saturating_mul(32),
+        layer: Some(layer),
     })
 }
 

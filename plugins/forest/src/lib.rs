@@ -44,7 +44,9 @@ mod spec;
 mod terrain;
 mod trunks;
 
-pub use assemble::{Grown, assemble, assemble_budgeted, layout_model, transform};
+pub use assemble::{
+    CHECK_EVERY, Grown, assemble, assemble_budgeted, assemble_checked, layout_model, transform,
+};
 pub use cache::{GrownVariant, VariantCache, VariantKey};
 pub use grow::{ForestConfig, SpeciesGrower};
 pub use layer::{Density, Layer, Method, Variants};
@@ -89,6 +91,9 @@ pub enum ForestError {
     TooMany {
         /// How many it would hold.
         estimate: u64,
+        /// The layer whose options made it so many (the one that drew the most samples, or
+        /// was being laid out when the count passed the limit), when one did.
+        layer: Option<usize>,
     },
     /// A tile was asked of a forest without `tile`.
     #[error("--tile needs a forest with tile = T (metres)")]

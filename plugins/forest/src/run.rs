@@ -9,7 +9,7 @@ use pge_engine::{Algorithm, Error, RunContext, Step};
 
 use crate::grow::{ForestConfig, SpeciesGrower, grow_variants};
 use crate::{
-    ForestError, ForestSpec, Grown, Layout, Tile, VariantLod, VariantSharing, assemble_budgeted,
+    ForestError, ForestSpec, Grown, Layout, Tile, VariantLod, VariantSharing, assemble_checked,
     check_budget, instance_leaves, layout_model, variant_lod, variants_model,
 };
 
@@ -150,7 +150,9 @@ impl ForestRun {
             (None, _, Some(grown)) if self.sharing() == Some(VariantSharing::Write) => {
                 variants_model(forest, grown)
             }
-            (None, Some(layout), Some(grown)) => self.assembled(layout, grown)?,
+            (None, Some(layout), Some(grown)) => {
+                self.assembled(layout, grown, &RunContext::default())?
+            }
             (None, Some(layout), None) => layout_model(forest, layout, tile),
             _ => layout_model(forest, &Layout::default(), tile),
         };
@@ -172,7 +174,11 @@ impl ForestRun {
     /// [`ForestRun::layout`] within the run's limits ([`crate::Forest::layout_within`]).
     pub fn layout_within(&self, ctx: &RunContext) -> Result<Layout, ForestError> {
         let forest = self.spec.forest();
-        let mut layout = forest.layout_within(self.spec.tile(), ctx, &self.spec.origin())?;
+        let at = |layer: Option<usize>| match layer {
+            Some(l) => self.spec.layer_origin(l),
+            None => self.spec.origin(),
+        };
+        let mut layout = forest.layout_located(self.spec.tile(), ctx, &at)?;
         let empty = layout.counts.iter().enumerate().filter(|(_, c)| **c == 0);
         let located: Vec<String> = empty
             .zip(&layout.warnings)
@@ -221,15 +227,23 @@ impl ForestRun {
 
     /// The forest's model: the layout's instances of the grown variants, with each
     /// instance's leaves when the forest has a camera.
-    fn assembled(&self, layout: &Layout, grown: &[Grown]) -> Result<Model, ForestError> {
+    /// The run's deadline is checked as it goes ([`assemble_checked`]).
+    fn assembled(
+        &self,
+        layout: &Layout,
+        grown: &[Grown],
+        ctx: &RunContext,
+    ) -> Result<Model, ForestError> {
         let leaves = self.budgeted_leaves(layout, grown)?;
-        Ok(assemble_budgeted(
+        let origin = self.spec.origin();
+        assemble_checked(
             self.spec.forest(),
             layout,
             grown,
             self.spec.tile(),
             leaves.as_deref(),
-        ))
+            &mut || ctx.check_deadline(&origin).map_err(ForestError::Script),
+        )
     }
 
     /// One step: layout, then variants, then assembly; returns the step's name.
@@ -276,7 +290,7 @@ impl ForestRun {
             self.model = Some(if writing {
                 variants_model(self.spec.forest(), grown)
             } else {
-                self.assembled(layout, grown)?
+                self.assembled(layout, grown, ctx)?
             });
         }
         Ok(("assembly", Step::Done))
@@ -295,6 +309,9 @@ impl ForestRun {
                 error: pge_lod::LodError::Limit(error),
                 ..
             } => *error,
+            e @ ForestError::TooMany {
+                layer: Some(layer), ..
+            } => Error::script(self.spec.layer_origin(layer), e.to_string()),
             e @ ForestError::Species { layer, .. } => Error::script(
                 self.spec.layer_origin(layer),
                 format!("forest:scatter: {e}"),

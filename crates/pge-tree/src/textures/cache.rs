@@ -167,6 +167,59 @@ mod tests {
     }
 
     #[test]
+    fn a_pool_thread_waiting_inside_a_set_never_asks_for_that_set_itself() {
+        use std::sync::mpsc;
+        use std::time::Duration;
+
+        // The set's maker waits for pool work another thread of the pool took; meanwhile
+        // other askers of the same set are queued on that pool. A thread that holds the
+        // set's cell and picks one of them up while it waits would wait for itself.
+        let cache = Arc::new(TextureCache::default());
+        let pool = Arc::new(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .expect("pool"),
+        );
+        let (inside_tx, inside) = mpsc::channel();
+        let make = move || {
+            // The first half on this thread, the second, longer, taken by the other thread
+            // while the first sleeps: it says so, and the other askers are queued then.
+            rayon::join(
+                || std::thread::sleep(Duration::from_millis(50)),
+                || {
+                    let _ = inside_tx.send(());
+                    std::thread::sleep(Duration::from_millis(250));
+                },
+            );
+            bark_set(&bark(BarkStyle::Furrowed, 16))
+        };
+        let (done_tx, done) = mpsc::channel();
+        let ask = |make: Box<dyn FnOnce() -> Result<TextureSet, TreeError> + Send>| {
+            let (cache, done_tx) = (cache.clone(), done_tx.clone());
+            pool.spawn(move || {
+                let set = cache.get("deadlock".into(), make);
+                let _ = done_tx.send(set.is_ok());
+            });
+        };
+        ask(Box::new(make));
+        inside
+            .recv_timeout(Duration::from_secs(60))
+            .expect("the set is being made");
+        for _ in 0..8 {
+            ask(Box::new(|| unreachable!("the set is made once")));
+        }
+        // A watchdog, not a measure: the asks take a third of a second.
+        for i in 0..9 {
+            match done.recv_timeout(Duration::from_secs(120)) {
+                Ok(ok) => assert!(ok, "ask {i} failed"),
+                Err(_) => panic!("deadlock: {i} of 9 asks answered in two minutes"),
+            }
+        }
+        assert_eq!(cache.generated(), 1);
+    }
+
+    #[test]
     fn a_forest_of_24_variants_built_in_parallel_shares_one_set_per_parameter_set() {
         use crate::{LeafOptions, MeshOptions, TreeOptions, build_tree};
         use glam::Vec3;

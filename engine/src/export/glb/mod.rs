@@ -41,7 +41,7 @@ use lod_extras::{group_leaves_extras, placement_leaves_extras};
 use root_extras::RootExtras;
 pub use sky::UNLIT;
 use sky::{SKY_MIN_RADIUS, SKY_RINGS, SKY_SEGMENTS, sky_sphere};
-pub use write::write_glb_with;
+pub use write::{write_glb_checked, write_glb_with};
 
 #[cfg(test)]
 mod tests;
@@ -107,7 +107,12 @@ struct Builder {
     /// The meshes whose skeletons the JSON text marks, formatted when it is written (see
     /// [`JsonText`]).
     skeletons: Vec<Arc<Mesh>>,
+    /// The deadline the build keeps to, checked per mesh and every [`CHECK_EVERY`] nodes.
+    limit: super::ExportLimit,
 }
+
+/// Placements written between two checks of the deadline.
+const CHECK_EVERY: usize = 1 << 16;
 
 fn raw(value: &JsonValue) -> Result<json::Extras> {
     serde_json::value::to_raw_value(value)

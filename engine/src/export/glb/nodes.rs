@@ -46,6 +46,7 @@ impl Builder {
         // Meshes only groups use are written inside their group's mesh, not on their own.
         let mut meshes = Vec::with_capacity(model.meshes.len());
         for (i, m) in model.meshes.iter().enumerate() {
+            self.limit.check()?;
             let standalone =
                 model.groups.is_empty() || model.instances.iter().any(|inst| inst.mesh == i);
             meshes.push(if standalone {
@@ -55,7 +56,10 @@ impl Builder {
             });
         }
         let mut nodes = Vec::with_capacity(model.instances.len());
-        for inst in &model.instances {
+        for (k, inst) in model.instances.iter().enumerate() {
+            if k % CHECK_EVERY == 0 {
+                self.limit.check()?;
+            }
             let Some(&Some(mesh)) = meshes.get(inst.mesh) else {
                 return Err(Error::Export("an instance's mesh was not written".into()));
             };
@@ -66,6 +70,7 @@ impl Builder {
             if group.transforms.is_empty() {
                 continue;
             }
+            self.limit.check()?;
             let mesh = match self.shared_mesh(group)? {
                 Some(mesh) => mesh,
                 None => self.group_mesh(group, &model.meshes)?,
@@ -97,6 +102,9 @@ impl Builder {
                 }
                 Instancing::Nodes => {
                     for (k, x) in group.transforms.iter().enumerate() {
+                        if k % CHECK_EVERY == 0 {
+                            self.limit.check()?;
+                        }
                         let mut n = json::Node {
                             mesh: Some(mesh),
                             extras: placement_leaves_extras(group, k)?,

@@ -525,3 +525,67 @@ fn the_calling_thread_opens_the_file_when_the_pool_is_busy() {
     let opened_on = opened_on.into_inner().expect("lock");
     assert_eq!(opened_on, vec![std::thread::current().id()]);
 }
+
+#[test]
+fn a_glb_export_stops_at_the_run_s_deadline_before_anything_is_written() {
+    use crate::export::ExportLimit;
+    use crate::geometry::InstanceTransform;
+    use crate::{Location, RunContext};
+
+    // A forest's group of 200,000 placements, written one node each or as one instanced
+    // node.
+    let mesh =
+        Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("valid");
+    let mut model = Model::new();
+    model.meshes.push(Arc::new(mesh));
+    model.groups.push(InstanceGroup {
+        name: "oak/0".into(),
+        meshes: vec![0],
+        transforms: (0..200_000)
+            .map(|i| InstanceTransform {
+                translation: [i as f32, 0.0, 0.0],
+                rotation: [0.0, 0.0, 0.0, 1.0],
+                scale: 1.0,
+            })
+            .collect(),
+        leaves: None,
+    });
+    let write = |limit: &ExportLimit, instancing| {
+        let written = std::sync::atomic::AtomicBool::new(false);
+        let out = write_glb_checked(
+            &model,
+            &Prepared::default(),
+            &ExportMeta::default(),
+            instancing,
+            limit,
+            || Ok::<_, Error>(()),
+            |(), glb| {
+                written.store(true, std::sync::atomic::Ordering::Relaxed);
+                glb.to_vec()
+            },
+        );
+        (out, written.into_inner())
+    };
+    let at = Location::new("forest.lua", 3);
+    let passed = ExportLimit {
+        ctx: RunContext {
+            deadline: Some(crate::clock::Instant::now()),
+            ..RunContext::default()
+        },
+        at: at.clone(),
+    };
+    for instancing in [Instancing::Gpu, Instancing::Nodes] {
+        let (out, written) = write(&passed, instancing);
+        let err = out.expect_err("past the deadline");
+        assert!(
+            matches!(&err, Error::TimeLimit { location } if *location == at),
+            "{err:?}"
+        );
+        assert!(!written, "nothing handed to the writer");
+        // Within the deadline, the bytes of the unchecked writer.
+        let (out, written) = write(&ExportLimit::default(), instancing);
+        assert!(written);
+        let plain = glb_bytes_with(&model, &ExportMeta::default(), instancing).expect("glb");
+        assert_eq!(out.expect("glb"), plain);
+    }
+}

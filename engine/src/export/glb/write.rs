@@ -5,6 +5,7 @@ use std::sync::PoisonError;
 
 use super::{Builder, ExportMeta, GlbFile, Instancing, Prepared};
 use crate::Error;
+use crate::export::ExportLimit;
 use crate::geometry::Model;
 
 /// [`glb_file_with`](super::glb_file_with) (the skeletons' texts taken from `prepared` where
@@ -33,8 +34,33 @@ where
     F: Send,
     E: From<Error> + Send,
 {
+    let limit = ExportLimit::default();
+    write_glb_checked(model, prepared, meta, instancing, &limit, open, write)
+}
+
+/// [`write_glb_with`] within a run's deadline: the build checks `limit` per mesh, per group
+/// and every 65536 placements, and once more before `write` is handed the file; its error
+/// stops the export before anything is written.
+pub fn write_glb_checked<F, T, E>(
+    model: &Model,
+    prepared: &Prepared,
+    meta: &ExportMeta,
+    instancing: Instancing,
+    limit: &ExportLimit,
+    open: impl FnOnce() -> std::result::Result<F, E> + Send,
+    write: impl FnOnce(F, GlbFile) -> std::result::Result<T, E>,
+) -> std::result::Result<T, E>
+where
+    F: Send,
+    E: From<Error> + Send,
+{
+    let write = |opened: F, file: GlbFile| {
+        limit.check()?;
+        write(opened, file)
+    };
     let build = || {
         let mut b = Builder::new();
+        b.limit = limit.clone();
         b.instancing = instancing;
         b.root.scene = Some(b.scene(model, "pge")?);
         b.file(model, prepared, meta, None)

@@ -556,8 +556,7 @@ impl LSystemAlgorithm {
         let has_model = match &self.this_rw {
             Value::UserData(ud) => {
                 matches!(ud.get::<Value>("model"), Ok(Value::Function(_)))
-                    || ud.is::<pge_engine::lua::LuaModel>()
-                    || ud.is::<pge_engine::lua::LuaMesh>()
+                    || pge_engine::lua::is_model_or_mesh(ud)
             }
             Value::Table(t) => matches!(t.get::<Value>("model"), Ok(Value::Function(_))),
             _ => false,
