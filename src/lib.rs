@@ -71,19 +71,10 @@ pub fn default_engine() -> pge_engine::EngineBuilder {
 /// `pge run --variant-cache`).
 #[must_use]
 pub fn engine_with_forest(forest: pge_forest::ForestPlugin) -> pge_engine::EngineBuilder {
-    pge_engine::Engine::builder()
-        .library_found_by(library_folder)
-        .plugin(pge_lsystem::LSystemPlugin)
-        .plugin(pge_turtle::TurtlePlugin)
-        .plugin(pge_spacecol::SpaceColonizationPlugin)
-        .plugin(pge_growth::GrowthPlugin)
-        .plugin(pge_conifer::ConiferPlugin)
-        .plugin(pge_tree::TreePlugin)
-        .plugin(pge_extruder::ExtruderPlugin)
-        .plugin(pge_metaballs::MetaballsPlugin)
-        .plugin(pge_canvas::CanvasPlugin)
-        .plugin(forest)
-        .plugin(pge_lod::LodPlugin)
+    pge_plugins::with_all(
+        pge_engine::Engine::builder().library_found_by(library_folder),
+        forest,
+    )
 }
 
 #[cfg(test)]

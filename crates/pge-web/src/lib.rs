@@ -133,23 +133,13 @@ impl From<String> for Failure {
     }
 }
 
-/// An engine with every PGE plugin (those of `pge::default_engine`), reading `files`.
+/// An engine with every PGE plugin (`pge_plugins::with_all`, as `pge` has them), reading `files`.
 #[must_use]
 pub fn engine_builder(files: MemoryFiles) -> pge_engine::EngineBuilder {
-    Engine::builder()
-        .files(files)
-        .library("/scripts")
-        .plugin(pge_lsystem::LSystemPlugin)
-        .plugin(pge_turtle::TurtlePlugin)
-        .plugin(pge_spacecol::SpaceColonizationPlugin)
-        .plugin(pge_growth::GrowthPlugin)
-        .plugin(pge_conifer::ConiferPlugin)
-        .plugin(pge_tree::TreePlugin)
-        .plugin(pge_extruder::ExtruderPlugin)
-        .plugin(pge_metaballs::MetaballsPlugin)
-        .plugin(pge_canvas::CanvasPlugin)
-        .plugin(pge_forest::ForestPlugin::default())
-        .plugin(pge_lod::LodPlugin)
+    pge_plugins::with_all(
+        Engine::builder().files(files).library("/scripts"),
+        pge_plugins::pge_forest::ForestPlugin::default(),
+    )
 }
 
 /// A parameter override as `--set` gives it: the text of a number, boolean or string.
