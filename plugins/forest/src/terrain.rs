@@ -211,10 +211,14 @@ impl Terrain {
         }
     }
 
-    /// The unit normal at `(x, z)` (central differences half a grid step apart).
+    /// The unit normal at `(x, z)` (central differences half a grid step apart, never
+    /// farther than the world is wide).
     #[must_use]
     pub fn normal(&self, x: f64, z: f64) -> Vec3 {
-        let e = 0.5 * self.resolution.max(0.01);
+        // A `resolution` past the world's size makes one cell; half of it would sample far
+        // outside the world, where the noise's lattice index no longer fits an integer.
+        let widest = self.size[0].abs().max(self.size[1].abs());
+        let e = 0.5 * self.resolution.min(widest).max(0.01);
         let dx = (self.height(x + e, z) - self.height(x - e, z)) / (2.0 * e);
         let dz = (self.height(x, z + e) - self.height(x, z - e)) / (2.0 * e);
         Vec3::new(-dx as f32, 1.0, -dz as f32).normalize()
@@ -365,6 +369,21 @@ mod tests {
             max > 0.5 && max < 2.0 * FbmOptions::default().height,
             "{max}"
         );
+    }
+
+    #[test]
+    fn a_resolution_far_wider_than_the_world_gives_one_cell_of_finite_normals() {
+        // Found by the forest_options fuzz target: the normal sampled the noise half a
+        // resolution (6e131 m) away, past the range of its lattice index (a panic).
+        for resolution in [1.2e132, 9.3e242, 1e6] {
+            let t =
+                Terrain::fbm([30.0, 30.0], FbmOptions::default(), 1).with_resolution(resolution);
+            let grid = t.grid(None);
+            assert_eq!(grid.last, [1, 1]);
+            let mesh = t.mesh(&grid, (0, 1), (0, 1));
+            assert_eq!(mesh.positions.len(), 4);
+            assert!(mesh.normals.iter().all(|n| n.is_finite() && n.y > 0.0));
+        }
     }
 
     #[test]
