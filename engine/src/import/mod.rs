@@ -128,6 +128,16 @@ pub enum ImportError {
     /// Indices are not unsigned integer scalars, as glTF requires.
     #[error("accessor {0} (indices) must be an unsigned integer SCALAR")]
     IndexType(usize),
+    /// A vertex attribute whose accessor type glTF does not allow for it.
+    #[error("accessor {accessor} ({attribute}) must be {expected}")]
+    AttributeType {
+        /// The accessor.
+        accessor: usize,
+        /// The attribute (NORMAL, TEXCOORD_0, COLOR_0).
+        attribute: String,
+        /// The types it may have.
+        expected: &'static str,
+    },
     /// The node graph has a cycle or a shared child.
     #[error("the node hierarchy is not a tree (a cycle or a shared child)")]
     NotATree,

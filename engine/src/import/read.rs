@@ -76,6 +76,58 @@ pub fn check_layout(doc: &gltf::Document, present: &[usize]) -> Result<(), Impor
     Ok(())
 }
 
+/// The types glTF requires of the attributes in `read` (POSITION and NORMAL float VEC3,
+/// TEXCOORD_n float or unsigned VEC2, COLOR_n float or unsigned VEC3 or VEC4) and of the
+/// indices (an unsigned integer SCALAR): the gltf crate's readers assume them, and reach an
+/// `unreachable!` (a panic) or read other bytes than the accessor's when they do not hold.
+pub(crate) fn check_primitive_types(
+    prim: &gltf::Primitive,
+    read: &[gltf::Semantic],
+) -> Result<(), ImportError> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType, Dimensions};
+    let unsigned = |t: DataType| matches!(t, DataType::U8 | DataType::U16);
+    for semantic in read {
+        let Some(a) = prim.get(semantic) else {
+            continue;
+        };
+        let (t, d) = (a.data_type(), a.dimensions());
+        let (ok, expected) = match semantic {
+            Semantic::Positions => {
+                if t != DataType::F32 || d != Dimensions::Vec3 {
+                    return Err(ImportError::PositionType(a.index()));
+                }
+                continue;
+            }
+            Semantic::Normals => (t == DataType::F32 && d == Dimensions::Vec3, "FLOAT VEC3"),
+            Semantic::TexCoords(_) => (
+                (t == DataType::F32 || unsigned(t)) && d == Dimensions::Vec2,
+                "a FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT VEC2",
+            ),
+            Semantic::Colors(_) => (
+                (t == DataType::F32 || unsigned(t))
+                    && matches!(d, Dimensions::Vec3 | Dimensions::Vec4),
+                "a FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT VEC3 or VEC4",
+            ),
+            _ => (true, ""),
+        };
+        if !ok {
+            return Err(ImportError::AttributeType {
+                accessor: a.index(),
+                attribute: semantic.to_string(),
+                expected,
+            });
+        }
+    }
+    if let Some(a) = prim.indices() {
+        let integer = unsigned(a.data_type()) || a.data_type() == gltf::accessor::DataType::U32;
+        if !integer || a.dimensions() != gltf::accessor::Dimensions::Scalar {
+            return Err(ImportError::IndexType(a.index()));
+        }
+    }
+    Ok(())
+}
+
 /// A node's leaf counts (`extras.pge.lod.leaves`: an array for an instancing node, a number
 /// for a node per placement), checked against its `placements`.
 pub fn leaf_counts(
@@ -162,6 +214,15 @@ pub fn read_mesh<'s>(
     });
     let mut parts = Vec::new();
     for prim in mesh.primitives() {
+        check_primitive_types(
+            &prim,
+            &[
+                gltf::Semantic::Positions,
+                gltf::Semantic::Normals,
+                gltf::Semantic::TexCoords(0),
+                gltf::Semantic::Colors(0),
+            ],
+        )?;
         let reader = prim.reader(buffer);
         let primitive = match prim.mode() {
             gltf::mesh::Mode::Triangles => Primitive::Triangles,
@@ -321,6 +382,69 @@ pub fn relative_file(uri: &str) -> Result<PathBuf, ImportError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Model;
+
+    /// A glb of one triangle with its JSON changed by `edit`.
+    fn tampered_triangle(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+        let mesh =
+            Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("mesh");
+        let bytes =
+            crate::export::glb_bytes(&Model::from_mesh(mesh), &Default::default()).expect("glb");
+        let glb = gltf::binary::Glb::from_slice(&bytes).expect("glb");
+        let mut json: Value = serde_json::from_slice(&glb.json).expect("json");
+        edit(&mut json);
+        let text = serde_json::to_vec(&json).expect("json");
+        gltf::binary::Glb {
+            header: glb.header,
+            json: text.into(),
+            bin: glb.bin.clone(),
+        }
+        .to_vec()
+        .expect("glb")
+    }
+
+    #[test]
+    fn attributes_of_types_gltf_forbids_are_errors_not_panics() {
+        // Found by tampering the tile_gltf fuzz target's seeds: the gltf crate's readers
+        // reach `unreachable!` on float indices and on texture coordinates or colours of
+        // other types, which `pge merge` read from a tampered tile (a panic).
+        type Tamper = fn(&mut Value);
+        let tampers: [(&str, Tamper); 4] = [
+            ("(indices) must be an unsigned integer SCALAR", |j| {
+                let a = j["meshes"][0]["primitives"][0]["indices"]
+                    .as_u64()
+                    .expect("indices");
+                let t = &mut j["accessors"][a as usize]["componentType"];
+                // Signed or float of the same size: inside its view, of a forbidden type.
+                *t = Value::from(if *t == 5125 { 5126 } else { 5122 });
+            }),
+            ("(TEXCOORD_0) must be", |j| {
+                let i = j["meshes"][0]["primitives"][0]["indices"].clone();
+                j["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = i;
+            }),
+            ("(COLOR_0) must be", |j| {
+                let i = j["meshes"][0]["primitives"][0]["indices"].clone();
+                j["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = i;
+            }),
+            ("(NORMAL) must be FLOAT VEC3", |j| {
+                let i = j["meshes"][0]["primitives"][0]["indices"].clone();
+                j["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = i;
+            }),
+        ];
+        for (needle, tamper) in tampers {
+            let bytes = tampered_triangle(tamper);
+            let gltf = super::super::open(&bytes).expect("opens");
+            let data = vec![gltf.blob.as_deref()];
+            check_bounds(&gltf.document, &data).expect("inside its buffers");
+            let buffer = |b: gltf::Buffer| data.get(b.index()).copied().flatten();
+            let mesh = gltf.document.meshes().next().expect("a mesh");
+            let json: Value =
+                serde_json::from_slice(&gltf::binary::Glb::from_slice(&bytes).expect("glb").json)
+                    .expect("json");
+            let e = read_mesh(&mesh, &buffer, &json).expect_err(needle);
+            assert!(e.to_string().contains(needle), "{e}");
+        }
+    }
 
     #[test]
     fn a_buffer_uri_is_checked_after_it_is_decoded() {

@@ -4,6 +4,7 @@
 use glam::{Mat4, Vec3};
 use gltf::Gltf;
 
+use super::read::check_primitive_types;
 use super::{ImportError, check_bounds};
 
 /// Parses a `.glb` (or a `.gltf` text) after checking that every primitive attribute names
@@ -67,7 +68,7 @@ pub fn scene_triangles(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Impor
                 if prim.mode() != gltf::mesh::Mode::Triangles {
                     continue;
                 }
-                check_primitive_types(&prim)?;
+                check_primitive_types(&prim, &[gltf::Semantic::Positions])?;
                 let reader = prim.reader(|b| data.get(b.index()).copied().flatten());
                 let Some(ps) = reader.read_positions() else {
                     continue;
@@ -89,24 +90,6 @@ pub fn scene_triangles(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Impor
         stack.extend(node.children().map(|c| (c, world, depth + 1)));
     }
     Ok((positions, triangles))
-}
-
-/// POSITION must be float VEC3 and indices unsigned integer SCALAR, as glTF requires: the
-/// gltf crate's readers assume it (other types reach an `unreachable!`).
-fn check_primitive_types(prim: &gltf::Primitive) -> Result<(), ImportError> {
-    use gltf::accessor::{DataType, Dimensions};
-    if let Some(a) = prim.get(&gltf::Semantic::Positions)
-        && (a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3)
-    {
-        return Err(ImportError::PositionType(a.index()));
-    }
-    if let Some(a) = prim.indices() {
-        let integer = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
-        if !integer || a.dimensions() != Dimensions::Scalar {
-            return Err(ImportError::IndexType(a.index()));
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]
