@@ -150,8 +150,10 @@ pub(crate) fn poisson_until(
         if r1 < r0 {
             return Ok(Vec::new());
         }
-        lo[a] = (r0 - MARGIN_BLOCKS).clamp(0, nb[a] - 1);
-        hi[a] = (r1 + MARGIN_BLOCKS).clamp(0, nb[a] - 1);
+        // Saturating: a minimum distance tiny against the world puts r1 at i64::MAX (the
+        // float's cast saturates), where adding the margin would wrap to a single block.
+        lo[a] = r0.saturating_sub(MARGIN_BLOCKS).clamp(0, nb[a] - 1);
+        hi[a] = r1.saturating_add(MARGIN_BLOCKS).clamp(0, nb[a] - 1);
         wanted[a] = [r0.clamp(0, nb[a] - 1), r1.clamp(0, nb[a] - 1)];
     }
     // The grid holds 25 cells per block: more blocks than the cap allows samples is refused
@@ -438,6 +440,23 @@ mod tests {
             }
         }
         best
+    }
+
+    #[test]
+    fn a_minimum_distance_tiny_against_the_world_is_refused_by_the_cap() {
+        // Found by the forest_options fuzz target: 1.3e9 m over minDistance = 8e-137 puts the
+        // last block at i64::MAX; its margin wrapped the block range to one block, and the
+        // wanted blocks were read past it (an index out of bounds).
+        let world = Rect::new([-6.7e8, -6.7e8], [6.7e8, 6.7e8]);
+        let region = Rect::new([-6.7e8, -6.7e8], [-6.6e8, -6.6e8]);
+        for (r, region) in [(8e-137, world), (8e-137, region), (1e-300, world)] {
+            let got = poisson(world, region, r, 7, &|_, _| false, 10_000_000);
+            assert!(
+                got.is_err(),
+                "{r} over {region:?}: {:?}",
+                got.map(|p| p.len())
+            );
+        }
     }
 
     #[test]
