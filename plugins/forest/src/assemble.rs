@@ -196,7 +196,10 @@ fn build<E>(
     let mut model = Model::new();
     let grid = forest.terrain.grid(forest.tile);
     let (kx, kz) = forest.terrain.patch(&grid, tile);
-    model.add_mesh(forest.terrain.mesh(&grid, kx, kz), Mat4::IDENTITY);
+    model.add_mesh(
+        forest.terrain.mesh_checked(&grid, kx, kz, check)?,
+        Mat4::IDENTITY,
+    );
     let mut first_group = Vec::with_capacity(grown.len());
     for (l, g) in grown.iter().enumerate() {
         first_group.push(model.groups.len());
@@ -429,13 +432,16 @@ pub(crate) mod tests {
             Ok::<(), &str>(())
         })
         .expect("assembled");
-        assert_eq!(calls, 3, "two variants, then the placements");
+        // The terrain's rows of vertices and of triangles, two variants, then the placements.
+        let rows = f.terrain.grid(f.tile).last[1] + 1;
+        let terrain = rows + rows - 1;
+        assert_eq!(calls, terrain + 3);
         assert_eq!(model.groups.len(), 2);
         // The deadline passing at the placements stops the assembly with its error.
         let mut calls = 0;
         let stopped = assemble_checked(&f, &layout, &grown, None, None, &mut || {
             calls += 1;
-            if calls == 3 {
+            if calls == terrain + 3 {
                 Err("time limit")
             } else {
                 Ok(())

@@ -297,11 +297,28 @@ impl Terrain {
     /// The mesh of the vertices `kx.0..=kx.1` by `kz.0..=kz.1` of `grid` (named `terrain`).
     #[must_use]
     pub fn mesh(&self, grid: &Grid, kx: (usize, usize), kz: (usize, usize)) -> Mesh {
+        match self.mesh_checked(grid, kx, kz, &mut || Ok::<(), std::convert::Infallible>(())) {
+            Ok(mesh) => mesh,
+            Err(never) => match never {},
+        }
+    }
+
+    /// [`Terrain::mesh`], calling `check` before each row of vertices and of triangles (a
+    /// fine terrain's rows are the long part of a forest's assembly): its error stops the
+    /// mesh.
+    pub fn mesh_checked<E>(
+        &self,
+        grid: &Grid,
+        kx: (usize, usize),
+        kz: (usize, usize),
+        check: &mut dyn FnMut() -> Result<(), E>,
+    ) -> Result<Mesh, E> {
         let (nx, nz) = (kx.1 - kx.0 + 1, kz.1 - kz.0 + 1);
         let mut positions = Vec::with_capacity(nx * nz);
         let mut normals = Vec::with_capacity(nx * nz);
         let mut uvs = Vec::with_capacity(nx * nz);
         for l in kz.0..=kz.1 {
+            check()?;
             let z = self.vertex_x(grid, l, 1);
             for k in kx.0..=kx.1 {
                 let x = self.vertex_x(grid, k, 0);
@@ -312,13 +329,14 @@ impl Terrain {
         }
         let mut indices = Vec::with_capacity((nx - 1) * (nz - 1) * 6);
         for l in 0..nz - 1 {
+            check()?;
             for k in 0..nx - 1 {
                 let a = (l * nx + k) as u32;
                 let (b, c, d) = (a + 1, a + nx as u32, a + nx as u32 + 1);
                 indices.extend_from_slice(&[a, c, b, b, c, d]);
             }
         }
-        Mesh {
+        Ok(Mesh {
             name: "terrain".into(),
             positions,
             normals,
@@ -331,7 +349,7 @@ impl Terrain {
                 ..Material::default()
             }),
             ..Mesh::default()
-        }
+        })
     }
 
     /// The vertex ranges of the whole world, or of tile `(i, j)` when the grid is tiled.
@@ -384,6 +402,36 @@ mod tests {
             assert_eq!(mesh.positions.len(), 4);
             assert!(mesh.normals.iter().all(|n| n.is_finite() && n.y > 0.0));
         }
+    }
+
+    #[test]
+    fn a_checked_mesh_checks_every_row_and_stops_at_an_error() {
+        // A fine terrain's mesh is the long part of a forest's assembly: the run's deadline
+        // is checked before each row of vertices and of triangles.
+        let t = Terrain::fbm([100.0, 60.0], FbmOptions::default(), 2).with_resolution(2.0);
+        let grid = t.grid(None);
+        let (kx, kz) = t.patch(&grid, None);
+        let rows = kz.1 - kz.0 + 1;
+        let mut calls = 0;
+        let mesh = t
+            .mesh_checked(&grid, kx, kz, &mut || {
+                calls += 1;
+                Ok::<(), &str>(())
+            })
+            .expect("mesh");
+        assert_eq!(calls, rows + rows - 1);
+        assert_eq!(mesh, t.mesh(&grid, kx, kz));
+        let mut calls = 0;
+        let stopped = t.mesh_checked(&grid, kx, kz, &mut || {
+            calls += 1;
+            if calls == rows / 2 {
+                Err("time limit")
+            } else {
+                Ok(())
+            }
+        });
+        assert_eq!(stopped.err(), Some("time limit"));
+        assert_eq!(calls, rows / 2, "no row after the error");
     }
 
     #[test]
