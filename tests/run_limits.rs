@@ -320,6 +320,26 @@ fn a_tile_of_a_100_km2_world_is_a_tile_like_any_other() {
     assert_eq!(small["tile"].as_array().map(Vec::len), Some(2));
 }
 
+#[test]
+fn a_tiles_leaf_budget_lays_out_the_whole_world_within_the_limits() {
+    // With a camera, a tile's leaves are budgeted on the whole forest's layout: about 4.7
+    // million trunks here, for a tile of about 30,000. That layout keeps to the run's memory
+    // budget (it ran unbounded) and is refused at the dense layer's line.
+    let case = Case::new(
+        "local forest = pge.Forest{ size = {3000, 3000}, seed = 7, tile = 250,\n\
+           lod = { camera = {0, 2, 0}, total = 1000, near = 10, far = 500 } }\n\
+         forest:scatter{ species = \"stick.lua\", minDistance = 1.2, variants = 1 }\n\
+         return forest\n",
+    );
+    let o = case.run(&["--tile", "0,0", "--memory-limit", "64"]);
+    limit(
+        &o,
+        "main.lua:3",
+        &["the layout of about", "memory limit of 64 MiB exceeded"],
+        &case.output(),
+    );
+}
+
 /// A skeleton of 2000 nodes in one line: a tree model of it holds about 2 MiB of meshes.
 const SKELETON: &str = "local s = pge.Skeleton()\n\
      local p = 0\n\

@@ -52,8 +52,8 @@ pub use grow::{ForestConfig, SpeciesGrower};
 pub use layer::{Density, Layer, Method, Variants};
 pub use layout::{Forest, Instance, Layout, MAX_INSTANCES, Tile, unique_seed, variant_seed};
 pub use lod::{
-    Camera, ForestLod, VariantLod, check_budget, instance_leaves, variant_lod, variant_mesh_lod,
-    with_lod,
+    Camera, ForestLod, VariantLod, check_budget, instance_leaves, instance_leaves_within,
+    variant_lod, variant_mesh_lod, with_lod,
 };
 #[cfg(feature = "lua")]
 pub use lua::ForestPlugin;

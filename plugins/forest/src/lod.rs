@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pge_engine::geometry::{GroupLod, LodTable, Mesh, MeshLod, Model, PrimitiveLod};
+use pge_engine::{Location, RunContext};
 use pge_lod::{self, Axis, Budget, LodError, LodOptions};
 
 use crate::ForestError;
@@ -141,11 +142,32 @@ pub fn instance_leaves(
     lods: &[Vec<Option<VariantLod>>],
     camera: &Camera,
 ) -> Result<Vec<Option<u32>>, ForestError> {
+    let unlimited = RunContext {
+        budget: pge_engine::Budget::new(usize::MAX),
+        ..RunContext::default()
+    };
+    instance_leaves_within(forest, layout, tile, lods, camera, &unlimited, &|_| {
+        Location::new("forest", 0)
+    })
+}
+
+/// [`instance_leaves`] within a run's limits: for a tile, the whole forest's layout is laid
+/// out within `ctx`'s deadline and memory budget, its limits placed by `at`, as
+/// [`Forest::layout_located`] places them.
+pub fn instance_leaves_within(
+    forest: &Forest,
+    layout: &Layout,
+    tile: Option<(usize, usize)>,
+    lods: &[Vec<Option<VariantLod>>],
+    camera: &Camera,
+    ctx: &RunContext,
+    at: &dyn Fn(Option<usize>) -> Location,
+) -> Result<Vec<Option<u32>>, ForestError> {
     check_budget(forest, camera)?;
     if tile.is_none() {
         return Ok(budget(layout, lods, camera));
     }
-    let whole = forest.layout(None)?;
+    let whole = forest.layout_located(None, ctx, at)?;
     let leaves = budget(&whole, lods, camera);
     let key = |i: &crate::Instance| (i.layer, i.position[0].to_bits(), i.position[2].to_bits());
     let at: HashMap<_, usize> = whole

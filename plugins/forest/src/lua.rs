@@ -214,7 +214,9 @@ impl UserData for LuaForest {
                 let run = me.setup.run(spec.clone());
                 let typed = |e: ForestError| mlua::Error::external(run.engine_error(e));
                 let grown = run.grow(&layout, &run_context(lua)).map_err(typed)?;
-                let leaves = run.budgeted_leaves(&layout, &grown).map_err(typed)?;
+                let leaves = run
+                    .budgeted_leaves(&layout, &grown, &run_context(lua))
+                    .map_err(typed)?;
                 (leaves.unwrap_or_default(), levels(&grown))
             } else {
                 (Vec::new(), Vec::new())

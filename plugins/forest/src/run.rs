@@ -10,7 +10,7 @@ use pge_engine::{Algorithm, Error, RunContext, Step};
 use crate::grow::{ForestConfig, SpeciesGrower, grow_variants};
 use crate::{
     ForestError, ForestSpec, Grown, Layout, Tile, VariantLod, VariantSharing, assemble_checked,
-    check_budget, instance_leaves, layout_model, variant_lod, variants_model,
+    check_budget, instance_leaves_within, layout_model, variant_lod, variants_model,
 };
 
 /// Bytes the assembly and the export hold per placed tree (its transform, its node or
@@ -207,20 +207,29 @@ impl ForestRun {
 
     /// How many leaves each instance of `layout` draws for the forest's camera, `None`
     /// without one.
+    /// A tile's budget is computed on the whole forest's layout, laid out within `ctx`'s
+    /// limits ([`instance_leaves_within`]).
     pub fn budgeted_leaves(
         &self,
         layout: &Layout,
         grown: &[Grown],
+        ctx: &RunContext,
     ) -> Result<Option<Vec<Option<u32>>>, ForestError> {
         let Some(camera) = &self.spec.lod.camera else {
             return Ok(None);
         };
-        instance_leaves(
+        let at = |layer: Option<usize>| match layer {
+            Some(l) => self.spec.layer_origin(l),
+            None => self.spec.origin(),
+        };
+        instance_leaves_within(
             self.spec.forest(),
             layout,
             self.spec.tile(),
             &levels(grown),
             camera,
+            ctx,
+            &at,
         )
         .map(Some)
     }
@@ -234,7 +243,7 @@ impl ForestRun {
         grown: &[Grown],
         ctx: &RunContext,
     ) -> Result<Model, ForestError> {
-        let leaves = self.budgeted_leaves(layout, grown)?;
+        let leaves = self.budgeted_leaves(layout, grown, ctx)?;
         let origin = self.spec.origin();
         assemble_checked(
             self.spec.forest(),
