@@ -127,15 +127,21 @@ fn uncharged(
 /// nothing uses may still hold buffers); then an [`crate::Error::MemoryLimit`] at the
 /// calling line.
 pub(crate) fn charge_model(lua: &Lua, model: &Model) -> mlua::Result<()> {
-    charge(lua, &model.meshes, model.environment.as_ref())
+    charge(lua, &model.meshes, model.environment.as_ref(), "a model")
 }
 
 /// Charges the buffers of `mesh` (a value the script now holds), as [`charge_model`] does.
 pub(crate) fn charge_mesh(lua: &Lua, mesh: &Arc<Mesh>) -> mlua::Result<()> {
-    charge(lua, std::slice::from_ref(mesh), None)
+    charge(lua, std::slice::from_ref(mesh), None, "a mesh")
 }
 
-fn charge(lua: &Lua, meshes: &[Arc<Mesh>], environment: Option<&Arc<Texture>>) -> mlua::Result<()> {
+/// `what` names the value in the error: "a model", "a mesh".
+fn charge(
+    lua: &Lua,
+    meshes: &[Arc<Mesh>],
+    environment: Option<&Arc<Texture>>,
+    what: &str,
+) -> mlua::Result<()> {
     let list = uncharged(
         meshes,
         environment,
@@ -150,7 +156,7 @@ fn charge(lua: &Lua, meshes: &[Arc<Mesh>], environment: Option<&Arc<Texture>>) -
         super::sync_lua_memory(lua);
         budget.charge(total, &caller_location(lua), || {
             format!(
-                "the meshes and textures of a model ({} MiB)",
+                "the meshes and textures of {what} ({} MiB)",
                 total.div_ceil(1 << 20)
             )
         })
@@ -265,5 +271,38 @@ mod tests {
         assert_eq!(held(lua), (1, 4 << 20));
         drop(set);
         assert_eq!(held(lua), (0, 0));
+    }
+
+    #[test]
+    fn a_mesh_past_the_budget_is_named_a_mesh() {
+        let engine = Engine::builder().build().expect("engine");
+        let session = engine
+            .session(SessionOptions {
+                budget: Some(Budget::new(1 << 20)),
+                ..SessionOptions::default()
+            })
+            .expect("session");
+        let lua = session.lua();
+        let big = texture(2 << 20);
+        let mesh = model(&big).meshes[0].clone();
+        let err = crate::lua::LuaMesh(mesh)
+            .into_lua(lua)
+            .expect_err("past the budget");
+        let err = crate::lua::engine_error_of(&err).expect("typed");
+        assert!(matches!(err, Error::MemoryLimit { .. }), "{err:?}");
+        assert!(
+            err.to_string()
+                .contains("the meshes and textures of a mesh ("),
+            "{err}"
+        );
+        let err = LuaModel(model(&big))
+            .into_lua(lua)
+            .expect_err("past the budget");
+        let err = crate::lua::engine_error_of(&err).expect("typed");
+        assert!(
+            err.to_string()
+                .contains("the meshes and textures of a model ("),
+            "{err}"
+        );
     }
 }
