@@ -264,7 +264,16 @@ pub fn write_model(
             .to_string_lossy()
             .to_string();
         let mtl = format!("{stem}.mtl");
-        let files = obj_files_checked(model, &mtl, &stem, &mut || limit.check())?;
+        // The text is held whole until it is written: it must fit the run's memory budget.
+        let files = obj_files_checked(model, &mtl, &stem, &mut |bytes| {
+            limit.check()?;
+            limit.ctx.budget.check(bytes as u64, &limit.at, || {
+                format!(
+                    "the .obj text (past {} MiB, every placement written out)",
+                    bytes.div_ceil(1 << 20)
+                )
+            })
+        })?;
         limit.check()?;
         let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut set: Vec<(PathBuf, &[u8])> = files

@@ -206,14 +206,16 @@ fn run_one(
     prepared: Option<&mut Prepared>,
 ) -> anyhow::Result<()> {
     let Target { tile, output } = target;
-    // The run's deadline, which the export keeps to as well (at the line that returned
-    // what grew).
+    // The run's deadline and memory limit, which the export keeps to as well (at the line
+    // that returned what grew): an export's own buffers (an .obj's text) must fit beside
+    // the model.
     let limit = pge_engine::export::ExportLimit {
         ctx: pge_engine::RunContext {
             deadline: Some(
                 pge_engine::clock::Instant::now()
                     + std::time::Duration::from_secs_f64(args.script.time_limit),
             ),
+            budget: pge_engine::Budget::new(args.script.memory_limit.saturating_mul(1 << 20)),
             ..pge_engine::RunContext::default()
         },
         at: pge::Script::File(args.script.script.clone()).return_location(),
@@ -256,6 +258,15 @@ fn run_one(
         eprintln!("{w}");
     }
     let te = Instant::now();
+    // The model's meshes (each once), held while it is written out.
+    let mut seen = std::collections::HashSet::new();
+    let held: usize = (model.meshes.iter())
+        .filter(|m| seen.insert(std::sync::Arc::as_ptr(m)))
+        .map(|m| m.heap_bytes())
+        .sum();
+    let _held = limit.ctx.budget.charge(held, &limit.at, || {
+        format!("the model's meshes ({} MiB)", held.div_ceil(1 << 20))
+    })?;
     let instancing = args.instancing.into();
     let mut summary = None;
     let written = match product {

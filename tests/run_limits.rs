@@ -421,6 +421,43 @@ fn an_export_stops_at_the_time_limit() {
 }
 
 #[test]
+fn an_obj_text_past_the_memory_limit_stops_the_export() {
+    // About 75 trees of 18,000 vertices written out as .obj text: over 100 MiB of text,
+    // held whole until it is written; the model itself is a few MiB.
+    let case = Case::new(
+        "local forest = pge.Forest{ size = {20, 20}, seed = 7 }\n\
+         forest:scatter{ species = \"tree.lua\", minDistance = 2, variants = 1 }\n\
+         return forest\n",
+    );
+    std::fs::write(
+        case.path().join("tree.lua"),
+        format!("{SKELETON}return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"),
+    )
+    .expect("species");
+    let obj = |limit: &str| {
+        case.pge(&[
+            "run",
+            "main.lua",
+            "-o",
+            "out/forest.obj",
+            "-q",
+            "--memory-limit",
+            limit,
+        ])
+    };
+    let o = obj("64");
+    limit(
+        &o,
+        "main.lua:3",
+        &["the .obj text (past", "memory limit of 64 MiB exceeded"],
+        &case.path().join("out/forest.obj"),
+    );
+    // The same forest as a glb (instanced) fits.
+    let o = case.run(&["--memory-limit", "64"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
 fn images_a_script_keeps_are_charged_to_its_memory_limit() {
     // 400 copies of a 4 MiB image kept: 1.6 GiB of pixels.
     let keep = |body: &str| {

@@ -29,23 +29,24 @@ fn srgb(c: f32) -> f32 {
 /// Writes every instance of the model with its transform applied; `mtl_name` is the file
 /// name the `.obj` refers to, `stem` prefixes texture file names.
 pub fn obj_files(model: &Model, mtl_name: &str, stem: &str) -> Result<ObjFiles> {
-    obj_files_checked(model, mtl_name, stem, &mut || Ok(()))
+    obj_files_checked(model, mtl_name, stem, &mut |_| Ok(()))
 }
 
 /// Vertices written between two calls of [`obj_files_checked`]'s `check`.
 const CHECK_EVERY: usize = 1 << 16;
 
-/// [`obj_files`], calling `check` (a run's deadline, [`crate::RunContext::check_deadline`])
-/// before the first instance and then every [`CHECK_EVERY`] vertices or so (an instance is
-/// written whole): its error stops the export. A forest's every placement is written out,
-/// so the text grows with the trees times their vertices.
+/// [`obj_files`], calling `check` with the bytes of `.obj` text written so far before the
+/// first instance and then every [`CHECK_EVERY`] vertices or so (an instance is written
+/// whole): its error (a run's deadline, [`crate::RunContext::check_deadline`], or its memory
+/// budget, [`crate::Budget::check`], which the text must fit) stops the export. A forest's
+/// every placement is written out, so the text grows with the trees times their vertices.
 pub fn obj_files_checked(
     model: &Model,
     mtl_name: &str,
     stem: &str,
-    check: &mut dyn FnMut() -> Result<()>,
+    check: &mut dyn FnMut(usize) -> Result<()>,
 ) -> Result<ObjFiles> {
-    check()?;
+    check(0)?;
     model.validate()?;
     let mut out = ObjFiles::default();
     let e = |err: std::fmt::Error| Error::Export(err.to_string());
@@ -68,7 +69,7 @@ pub fn obj_files_checked(
         let mesh = &model.meshes[inst.mesh];
         unchecked += mesh.positions.len() + 1;
         if unchecked >= CHECK_EVERY {
-            check()?;
+            check(out.obj.len())?;
             unchecked = 0;
         }
         let mi = match materials.iter().position(|m| **m == *mesh.material) {
