@@ -479,6 +479,28 @@ fn images_a_script_keeps_are_charged_to_its_memory_limit() {
         ],
         &case.output(),
     );
+    // Textures made of an image: a 256 x 256 image of noise, about 256 KiB as PNG, 400
+    // times (the pixels are charged once, the textures each).
+    let textures = |body: &str| {
+        Case::new(&format!(
+            "local img = pge.Image.new(256, 256)\n\
+             for y = 0, 255 do for x = 0, 255 do img:set(x, y, {{math.random(), math.random(), math.random(), 1}}) end end\n\
+             local keep = {{}}\n\
+             for i = 1, 400 do {body} end\n\
+             {STICK}"
+        ))
+    };
+    let case = textures("keep[i] = img:texture()");
+    let o = case.run(&["--memory-limit", "64"]);
+    limit(
+        &o,
+        "main.lua:4",
+        &["a texture (", "memory limit of 64 MiB exceeded"],
+        &case.output(),
+    );
+    let case = textures("local t = img:texture()");
+    let o = case.run(&["--memory-limit", "64"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // Copies that are dropped are given back.
     let case = keep("local copy = img:clone()");
     let o = case.run(&["--memory-limit", "128"]);

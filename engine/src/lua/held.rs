@@ -127,15 +127,30 @@ fn uncharged(
 /// nothing uses may still hold buffers); then an [`crate::Error::MemoryLimit`] at the
 /// calling line.
 pub(crate) fn charge_model(lua: &Lua, model: &Model) -> mlua::Result<()> {
-    charge(lua, &model.meshes, model.environment.as_ref(), "a model")
+    charge(
+        lua,
+        &model.meshes,
+        model.environment.as_ref(),
+        "the meshes and textures of a model",
+    )
 }
 
 /// Charges the buffers of `mesh` (a value the script now holds), as [`charge_model`] does.
 pub(crate) fn charge_mesh(lua: &Lua, mesh: &Arc<Mesh>) -> mlua::Result<()> {
-    charge(lua, std::slice::from_ref(mesh), None, "a mesh")
+    charge(
+        lua,
+        std::slice::from_ref(mesh),
+        None,
+        "the meshes and textures of a mesh",
+    )
 }
 
-/// `what` names the value in the error: "a model", "a mesh".
+/// Charges the bytes of `texture` (a value the script now holds), as [`charge_model`] does.
+pub(crate) fn charge_texture(lua: &Lua, texture: &Arc<Texture>) -> mlua::Result<()> {
+    charge(lua, &[], Some(texture), "a texture")
+}
+
+/// `what` names what is charged in the error ("the meshes and textures of a model").
 fn charge(
     lua: &Lua,
     meshes: &[Arc<Mesh>],
@@ -155,10 +170,7 @@ fn charge(
     let attempt = || {
         super::sync_lua_memory(lua);
         budget.charge(total, &caller_location(lua), || {
-            format!(
-                "the meshes and textures of {what} ({} MiB)",
-                total.div_ceil(1 << 20)
-            )
+            format!("{what} ({} MiB)", total.div_ceil(1 << 20))
         })
     };
     let mut charge = match attempt() {

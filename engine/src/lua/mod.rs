@@ -96,6 +96,16 @@ fn sync_lua_memory(lua: &mlua::Lua) {
     }
 }
 
+/// Charges the encoded bytes of `texture` (a value the script now holds, such as
+/// `image:texture()`'s) to the run's budget for as long as the texture lives, once per Lua
+/// state: a material or model that holds the same texture later is not charged it again.
+pub fn charge_texture(
+    lua: &mlua::Lua,
+    texture: &std::sync::Arc<crate::geometry::Texture>,
+) -> mlua::Result<()> {
+    held::charge_texture(lua, texture)
+}
+
 /// Charges `bytes` that a value the script keeps holds on the Rust side (a skeleton's
 /// nodes, a model's meshes and textures) to the run's budget, for as long as `value` lives:
 /// the charge is its user value, given back when Lua collects it. When the budget is

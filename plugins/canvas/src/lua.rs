@@ -257,7 +257,10 @@ impl UserData for LuaImage {
                 me.0.borrow()
                     .texture("image")
                     .map_err(|e| script_error(lua, format!("texture: {e}")))?;
-            Ok(LuaTexture(Arc::new(t)))
+            // Held by the script: its bytes are charged to the run's budget while it lives.
+            let t = Arc::new(t);
+            pge_engine::lua::charge_texture(lua, &t)?;
+            Ok(LuaTexture(t))
         });
         m.add_method("pngBytes", |lua, me, ()| {
             let png =
