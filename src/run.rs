@@ -258,12 +258,8 @@ fn run_one(
         eprintln!("{w}");
     }
     let te = Instant::now();
-    // The model's meshes (each once), held while it is written out.
-    let mut seen = std::collections::HashSet::new();
-    let held: usize = (model.meshes.iter())
-        .filter(|m| seen.insert(std::sync::Arc::as_ptr(m)))
-        .map(|m| m.heap_bytes())
-        .sum();
+    // The model's meshes, held while it is written out.
+    let held = model.mesh_bytes();
     let _held = limit.ctx.budget.charge(held, &limit.at, || {
         format!("the model's meshes ({} MiB)", held.div_ceil(1 << 20))
     })?;

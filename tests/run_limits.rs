@@ -385,29 +385,35 @@ fn models_a_script_keeps_are_charged_to_its_memory_limit() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
-#[test]
-fn an_export_stops_at_the_time_limit() {
-    // 1839 trees of 18,000 vertices each written out one by one as .obj text: 33 million
-    // vertices, minutes of export; the layout and the one variant take milliseconds.
-    let case = Case::new(
-        "local forest = pge.Forest{ size = {100, 100}, seed = 7 }\n\
-         forest:scatter{ species = \"tree.lua\", minDistance = 2, variants = 1 }\n\
-         return forest\n",
-    );
+/// A forest `size` metres square of trees of 18,000 vertices each (`tree.lua`, the
+/// [`SKELETON`]'s tree), every 2 m or so.
+fn tree_forest(size: u32) -> Case {
+    let case = Case::new(&format!(
+        "local forest = pge.Forest{{ size = {{{size}, {size}}}, seed = 7 }}\n\
+         forest:scatter{{ species = \"tree.lua\", minDistance = 2, variants = 1 }}\n\
+         return forest\n"
+    ));
     std::fs::write(
         case.path().join("tree.lua"),
         format!("{SKELETON}return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"),
     )
     .expect("species");
-    let o = case.pge(&[
-        "run",
-        "main.lua",
-        "-o",
-        "out/forest.obj",
-        "-q",
-        "--time-limit",
-        "1",
-    ]);
+    case
+}
+
+/// `pge run main.lua -o out/forest.obj -q` plus `extra`.
+fn run_obj(case: &Case, extra: &[&str]) -> Output {
+    let mut args = vec!["run", "main.lua", "-o", "out/forest.obj", "-q"];
+    args.extend_from_slice(extra);
+    case.pge(&args)
+}
+
+#[test]
+fn an_export_stops_at_the_time_limit() {
+    // 1839 trees of 18,000 vertices each written out one by one as .obj text: 33 million
+    // vertices, minutes of export; the layout and the one variant take milliseconds.
+    let case = tree_forest(100);
+    let o = run_obj(&case, &["--time-limit", "1"]);
     limit(
         &o,
         "main.lua:3",
@@ -424,28 +430,8 @@ fn an_export_stops_at_the_time_limit() {
 fn an_obj_text_past_the_memory_limit_stops_the_export() {
     // About 75 trees of 18,000 vertices written out as .obj text: over 100 MiB of text,
     // held whole until it is written; the model itself is a few MiB.
-    let case = Case::new(
-        "local forest = pge.Forest{ size = {20, 20}, seed = 7 }\n\
-         forest:scatter{ species = \"tree.lua\", minDistance = 2, variants = 1 }\n\
-         return forest\n",
-    );
-    std::fs::write(
-        case.path().join("tree.lua"),
-        format!("{SKELETON}return pge.tree{{ skeleton = s, mesh = {{ textureSize = 64 }} }}\n"),
-    )
-    .expect("species");
-    let obj = |limit: &str| {
-        case.pge(&[
-            "run",
-            "main.lua",
-            "-o",
-            "out/forest.obj",
-            "-q",
-            "--memory-limit",
-            limit,
-        ])
-    };
-    let o = obj("64");
+    let case = tree_forest(20);
+    let o = run_obj(&case, &["--memory-limit", "64"]);
     limit(
         &o,
         "main.lua:3",

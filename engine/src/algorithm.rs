@@ -53,6 +53,16 @@ impl Default for RunContext {
 }
 
 impl RunContext {
+    /// A context with no deadline and no memory limit, for work outside a run (a host
+    /// laying out a forest itself, tests).
+    #[must_use]
+    pub fn unlimited() -> RunContext {
+        RunContext {
+            budget: Budget::new(usize::MAX),
+            ..RunContext::default()
+        }
+    }
+
     /// An error if the deadline has passed or the run was cancelled (or stopped by its
     /// budget's flag, [`Budget::stop`]), pointing at `location`. Cheap: call it in every
     /// loop whose length a script decides.

@@ -99,3 +99,36 @@ pub fn run_with_stats(script: &str, dir: &Path, extra: &[&str]) -> (serde_json::
         serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).expect("stats are JSON");
     (stats, std::fs::read(&out).expect("glb written"))
 }
+
+/// Checks a failed command: exit 1, one line holding every needle, no panic.
+pub fn one_line_error(o: &Output, needles: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "exit code: {err}");
+    assert!(!err.contains("panicked"), "a panic: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "'{n}' not in: {err}");
+    }
+    err
+}
+
+/// Runs `pge run main.lua -o out.glb -q` plus `extra` in a folder holding `files` (name,
+/// text); checks a one-line error at `main.lua:LINE:` (or at `at` when given) holding every
+/// needle, no model written. Returns the line.
+pub fn script_fails(files: &[(&str, &str)], extra: &[&str], at: &str, needles: &[&str]) -> String {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).expect("script");
+    }
+    let mut args = vec!["run", "main.lua", "-o", "out.glb", "-q"];
+    args.extend_from_slice(extra);
+    let o = pge_in(&args, dir.path());
+    let err = one_line_error(&o, needles);
+    assert!(err.starts_with(at), "expected '{at}...', got: {err}");
+    assert!(!dir.path().join("out.glb").exists(), "a model was written");
+    err
+}
+
+/// A small space-colonized bush, a species for forests in tests.
+pub const BUSH: &str = "pge.SpaceColonization{envelope = pge.shape.sphere{center = {0, 0.5, 0}, \
+                    radius = 0.4}, points = 10, roots = {{0, 0, 0}}}";

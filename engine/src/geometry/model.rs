@@ -273,6 +273,17 @@ impl Model {
         removed
     }
 
+    /// The bytes its meshes hold ([`Mesh::heap_bytes`]), a mesh listed twice counted once;
+    /// textures and skeletons apart.
+    #[must_use]
+    pub fn mesh_bytes(&self) -> usize {
+        let mut seen = std::collections::HashSet::new();
+        (self.meshes.iter())
+            .filter(|m| seen.insert(Arc::as_ptr(m)))
+            .map(|m| m.heap_bytes())
+            .sum()
+    }
+
     /// Vertices drawn, counting every instance (of groups too).
     #[must_use]
     pub fn vertex_count(&self) -> usize {
@@ -410,6 +421,18 @@ mod tests {
         Arc::new(
             Mesh::from_triangles(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).expect("ok"),
         )
+    }
+
+    #[test]
+    fn mesh_bytes_count_a_shared_mesh_once() {
+        let tri = triangle();
+        let mut m = Model::new();
+        m.meshes.push(tri.clone());
+        assert_eq!(m.mesh_bytes(), tri.heap_bytes());
+        m.meshes.push(tri.clone());
+        assert_eq!(m.mesh_bytes(), tri.heap_bytes());
+        m.meshes.push(triangle());
+        assert_eq!(m.mesh_bytes(), 2 * tri.heap_bytes());
     }
 
     #[test]

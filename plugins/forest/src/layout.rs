@@ -10,7 +10,7 @@ use crate::poisson::{Rect, Sample, block_size, poisson_until};
 use crate::terrain::Terrain;
 use crate::trunks::Trunks;
 use pge_engine::random::{SplitMix64, hash_words};
-use pge_engine::{Budget, Location, RunContext};
+use pge_engine::{Location, RunContext};
 
 /// The most instances a layout may hold.
 pub const MAX_INSTANCES: usize = 10_000_000;
@@ -173,11 +173,7 @@ impl Forest {
     /// trunk is inside it, exactly as the whole forest places them. Without a time or memory
     /// limit: [`Forest::layout_within`] keeps to a run's.
     pub fn layout(&self, tile: Option<(usize, usize)>) -> Result<Layout, ForestError> {
-        let unlimited = RunContext {
-            budget: Budget::new(usize::MAX),
-            ..RunContext::default()
-        };
-        self.layout_within(tile, &unlimited, &Location::new("forest", 0))
+        self.layout_within(tile, &RunContext::unlimited(), &Location::new("forest", 0))
     }
 
     /// The regions each layer is sampled in for `target`: each layer must be right wherever

@@ -142,10 +142,7 @@ pub fn instance_leaves(
     lods: &[Vec<Option<VariantLod>>],
     camera: &Camera,
 ) -> Result<Vec<Option<u32>>, ForestError> {
-    let unlimited = RunContext {
-        budget: pge_engine::Budget::new(usize::MAX),
-        ..RunContext::default()
-    };
+    let unlimited = RunContext::unlimited();
     instance_leaves_within(forest, layout, tile, lods, camera, &unlimited, &|_| {
         Location::new("forest", 0)
     })

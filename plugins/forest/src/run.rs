@@ -165,10 +165,7 @@ impl ForestRun {
     /// The layout of the forest (or its tile), its empty layers' warnings placed at the lines
     /// that described them.
     pub fn layout(&self) -> Result<Layout, ForestError> {
-        self.layout_within(&RunContext {
-            budget: pge_engine::Budget::new(usize::MAX),
-            ..RunContext::default()
-        })
+        self.layout_within(&RunContext::unlimited())
     }
 
     /// [`ForestRun::layout`] within the run's limits ([`crate::Forest::layout_within`]).
